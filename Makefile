@@ -1,0 +1,56 @@
+# T-SCvx guidance: one entry point for set-up, build, tests, demo, benchmarks and models.
+# `make demo` and `make test` work on a fresh Debian machine: they install what is missing.
+
+PYTHON ?= python3
+VENV   := .venv
+PY     := $(VENV)/bin/python
+PIP    := $(VENV)/bin/pip
+STAMP  := $(VENV)/.installed
+APT_PACKAGES := libeigen3-dev libsuitesparse-dev valgrind
+BUILD  := build
+
+.PHONY: all setup apt lib ctest pytest test lint demo bench budget models clean
+
+all: lib
+
+# ---- environment -------------------------------------------------------------------------
+apt:
+	@missing=""; for p in $(APT_PACKAGES); do \
+	  dpkg -s $$p >/dev/null 2>&1 || missing="$$missing $$p"; done; \
+	if [ -n "$$missing" ]; then \
+	  echo "installing Debian packages:$$missing"; \
+	  SUDO=""; [ "$$(id -u)" = 0 ] || SUDO=sudo; \
+	  $$SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq $$missing; \
+	fi
+
+$(STAMP): pyproject.toml
+	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
+	$(PIP) install -q --upgrade pip
+	$(PIP) install -q -e '.[dev]'
+	@touch $@
+
+setup: apt $(STAMP)
+
+# ---- flight C library (rules in c_runtime/runtime.mk) --------------------------------------
+include c_runtime/runtime.mk
+
+# ---- tests ---------------------------------------------------------------------------------
+pytest: setup lib
+	$(PY) -m pytest -q
+
+lint: setup
+	$(VENV)/bin/ruff check guidance tests codegen
+	$(VENV)/bin/ruff format --check guidance tests codegen
+
+test: setup lib ctest lint pytest
+
+# ---- user-facing jobs ----------------------------------------------------------------------
+demo: setup lib
+	@mkdir -p out
+	$(VENV)/bin/guidance solve --method scvx --backend clarabel --out out/default.npz --plot out/default.png
+
+bench: setup lib
+	$(VENV)/bin/guidance bench
+
+clean:
+	rm -rf $(BUILD) out .pytest_cache .ruff_cache

@@ -1,0 +1,133 @@
+"""Command line: ``guidance solve | bench | scenario``."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Sequence
+
+import numpy as np
+
+from guidance.params import IM, Scenario, SCvxSettings
+from guidance.scenario import ScenarioError, load_scenario, scenario_to_dict
+
+EXIT_BAD_INPUT = 2
+
+
+def _load(path: str | None, pin_final_attitude: bool) -> Scenario:
+    scenario = load_scenario(path) if path else Scenario()
+    if pin_final_attitude:
+        scenario = Scenario(scenario.initial, scenario.params.replace(final_roll_free=False))
+    return scenario
+
+
+def cmd_solve(args: argparse.Namespace) -> int:
+    from guidance.scvx import SCvxSolver
+    from guidance.trajectory_io import write_trajectory
+
+    scenario = _load(args.scenario, args.pin_final_attitude)
+    settings = SCvxSettings(iter_max=args.iter_max)
+    print(f"scenario: {json.dumps(scenario_to_dict(scenario))}")
+    print(f"method: {args.method}, backend: {args.backend}, N = {scenario.params.N}")
+    solver = SCvxSolver(scenario, settings, backend=args.backend, log=print)
+    result = solver.solve()
+    p = scenario.params
+    fuel = scenario.initial.m0 - result.x[-1, IM]
+    propellant = scenario.initial.m0 - p.m_dry
+    sub_times = [h.subproblem_time_s for h in result.history]
+    print()
+    print(f"status        {result.status} ({result.reason})")
+    print(f"iterations    {result.iterations} (subproblems solved: {result.subproblems_solved})")
+    print(f"t_f           {result.t_f:.6f} U_T")
+    print(f"final mass    {result.m_f:.6f} U_M")
+    print(f"fuel          {fuel:.6f} U_M ({100 * fuel / propellant:.1f} % of the propellant)")
+    print(f"max defect    {result.max_defect:.2e}   max path violation {result.max_violation:.2e}")
+    print(
+        f"total time    {result.solve_time_s:.3f} s "
+        f"(conic solves {sum(sub_times):.3f} s, median {1e3 * np.median(sub_times):.1f} ms)"
+    )
+    if args.out:
+        write_trajectory(args.out, result, p, scenario, args.method, args.backend)
+        print(f"wrote {args.out}")
+    if args.plot:
+        from guidance.plots import landing_figure
+
+        title = (
+            f"{args.method} / {args.backend}: {result.status}, t_f = {result.t_f:.3f}, "
+            f"m_f = {result.m_f:.4f}"
+        )
+        landing_figure(result.x, result.u, result.t_f, p, args.plot, title)
+        print(f"wrote {args.plot}")
+    return 0
+
+
+def cmd_scenario(args: argparse.Namespace) -> int:
+    scenario = _load(args.scenario, False)
+    print(json.dumps(scenario_to_dict(scenario), indent=2))
+    return 0
+
+
+def cmd_bench(args: argparse.Namespace) -> int:
+    from guidance.bench import run_scvx_bench
+
+    run_scvx_bench(backends=args.backend, repeats=args.repeats)
+    if not args.skip_socp:
+        try:
+            from guidance import bench_socp
+        except ImportError:
+            print("\n(conic solver benchmark unavailable: guidance.bench_socp not found)")
+        else:
+            bench_socp.main()
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="guidance",
+        description="T-SCvx 6-DoF powered-descent guidance: ground tools.",
+    )
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    s = sub.add_parser("solve", help="solve one landing and write the trajectory")
+    s.add_argument("scenario", nargs="?", help="scenario JSON (default: the default landing)")
+    s.add_argument("--method", choices=["scvx"], default="scvx")
+    s.add_argument(
+        "--backend",
+        choices=["clarabel", "c"],
+        default="clarabel",
+        help="conic solver for the subproblems",
+    )
+    s.add_argument("--out", help="trajectory .npz to write")
+    s.add_argument("--plot", help="figure (.png) to write")
+    s.add_argument("--iter-max", type=int, default=SCvxSettings().iter_max)
+    s.add_argument(
+        "--pin-final-attitude",
+        action="store_true",
+        help="require q(t_f) = q_f instead of only an upright touchdown",
+    )
+    s.set_defaults(func=cmd_solve)
+
+    c = sub.add_parser("scenario", help="print a scenario (default: the default) as JSON")
+    c.add_argument("scenario", nargs="?")
+    c.set_defaults(func=cmd_scenario)
+
+    b = sub.add_parser("bench", help="time the reference SCvx (and the conic solvers)")
+    b.add_argument("--backend", nargs="+", default=["clarabel"], choices=["clarabel", "c"])
+    b.add_argument("--repeats", type=int, default=1)
+    b.add_argument("--skip-socp", action="store_true", help="skip the conic solver benchmark")
+    b.set_defaults(func=cmd_bench)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return int(args.func(args))
+    except ScenarioError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

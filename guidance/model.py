@@ -1,0 +1,271 @@
+"""The 6-DoF landing model in CasADi: dynamics, Jacobians, path constraints, FOH discretization.
+
+Every function takes the physical parameters as a numeric input vector ``p`` (see
+:func:`param_vector`) instead of baking them in, so the same expressions serve every scenario
+and can be generated once as C (``codegen/``).
+
+Equations (DESIGN.md; paper Eq. (3)), with sigma = t_f and normalized time tau in [0, 1]:
+    dm/dt = -alpha |T_B| - beta
+    dr/dt = v
+    dv/dt = C_IB(q) (T_B + A_B) / m + g_I,        A_B = -c_A |v_B| v_B,  v_B = C_BI(q) v_I
+    dq/dt = 1/2 Omega(omega) q
+    J domega/dt = r_T x T_B + r_cp x A_B - omega x (J omega)
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+
+import casadi as ca
+import numpy as np
+
+from guidance.params import NU, NX, Params
+
+# Parameter vector layout for the CasADi functions.
+P_NAMES = (
+    "g1",  # gravity along e1 (negative)
+    "J1", "J2", "J3",
+    "rT1", "rT2", "rT3",
+    "rcp1", "rcp2", "rcp3",
+    "alpha_mdot",
+    "beta_mdot",
+    "aero_coeff",
+)  # fmt: skip
+NP = len(P_NAMES)
+
+
+def param_vector(params: Params) -> np.ndarray:
+    return np.array(
+        [
+            params.g_I[0],
+            *params.J_B,
+            *params.r_T_B,
+            *params.r_cp_B,
+            params.alpha_mdot,
+            params.beta_mdot,
+            params.aero_coeff,
+        ],
+        dtype=float,
+    )
+
+
+def _dcm_entries(q0, q1, q2, q3):
+    """C_B<-I(q), scalar-first, in its homogeneous form.
+
+    On unit quaternions this is DESIGN.md's matrix (1 - 2(q2^2 + q3^2) = q0^2 + q1^2 - q2^2 -
+    q3^2). Off the unit sphere, where SCvx iterates and linearizations live, the homogeneous
+    form stays a scaled rotation, so the Jacobians commute with rotations about the up axis
+    (the other form does not, and a rotated scenario would then take a different path).
+    """
+    s0, s1, s2, s3 = q0 * q0, q1 * q1, q2 * q2, q3 * q3
+    return (
+        (s0 + s1 - s2 - s3, 2 * (q1 * q2 + q0 * q3), 2 * (q1 * q3 - q0 * q2)),
+        (2 * (q1 * q2 - q0 * q3), s0 - s1 + s2 - s3, 2 * (q2 * q3 + q0 * q1)),
+        (2 * (q1 * q3 + q0 * q2), 2 * (q2 * q3 - q0 * q1), s0 - s1 - s2 + s3),
+    )
+
+
+def dcm_bi(q: ca.SX) -> ca.SX:
+    """C_B<-I(q) for a scalar-first quaternion (DESIGN.md), see _dcm_entries."""
+    rows = _dcm_entries(q[0], q[1], q[2], q[3])
+    return ca.vertcat(*(ca.horzcat(*row) for row in rows))
+
+
+def omega_matrix(w: ca.SX) -> ca.SX:
+    w1, w2, w3 = w[0], w[1], w[2]
+    return ca.vertcat(
+        ca.horzcat(0, -w1, -w2, -w3),
+        ca.horzcat(w1, 0, w3, -w2),
+        ca.horzcat(w2, -w3, 0, w1),
+        ca.horzcat(w3, w2, -w1, 0),
+    )
+
+
+def _norm(v: ca.SX) -> ca.SX:
+    # A smooth norm would change the model; |v| is only non-differentiable at v = 0, which
+    # the thrust never reaches (T_min > 0) and where the drag term is zero to second order.
+    return ca.sqrt(ca.sumsqr(v))
+
+
+def dynamics_expr(x: ca.SX, u: ca.SX, p: ca.SX) -> ca.SX:
+    """Time derivative f(x, u; p) of the state (physical time)."""
+    v, q, w, m = x[3:6], x[6:10], x[10:13], x[13]
+    g_I = ca.vertcat(p[0], 0, 0)
+    J = ca.vertcat(p[1], p[2], p[3])
+    r_T, r_cp = p[4:7], p[7:10]
+    alpha, beta, c_A = p[10], p[11], p[12]
+    C_BI = dcm_bi(q)
+    v_B = C_BI @ v
+    A_B = -c_A * _norm(v_B) * v_B
+    m_dot = -alpha * _norm(u) - beta
+    v_dot = (C_BI.T @ (u + A_B)) / m + g_I
+    q_dot = 0.5 * omega_matrix(w) @ q
+    Jw = J * w
+    w_dot = (ca.cross(r_T, u) + ca.cross(r_cp, A_B) - ca.cross(w, Jw)) / J
+    return ca.vertcat(v, v_dot, q_dot, w_dot, m_dot)
+
+
+@lru_cache(maxsize=1)
+def dynamics_functions() -> tuple[ca.Function, ca.Function]:
+    """f(x, u, p) and its Jacobians (A, B) = (df/dx, df/du)."""
+    x, u, p = ca.SX.sym("x", NX), ca.SX.sym("u", NU), ca.SX.sym("p", NP)
+    f = dynamics_expr(x, u, p)
+    f_fun = ca.Function("tscvx_dynamics", [x, u, p], [f], ["x", "u", "p"], ["f"])
+    jac_fun = ca.Function(
+        "tscvx_dynamics_jac",
+        [x, u, p],
+        [ca.jacobian(f, x), ca.jacobian(f, u)],
+        ["x", "u", "p"],
+        ["A", "B"],
+    )
+    return f_fun, jac_fun
+
+
+# ---- path constraints: h(x, u) <= 0 in each constraint's own units, order of DESIGN.md -------
+CONSTRAINT_PARAM_NAMES = ("m_dry", "tan_gs", "tilt_q_max", "omega_max", "T_max", "cos_gimbal",
+                          "T_min")  # fmt: skip
+
+
+def constraint_param_vector(params: Params) -> np.ndarray:
+    return np.array(
+        [
+            params.m_dry,
+            params.tan_glideslope,
+            params.tilt_q_max,
+            params.omega_max,
+            params.T_max,
+            params.cos_gimbal,
+            params.T_min,
+        ]
+    )
+
+
+def path_constraints_expr(x: ca.SX, u: ca.SX, c: ca.SX) -> ca.SX:
+    r, q, w, m = x[0:3], x[6:10], x[10:13], x[13]
+    T = _norm(u)
+    return ca.vertcat(
+        c[0] - m,
+        c[1] * _norm(r[1:3]) - r[0],
+        _norm(q[2:4]) - c[2],
+        _norm(w) - c[3],
+        T - c[4],
+        c[5] * T - u[0],
+        c[6] - T,
+    )
+
+
+@lru_cache(maxsize=1)
+def constraint_functions() -> tuple[ca.Function, ca.Function]:
+    """h(x, u, c) (7 values, <= 0 when met) and its Jacobians (dh/dx, dh/du)."""
+    x, u, c = ca.SX.sym("x", NX), ca.SX.sym("u", NU), ca.SX.sym("c", len(CONSTRAINT_PARAM_NAMES))
+    h = path_constraints_expr(x, u, c)
+    h_fun = ca.Function("tscvx_path_constraints", [x, u, c], [h], ["x", "u", "c"], ["h"])
+    jac = ca.Function(
+        "tscvx_path_constraints_jac",
+        [x, u, c],
+        [ca.jacobian(h, x), ca.jacobian(h, u)],
+        ["x", "u", "c"],
+        ["H_x", "H_u"],
+    )
+    return h_fun, jac
+
+
+# ---- first-order-hold discretization -----------------------------------------------------
+@lru_cache(maxsize=8)
+def discretization_function(substeps: int) -> ca.Function:
+    """FOH discretization of one interval of normalized length dtau (paper Eq. (5)).
+
+    Integrates, with ``substeps`` classic RK4 steps, the augmented system
+        x'     = sigma f(x, u(s)),              u(s) = l_m(s) u_k + l_p(s) u_k1
+        Phi_A' = sigma A Phi_A                  Phi_A(0) = I
+        Phi_m' = sigma A Phi_m + sigma B l_m    Phi_m(0) = 0
+        Phi_p' = sigma A Phi_p + sigma B l_p    Phi_p(0) = 0
+        Phi_s' = sigma A Phi_s + f              Phi_s(0) = 0
+    with l_m = 1 - s/dtau, l_p = s/dtau; returns x(dtau), A_k = Phi_A, B-_k = Phi_m,
+    B+_k = Phi_p, Sigma_k = Phi_s and the defect term
+        z_k = x(dtau) - A_k x_k - B-_k u_k - B+_k u_k1 - Sigma_k sigma,
+    so that x_{k+1} ~ A_k x_k + B-_k u_k + B+_k u_k1 + Sigma_k sigma + z_k.
+    """
+    xk, uk, uk1 = ca.SX.sym("x_k", NX), ca.SX.sym("u_k", NU), ca.SX.sym("u_k1", NU)
+    sigma, dtau, p = ca.SX.sym("sigma"), ca.SX.sym("dtau"), ca.SX.sym("p", NP)
+
+    xs, us = ca.SX.sym("xs", NX), ca.SX.sym("us", NU)
+    f = dynamics_expr(xs, us, p)
+    fAB = ca.Function("fAB", [xs, us, p], [f, ca.jacobian(f, xs), ca.jacobian(f, us)])
+
+    def rhs(s: ca.SX, state: tuple[ca.SX, ...]) -> tuple[ca.SX, ...]:
+        x, PA, Pm, Pp, Ps = state
+        lp = s / dtau
+        lm = 1 - lp
+        fx, A, B = fAB(x, lm * uk + lp * uk1, p)
+        SA = sigma * A
+        return (
+            sigma * fx,
+            SA @ PA,
+            SA @ Pm + sigma * B * lm,
+            SA @ Pp + sigma * B * lp,
+            SA @ Ps + fx,
+        )
+
+    state = (xk, ca.SX.eye(NX), ca.SX.zeros(NX, NU), ca.SX.zeros(NX, NU), ca.SX.zeros(NX, 1))
+    h = dtau / substeps
+    for i in range(substeps):
+        s = i * h
+        k1 = rhs(s, state)
+        k2 = rhs(s + h / 2, tuple(a + h / 2 * b for a, b in zip(state, k1, strict=True)))
+        k3 = rhs(s + h / 2, tuple(a + h / 2 * b for a, b in zip(state, k2, strict=True)))
+        k4 = rhs(s + h, tuple(a + h * b for a, b in zip(state, k3, strict=True)))
+        state = tuple(
+            a + h / 6 * (b1 + 2 * b2 + 2 * b3 + b4)
+            for a, b1, b2, b3, b4 in zip(state, k1, k2, k3, k4, strict=True)
+        )
+    x_next, A_k, Bm_k, Bp_k, S_k = state
+    z_k = x_next - A_k @ xk - Bm_k @ uk - Bp_k @ uk1 - S_k * sigma
+    return ca.Function(
+        "tscvx_foh_interval",
+        [xk, uk, uk1, sigma, dtau, p],
+        [x_next, A_k, Bm_k, Bp_k, S_k, z_k],
+        ["x_k", "u_k", "u_k1", "sigma", "dtau", "p"],
+        ["x_next", "A", "Bm", "Bp", "Sigma", "z"],
+    )
+
+
+@lru_cache(maxsize=8)
+def _mapped_discretization(substeps: int, intervals: int) -> ca.Function:
+    return discretization_function(substeps).map(intervals, "serial")
+
+
+def discretize(
+    x: np.ndarray, u: np.ndarray, sigma: float, params: Params, substeps: int
+) -> dict[str, np.ndarray]:
+    """FOH discretization of all N-1 intervals about (x, u, sigma); arrays are interval-major.
+
+    Returns x_next (N-1, 14), A (N-1, 14, 14), Bm (N-1, 14, 3), Bp (N-1, 14, 3),
+    Sigma (N-1, 14), z (N-1, 14).
+    """
+    N = x.shape[0]
+    fun = _mapped_discretization(substeps, N - 1)
+    out = fun(x[:-1].T, u[:-1].T, u[1:].T, sigma, 1.0 / (N - 1), param_vector(params))
+    xn, A, Bm, Bp, S, z = (np.asarray(o) for o in out)
+    return {
+        "x_next": xn.T,
+        # CasADi stacks the mapped matrix outputs side by side (column-major blocks).
+        "A": A.reshape(NX, N - 1, NX).transpose(1, 0, 2),
+        "Bm": Bm.reshape(NX, N - 1, NU).transpose(1, 0, 2),
+        "Bp": Bp.reshape(NX, N - 1, NU).transpose(1, 0, 2),
+        "Sigma": S.T,
+        "z": z.T,
+    }
+
+
+def propagate_nodes(
+    x: np.ndarray, u: np.ndarray, sigma: float, params: Params, substeps: int
+) -> np.ndarray:
+    """Nonlinear single-interval propagation F(x_k, u_k, u_k1, sigma) for every interval."""
+    return discretize(x, u, sigma, params, substeps)["x_next"]
+
+
+def dcm_bi_numpy(q: np.ndarray) -> np.ndarray:
+    """C_B<-I for a batch of quaternions (..., 4) -> (..., 3, 3), same formula as dcm_bi."""
+    rows = _dcm_entries(*(q[..., i] for i in range(4)))
+    return np.stack([np.stack(row, -1) for row in rows], axis=-2)

@@ -1,0 +1,176 @@
+"""Problem parameters: the one place that defines every number of the landing problem.
+
+Values are paper Table 1 in nondimensional units (U_L, U_T, U_M); the derived values follow
+DESIGN.md. Field names are exactly the keys of the trajectory ``params`` contract, so a
+scenario JSON may override any of them by name.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+# State layout (DESIGN.md): r_I (3), v_I (3), q_B<-I (4, scalar first), omega_B (3), m (1).
+NX = 14
+NU = 3
+IR = slice(0, 3)
+IV = slice(3, 6)
+IQ = slice(6, 10)
+IW = slice(10, 13)
+IM = 13
+
+# Path constraints per node, in mask order (bit 7k + c).
+CONSTRAINT_NAMES = (
+    "mass",  # 0  m >= m_dry
+    "glideslope",  # 1  tan(gs) |(r2, r3)| <= r1
+    "tilt",  # 2  |(q2, q3)| <= sqrt((1 - cos(tilt_max)) / 2)
+    "omega",  # 3  |omega| <= omega_max
+    "thrust_max",  # 4  |T| <= T_max
+    "gimbal",  # 5  cos(delta_max) |T| <= T1
+    "thrust_min",  # 6  T_min <= |T|   (nonconvex)
+)
+NC = len(CONSTRAINT_NAMES)
+
+# Table 1 quantities from which the contract's derived values are computed.
+I_SP = 30.0  # U_T, specific impulse (g0 = 1)
+P_AMB = 0.1  # ambient pressure
+A_NOZ = 0.5  # nozzle exit area
+RHO_SA_CA = 0.2  # rho * S_A * C_A, aerodynamic drag product
+
+
+@dataclass(frozen=True)
+class Params:
+    """Vehicle, environment, constraints, boundary conditions and discretization size."""
+
+    g_I: tuple[float, float, float] = (-1.0, 0.0, 0.0)
+    J_B: tuple[float, float, float] = (0.001, 0.01, 0.01)  # diagonal of J_B
+    r_T_B: tuple[float, float, float] = (-0.01, 0.0, 0.0)
+    r_cp_B: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    alpha_mdot: float = 1.0 / I_SP  # 1 / (I_sp g0)
+    beta_mdot: float = P_AMB * A_NOZ / I_SP  # alpha_mdot * P_amb * A_noz (back-pressure loss)
+    aero_coeff: float = 0.5 * RHO_SA_CA  # c_A in A_B = -c_A |v_B| v_B
+    m_dry: float = 2.0
+    T_min: float = 0.3
+    T_max: float = 5.0
+    gimbal_max_deg: float = 20.0
+    tilt_max_deg: float = 90.0
+    glideslope_deg: float = 20.0
+    omega_max_deg: float = 90.0  # deg / U_T
+    r_f: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    v_f: tuple[float, float, float] = (-0.1, 0.0, 0.0)
+    q_f: tuple[float, float, float, float] = (1.0, 0.0, 0.0, 0.0)
+    omega_f: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    final_roll_free: bool = True  # True: only q2(t_f) = q3(t_f) = 0; False: q(t_f) = q_f
+    N: int = 50
+
+    # ---- derived quantities (radians, cone constants) -------------------------------------
+    @property
+    def omega_max(self) -> float:
+        return math.radians(self.omega_max_deg)
+
+    @property
+    def cos_gimbal(self) -> float:
+        return math.cos(math.radians(self.gimbal_max_deg))
+
+    @property
+    def tan_glideslope(self) -> float:
+        return math.tan(math.radians(self.glideslope_deg))
+
+    @property
+    def tilt_q_max(self) -> float:
+        """Bound on |(q2, q3)| equivalent to the tilt limit: sqrt((1 - cos tilt_max) / 2)."""
+        return math.sqrt((1.0 - math.cos(math.radians(self.tilt_max_deg))) / 2.0)
+
+    @property
+    def roll_decoupled(self) -> bool:
+        """True when no torque acts about body axis 1, so omega_1 is constant in time."""
+        J = self.J_B
+        off_axis = (self.r_T_B[1], self.r_T_B[2], self.r_cp_B[1], self.r_cp_B[2])
+        return J[1] == J[2] and all(c == 0.0 for c in off_axis)
+
+    def x_final_target(self) -> np.ndarray:
+        """Terminal state with the mass slot left at zero (mass is free)."""
+        x = np.zeros(NX)
+        x[IR] = self.r_f
+        x[IV] = self.v_f
+        x[IQ] = self.q_f
+        x[IW] = self.omega_f
+        return x
+
+    def to_json_dict(self) -> dict:
+        return {f.name: _plain(getattr(self, f.name)) for f in dataclasses.fields(self)}
+
+    def replace(self, **changes: object) -> Params:
+        return dataclasses.replace(self, **changes)
+
+
+def _plain(value: object) -> object:
+    if isinstance(value, tuple):
+        return [float(v) for v in value]
+    return value
+
+
+PARAM_NAMES = tuple(f.name for f in dataclasses.fields(Params))
+VECTOR_PARAM_SIZES = {
+    f.name: len(f.default)  # type: ignore[arg-type]
+    for f in dataclasses.fields(Params)
+    if isinstance(f.default, tuple)
+}
+
+
+@dataclass(frozen=True)
+class SCvxSettings:
+    """Paper Algorithm 1 / 2 settings (Table 1), plus this implementation's tolerances."""
+
+    lam: float = 500.0  # penalty weight lambda on virtual control and buffers
+    rho0: float = 0.0
+    rho1: float = 0.1
+    rho2: float = 0.7
+    alpha: float = 2.0  # trust-region shrink factor
+    beta: float = 2.0  # trust-region growth factor
+    eta_init: float = 2.0  # initial trust radius (full); 0.01 for reduced problems
+    eta_lb: float = 0.001
+    eta_ub: float = 10.0
+    iter_max: int = 20  # successions k (accepted steps)
+    max_subproblems: int = 60  # bound on subproblem solves, rejected steps included
+    # Convergence: an accepted step whose scaled infinity-norm is below step_tol, whose
+    # virtual control and buffers are below vc_tol (scaled units), and whose nonlinear
+    # defects are below defect_tol.
+    step_tol: float = 2e-3
+    vc_tol: float = 1e-6
+    defect_tol: float = 1e-6
+    rk4_substeps: int = 8  # RK4 steps per FOH interval in the discretization
+    tight_tol: float = 1e-6  # slack threshold of the tight-constraint labelling
+
+    def replace(self, **changes: object) -> SCvxSettings:
+        return dataclasses.replace(self, **changes)
+
+
+DEFAULT_PARAMS = Params()
+
+
+@dataclass(frozen=True)
+class InitialState:
+    r0: tuple[float, float, float] = (4.0, 4.0, 0.0)
+    v0: tuple[float, float, float] = (0.0, -1.0, -2.0)
+    q0: tuple[float, float, float, float] = (1.0, 0.0, 0.0, 0.0)
+    w0: tuple[float, float, float] = (0.0, 0.0, 0.0)  # rad / U_T
+    m0: float = 3.0
+
+    def as_vector(self) -> np.ndarray:
+        return np.concatenate([self.r0, self.v0, self.q0, self.w0, [self.m0]]).astype(float)
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """One landing problem: the initial state and the parameters (with any overrides)."""
+
+    initial: InitialState = field(default_factory=InitialState)
+    params: Params = field(default_factory=Params)
+
+    @property
+    def x0(self) -> np.ndarray:
+        return self.initial.as_vector()

@@ -1,0 +1,196 @@
+"""Scenario JSON loading and validation (DESIGN.md, "File contracts").
+
+Every rejection raises :class:`ScenarioError` naming the offending field; the CLI turns it
+into exit code 2 before anything is written or solved.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from guidance.params import (
+    PARAM_NAMES,
+    VECTOR_PARAM_SIZES,
+    InitialState,
+    Params,
+    Scenario,
+)
+
+STATE_KEYS = {"r0": 3, "v0": 3, "q0": 4, "w0": 3}
+SCALAR_STATE_KEYS = ("m0",)
+UNIT_QUATERNION_TOL = 1e-6
+INT_PARAMS = {"N"}
+BOOL_PARAMS = {"final_roll_free"}
+
+
+class ScenarioError(ValueError):
+    """A scenario that must not be solved. ``field`` names the offending key."""
+
+    def __init__(self, field: str, message: str) -> None:
+        super().__init__(f"scenario field '{field}': {message}")
+        self.field = field
+
+
+def _finite_vector(field: str, value: Any, size: int) -> tuple[float, ...]:
+    if not isinstance(value, list | tuple) or len(value) != size:
+        raise ScenarioError(field, f"expected a list of {size} numbers, got {value!r}")
+    out = []
+    for v in value:
+        if isinstance(v, bool) or not isinstance(v, int | float):
+            raise ScenarioError(field, f"expected numbers, got {v!r}")
+        if not math.isfinite(v):
+            raise ScenarioError(field, f"must be finite, got {v!r}")
+        out.append(float(v))
+    return tuple(out)
+
+
+def _finite_scalar(field: str, value: Any) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise ScenarioError(field, f"expected a number, got {value!r}")
+    if not math.isfinite(value):
+        raise ScenarioError(field, f"must be finite, got {value!r}")
+    return float(value)
+
+
+def _parse_param(name: str, value: Any) -> Any:
+    if name in VECTOR_PARAM_SIZES:
+        return _finite_vector(name, value, VECTOR_PARAM_SIZES[name])
+    if name in BOOL_PARAMS:
+        if not isinstance(value, bool):
+            raise ScenarioError(name, f"expected true or false, got {value!r}")
+        return value
+    if name in INT_PARAMS:
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise ScenarioError(name, f"expected an integer, got {value!r}")
+        return value
+    return _finite_scalar(name, value)
+
+
+def scenario_from_dict(data: dict[str, Any]) -> Scenario:
+    """Build and validate a scenario from the JSON contract's dictionary."""
+    if not isinstance(data, dict):
+        raise ScenarioError("<root>", "a scenario is a JSON object")
+    allowed = set(STATE_KEYS) | set(SCALAR_STATE_KEYS) | set(PARAM_NAMES)
+    for key in data:
+        if key not in allowed:
+            raise ScenarioError(key, f"unknown key (allowed: {', '.join(sorted(allowed))})")
+    initial_kwargs: dict[str, Any] = {}
+    for key, size in STATE_KEYS.items():
+        if key in data:
+            initial_kwargs[key] = _finite_vector(key, data[key], size)
+    if "m0" in data:
+        initial_kwargs["m0"] = _finite_scalar("m0", data["m0"])
+    param_kwargs = {k: _parse_param(k, v) for k, v in data.items() if k in PARAM_NAMES}
+    scenario = Scenario(InitialState(**initial_kwargs), Params(**param_kwargs))
+    validate(scenario)
+    return scenario
+
+
+def load_scenario(path: str | Path) -> Scenario:
+    path = Path(path)
+    try:
+        text = path.read_text()
+    except OSError as exc:
+        raise ScenarioError("<file>", f"cannot read {path}: {exc.strerror}") from exc
+    try:
+        data = json.loads(text, parse_constant=_reject_constant)
+    except json.JSONDecodeError as exc:
+        raise ScenarioError("<file>", f"{path} is not valid JSON: {exc}") from exc
+    return scenario_from_dict(data)
+
+
+def _reject_constant(name: str) -> float:
+    # json accepts NaN/Infinity literals; return them so the field check names the field.
+    return float(name.replace("Infinity", "inf"))
+
+
+def scenario_to_dict(scenario: Scenario) -> dict[str, Any]:
+    """The JSON contract form; parameters are written only where they differ from defaults."""
+    s = scenario.initial
+    out: dict[str, Any] = {
+        "r0": list(s.r0),
+        "v0": list(s.v0),
+        "q0": list(s.q0),
+        "w0": list(s.w0),
+        "m0": s.m0,
+        "glideslope_deg": scenario.params.glideslope_deg,
+        "tilt_max_deg": scenario.params.tilt_max_deg,
+    }
+    default = Params().to_json_dict()
+    for key, value in scenario.params.to_json_dict().items():
+        if key not in out and value != default[key]:
+            out[key] = value
+    return out
+
+
+def validate(scenario: Scenario) -> None:
+    """Reject parameters and initial states that cannot give a meaningful landing."""
+    p = scenario.params
+    _validate_params(p)
+    s = scenario.initial
+    q0 = np.asarray(s.q0)
+    if abs(np.linalg.norm(q0) - 1.0) > UNIT_QUATERNION_TOL:
+        raise ScenarioError("q0", f"must be a unit quaternion, |q0| = {np.linalg.norm(q0):.9g}")
+    if s.m0 <= p.m_dry:
+        raise ScenarioError("m0", f"m0 = {s.m0:g} must exceed the dry mass m_dry = {p.m_dry:g}")
+    r0 = np.asarray(s.r0)
+    horizontal = float(np.linalg.norm(r0[1:]))
+    gs = math.radians(p.glideslope_deg)
+    # tan(gs) |(r2, r3)| <= r1 written as sin(gs) |h| <= cos(gs) r1 (valid up to 90 deg).
+    if math.sin(gs) * horizontal > math.cos(gs) * r0[0] + 1e-12:
+        raise ScenarioError(
+            "r0",
+            f"start is below the {p.glideslope_deg:g} deg glideslope cone "
+            f"(altitude {r0[0]:g}, horizontal distance {horizontal:g})",
+        )
+    tilt_q = float(np.linalg.norm(q0[2:4]))
+    if tilt_q > p.tilt_q_max + 1e-12:
+        tilt = math.degrees(math.acos(max(-1.0, min(1.0, 1.0 - 2.0 * tilt_q**2))))
+        raise ScenarioError(
+            "q0", f"initial tilt {tilt:.3f} deg exceeds tilt_max_deg = {p.tilt_max_deg:g}"
+        )
+    w0 = np.asarray(s.w0)
+    if np.linalg.norm(w0) > p.omega_max + 1e-12:
+        raise ScenarioError(
+            "w0",
+            f"|w0| = {math.degrees(np.linalg.norm(w0)):.3f} deg/U_T exceeds "
+            f"omega_max_deg = {p.omega_max_deg:g}",
+        )
+    if p.roll_decoupled and w0[0] != p.omega_f[0]:
+        raise ScenarioError(
+            "w0",
+            "the engine cannot make roll torque (J2 = J3, r_T on the body axis), so the roll "
+            f"rate is constant: w0[0] = {w0[0]:g} cannot reach omega_f[0] = {p.omega_f[0]:g}",
+        )
+
+
+def _validate_params(p: Params) -> None:
+    positive = ("alpha_mdot", "aero_coeff", "m_dry", "T_min", "T_max", "omega_max_deg")
+    for name in positive:
+        if getattr(p, name) <= 0.0:
+            raise ScenarioError(name, f"must be positive, got {getattr(p, name)!r}")
+    if p.beta_mdot < 0.0:
+        raise ScenarioError("beta_mdot", f"must be non-negative, got {p.beta_mdot!r}")
+    if any(j <= 0.0 for j in p.J_B):
+        raise ScenarioError("J_B", f"inertia diagonal must be positive, got {p.J_B}")
+    if p.T_min >= p.T_max:
+        raise ScenarioError("T_min", f"T_min = {p.T_min:g} must be below T_max = {p.T_max:g}")
+    if not 0.0 < p.gimbal_max_deg < 90.0:
+        raise ScenarioError("gimbal_max_deg", "must lie in (0, 90) degrees")
+    if not 0.0 < p.tilt_max_deg <= 180.0:
+        raise ScenarioError("tilt_max_deg", "must lie in (0, 180] degrees")
+    if not 0.0 <= p.glideslope_deg < 90.0:
+        raise ScenarioError("glideslope_deg", "must lie in [0, 90) degrees")
+    if abs(np.linalg.norm(p.q_f) - 1.0) > UNIT_QUATERNION_TOL:
+        raise ScenarioError("q_f", "must be a unit quaternion")
+    if p.g_I[0] >= 0.0 or p.g_I[1] != 0.0 or p.g_I[2] != 0.0:
+        raise ScenarioError("g_I", "gravity must point along -e1 (e1 is up)")
+    if not 3 <= p.N <= 400:
+        raise ScenarioError("N", f"must lie in [3, 400], got {p.N}")
+    if p.r_f[0] < 0.0:
+        raise ScenarioError("r_f", "landing point must not be below the surface")

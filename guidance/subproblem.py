@@ -1,0 +1,400 @@
+"""The SCvx convex subproblem (paper Eq. (7)-(9)) as a sparse conic program in Clarabel's form.
+
+Variables are scaled to O(1) ranges, x = S_x x_hat + c_x, u = S_u u_hat, sigma = S_s sigma_hat
+(the paper: "numerical scaling was used for variable ranges"); lambda and the trust radius act
+on the scaled variables. The decision vector is
+
+    z = [x_hat (N x 14, node-major) | u_hat (N x 3) | sigma_hat | nu ((N-1) x 14) |
+         t ((N-1) x 10) | s' (N)]
+
+with the virtual control nu (scaled state units), the epigraph t of its block norms (see
+N_NU_BLOCKS) and the virtual buffer s' >= 0 of the linearized nonconvex T_min constraint.
+The objective is -m_hat(t_f) + lambda (sum t + sum s').
+
+The sparsity pattern depends only on N, the terminal condition and the constraint mask: it is
+built once (:class:`SubproblemTemplate`) and every SCvx iteration only writes new numbers.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from guidance.conic import ConeKind, ConicProblem
+from guidance.params import IM, IR, IV, IW, NC, NU, NX, Params, Scenario
+
+# Cone dimension of each path constraint (mask order); 1 = a linear row.
+CONE_DIMS = (1, 3, 3, 4, 4, 4, 1)
+SIGMA_MIN = 1e-2  # lower bound on t_f (keeps the time dilation positive)
+# Trust region |z - z_ref| <= eta: the infinity norm over the scalar components and over the
+# 2-norms of the pairs that a rotation about the up axis mixes (horizontal position and
+# velocity; (q0, q1) and (q2, q3) of the quaternion). That keeps every subproblem, and so the
+# whole iteration, exactly equivariant under such rotations (DESIGN.md's symmetry).
+TR_SCALAR_STATES = (0, 3, 10, 11, 12, 13)
+TR_PAIRS = ((1, 2), (4, 5), (6, 7), (8, 9))
+# The virtual control is penalized in the same blocks: |nu_i| for the scalar states and
+# |(nu_a, nu_b)|_2 for the pairs, through epigraph variables t (an exact penalty in this norm).
+N_NU_BLOCKS = len(TR_SCALAR_STATES) + len(TR_PAIRS)
+
+
+@dataclass(frozen=True)
+class Scaling:
+    """Affine maps between physical and scaled variables (rotation invariant by design)."""
+
+    Sx: np.ndarray  # (14,) state scale
+    cx: np.ndarray  # (14,) state offset
+    Su: float  # thrust scale
+    Ss: float  # t_f scale
+
+    @staticmethod
+    def for_scenario(scenario: Scenario, t_f_guess: float) -> Scaling:
+        p, s = scenario.params, scenario.initial
+        Sr = max(float(np.linalg.norm(s.r0)), 1.0)
+        Sv = max(float(np.linalg.norm(s.v0)), 1.0)
+        Sx = np.ones(NX)
+        Sx[IR], Sx[IV], Sx[IW], Sx[IM] = Sr, Sv, p.omega_max, s.m0 - p.m_dry
+        cx = np.zeros(NX)
+        cx[IM] = p.m_dry
+        return Scaling(Sx=Sx, cx=cx, Su=p.T_max, Ss=t_f_guess)
+
+    def scale_x(self, x: np.ndarray) -> np.ndarray:
+        return (x - self.cx) / self.Sx
+
+    def unscale_x(self, xh: np.ndarray) -> np.ndarray:
+        return xh * self.Sx + self.cx
+
+
+@dataclass(frozen=True)
+class Layout:
+    """Index ranges of the decision vector."""
+
+    N: int
+
+    @property
+    def ix(self) -> int:
+        return 0
+
+    @property
+    def iu(self) -> int:
+        return self.N * NX
+
+    @property
+    def isig(self) -> int:
+        return self.iu + self.N * NU
+
+    @property
+    def inu(self) -> int:
+        """Virtual control nu ((N-1) x 14, free)."""
+        return self.isig + 1
+
+    @property
+    def ivc(self) -> int:
+        """Start of the penalized variables: the epigraph t of |nu| ((N-1) x 10), then s'."""
+        return self.inu + (self.N - 1) * NX
+
+    @property
+    def ibuf(self) -> int:
+        return self.ivc + (self.N - 1) * N_NU_BLOCKS
+
+    @property
+    def n(self) -> int:
+        return self.ibuf + self.N
+
+    @property
+    def n_traj(self) -> int:
+        """Number of trajectory variables (x_hat, u_hat, sigma_hat) under the trust region."""
+        return self.isig + 1
+
+    def x_index(self, k: int | np.ndarray, i: int | np.ndarray) -> np.ndarray:
+        return np.asarray(self.ix + NX * np.asarray(k) + np.asarray(i))
+
+    def u_index(self, k: int | np.ndarray, i: int | np.ndarray) -> np.ndarray:
+        return np.asarray(self.iu + NU * np.asarray(k) + np.asarray(i))
+
+
+class _Rows:
+    """Accumulates constraint rows as COO triplets with a fixed order of entries."""
+
+    def __init__(self) -> None:
+        self.rows: list[np.ndarray] = []
+        self.cols: list[np.ndarray] = []
+        self.m = 0
+        self.cones: list[tuple[ConeKind, int]] = []
+
+    def add(self, kind: ConeKind, rows: np.ndarray, cols: np.ndarray, height: int) -> int:
+        """Adds entries at local rows `rows` (relative) of a new block; returns its first row."""
+        start = self.m
+        self.rows.append(start + np.asarray(rows, dtype=np.int64).ravel())
+        self.cols.append(np.asarray(cols, dtype=np.int64).ravel())
+        self.m += height
+        if self.cones and kind != "soc" and self.cones[-1][0] == kind:
+            self.cones[-1] = (kind, self.cones[-1][1] + height)
+        else:
+            self.cones.append((kind, height))
+        return start
+
+
+class SubproblemTemplate:
+    """Sparsity pattern, cone list and value maps of the subproblem for one N, BC and mask.
+
+    ``mask`` (7N booleans, node-major bit 7k + c) selects which path constraints enter; the
+    full problem uses all ones. Constraint 6 (T_min) is always kept (DESIGN.md).
+    """
+
+    def __init__(self, N: int, final_roll_free: bool, mask: np.ndarray | None = None) -> None:
+        self.N = N
+        self.lay = Layout(N)
+        self.final_roll_free = final_roll_free
+        mask = np.ones(NC * N, dtype=bool) if mask is None else np.asarray(mask, dtype=bool)
+        if mask.shape != (NC * N,):
+            raise ValueError(f"mask must have {NC * N} entries (7N), got {mask.shape}")
+        mask = mask.reshape(N, NC).copy()
+        mask[:, 6] = True
+        self.mask = mask
+        self._build()
+
+    # -- pattern --------------------------------------------------------------------------
+    def _build(self) -> None:
+        N, L = self.N, self.lay
+        R = _Rows()
+        nI = N - 1
+        k = np.arange(nI)
+        # Dynamics (zero cone), 14 rows per interval; entries in this order per interval:
+        # x_{k+1} (14), A_hat (14x14), Bm_hat (14x3), Bp_hat (14x3), Sigma_hat (14), nu (14).
+        eye_r = np.arange(NX)
+        rr = np.repeat(eye_r, NX)  # row-major over (row, col) of a 14x14 block
+        cc = np.tile(eye_r, NX)
+        ru = np.repeat(eye_r, NU)
+        cu = np.tile(np.arange(NU), NX)
+        rows_d, cols_d = [], []
+        for kk in k:
+            base = NX * kk
+            rows_d += [base + eye_r, base + rr, base + ru, base + ru, base + eye_r, base + eye_r]
+            cols_d += [
+                L.x_index(kk + 1, eye_r),
+                L.x_index(kk, cc),
+                L.u_index(kk, cu),
+                L.u_index(kk + 1, cu),
+                np.full(NX, L.isig),
+                L.inu + NX * kk + eye_r,
+            ]
+        self.r_dyn = R.add("zero", np.concatenate(rows_d), np.concatenate(cols_d), NX * nI)
+        self.nnz_dyn_per_interval = NX * (1 + NX + 2 * NU + 2)
+        # Boundary conditions (zero cone): full initial state, final r, v, omega, q.
+        self.r_x0 = R.add("zero", eye_r, L.x_index(0, eye_r), NX)
+        fin = list(range(0, 6)) + list(range(10, 13))
+        fin += [8, 9] if self.final_roll_free else [6, 7, 8, 9]
+        self.final_idx = np.array(fin)
+        self.r_xf = R.add("zero", np.arange(len(fin)), L.x_index(N - 1, self.final_idx), len(fin))
+        # Nonnegative rows: t_i - nu_i >= 0 and t_i + nu_i >= 0 (scalar blocks), s' >= 0,
+        # sigma bound, trust region, mass, T_min.
+        ns_nu = len(TR_SCALAR_STATES)
+        t_idx = (L.ivc + N_NU_BLOCKS * k[:, None] + np.arange(ns_nu)[None, :]).ravel()
+        nu_idx = (L.inu + NX * k[:, None] + np.array(TR_SCALAR_STATES)[None, :]).ravel()
+        ne = t_idx.size
+        self.r_nu = R.add(
+            "nonneg",
+            np.concatenate(
+                [np.arange(ne), np.arange(ne), np.arange(ne, 2 * ne), np.arange(ne, 2 * ne)]
+            ),
+            np.concatenate([t_idx, nu_idx, t_idx, nu_idx]),
+            2 * ne,
+        )
+        self.n_nu_scalar = ne
+        self.r_buf = R.add("nonneg", np.arange(N), L.ibuf + np.arange(N), N)
+        self.r_sig = R.add("nonneg", np.array([0]), np.array([L.isig]), 1)
+        # Trust region, scalar part: |z_i - z_ref,i| <= eta as two rows each.
+        nodes = np.arange(N)
+        scal = [
+            L.x_index(nodes[:, None], np.array(TR_SCALAR_STATES)[None, :]).ravel(),
+            np.arange(L.iu, L.isig),
+            np.array([L.isig]),
+        ]
+        self.tr_scalar = np.concatenate(scal)
+        ns = self.tr_scalar.size
+        self.r_tr = R.add(
+            "nonneg", np.arange(2 * ns), np.concatenate([self.tr_scalar, self.tr_scalar]), 2 * ns
+        )
+        nodes_m = np.flatnonzero(self.mask[:, 0])
+        self.nodes_mass = nodes_m
+        self.r_mass = R.add("nonneg", np.arange(len(nodes_m)), L.x_index(nodes_m, IM), len(nodes_m))
+        # T_min linearization at every node: (T_k / |T_k|) . u_hat + s'_k >= T_min / S_u.
+        self.r_tmin = R.add(
+            "nonneg",
+            np.concatenate([np.repeat(np.arange(N), NU), np.arange(N)]),
+            np.concatenate(
+                [
+                    L.u_index(np.repeat(np.arange(N), NU), np.tile(np.arange(NU), N)),
+                    L.ibuf + np.arange(N),
+                ]
+            ),
+            N,
+        )
+        # Second-order cones, node-major, in constraint order 1..5 at each node.
+        self.soc_rows: dict[tuple[int, int], int] = {}
+        for node in range(N):
+            for c in range(1, 6):
+                if not self.mask[node, c]:
+                    continue
+                rows, cols = self._soc_entries(node, c)
+                self.soc_rows[(node, c)] = R.add("soc", rows, cols, CONE_DIMS[c])
+        # Virtual control pairs: [t_p; nu_a; nu_b] in Q3.
+        self.nu_pairs = []
+        for kk in k:
+            for j, pair in enumerate(TR_PAIRS):
+                t_col = L.ivc + N_NU_BLOCKS * kk + len(TR_SCALAR_STATES) + j
+                cols = np.array([t_col, L.inu + NX * kk + pair[0], L.inu + NX * kk + pair[1]])
+                self.nu_pairs.append(R.add("soc", np.arange(3), cols, 3))
+        # Trust region, rotation-invariant pairs: |(z_a, z_b) - ref|_2 <= eta (SOC of dim 3).
+        self.tr_pairs = np.stack(
+            [L.x_index(nodes[:, None], np.array(pair)[None, :]) for pair in TR_PAIRS], axis=1
+        ).reshape(-1, 2)
+        self.r_trp = R.m
+        for pair in self.tr_pairs:
+            R.add("soc", np.array([1, 2]), pair, 3)
+        rows = np.concatenate(R.rows)
+        cols = np.concatenate(R.cols)
+        self.m, self.n = R.m, L.n
+        self.cones = R.cones
+        self.nnz = rows.size
+        # COO -> CSC permutation, computed once: csc.data = values[self.perm].
+        order = np.lexsort((rows, cols))
+        self.perm = order
+        self.indices = rows[order].astype(np.int64)
+        self.indptr = np.searchsorted(cols[order], np.arange(self.n + 1)).astype(np.int64)
+        if np.any((np.diff(rows[order]) == 0) & (np.diff(cols[order]) == 0)):
+            raise AssertionError("duplicate entries in the subproblem pattern")
+
+    def _soc_entries(self, node: int, c: int) -> tuple[np.ndarray, np.ndarray]:
+        L = self.lay
+        if c == 1:  # [r1; tan(gs) r2; tan(gs) r3]
+            return np.arange(3), L.x_index(node, np.array([0, 1, 2]))
+        if c == 2:  # [q_max; q2; q3]
+            return np.array([1, 2]), L.x_index(node, np.array([8, 9]))
+        if c == 3:  # [omega_max / S_w; omega_hat]
+            return np.array([1, 2, 3]), L.x_index(node, np.array([10, 11, 12]))
+        if c == 4:  # [T_max / S_u; u_hat]
+            return np.array([1, 2, 3]), L.u_index(node, np.arange(3))
+        # c == 5: [u1; cos(delta) u_hat]
+        return np.array([0, 1, 2, 3]), L.u_index(node, np.array([0, 0, 1, 2]))
+
+    # -- numbers --------------------------------------------------------------------------
+    def assemble(
+        self,
+        disc: dict[str, np.ndarray],
+        z_ref: np.ndarray,
+        eta: float,
+        lam: float,
+        scenario: Scenario,
+        scaling: Scaling,
+    ) -> ConicProblem:
+        """Writes the numbers of the subproblem linearized about the scaled iterate z_ref."""
+        p = scenario.params
+        N, L, sc = self.N, self.lay, scaling
+        Sx, cx, Su, Ss = sc.Sx, sc.cx, sc.Su, sc.Ss
+        vals: list[np.ndarray] = []
+        b = np.zeros(self.m)
+        # Dynamics: x_hat_{k+1} - A_hat x_hat_k - Bm_hat u_hat_k - Bp_hat u_hat_{k+1}
+        #           - Sigma_hat sigma_hat - nu = Sx^-1 (A c_x + z - c_x)
+        A, Bm, Bp, S, zk = disc["A"], disc["Bm"], disc["Bp"], disc["Sigma"], disc["z"]
+        inv = 1.0 / Sx
+        Ah = -(inv[None, :, None] * A * Sx[None, None, :])
+        Bmh = -(inv[None, :, None] * Bm * Su)
+        Bph = -(inv[None, :, None] * Bp * Su)
+        Sh = -(inv[None, :] * S * Ss)
+        nI = N - 1
+        ones = np.ones((nI, NX))
+        dyn = np.concatenate(
+            [ones, Ah.reshape(nI, -1), Bmh.reshape(nI, -1), Bph.reshape(nI, -1), Sh, -ones],
+            axis=1,
+        )
+        vals.append(dyn.ravel())
+        b[self.r_dyn : self.r_dyn + NX * nI] = (inv * (A @ cx + zk - cx)).ravel()
+        # Boundary conditions.
+        x0h = sc.scale_x(scenario.x0)
+        xf = p.x_final_target()
+        vals.append(np.ones(NX))
+        b[self.r_x0 : self.r_x0 + NX] = x0h
+        vals.append(np.ones(len(self.final_idx)))
+        b[self.r_xf : self.r_xf + len(self.final_idx)] = ((xf - cx) / Sx)[self.final_idx]
+        # Epigraph of |nu_i|: s = t - nu >= 0 and s = t + nu >= 0; then s' >= 0.
+        ne = self.n_nu_scalar
+        vals.append(np.concatenate([-np.ones(ne), np.ones(ne), -np.ones(ne), -np.ones(ne)]))
+        vals.append(-np.ones(N))
+        # sigma_hat >= SIGMA_MIN / Ss.
+        vals.append(-np.ones(1))
+        b[self.r_sig] = -SIGMA_MIN / Ss
+        # Trust region, scalars: eta - (z - z_ref) >= 0 and eta + (z - z_ref) >= 0.
+        ns = self.tr_scalar.size
+        zr = z_ref[self.tr_scalar]
+        vals.append(np.concatenate([np.ones(ns), -np.ones(ns)]))
+        b[self.r_tr : self.r_tr + ns] = eta + zr
+        b[self.r_tr + ns : self.r_tr + 2 * ns] = eta - zr
+        # Mass: m_hat >= 0  (m >= m_dry with c_m = m_dry).
+        vals.append(-np.ones(len(self.nodes_mass)))
+        # T_min: -(T_ref/|T_ref|) . u_hat - s' + s = -T_min / S_u  (s >= 0).
+        u_ref = z_ref[L.iu : L.isig].reshape(N, NU)
+        dirs = u_ref / np.maximum(np.linalg.norm(u_ref, axis=1, keepdims=True), 1e-12)
+        vals.append(np.concatenate([-dirs.ravel(), -np.ones(N)]))
+        b[self.r_tmin : self.r_tmin + N] = -p.T_min / Su
+        # Second-order cones: s = b - A z.
+        tg, cg = p.tan_glideslope, p.cos_gimbal
+        soc_vals = {
+            1: np.array([-1.0, -tg, -tg]),
+            2: np.array([-1.0, -1.0]),
+            3: np.array([-1.0, -1.0, -1.0]),
+            4: np.array([-1.0, -1.0, -1.0]),
+            5: np.array([-1.0, -cg, -cg, -cg]),
+        }
+        head = {2: p.tilt_q_max / Sx[8], 3: p.omega_max / Sx[10], 4: p.T_max / Su}
+        for (_node, c), row in self.soc_rows.items():
+            vals.append(soc_vals[c])
+            if c in head:
+                b[row] = head[c]
+        # Virtual control pairs: s = [t; nu_a; nu_b] in Q3.
+        vals.append(np.tile(-np.ones(3), len(self.nu_pairs)))
+        # Trust region, pairs: s = [eta; z_a - ref_a; z_b - ref_b] in Q3.
+        npair = len(self.tr_pairs)
+        vals.append(-np.ones(2 * npair))
+        tb = np.zeros((npair, 3))
+        tb[:, 0] = eta
+        tb[:, 1:] = -z_ref[self.tr_pairs]
+        b[self.r_trp : self.r_trp + 3 * npair] = tb.ravel()
+        data = np.concatenate(vals)[self.perm]
+        Amat = sp.csc_matrix((data, self.indices, self.indptr), shape=(self.m, self.n))
+        q = np.zeros(self.n)
+        q[L.x_index(N - 1, IM)] = -1.0  # minimize -m_hat(t_f)
+        q[L.ivc :] = lam  # lambda (sum t + sum s')
+        return ConicProblem(P=None, q=q, A=Amat, b=b, cones=list(self.cones))
+
+
+def pack(xh: np.ndarray, uh: np.ndarray, sh: float, lay: Layout) -> np.ndarray:
+    z = np.zeros(lay.n)
+    z[: lay.iu] = xh.ravel()
+    z[lay.iu : lay.isig] = uh.ravel()
+    z[lay.isig] = sh
+    return z
+
+
+def unpack(z: np.ndarray, lay: Layout) -> tuple[np.ndarray, np.ndarray, float]:
+    N = lay.N
+    return (
+        z[: lay.iu].reshape(N, NX).copy(),
+        z[lay.iu : lay.isig].reshape(N, NU).copy(),
+        float(z[lay.isig]),
+    )
+
+
+def physical(z: np.ndarray, lay: Layout, sc: Scaling) -> tuple[np.ndarray, np.ndarray, float]:
+    xh, uh, sh = unpack(z, lay)
+    return sc.unscale_x(xh), uh * sc.Su, sh * sc.Ss
+
+
+def scaled(x: np.ndarray, u: np.ndarray, t_f: float, lay: Layout, sc: Scaling) -> np.ndarray:
+    return pack(sc.scale_x(x), u / sc.Su, t_f / sc.Ss, lay)
+
+
+def constraint_params_check(p: Params) -> None:  # pragma: no cover - documentation aid
+    """The SOC forms above assume tan(gs) finite and cos(delta) in (0, 1) (validated input)."""

@@ -1,0 +1,68 @@
+"""Trajectory .npz files (DESIGN.md contract) and their provenance."""
+
+from __future__ import annotations
+
+import json
+import platform
+from datetime import datetime, timezone
+from pathlib import Path
+
+import numpy as np
+
+from guidance.params import Params
+from guidance.scenario import scenario_to_dict
+from guidance.scvx import SCvxResult
+
+REQUIRED_KEYS = ("t_f", "x", "u", "status", "iterations", "solve_time_s", "params")
+
+
+def provenance() -> dict[str, str]:
+    from importlib.metadata import version
+
+    return {
+        "generator": f"guidance {version('guidance')}",
+        "created_utc": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+        "python": platform.python_version(),
+        "host": platform.machine(),
+    }
+
+
+def write_trajectory(
+    path: str | Path,
+    result: SCvxResult,
+    params: Params,
+    scenario: object,
+    method: str,
+    backend: str,
+) -> None:
+    """Writes the contract keys plus the iteration masks, reason, scenario and provenance."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(path.name + ".tmp.npz")
+    np.savez(
+        tmp,
+        t_f=np.float64(result.t_f),
+        x=result.x,
+        u=result.u,
+        status=np.str_(result.status),
+        iterations=np.int64(result.iterations),
+        solve_time_s=np.float64(result.solve_time_s),
+        params=np.str_(json.dumps(params.to_json_dict())),
+        reason=np.str_(result.reason),
+        masks=result.masks,
+        scenario=np.str_(json.dumps(scenario_to_dict(scenario))),  # type: ignore[arg-type]
+        method=np.str_(method),
+        backend=np.str_(backend),
+        provenance=np.str_(json.dumps(provenance())),
+    )
+    tmp.replace(path)  # never leave a half-written file under the final name
+
+
+def read_trajectory(path: str | Path) -> dict[str, object]:
+    with np.load(path, allow_pickle=False) as data:
+        missing = [k for k in REQUIRED_KEYS if k not in data]
+        if missing:
+            raise ValueError(f"{path}: not a trajectory file, missing {', '.join(missing)}")
+        out: dict[str, object] = {k: data[k] for k in data.files}
+    out["params"] = json.loads(str(out["params"]))
+    return out

@@ -1,0 +1,98 @@
+"""Independent checks of a trajectory: open-loop integration with scipy and constraint audit.
+
+The dynamics here are written again in plain numpy from DESIGN.md (not through CasADi), so
+that a landing that passes is checked by code that shares nothing with the solver but the
+equations.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+from guidance.constraints import path_constraint_values
+from guidance.params import IM, IQ, IR, IV, IW, Params
+
+
+def _dcm_bi(q: np.ndarray) -> np.ndarray:
+    q0, q1, q2, q3 = q
+    return np.array(
+        [
+            [1 - 2 * (q2**2 + q3**2), 2 * (q1 * q2 + q0 * q3), 2 * (q1 * q3 - q0 * q2)],
+            [2 * (q1 * q2 - q0 * q3), 1 - 2 * (q1**2 + q3**2), 2 * (q2 * q3 + q0 * q1)],
+            [2 * (q1 * q3 + q0 * q2), 2 * (q2 * q3 - q0 * q1), 1 - 2 * (q1**2 + q2**2)],
+        ]
+    )
+
+
+def dynamics_numpy(x: np.ndarray, u: np.ndarray, p: Params) -> np.ndarray:
+    """dx/dt of DESIGN.md in plain numpy (physical time)."""
+    v, q, w, m = x[IV], x[IQ], x[IW], x[IM]
+    J = np.array(p.J_B)
+    C_BI = _dcm_bi(q)
+    v_B = C_BI @ v
+    A_B = -p.aero_coeff * np.linalg.norm(v_B) * v_B
+    w1, w2, w3 = w
+    Omega = np.array([[0, -w1, -w2, -w3], [w1, 0, w3, -w2], [w2, -w3, 0, w1], [w3, w2, -w1, 0]])
+    torque = np.cross(p.r_T_B, u) + np.cross(p.r_cp_B, A_B) - np.cross(w, J * w)
+    return np.concatenate(
+        [
+            v,
+            C_BI.T @ (u + A_B) / m + np.array(p.g_I),
+            0.5 * Omega @ q,
+            torque / J,
+            [-p.alpha_mdot * np.linalg.norm(u) - p.beta_mdot],
+        ]
+    )
+
+
+def foh_control(u: np.ndarray, t_f: float):
+    N = u.shape[0]
+    grid = np.linspace(0.0, t_f, N)
+
+    def control(t: float) -> np.ndarray:
+        return np.array([np.interp(t, grid, u[:, i]) for i in range(3)])
+
+    return control
+
+
+def propagate(
+    x0: np.ndarray, u: np.ndarray, t_f: float, p: Params, rtol: float = 1e-10
+) -> np.ndarray:
+    """Open-loop integration from x0 under the FOH thrust; states at the N node times."""
+    control = foh_control(u, t_f)
+    grid = np.linspace(0.0, t_f, u.shape[0])
+    sol = solve_ivp(
+        lambda t, x: dynamics_numpy(x, control(t), p),
+        (0.0, t_f),
+        x0,
+        t_eval=grid,
+        rtol=rtol,
+        atol=rtol,
+        method="DOP853",
+        max_step=t_f / (u.shape[0] - 1),
+    )
+    return sol.y.T
+
+
+@dataclass
+class Audit:
+    landing_position_error: float  # |r(t_f) - r_f| of the open-loop propagation
+    landing_velocity_error: float
+    final_tilt_q: float  # |(q2, q3)| at t_f, propagated
+    max_path_violation: float  # max over nodes and constraints of h (<= 0 when met)
+    max_node_deviation: float  # max |x_propagated - x| over nodes
+
+
+def audit(x: np.ndarray, u: np.ndarray, t_f: float, p: Params) -> Audit:
+    xp = propagate(x[0], u, t_f, p)
+    h = path_constraint_values(x, u, p)
+    return Audit(
+        landing_position_error=float(np.linalg.norm(xp[-1, IR] - np.array(p.r_f))),
+        landing_velocity_error=float(np.linalg.norm(xp[-1, IV] - np.array(p.v_f))),
+        final_tilt_q=float(np.linalg.norm(xp[-1, 8:10])),
+        max_path_violation=float(h.max()),
+        max_node_deviation=float(np.abs(xp - x).max()),
+    )

@@ -1,0 +1,81 @@
+"""Scenario contract: every kind of bad input gets a clear error naming the field, exit 2."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from guidance.cli import main
+from guidance.params import Params
+from guidance.scenario import ScenarioError, scenario_from_dict
+
+GOOD = {
+    "r0": [4, 4, 0],
+    "v0": [0, -1, -2],
+    "q0": [1, 0, 0, 0],
+    "w0": [0, 0, 0],
+    "m0": 3.0,
+    "glideslope_deg": 20.0,
+    "tilt_max_deg": 90.0,
+}
+
+BAD = [
+    ({"colour": 1}, "colour"),
+    ({"r0": [4, 4]}, "r0"),
+    ({"v0": [0, -1, "x"]}, "v0"),
+    ({"m0": float("nan")}, "m0"),
+    ({"r0": [4, float("inf"), 0]}, "r0"),
+    ({"q0": [1, 0.1, 0, 0]}, "q0"),
+    ({"m0": 2.0}, "m0"),
+    ({"m0": 1.5}, "m0"),
+    ({"r0": [1, 4, 0]}, "r0"),  # below the 20 deg glideslope cone
+    ({"tilt_max_deg": 10.0, "q0": [0.9659258262890683, 0, 0.25881904510252074, 0]}, "q0"),
+    ({"w0": [0, 2.0, 0]}, "w0"),  # |w0| above 90 deg/U_T
+    ({"w0": [0.1, 0, 0]}, "w0"),  # roll rate cannot change
+    ({"T_min": 6.0}, "T_min"),
+    ({"N": 2}, "N"),
+    ({"final_roll_free": "yes"}, "final_roll_free"),
+    ({"J_B": [0.001, 0.01]}, "J_B"),
+]
+
+
+@pytest.mark.parametrize(("change", "field"), BAD)
+def test_bad_scenario_is_rejected_naming_the_field(change: dict, field: str) -> None:
+    with pytest.raises(ScenarioError) as err:
+        scenario_from_dict({**GOOD, **change})
+    assert err.value.field == field
+    assert field in str(err.value)
+
+
+@pytest.mark.parametrize(("change", "field"), BAD)
+def test_cli_exit_code_2_and_nothing_written(
+    change: dict, field: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = tmp_path / "s.json"
+    # allow_nan writes NaN / Infinity literals, which the loader must reject by field
+    path.write_text(json.dumps({**GOOD, **change}, allow_nan=True))
+    out, fig = tmp_path / "t.npz", tmp_path / "t.png"
+    code = main(["solve", str(path), "--out", str(out), "--plot", str(fig)])
+    assert code == 2
+    assert field in capsys.readouterr().err
+    assert not out.exists() and not fig.exists()
+
+
+def test_unreadable_and_malformed_files(tmp_path: Path) -> None:
+    assert main(["solve", str(tmp_path / "missing.json")]) == 2
+    bad = tmp_path / "bad.json"
+    bad.write_text("{not json")
+    assert main(["solve", str(bad)]) == 2
+
+
+def test_parameter_override_and_defaults() -> None:
+    s = scenario_from_dict({**GOOD, "T_max": 4.5, "final_roll_free": False, "N": 30})
+    assert s.params.T_max == 4.5 and s.params.N == 30 and not s.params.final_roll_free
+    p = Params()
+    # derived values of DESIGN.md
+    assert p.alpha_mdot == pytest.approx(1 / 30)
+    assert p.beta_mdot == pytest.approx(0.1 * 0.5 / 30)
+    assert p.aero_coeff == pytest.approx(0.1)
+    assert p.J_B == (0.001, 0.01, 0.01)

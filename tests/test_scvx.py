@@ -1,0 +1,97 @@
+"""Reference SCvx end to end: convergence, open-loop landing, symmetry, infeasibility, files."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from guidance.catalog import SCENARIOS
+from guidance.cli import main
+from guidance.params import NC, InitialState, Scenario
+from guidance.scvx import SCvxResult, solve_scvx
+from guidance.symmetry import rotate_scenario, rotate_states
+from guidance.trajectory_io import read_trajectory
+from guidance.verify import audit
+
+
+@pytest.fixture(scope="module")
+def results() -> dict[str, SCvxResult]:
+    return {name: solve_scvx(s) for name, s in SCENARIOS.items()}
+
+
+@pytest.mark.parametrize("name", list(SCENARIOS))
+def test_converges_and_lands_open_loop(results: dict[str, SCvxResult], name: str) -> None:
+    r = results[name]
+    p = SCENARIOS[name].params
+    assert r.status == "solved", r.reason
+    assert r.iterations <= 20
+    assert r.history[-1].vc_norm1 <= 1e-6  # virtual control and buffers of the last step
+    a = audit(r.x, r.u, r.t_f, p)  # scipy integration of the numpy dynamics from x0
+    assert a.landing_position_error <= 1e-3
+    assert a.landing_velocity_error <= 1e-3
+    assert a.max_path_violation <= 1e-6
+    assert r.masks.shape == (r.iterations, NC * p.N)
+
+
+def test_default_landing_burns_about_three_quarters(results: dict[str, SCvxResult]) -> None:
+    fuel = 3.0 - results["default"].m_f
+    assert 0.6 < fuel < 0.9  # DESIGN.md: about three quarters of the unit of propellant
+
+
+def test_rotation_about_up_axis_rotates_the_solution(results: dict[str, SCvxResult]) -> None:
+    base = results["default"]
+    for j in range(1, 8):
+        psi = j * math.pi / 4
+        r = solve_scvx(rotate_scenario(SCENARIOS["default"], psi))
+        assert r.status == "solved"
+        assert abs(r.m_f - base.m_f) <= 1e-5
+        np.testing.assert_allclose(r.x, rotate_states(base.x, psi), atol=1e-4)
+        np.testing.assert_allclose(r.u, base.u, atol=1e-4)
+        np.testing.assert_array_equal(r.final_mask, base.final_mask)
+
+
+def test_far_and_fast_start_is_infeasible_with_a_reason() -> None:
+    far = Scenario(InitialState(r0=(8.0, 8.0, 0.0), v0=(0.0, -2.0, -2.0), m0=2.4))
+    r = solve_scvx(far)
+    assert r.status == "infeasible"
+    assert "virtual control" in r.reason or "defect" in r.reason
+    assert "mass at the floor" in r.reason
+
+
+def test_cli_writes_the_trajectory_contract(tmp_path: Path) -> None:
+    out, fig = tmp_path / "traj.npz", tmp_path / "traj.png"
+    assert main(["solve", "--out", str(out), "--plot", str(fig)]) == 0
+    data = read_trajectory(out)
+    assert data["x"].shape == (50, 14) and data["u"].shape == (50, 3)
+    assert str(data["status"]) == "solved"
+    assert float(data["t_f"]) > 0 and int(data["iterations"]) <= 20
+    params = data["params"]
+    for key in (
+        "g_I",
+        "J_B",
+        "r_T_B",
+        "r_cp_B",
+        "alpha_mdot",
+        "beta_mdot",
+        "aero_coeff",
+        "m_dry",
+        "T_min",
+        "T_max",
+        "gimbal_max_deg",
+        "tilt_max_deg",
+        "glideslope_deg",
+        "omega_max_deg",
+        "r_f",
+        "v_f",
+        "q_f",
+        "omega_f",
+        "final_roll_free",
+        "N",
+    ):
+        assert key in params
+    assert json.loads(str(data["scenario"]))["m0"] == 3.0
+    assert fig.stat().st_size > 10_000
