@@ -139,9 +139,9 @@ class SCvxSettings:
     # Convergence: an accepted step whose scaled infinity-norm is below step_tol, whose
     # virtual control and buffers are below vc_tol (scaled units), and whose nonlinear
     # defects are below defect_tol.
-    step_tol: float = 2e-3
+    step_tol: float = 5e-3
     vc_tol: float = 1e-6
-    defect_tol: float = 1e-6
+    defect_tol: float = 1e-5  # physical units; path constraints must hold to 1e-6 anyway
     rk4_substeps: int = 8  # RK4 steps per FOH interval in the discretization
     tight_tol: float = 1e-6  # slack threshold of the tight-constraint labelling
 

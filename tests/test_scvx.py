@@ -50,7 +50,7 @@ def test_rotation_about_up_axis_rotates_the_solution(results: dict[str, SCvxResu
         assert r.status == "solved"
         assert abs(r.m_f - base.m_f) <= 1e-5
         np.testing.assert_allclose(r.x, rotate_states(base.x, psi), atol=1e-4)
-        np.testing.assert_allclose(r.u, base.u, atol=1e-4)
+        np.testing.assert_allclose(r.u, base.u, atol=1e-3)  # thrust is O(1..5)
         np.testing.assert_array_equal(r.final_mask, base.final_mask)
 
 
