@@ -9,7 +9,7 @@ STAMP  := $(VENV)/.installed
 APT_PACKAGES := libeigen3-dev libsuitesparse-dev valgrind
 BUILD  := build
 
-.PHONY: all setup apt lib ctest pytest test lint demo bench budget models clean
+.PHONY: all setup apt lib gnc ctest pytest test lint demo bench budget models clean
 
 all: lib
 
@@ -33,6 +33,7 @@ setup: apt $(STAMP)
 
 # ---- flight C library (rules in c_runtime/runtime.mk) --------------------------------------
 include c_runtime/runtime.mk
+include c_runtime/guidance.mk
 
 # ---- tests ---------------------------------------------------------------------------------
 pytest: setup lib

@@ -117,6 +117,11 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--repeats", type=int, default=1)
     b.add_argument("--skip-socp", action="store_true", help="skip the conic solver benchmark")
     b.set_defaults(func=cmd_bench)
+
+    # Learning tools (dataset, train, export, baselines) register their own subcommands.
+    from guidance import cli_learning
+
+    cli_learning.add_commands(sub)
     return parser
 
 

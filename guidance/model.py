@@ -171,31 +171,48 @@ def constraint_functions() -> tuple[ca.Function, ca.Function]:
 
 
 # ---- first-order-hold discretization -----------------------------------------------------
-@lru_cache(maxsize=8)
-def discretization_function(substeps: int) -> ca.Function:
-    """FOH discretization of one interval of normalized length dtau (paper Eq. (5)).
+# Augmented state of one interval, packed: x (14), Phi_A (14x14), Phi_m (14x3), Phi_p (14x3),
+# Phi_s (14); matrices column-major as CasADi stores them.
+N_AUG = NX + NX * NX + 2 * NX * NU + NX
 
-    Integrates, with ``substeps`` classic RK4 steps, the augmented system
+
+def _unpack_aug(P: ca.SX) -> tuple[ca.SX, ...]:
+    i = 0
+    out = []
+    for rows, cols in ((NX, 1), (NX, NX), (NX, NU), (NX, NU), (NX, 1)):
+        out.append(ca.reshape(P[i : i + rows * cols], rows, cols))
+        i += rows * cols
+    return tuple(out)
+
+
+def _pack_aug(parts: tuple[ca.SX, ...]) -> ca.SX:
+    return ca.vertcat(*(ca.vec(m) for m in parts))
+
+
+@lru_cache(maxsize=1)
+def foh_step_function() -> ca.Function:
+    """One classic RK4 step, from s to s + h, of the augmented FOH system (paper Eq. (5)):
+
         x'     = sigma f(x, u(s)),              u(s) = l_m(s) u_k + l_p(s) u_k1
         Phi_A' = sigma A Phi_A                  Phi_A(0) = I
         Phi_m' = sigma A Phi_m + sigma B l_m    Phi_m(0) = 0
         Phi_p' = sigma A Phi_p + sigma B l_p    Phi_p(0) = 0
         Phi_s' = sigma A Phi_s + f              Phi_s(0) = 0
-    with l_m = 1 - s/dtau, l_p = s/dtau; returns x(dtau), A_k = Phi_A, B-_k = Phi_m,
-    B+_k = Phi_p, Sigma_k = Phi_s and the defect term
-        z_k = x(dtau) - A_k x_k - B-_k u_k - B+_k u_k1 - Sigma_k sigma,
-    so that x_{k+1} ~ A_k x_k + B-_k u_k + B+_k u_k1 + Sigma_k sigma + z_k.
-    """
-    xk, uk, uk1 = ca.SX.sym("x_k", NX), ca.SX.sym("u_k", NU), ca.SX.sym("u_k1", NU)
-    sigma, dtau, p = ca.SX.sym("sigma"), ca.SX.sym("dtau"), ca.SX.sym("p", NP)
 
+    with l_m = 1 - s/dtau, l_p = s/dtau and A, B the Jacobians of f. The flight library calls
+    the generated C of this function in a bounded loop; Python composes it symbolically.
+    """
+    P = ca.SX.sym("P", N_AUG)
+    s, h = ca.SX.sym("s"), ca.SX.sym("h")
+    uk, uk1 = ca.SX.sym("u_k", NU), ca.SX.sym("u_k1", NU)
+    sigma, dtau, p = ca.SX.sym("sigma"), ca.SX.sym("dtau"), ca.SX.sym("p", NP)
     xs, us = ca.SX.sym("xs", NX), ca.SX.sym("us", NU)
     f = dynamics_expr(xs, us, p)
     fAB = ca.Function("fAB", [xs, us, p], [f, ca.jacobian(f, xs), ca.jacobian(f, us)])
 
-    def rhs(s: ca.SX, state: tuple[ca.SX, ...]) -> tuple[ca.SX, ...]:
+    def rhs(t: ca.SX, state: tuple[ca.SX, ...]) -> tuple[ca.SX, ...]:
         x, PA, Pm, Pp, Ps = state
-        lp = s / dtau
+        lp = t / dtau
         lm = 1 - lp
         fx, A, B = fAB(x, lm * uk + lp * uk1, p)
         SA = sigma * A
@@ -207,19 +224,44 @@ def discretization_function(substeps: int) -> ca.Function:
             SA @ Ps + fx,
         )
 
-    state = (xk, ca.SX.eye(NX), ca.SX.zeros(NX, NU), ca.SX.zeros(NX, NU), ca.SX.zeros(NX, 1))
+    def axpy(a: tuple[ca.SX, ...], c: ca.SX, b: tuple[ca.SX, ...]) -> tuple[ca.SX, ...]:
+        return tuple(ai + c * bi for ai, bi in zip(a, b, strict=True))
+
+    y = _unpack_aug(P)
+    k1 = rhs(s, y)
+    k2 = rhs(s + h / 2, axpy(y, h / 2, k1))
+    k3 = rhs(s + h / 2, axpy(y, h / 2, k2))
+    k4 = rhs(s + h, axpy(y, h, k3))
+    y_next = tuple(
+        a + h / 6 * (b1 + 2 * b2 + 2 * b3 + b4)
+        for a, b1, b2, b3, b4 in zip(y, k1, k2, k3, k4, strict=True)
+    )
+    return ca.Function(
+        "tscvx_foh_step",
+        [P, s, h, uk, uk1, sigma, dtau, p],
+        [_pack_aug(y_next)],
+        ["P", "s", "h", "u_k", "u_k1", "sigma", "dtau", "p"],
+        ["P_next"],
+    )
+
+
+@lru_cache(maxsize=8)
+def discretization_function(substeps: int) -> ca.Function:
+    """FOH discretization of one interval of normalized length dtau (paper Eq. (5)).
+
+    ``substeps`` RK4 steps of :func:`foh_step_function` from the initial augmented state;
+    returns x(dtau), A_k = Phi_A, B-_k = Phi_m, B+_k = Phi_p, Sigma_k = Phi_s and the defect term
+        z_k = x(dtau) - A_k x_k - B-_k u_k - B+_k u_k1 - Sigma_k sigma,
+    so that x_{k+1} ~ A_k x_k + B-_k u_k + B+_k u_k1 + Sigma_k sigma + z_k.
+    """
+    xk, uk, uk1 = ca.SX.sym("x_k", NX), ca.SX.sym("u_k", NU), ca.SX.sym("u_k1", NU)
+    sigma, dtau, p = ca.SX.sym("sigma"), ca.SX.sym("dtau"), ca.SX.sym("p", NP)
+    step = foh_step_function()
+    P = _pack_aug((xk, ca.SX.eye(NX), ca.SX.zeros(NX, NU), ca.SX.zeros(NX, NU), ca.SX.zeros(NX, 1)))
     h = dtau / substeps
     for i in range(substeps):
-        s = i * h
-        k1 = rhs(s, state)
-        k2 = rhs(s + h / 2, tuple(a + h / 2 * b for a, b in zip(state, k1, strict=True)))
-        k3 = rhs(s + h / 2, tuple(a + h / 2 * b for a, b in zip(state, k2, strict=True)))
-        k4 = rhs(s + h, tuple(a + h * b for a, b in zip(state, k3, strict=True)))
-        state = tuple(
-            a + h / 6 * (b1 + 2 * b2 + 2 * b3 + b4)
-            for a, b1, b2, b3, b4 in zip(state, k1, k2, k3, k4, strict=True)
-        )
-    x_next, A_k, Bm_k, Bp_k, S_k = state
+        P = step(P, i * h, h, uk, uk1, sigma, dtau, p)
+    x_next, A_k, Bm_k, Bp_k, S_k = _unpack_aug(P)
     z_k = x_next - A_k @ xk - Bm_k @ uk - Bp_k @ uk1 - S_k * sigma
     return ca.Function(
         "tscvx_foh_interval",

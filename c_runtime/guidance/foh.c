@@ -1,0 +1,82 @@
+/* First-order-hold discretization of one interval: a bounded loop over the generated RK4
+ * step of the augmented system (see foh.h). */
+#include "foh.h"
+
+#include <math.h>
+#include <stddef.h>
+
+#include "tscvx_model.h"
+
+static void initial_augmented_state(const double *x_k, double *P)
+{
+    int i;
+    for (i = 0; i < PDG_NAUG; ++i) {
+        P[i] = 0.0;
+    }
+    for (i = 0; i < PDG_NX; ++i) {
+        P[PDG_AUG_X + i] = x_k[i];
+        P[PDG_AUG_A + i * PDG_NX + i] = 1.0; /* Phi_A(0) = I */
+    }
+}
+
+int pdg_foh_interval(const double *x_k, const double *u_k, const double *u_k1, double sigma,
+                     double dtau, const double *p, int substeps, double *aug, double *z,
+                     double *work)
+{
+    const double *arg[tscvx_foh_step_SZ_ARG];
+    double *res[tscvx_foh_step_SZ_RES];
+    double *cur = aug;
+    double *next = work;
+    double s = 0.0;
+    double h;
+    int step, i, j;
+
+    if (!x_k || !u_k || !u_k1 || !p || !aug || !z || !work || substeps < 1 ||
+        substeps > PDG_MAX_SUBSTEPS || !(dtau > 0.0) || !(sigma > 0.0)) {
+        return -1;
+    }
+    h = dtau / substeps;
+    initial_augmented_state(x_k, cur);
+    for (step = 0; step < substeps; ++step) {
+        s = step * h;
+        arg[0] = cur;
+        arg[1] = &s;
+        arg[2] = &h;
+        arg[3] = u_k;
+        arg[4] = u_k1;
+        arg[5] = &sigma;
+        arg[6] = &dtau;
+        arg[7] = p;
+        res[0] = next;
+        if (tscvx_foh_step(arg, res, NULL, NULL, 0) != 0) {
+            return -2;
+        }
+        { /* ping-pong the two buffers */
+            double *t = cur;
+            cur = next;
+            next = t;
+        }
+    }
+    if (cur != aug) {
+        for (i = 0; i < PDG_NAUG; ++i) {
+            aug[i] = cur[i];
+        }
+    }
+    /* z_k = x(dtau) - A x_k - B- u_k - B+ u_k1 - Sigma sigma (column-major blocks) */
+    for (i = 0; i < PDG_NX; ++i) {
+        double v = aug[PDG_AUG_X + i] - aug[PDG_AUG_S + i] * sigma;
+        for (j = 0; j < PDG_NX; ++j) {
+            v -= aug[PDG_AUG_A + j * PDG_NX + i] * x_k[j];
+        }
+        for (j = 0; j < PDG_NU; ++j) {
+            v -= aug[PDG_AUG_BM + j * PDG_NX + i] * u_k[j] + aug[PDG_AUG_BP + j * PDG_NX + i] * u_k1[j];
+        }
+        z[i] = v;
+    }
+    for (i = 0; i < PDG_NAUG; ++i) {
+        if (!isfinite(aug[i])) {
+            return -2;
+        }
+    }
+    return 0;
+}

@@ -1,0 +1,34 @@
+/*
+ * foh.h -- first-order-hold discretization of one interval from the generated model.
+ *
+ * The augmented state P = (x, Phi_A, Phi_m, Phi_p, Phi_s) (14 + 196 + 42 + 42 + 14 = 308
+ * numbers, matrices column-major) is advanced by `substeps` RK4 steps of the CasADi-generated
+ * tscvx_foh_step (paper Eq. (5); see guidance/model.py). Then
+ *     A_k = Phi_A, B-_k = Phi_m, B+_k = Phi_p, Sigma_k = Phi_s,
+ *     z_k = x(dtau) - A_k x_k - B-_k u_k - B+_k u_k1 - Sigma_k sigma.
+ */
+#ifndef TSCVX_FOH_H
+#define TSCVX_FOH_H
+
+#define PDG_NX 14
+#define PDG_NU 3
+#define PDG_NP 13
+#define PDG_NAUG (PDG_NX + PDG_NX * PDG_NX + 2 * PDG_NX * PDG_NU + PDG_NX)
+#define PDG_MAX_SUBSTEPS 64
+
+/* Offsets of the blocks inside the augmented state. */
+#define PDG_AUG_X 0
+#define PDG_AUG_A (PDG_AUG_X + PDG_NX)
+#define PDG_AUG_BM (PDG_AUG_A + PDG_NX * PDG_NX)
+#define PDG_AUG_BP (PDG_AUG_BM + PDG_NX * PDG_NU)
+#define PDG_AUG_S (PDG_AUG_BP + PDG_NX * PDG_NU)
+
+/* Discretizes one interval. `aug` (PDG_NAUG) receives x(dtau), A_k, B-_k, B+_k, Sigma_k;
+ * `z` (PDG_NX) the defect term; `work` must hold PDG_NAUG doubles. Returns 0, or -1 for a bad
+ * argument (NULL pointer, substeps outside [1, PDG_MAX_SUBSTEPS], dtau <= 0, sigma <= 0) and
+ * -2 when the model evaluation fails or produces a non-finite number. */
+int pdg_foh_interval(const double *x_k, const double *u_k, const double *u_k1, double sigma,
+                     double dtau, const double *p, int substeps, double *aug, double *z,
+                     double *work);
+
+#endif
