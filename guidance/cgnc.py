@@ -27,7 +27,14 @@ def library() -> ctypes.CDLL:
     lib.pdg_foh_interval.restype = ctypes.c_int
     lib.pdg_foh_interval.argtypes = [_dp, _dp, _dp, ctypes.c_double, ctypes.c_double, _dp,
                                      ctypes.c_int, _dp, _dp, _dp]  # fmt: skip
+    lib.pdg_foh_all.restype = ctypes.c_int
+    lib.pdg_foh_all.argtypes = [ctypes.c_int, _dp, _dp, ctypes.c_double, _dp, ctypes.c_int,
+                                _dp, _dp, _dp]  # fmt: skip
     return lib
+
+
+def available() -> bool:
+    return LIB_PATH.exists()
 
 
 def _ptr(a: np.ndarray) -> _dp:
@@ -69,5 +76,30 @@ def foh_interval(x_k: np.ndarray, u_k: np.ndarray, u_k1: np.ndarray, sigma: floa
         "Bm": aug[i[2] : i[3]].reshape(NX, NU, order="F"),
         "Bp": aug[i[3] : i[4]].reshape(NX, NU, order="F"),
         "Sigma": aug[i[4] : i[5]],
+        "z": z,
+    }
+
+
+def discretize_all(x: np.ndarray, u: np.ndarray, sigma: float, p: np.ndarray,
+                   substeps: int) -> dict[str, np.ndarray]:  # fmt: skip
+    """All intervals in C; same keys and shapes as guidance.model.discretize."""
+    N = x.shape[0]
+    xs = np.ascontiguousarray(x, dtype=float)
+    us = np.ascontiguousarray(u, dtype=float)
+    ps = np.ascontiguousarray(p, dtype=float)
+    aug, z, work = np.zeros((N - 1, N_AUG)), np.zeros((N - 1, NX)), np.zeros(N_AUG)
+    status = library().pdg_foh_all(
+        N, _ptr(xs), _ptr(us), float(sigma), _ptr(ps), int(substeps), _ptr(aug), _ptr(z),
+        _ptr(work),
+    )  # fmt: skip
+    if status != 0:
+        raise ValueError(f"pdg_foh_all returned {status}")
+    i = np.cumsum([0, NX, NX * NX, NX * NU, NX * NU, NX])
+    return {
+        "x_next": aug[:, i[0] : i[1]],
+        "A": aug[:, i[1] : i[2]].reshape(N - 1, NX, NX).transpose(0, 2, 1),
+        "Bm": aug[:, i[2] : i[3]].reshape(N - 1, NU, NX).transpose(0, 2, 1),
+        "Bp": aug[:, i[3] : i[4]].reshape(N - 1, NU, NX).transpose(0, 2, 1),
+        "Sigma": aug[:, i[4] : i[5]],
         "z": z,
     }

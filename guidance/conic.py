@@ -90,10 +90,7 @@ def clarabel_cones(cones: list[tuple[ConeKind, int]]) -> list[object]:
     return [make[kind](dim) for kind, dim in cones]
 
 
-def solve_clarabel(
-    prob: ConicProblem, *, tol: float = 1e-9, max_iter: int = 200, verbose: bool = False
-) -> ConicSolution:
-    """Solve with Clarabel (the ground reference). Time counts Clarabel's own solve only."""
+def _clarabel_settings(tol: float, max_iter: int, verbose: bool) -> object:
     import clarabel
 
     settings = clarabel.DefaultSettings()
@@ -102,6 +99,31 @@ def solve_clarabel(
     settings.tol_gap_rel = tol
     settings.tol_feas = tol
     settings.max_iter = max_iter
+    # Presolve may drop rows, which would forbid updating the numbers in place.
+    settings.presolve_enable = False
+    return settings
+
+
+def _clarabel_solution(sol: object, elapsed: float) -> ConicSolution:
+    status = _CLARABEL_STATUS.get(str(sol.status), "numerical_error")  # type: ignore[attr-defined]
+    return ConicSolution(
+        status=status,
+        x=np.asarray(sol.x),  # type: ignore[attr-defined]
+        s=np.asarray(sol.s),  # type: ignore[attr-defined]
+        z=np.asarray(sol.z),  # type: ignore[attr-defined]
+        obj=float(sol.obj_val),  # type: ignore[attr-defined]
+        iterations=int(sol.iterations),  # type: ignore[attr-defined]
+        solve_time_s=elapsed,
+        info={"solve_time_internal_s": float(sol.solve_time)},  # type: ignore[attr-defined]
+    )
+
+
+def solve_clarabel(
+    prob: ConicProblem, *, tol: float = 1e-9, max_iter: int = 200, verbose: bool = False
+) -> ConicSolution:
+    """Solve with Clarabel (the ground reference). Time counts Clarabel's own solve only."""
+    import clarabel
+
     P = prob.P if prob.P is not None else sp.csc_matrix((prob.n, prob.n))
     solver = clarabel.DefaultSolver(
         sp.csc_matrix(P),
@@ -109,22 +131,64 @@ def solve_clarabel(
         sp.csc_matrix(prob.A),
         prob.b,
         clarabel_cones(prob.cones),
-        settings,
+        _clarabel_settings(tol, max_iter, verbose),
     )
     t0 = time.perf_counter()
     sol = solver.solve()
-    elapsed = time.perf_counter() - t0
-    status = _CLARABEL_STATUS.get(str(sol.status), "numerical_error")
-    return ConicSolution(
-        status=status,
-        x=np.asarray(sol.x),
-        s=np.asarray(sol.s),
-        z=np.asarray(sol.z),
-        obj=float(sol.obj_val),
-        iterations=int(sol.iterations),
-        solve_time_s=elapsed,
-        info={"solve_time_internal_s": float(sol.solve_time)},
-    )
+    return _clarabel_solution(sol, time.perf_counter() - t0)
+
+
+class ClarabelSession:
+    """Clarabel for a sequence of problems of one sparsity pattern (what SCvx solves).
+
+    The first solve sets Clarabel up (ordering, symbolic factorization); later solves only
+    write the new numbers of q, A and b into it. Problems without P only.
+    """
+
+    def __init__(self, tol: float = 1e-9, max_iter: int = 200) -> None:
+        self.tol, self.max_iter = tol, max_iter
+        self._solver: object | None = None
+
+    def solve(self, prob: ConicProblem) -> ConicSolution:
+        import clarabel
+
+        if prob.P is not None:
+            return solve_clarabel(prob, tol=self.tol, max_iter=self.max_iter)
+        if self._solver is None:
+            self._solver = clarabel.DefaultSolver(
+                sp.csc_matrix((prob.n, prob.n)),
+                prob.q,
+                prob.A,
+                prob.b,
+                clarabel_cones(prob.cones),
+                _clarabel_settings(self.tol, self.max_iter, False),
+            )
+        else:
+            self._solver.update(q=prob.q, A=prob.A.data, b=prob.b)  # type: ignore[attr-defined]
+        t0 = time.perf_counter()
+        sol = self._solver.solve()  # type: ignore[attr-defined]
+        return _clarabel_solution(sol, time.perf_counter() - t0)
+
+
+class _OneShot:
+    def __init__(self, backend: str) -> None:
+        self.backend = backend
+
+    def solve(self, prob: ConicProblem) -> ConicSolution:
+        return solve(prob, self.backend)
+
+
+def session(backend: str) -> ClarabelSession | _OneShot:
+    """A solver for a sequence of problems sharing one sparsity pattern."""
+    if backend == "clarabel":
+        return ClarabelSession()
+    if backend == "c":
+        from guidance import csocp
+
+        if hasattr(csocp, "Session"):
+            return csocp.Session()
+        return _OneShot("c")
+    raise ValueError(f"unknown conic backend {backend!r} (use 'clarabel' or 'c')")
 
 
 def solve(prob: ConicProblem, backend: str = "clarabel") -> ConicSolution:

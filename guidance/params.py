@@ -143,6 +143,9 @@ class SCvxSettings:
     vc_tol: float = 1e-6
     defect_tol: float = 1e-5  # physical units; path constraints must hold to 1e-6 anyway
     rk4_substeps: int = 8  # RK4 steps per FOH interval in the discretization
+    # "c": the generated C of the model (build/libtscvx_gnc.so); "casadi": CasADi's VM;
+    # "auto": C when the library is built. Both evaluate the same expressions (equal to 1e-10).
+    discretization: str = "auto"
     tight_tol: float = 1e-6  # slack threshold of the tight-constraint labelling
 
     def replace(self, **changes: object) -> SCvxSettings:

@@ -96,6 +96,12 @@ class SCvxSolver:
         self.log = log
         self.record = record_subproblems
         self._templates: dict[bytes, SubproblemTemplate] = {}
+        self._sessions: dict[int, object] = {}  # conic solver per sparsity pattern
+        self.engine = self.st.discretization
+        if self.engine == "auto":
+            from guidance import cgnc
+
+            self.engine = "c" if cgnc.available() else "casadi"
 
     # ---- pieces ---------------------------------------------------------------------------
     def template(self, mask: np.ndarray | None) -> SubproblemTemplate:
@@ -106,7 +112,7 @@ class SCvxSolver:
 
     def _discretize(self, z: np.ndarray) -> dict[str, np.ndarray]:
         x, u, t_f = physical(z, self.lay, self.sc)
-        return discretize(x, u, t_f, self.p, self.st.rk4_substeps)
+        return discretize(x, u, t_f, self.p, self.st.rk4_substeps, self.engine)
 
     def penalty(self, z: np.ndarray, disc: dict[str, np.ndarray]) -> tuple[float, float, float]:
         """J(z) on the full constraint set; also the max defect and max violation."""
@@ -178,7 +184,9 @@ class SCvxSolver:
             prob = tpl.assemble(disc, z, eta, st.lam, self.scn, self.sc)
             if self.record:
                 subproblems.append(prob)
-            sol = conic.solve(prob, self.backend)
+            if id(tpl) not in self._sessions:
+                self._sessions[id(tpl)] = conic.session(self.backend)
+            sol = self._sessions[id(tpl)].solve(prob)  # type: ignore[attr-defined]
             if not sol.ok:
                 status = "solver_error"
                 reason = f"subproblem at iteration {k + 1}: conic solver returned {sol.status}"
@@ -266,8 +274,8 @@ class SCvxSolver:
                 f"no convergence in {st.iter_max} iterations; virtual control is zero, largest "
                 f"defect {defect:.2e}, largest path-constraint value {viol:.2e}"
             )
-        x, u, t_f = physical(z, self.lay, self.sc)
-        disc = discretize(x, u, t_f, self.p, st.rk4_substeps)
+        x, _, _ = physical(z, self.lay, self.sc)
+        disc = self._discretize(z)
         rel = np.abs((x[1:] - disc["x_next"]) / self.sc.Sx[None, :])
         k, i = np.unravel_index(int(np.argmax(rel)), rel.shape)
         parts = [f"virtual control {vc:.3g} > {st.vc_tol:g} after {st.iter_max} iterations"]

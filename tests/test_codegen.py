@@ -80,6 +80,18 @@ def test_c_discretization_matches_python() -> None:
             np.testing.assert_allclose(got[key].reshape(w.shape), w, rtol=1e-10, atol=1e-10)
 
 
+def test_c_discretization_of_a_trajectory_matches_casadi() -> None:
+    from guidance.guess import initial_guess
+    from guidance.model import discretize
+    from guidance.params import Scenario
+
+    x, u, t_f = initial_guess(Scenario())
+    want = discretize(x, u, t_f, P, 8, engine="casadi")
+    got = discretize(x, u, t_f, P, 8, engine="c")
+    for key, w in want.items():
+        np.testing.assert_allclose(got[key], w, rtol=1e-10, atol=1e-10)
+
+
 def test_c_discretization_rejects_bad_arguments() -> None:
     x, u = random_point(np.random.default_rng(0))
     p = param_vector(P)

@@ -80,3 +80,21 @@ int pdg_foh_interval(const double *x_k, const double *u_k, const double *u_k1, d
     }
     return 0;
 }
+
+int pdg_foh_all(int N, const double *x, const double *u, double sigma, const double *p,
+                int substeps, double *aug, double *z, double *work)
+{
+    int k;
+    if (N < 2 || N > PDG_MAX_NODES || !x || !u || !aug || !z) {
+        return -1;
+    }
+    for (k = 0; k < N - 1; ++k) {
+        int status = pdg_foh_interval(x + k * PDG_NX, u + k * PDG_NU, u + (k + 1) * PDG_NU, sigma,
+                                      1.0 / (N - 1), p, substeps, aug + k * PDG_NAUG,
+                                      z + k * PDG_NX, work);
+        if (status != 0) {
+            return status;
+        }
+    }
+    return 0;
+}

@@ -15,6 +15,7 @@
 #define PDG_NP 13
 #define PDG_NAUG (PDG_NX + PDG_NX * PDG_NX + 2 * PDG_NX * PDG_NU + PDG_NX)
 #define PDG_MAX_SUBSTEPS 64
+#define PDG_MAX_NODES 400
 
 /* Offsets of the blocks inside the augmented state. */
 #define PDG_AUG_X 0
@@ -30,5 +31,11 @@
 int pdg_foh_interval(const double *x_k, const double *u_k, const double *u_k1, double sigma,
                      double dtau, const double *p, int substeps, double *aug, double *z,
                      double *work);
+
+/* All N-1 intervals about the node values x (N x 14, row-major) and u (N x 3): interval k
+ * writes aug + k * PDG_NAUG and z + k * PDG_NX. Same return codes; -1 also for N outside
+ * [2, PDG_MAX_NODES]. */
+int pdg_foh_all(int N, const double *x, const double *u, double sigma, const double *p,
+                int substeps, double *aug, double *z, double *work);
 
 #endif
