@@ -53,5 +53,11 @@ demo: setup lib
 bench: setup lib
 	$(VENV)/bin/guidance bench
 
+budget: setup lib
+	$(VENV)/bin/guidance budget
+
+# `models` (data generation, training, export) lives with the models it makes.
+-include models/models.mk
+
 clean:
 	rm -rf $(BUILD) out .pytest_cache .ruff_cache

@@ -82,6 +82,15 @@ def cmd_bench(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_budget(args: argparse.Namespace) -> int:
+    try:
+        from guidance import budget
+    except ImportError:
+        print("the budget tool is not available in this build", file=sys.stderr)
+        return 1
+    return int(budget.main() or 0)
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="guidance",
@@ -117,6 +126,9 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--repeats", type=int, default=1)
     b.add_argument("--skip-socp", action="store_true", help="skip the conic solver benchmark")
     b.set_defaults(func=cmd_bench)
+
+    g = sub.add_parser("budget", help="RAD750 time and memory budget of one C guidance call")
+    g.set_defaults(func=cmd_budget)
 
     # Learning tools (dataset, train, export, baselines) register their own subcommands.
     from guidance import cli_learning

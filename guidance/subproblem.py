@@ -23,7 +23,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from guidance.conic import ConeKind, ConicProblem
-from guidance.params import IM, IR, IV, IW, NC, NU, NX, Params, Scenario
+from guidance.params import IM, IR, IV, IW, NC, NU, NX, Scenario
 
 # Cone dimension of each path constraint (mask order); 1 = a linear row.
 CONE_DIMS = (1, 3, 3, 4, 4, 4, 1)
@@ -394,7 +394,3 @@ def physical(z: np.ndarray, lay: Layout, sc: Scaling) -> tuple[np.ndarray, np.nd
 
 def scaled(x: np.ndarray, u: np.ndarray, t_f: float, lay: Layout, sc: Scaling) -> np.ndarray:
     return pack(sc.scale_x(x), u / sc.Su, t_f / sc.Ss, lay)
-
-
-def constraint_params_check(p: Params) -> None:  # pragma: no cover - documentation aid
-    """The SOC forms above assume tan(gs) finite and cos(delta) in (0, 1) (validated input)."""

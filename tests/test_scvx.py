@@ -62,6 +62,15 @@ def test_far_and_fast_start_is_infeasible_with_a_reason() -> None:
     assert "mass at the floor" in r.reason
 
 
+def test_pinned_final_attitude_lands_with_q_f() -> None:
+    scenario = SCENARIOS["north"]
+    pinned = Scenario(scenario.initial, scenario.params.replace(final_roll_free=False))
+    r = solve_scvx(pinned)
+    assert r.status == "solved", r.reason
+    np.testing.assert_allclose(r.x[-1, 6:10], pinned.params.q_f, atol=1e-8)
+    assert audit(r.x, r.u, r.t_f, pinned.params).landing_position_error <= 1e-3
+
+
 def test_cli_writes_the_trajectory_contract(tmp_path: Path) -> None:
     out, fig = tmp_path / "traj.npz", tmp_path / "traj.png"
     assert main(["solve", "--out", str(out), "--plot", str(fig)]) == 0
