@@ -173,6 +173,7 @@ class SCvxSolver:
         self.trace: list[np.ndarray] = []
         if self.log:
             self.log(_HEADER)
+        stalled = False
         k = 0  # successions (accepted steps); rejected steps retry the same k (Algorithm 1)
         for _ in range(st.max_subproblems):
             if k >= st.iter_max:
@@ -246,9 +247,15 @@ class SCvxSolver:
             if converged:
                 status, reason = "solved", "converged"
                 break
+            if not accepted and eta <= st.eta_lb:
+                # Same reference, same radius: the same step would be rejected forever.
+                stalled = True
+                break
             eta = eta_new
         if status == "max_iterations":
-            status, reason = self._diagnose(z, vc, defect, viol)
+            status, reason = self._diagnose(z, vc, defect, viol, k)
+            if stalled:
+                reason = f"step rejected at the smallest trust radius {st.eta_lb:g}; " + reason
         x, u, t_f = physical(z, self.lay, self.sc)
         return SCvxResult(
             status=status,
@@ -266,19 +273,21 @@ class SCvxSolver:
             subproblems=subproblems,
         )
 
-    def _diagnose(self, z: np.ndarray, vc: float, defect: float, viol: float) -> tuple[str, str]:
+    def _diagnose(
+        self, z: np.ndarray, vc: float, defect: float, viol: float, k: int
+    ) -> tuple[str, str]:
         """Why the iteration limit was hit: infeasible (virtual control left) or not converged."""
         st = self.st
         if vc <= st.vc_tol:
             return "max_iterations", (
-                f"no convergence in {st.iter_max} iterations; virtual control is zero, largest "
+                f"not converged after {k} iterations; virtual control is zero, largest "
                 f"defect {defect:.2e}, largest path-constraint value {viol:.2e}"
             )
         x, _, _ = physical(z, self.lay, self.sc)
         disc = self._discretize(z)
         rel = np.abs((x[1:] - disc["x_next"]) / self.sc.Sx[None, :])
         k, i = np.unravel_index(int(np.argmax(rel)), rel.shape)
-        parts = [f"virtual control {vc:.3g} > {st.vc_tol:g} after {st.iter_max} iterations"]
+        parts = [f"virtual control {vc:.3g} > {st.vc_tol:g} after {k} iterations"]
         parts.append(f"largest defect {defect:.3g} at interval {k}, state {STATE_NAMES[i]}")
         if x[-1, IM] <= self.p.m_dry + 1e-6 * self.sc.Sx[IM]:
             parts.append(f"mass at the floor (m_f = {x[-1, IM]:.6f} = m_dry): not enough fuel")
