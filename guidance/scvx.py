@@ -239,15 +239,19 @@ class SCvxSolver:
                 and defect <= st.defect_tol
                 and viol <= st.defect_tol
             )
-            if converged and mask is not None:
+            newly_forced = False
+            if mask is not None:
+                # A constraint the mask dropped and the candidate violates is put back for the
+                # rest of the solve; a converged answer must meet the full problem.
                 dropped = (h.reshape(-1) > st.defect_tol) & ~mask
                 if dropped.any():
-                    forced |= dropped  # put back what the mask wrongly dropped; go on
+                    newly_forced = bool((dropped & ~forced).any())
+                    forced |= dropped
                     converged = False
             if converged:
                 status, reason = "solved", "converged"
                 break
-            if not accepted and eta <= st.eta_lb:
+            if not accepted and eta <= st.eta_lb and not newly_forced:
                 # Same reference, same radius: the same step would be rejected forever.
                 stalled = True
                 break

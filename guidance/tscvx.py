@@ -1,0 +1,56 @@
+"""T-SCvx (paper Algorithm 2): SCvx warm-started by a predicted solution, with subproblems
+reduced to the constraints predicted tight at each iteration.
+
+The predictors are plain callables so that any model (the shipped ONNX networks, a lookup
+table, or an oracle in tests) can drive it:
+
+    predict_solution(scenario) -> (x (N, 14), u (N, 3), t_f)
+    predict_mask(scenario, k)  -> 7N tight-constraint probabilities or bits for iteration k
+
+The penalty J is always evaluated on the full constraint set, and before returning the full
+problem's constraints are checked: a violated constraint that the mask dropped is put back and
+the iteration goes on (guidance.scvx), so T-SCvx never returns what the full problem rejects.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from guidance.guess import project_guess
+from guidance.params import Scenario, SCvxSettings
+from guidance.scvx import SCvxResult, SCvxSolver
+
+REDUCED_ETA_INIT = 0.01  # Table 1: eta_reduced,init
+MASK_THRESHOLD = 0.5
+
+SolutionPredictor = Callable[[Scenario], tuple[np.ndarray, np.ndarray, float]]
+MaskPredictor = Callable[[Scenario, int], np.ndarray]
+
+
+def solve_tscvx(
+    scenario: Scenario,
+    predict_solution: SolutionPredictor | None,
+    predict_mask: MaskPredictor | None,
+    settings: SCvxSettings | None = None,
+    backend: str = "clarabel",
+    log: Callable[[str], None] | None = None,
+) -> SCvxResult:
+    """Algorithm 2. Without a solution predictor the cubic guess is used (and the full-problem
+    initial trust radius); without a mask predictor every subproblem is the full one."""
+    st = settings or SCvxSettings()
+    guess = None
+    if predict_solution is not None:
+        x, u, t_f = predict_solution(scenario)
+        guess = project_guess(scenario, x, u, t_f)
+        if settings is None:
+            st = st.replace(eta_init=REDUCED_ETA_INIT)
+    masks = None
+    if predict_mask is not None:
+
+        def masks(k: int) -> np.ndarray:
+            return np.asarray(predict_mask(scenario, k), dtype=float) >= MASK_THRESHOLD
+
+    solver = SCvxSolver(scenario, st, backend=backend, log=log)
+    return solver.solve(guess=guess, masks=masks)
