@@ -5,12 +5,15 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from pathlib import Path
 
 import numpy as np
 
 from guidance.params import IM, Scenario, SCvxSettings
 from guidance.scenario import ScenarioError, load_scenario, scenario_to_dict
+from guidance.scvx import SCvxResult, SCvxSolver, format_log
+from guidance.tscvx import REDUCED_ETA_INIT
 
 EXIT_BAD_INPUT = 2
 
@@ -22,16 +25,59 @@ def _load(path: str | None, pin_final_attitude: bool) -> Scenario:
     return scenario
 
 
+MODELS_DIR = Path(__file__).resolve().parent.parent / "models"
+CONSTRAINT_MODEL = "constraint.onnx"
+SOLUTION_MODEL = "solution.onnx"
+
+
+def run_solve(
+    scenario: Scenario,
+    method: str,
+    backend: str,
+    settings: SCvxSettings,
+    models_dir: Path = MODELS_DIR,
+    log: Callable[[str], None] | None = None,
+) -> SCvxResult:
+    """One landing by SCvx or T-SCvx on a backend:
+
+    clarabel  the Python SCvx with Clarabel (ground reference)
+    c-socp    the Python SCvx with the flight C SOCP runtime for the subproblems
+    c         the whole solve in the flight C library
+    """
+    guess = mask_fn = None
+    if method == "tscvx":
+        from guidance.dataset import theta_of
+        from guidance.guess import project_guess
+        from guidance.nn.infer import ConstraintModel, SolutionModel
+
+        theta = theta_of(scenario)
+        sol_model = SolutionModel(models_dir / SOLUTION_MODEL, scenario.params)
+        con_model = ConstraintModel(models_dir / CONSTRAINT_MODEL, scenario.params)
+        guess = project_guess(scenario, *sol_model.solution(theta))
+        mask_fn = con_model.mask_fn(theta)
+        settings = settings.replace(eta_init=REDUCED_ETA_INIT)
+    if backend == "c":
+        from guidance.cguidance import solve_c
+
+        result = solve_c(scenario, settings, guess=guess, masks=mask_fn)
+        if log:
+            for line in format_log(result.history):
+                log(line)
+        return result
+    solver = SCvxSolver(
+        scenario, settings, backend="c" if backend == "c-socp" else backend, log=log
+    )
+    return solver.solve(guess=guess, masks=mask_fn)
+
+
 def cmd_solve(args: argparse.Namespace) -> int:
-    from guidance.scvx import SCvxSolver
     from guidance.trajectory_io import write_trajectory
 
     scenario = _load(args.scenario, args.pin_final_attitude)
     settings = SCvxSettings(iter_max=args.iter_max)
     print(f"scenario: {json.dumps(scenario_to_dict(scenario))}")
     print(f"method: {args.method}, backend: {args.backend}, N = {scenario.params.N}")
-    solver = SCvxSolver(scenario, settings, backend=args.backend, log=print)
-    result = solver.solve()
+    result = run_solve(scenario, args.method, args.backend, settings, Path(args.models), print)
     p = scenario.params
     fuel = scenario.initial.m0 - result.x[-1, IM]
     propellant = scenario.initial.m0 - p.m_dry
@@ -100,13 +146,20 @@ def build_parser() -> argparse.ArgumentParser:
 
     s = sub.add_parser("solve", help="solve one landing and write the trajectory")
     s.add_argument("scenario", nargs="?", help="scenario JSON (default: the default landing)")
-    s.add_argument("--method", choices=["scvx"], default="scvx")
+    s.add_argument(
+        "--method",
+        choices=["scvx", "tscvx"],
+        default="scvx",
+        help="tscvx: warm start and tight-constraint masks from the shipped networks",
+    )
     s.add_argument(
         "--backend",
-        choices=["clarabel", "c"],
+        choices=["clarabel", "c-socp", "c"],
         default="clarabel",
-        help="conic solver for the subproblems",
+        help="clarabel: Python SCvx + Clarabel; c-socp: Python SCvx + the C SOCP runtime; "
+        "c: the whole solve in the C library",
     )
+    s.add_argument("--models", default=str(MODELS_DIR), help="folder of the ONNX networks")
     s.add_argument("--out", help="trajectory .npz to write")
     s.add_argument("--plot", help="figure (.png) to write")
     s.add_argument("--iter-max", type=int, default=SCvxSettings().iter_max)
@@ -122,7 +175,9 @@ def build_parser() -> argparse.ArgumentParser:
     c.set_defaults(func=cmd_scenario)
 
     b = sub.add_parser("bench", help="time the reference SCvx (and the conic solvers)")
-    b.add_argument("--backend", nargs="+", default=["clarabel"], choices=["clarabel", "c"])
+    b.add_argument(
+        "--backend", nargs="+", default=["clarabel"], choices=["clarabel", "c-socp", "c"]
+    )
     b.add_argument("--repeats", type=int, default=1)
     b.add_argument("--skip-socp", action="store_true", help="skip the conic solver benchmark")
     b.set_defaults(func=cmd_bench)

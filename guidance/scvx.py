@@ -309,6 +309,11 @@ def block_norm_sum(d: np.ndarray) -> float:
     return total
 
 
+def format_log(history: list[IterationRecord]) -> list[str]:
+    """The iteration log as printed while solving: a header and one line per subproblem."""
+    return [_HEADER, *(_format(r) for r in history)]
+
+
 def _format(r: IterationRecord) -> str:
     return (
         f"{r.k:3d} {r.J:10.5f} {r.dJ:10.3e} {r.dL:10.3e} {r.rho:8.3f} {r.eta:9.4f} "
