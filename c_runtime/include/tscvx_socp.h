@@ -1,0 +1,206 @@
+/*
+ * tscvx_socp.h -- flight SOCP interior-point solver (the one public header).
+ *
+ * Problem form (all matrices in compressed sparse column form, 0-based):
+ *
+ *     minimize    1/2 x'Px + c'x
+ *     subject to  A x = b                    (p equality rows)
+ *                 G x + s = h,   s in K      (m cone rows)
+ *
+ *   x in R^n.  P (n x n) is given by its UPPER triangle only (it may be absent: Pp == NULL).
+ *   K = R_+^l  x  Q^{q_1} x ... x Q^{q_nsoc}: the first l rows of G are the nonnegative
+ *   orthant, the following rows are second-order cones Q^q = {(t, u) in R x R^{q-1}: |u|_2 <= t}
+ *   in the order given by q[]; l + sum(q) = m.
+ *
+ * Algorithm: primal-dual interior-point method on the homogeneous self-dual embedding
+ * (quadratic objective as in Clarabel), Nesterov-Todd scaling, Mehrotra predictor-corrector,
+ * Ruiz equilibration, static regularization of the quasi-definite KKT system with iterative
+ * refinement, best-iterate fallback, primal/dual infeasibility certificates. The KKT system is
+ * factored by SuiteSparse AMD + LDL behind a small backend table.
+ *
+ * Lifecycle (memory is claimed in exactly one place, from ONE caller-provided arena):
+ *
+ *   1. tscvx_default_settings(&st)                      -- defaults, edit as needed
+ *   2. tscvx_scratch_size(&data, &st, &nscratch)         -- pure arithmetic
+ *      tscvx_workspace_size(&data, &st, scratch, nscratch, &narena)
+ *                                                       -- ordering + symbolic analysis in
+ *                                                          caller scratch (contents clobbered;
+ *                                                          the arena itself may be used)
+ *   3. tscvx_setup(&ws, arena, narena, &data, &st)       -- validates the data, builds the KKT
+ *                                                          pattern, maps and factor symbolics
+ *   4. tscvx_update_data(ws, Px, c, Ax, b, Gx, h)        -- new numbers, same sparsity;
+ *                                                          NULL = unchanged; no symbolic work
+ *   5. tscvx_solve(ws)                                   -- no allocation, bounded loops
+ *      tscvx_get_solution / tscvx_get_info / tscvx_get_iter_log
+ *   6. cleanup is trivial: the caller owns the arena and may reuse it.
+ *
+ * The workspace is opaque and lives inside the arena. The library never calls malloc, has no
+ * recursion and no global mutable state. Every public function returns a status code.
+ */
+#ifndef TSCVX_SOCP_H
+#define TSCVX_SOCP_H
+
+#include <stddef.h>
+
+#include "tscvx_types.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ---- status codes ------------------------------------------------------------------------ */
+
+/* Errors of the set-up phase (settings, size queries, setup, data updates, getters). */
+typedef enum {
+    TSCVX_SETUP_OK = 0,
+    TSCVX_SETUP_NULL_ARGUMENT,   /* a required pointer is NULL */
+    TSCVX_SETUP_BAD_SETTINGS,    /* a setting is out of its documented range */
+    TSCVX_SETUP_BAD_DIMENSIONS,  /* n <= 0, p < 0, m < 0, or l + sum(q) != m */
+    TSCVX_SETUP_BAD_CONES,       /* a cone dimension < 1, or cones larger than the rows */
+    TSCVX_SETUP_BAD_SPARSITY,    /* CSC pointers/indices invalid, unsorted or duplicated */
+    TSCVX_SETUP_P_NOT_UPPER,     /* P has an entry below the diagonal (give the upper part) */
+    TSCVX_SETUP_NONFINITE_DATA,  /* NaN or infinity in P, c, A, b, G or h */
+    TSCVX_SETUP_SCRATCH_TOO_SMALL, /* scratch smaller than tscvx_scratch_size() */
+    TSCVX_SETUP_ARENA_TOO_SMALL, /* arena smaller than tscvx_workspace_size() */
+    TSCVX_SETUP_TOO_LARGE,       /* sizes overflow the index type */
+    TSCVX_SETUP_NOT_READY,       /* workspace not set up or invalidated by a failed update */
+    TSCVX_SETUP_BAD_INDEX,       /* iteration-log index out of range */
+    TSCVX_SETUP_NSTATUS
+} tscvx_setup_status;
+
+/* Outcome of tscvx_solve. */
+typedef enum {
+    TSCVX_UNSOLVED = 0,          /* solve not called since setup/update */
+    TSCVX_SOLVED,                /* all tolerances met */
+    TSCVX_SOLVED_INACCURATE,     /* reduced tolerances met (best iterate) */
+    TSCVX_PRIMAL_INFEASIBLE,     /* certificate (y, z): A'y + G'z = 0, z in K, b'y + h'z < 0 */
+    TSCVX_DUAL_INFEASIBLE,       /* certificate (x, s): Px = 0, Ax = 0, Gx + s = 0, s in K, c'x < 0 */
+    TSCVX_MAX_ITER,              /* iteration limit reached */
+    TSCVX_NUMERICAL_ERROR,       /* factorization or step failure, no acceptable iterate */
+    TSCVX_INVALID_INPUT,         /* workspace not ready (setup or update failed) */
+    TSCVX_NSTATUS
+} tscvx_solve_status;
+
+const char *tscvx_setup_status_message(tscvx_setup_status status);
+const char *tscvx_solve_status_message(tscvx_solve_status status);
+
+/* ---- problem data (read during setup/update only; never modified, never kept) ----------- */
+
+typedef struct {
+    tscvx_int n;                 /* number of variables */
+    tscvx_int p;                 /* number of equality rows */
+    tscvx_int m;                 /* number of cone rows */
+    const tscvx_int *Pp;         /* n+1 column pointers of P's upper triangle, or NULL (P = 0) */
+    const tscvx_int *Pi;         /* nnz(P) row indices, sorted within a column, row <= col */
+    const tscvx_float *Px;       /* nnz(P) values */
+    const tscvx_float *c;        /* n linear cost */
+    const tscvx_int *Ap;         /* n+1 column pointers of A (p x n); may be NULL when p == 0 */
+    const tscvx_int *Ai;         /* nnz(A) row indices, sorted within a column */
+    const tscvx_float *Ax;       /* nnz(A) values */
+    const tscvx_float *b;        /* p right-hand side */
+    const tscvx_int *Gp;         /* n+1 column pointers of G (m x n); may be NULL when m == 0 */
+    const tscvx_int *Gi;         /* nnz(G) row indices, sorted within a column */
+    const tscvx_float *Gx;       /* nnz(G) values */
+    const tscvx_float *h;        /* m right-hand side */
+    tscvx_int l;                 /* dimension of the nonnegative orthant (first l rows of G) */
+    tscvx_int nsoc;              /* number of second-order cones */
+    const tscvx_int *q;          /* nsoc cone dimensions (each >= 1), in row order after l */
+} tscvx_data;
+
+/* ---- settings ---------------------------------------------------------------------------- */
+
+typedef struct {
+    tscvx_int max_iter;          /* IPM iteration limit, 1..500 (fixes the log size at setup) */
+    tscvx_float tol_gap_abs;     /* |pcost - dcost| <= tol_gap_abs, or ... */
+    tscvx_float tol_gap_rel;     /* ... <= tol_gap_rel * max(1, min(|pcost|, |dcost|)) */
+    tscvx_float tol_feas;        /* |Ax-b|,|Gx+s-h| <= tol_feas (1 + |b,h|); dual same with c */
+    tscvx_float tol_infeas;      /* certificate residual / certificate objective */
+    tscvx_float tol_gap_abs_inacc; /* reduced tolerances for SOLVED_INACCURATE */
+    tscvx_float tol_gap_rel_inacc;
+    tscvx_float tol_feas_inacc;
+    tscvx_float step_fraction;   /* fraction of the step to the cone boundary, (0, 1) */
+    tscvx_float static_reg;      /* static KKT regularization delta (scaled data), > 0 */
+    tscvx_int refine_iters;      /* iterative-refinement steps per KKT solve, 0..20 (used once
+                                    mu < 1e-3 mu_0, always with expanded SOCs) */
+    tscvx_int ruiz_iters;        /* Ruiz equilibration passes, 0..50 (setup only) */
+    tscvx_int soc_dense_max;     /* SOCs up to this dimension get a dense KKT block; larger
+                                    ones the sparse diagonal + rank-2 expansion (setup only) */
+} tscvx_settings;
+
+/* ---- information after a solve ----------------------------------------------------------- */
+
+typedef struct {
+    tscvx_solve_status status;
+    tscvx_int iterations;        /* IPM iterations taken */
+    tscvx_float pcost;           /* primal objective 1/2 x'Px + c'x */
+    tscvx_float dcost;           /* dual objective -1/2 x'Px - b'y - h'z */
+    tscvx_float gap_abs;         /* |pcost - dcost| */
+    tscvx_float gap_rel;         /* gap_abs / max(1, min(|pcost|, |dcost|)) */
+    tscvx_float pres;            /* max(|Ax-b|_inf/(1+|b|_inf), |Gx+s-h|_inf/(1+|h|_inf)) */
+    tscvx_float dres;            /* |Px + c + A'y + G'z|_inf / (1 + |c|_inf) */
+    tscvx_float mu;              /* complementarity (s'z + tau kappa) / (degree + 1) */
+    tscvx_int kkt_dim;           /* dimension of the KKT system */
+    tscvx_int kkt_nnz;           /* nonzeros of its upper triangle */
+    tscvx_int factor_nnz;        /* nonzeros of L */
+    tscvx_int factorizations;    /* numeric factorizations in the last solve */
+    size_t arena_used;           /* bytes of the arena held by the workspace */
+    size_t arena_high_water;     /* most bytes of the arena ever touched (setup scratch incl.) */
+} tscvx_info;
+
+/* One row of the iteration log. */
+typedef struct {
+    tscvx_int iter;
+    tscvx_float pcost, dcost, gap, pres, dres, mu, step;
+} tscvx_iter_log;
+
+typedef struct tscvx_workspace tscvx_workspace; /* opaque, lives in the arena */
+
+/* ---- API --------------------------------------------------------------------------------- */
+
+tscvx_setup_status tscvx_default_settings(tscvx_settings *settings);
+
+/* Bytes of scratch that tscvx_workspace_size needs (arithmetic only, data not checked). */
+tscvx_setup_status tscvx_scratch_size(const tscvx_data *data, const tscvx_settings *settings,
+                                      size_t *scratch_bytes);
+
+/* Validates the data, orders and analyses the KKT system in `scratch` and returns the exact
+ * arena size that tscvx_setup needs. */
+tscvx_setup_status tscvx_workspace_size(const tscvx_data *data, const tscvx_settings *settings,
+                                        void *scratch, size_t scratch_bytes,
+                                        size_t *arena_bytes);
+
+/* Builds the workspace inside `arena` (16-byte aligned is best; any alignment works). */
+tscvx_setup_status tscvx_setup(tscvx_workspace **ws, void *arena, size_t arena_bytes,
+                               const tscvx_data *data, const tscvx_settings *settings);
+
+/* New values with the setup sparsity (same nnz arrays); NULL leaves that part unchanged.
+ * No symbolic work: the new numbers are scaled with the setup's equilibration and written
+ * into the KKT matrix through the setup maps. Non-finite values make the workspace not ready
+ * (solve returns TSCVX_INVALID_INPUT) until a valid update. */
+tscvx_setup_status tscvx_update_data(tscvx_workspace *ws, const tscvx_float *Px,
+                                     const tscvx_float *c, const tscvx_float *Ax,
+                                     const tscvx_float *b, const tscvx_float *Gx,
+                                     const tscvx_float *h);
+
+/* Tolerances, iteration limit (<= setup's), step fraction, regularization and refinement;
+ * ruiz_iters and soc_dense_max are fixed at setup (changing them: TSCVX_SETUP_BAD_SETTINGS). */
+tscvx_setup_status tscvx_update_settings(tscvx_workspace *ws, const tscvx_settings *settings);
+
+tscvx_solve_status tscvx_solve(tscvx_workspace *ws);
+
+/* Copies the last solution (original units) into caller arrays; any may be NULL.
+ * x: n, y: p, z: m, s: m. For infeasible statuses these hold the certificate. */
+tscvx_setup_status tscvx_get_solution(const tscvx_workspace *ws, tscvx_float *x, tscvx_float *y,
+                                      tscvx_float *z, tscvx_float *s);
+
+tscvx_setup_status tscvx_get_info(const tscvx_workspace *ws, tscvx_info *info);
+
+/* Row k (0 <= k <= info.iterations) of the last solve's iteration log. */
+tscvx_setup_status tscvx_get_iter_log(const tscvx_workspace *ws, tscvx_int k,
+                                      tscvx_iter_log *row);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* TSCVX_SOCP_H */

@@ -1,0 +1,480 @@
+/* Public API: settings, validation, size queries, setup, updates, results, messages. */
+#include <limits.h>
+#include <stdint.h>
+#include <math.h>
+#include <string.h>
+
+#include "socp_internal.h"
+
+/* ---- messages ---------------------------------------------------------------------------- */
+
+static const char *const setup_messages[TSCVX_SETUP_NSTATUS] = {
+    "ok",
+    "a required pointer is NULL",
+    "a setting is out of range",
+    "bad dimensions (need n >= 1, p >= 0, m >= 0)",
+    "cone dimensions invalid (each >= 1, l + sum(q) must equal the m rows of G)",
+    "invalid CSC sparsity (pointers, row indices out of range, unsorted or duplicated)",
+    "P has entries below the diagonal; give the upper triangle only",
+    "NaN or infinity in the problem data",
+    "scratch smaller than tscvx_scratch_size()",
+    "arena smaller than tscvx_workspace_size()",
+    "problem too large for the index type",
+    "workspace not ready (setup or a data update failed)",
+    "iteration-log index out of range",
+};
+
+static const char *const solve_messages[TSCVX_NSTATUS] = {
+    "unsolved",
+    "solved",
+    "solved to reduced accuracy",
+    "primal infeasible",
+    "dual infeasible (unbounded)",
+    "iteration limit reached",
+    "numerical error",
+    "invalid input",
+};
+
+const char *tscvx_setup_status_message(tscvx_setup_status status) {
+    return (unsigned)status < TSCVX_SETUP_NSTATUS ? setup_messages[status] : "unknown status";
+}
+
+const char *tscvx_solve_status_message(tscvx_solve_status status) {
+    return (unsigned)status < TSCVX_NSTATUS ? solve_messages[status] : "unknown status";
+}
+
+/* ---- arena ------------------------------------------------------------------------------- */
+
+#define TSCVX_ALIGN 16u
+
+void *tscvx_arena_alloc(tscvx_arena *a, size_t count, size_t size) {
+    if (size != 0 && count > (SIZE_MAX / 2) / size) {
+        a->overflow = 1;
+        return NULL;
+    }
+    const size_t bytes = (count * size + TSCVX_ALIGN - 1) & ~(size_t)(TSCVX_ALIGN - 1);
+    const size_t start = a->top;
+    if (bytes > SIZE_MAX / 2 - start) {
+        a->overflow = 1;
+        return NULL;
+    }
+    a->top = start + bytes;
+    if (a->top > a->high) a->high = a->top;
+    if (a->top > a->cap) a->overflow = 1;
+    if (a->base == NULL || a->overflow) return NULL;
+    return a->base + start;
+}
+
+static void arena_init(tscvx_arena *a, void *mem, size_t bytes) {
+    a->base = NULL, a->cap = SIZE_MAX / 2, a->top = 0, a->high = 0, a->overflow = 0;
+    if (mem == NULL) return; /* counting mode */
+    const size_t pad = (TSCVX_ALIGN - (size_t)((uintptr_t)mem % TSCVX_ALIGN)) % TSCVX_ALIGN;
+    a->base = (unsigned char *)mem + pad;
+    a->cap = bytes > pad ? bytes - pad : 0;
+}
+
+/* ---- settings ---------------------------------------------------------------------------- */
+
+tscvx_setup_status tscvx_default_settings(tscvx_settings *st) {
+    if (st == NULL) return TSCVX_SETUP_NULL_ARGUMENT;
+    st->max_iter = 100;
+    st->tol_gap_abs = 1e-8;
+    st->tol_gap_rel = 1e-8;
+    st->tol_feas = 1e-8;
+    st->tol_infeas = 1e-8;
+    st->tol_gap_abs_inacc = 5e-5;
+    st->tol_gap_rel_inacc = 5e-5;
+    st->tol_feas_inacc = 1e-4;
+    st->step_fraction = 0.99;
+    st->static_reg = 1e-8;
+    st->refine_iters = 3;
+    st->ruiz_iters = 15;
+    st->soc_dense_max = 16;
+    return TSCVX_SETUP_OK;
+}
+
+static int pos_finite(tscvx_float v) { return isfinite(v) && v > 0.0; }
+
+static tscvx_setup_status check_settings(const tscvx_settings *st) {
+    if (st->max_iter < 1 || st->max_iter > 500) return TSCVX_SETUP_BAD_SETTINGS;
+    if (!pos_finite(st->tol_gap_abs) || !pos_finite(st->tol_gap_rel) ||
+        !pos_finite(st->tol_feas) || !pos_finite(st->tol_infeas) ||
+        !pos_finite(st->tol_gap_abs_inacc) || !pos_finite(st->tol_gap_rel_inacc) ||
+        !pos_finite(st->tol_feas_inacc))
+        return TSCVX_SETUP_BAD_SETTINGS;
+    if (!(st->step_fraction > 0.0 && st->step_fraction < 1.0)) return TSCVX_SETUP_BAD_SETTINGS;
+    if (!(st->static_reg > 0.0 && st->static_reg < 1.0)) return TSCVX_SETUP_BAD_SETTINGS;
+    if (st->refine_iters < 0 || st->refine_iters > 20) return TSCVX_SETUP_BAD_SETTINGS;
+    if (st->ruiz_iters < 0 || st->ruiz_iters > 50) return TSCVX_SETUP_BAD_SETTINGS;
+    if (st->soc_dense_max < 1) return TSCVX_SETUP_BAD_SETTINGS;
+    return TSCVX_SETUP_OK;
+}
+
+/* ---- data validation --------------------------------------------------------------------- */
+
+static int all_finite(const tscvx_float *v, tscvx_int n) {
+    for (tscvx_int i = 0; i < n; i++)
+        if (!isfinite(v[i])) return 0;
+    return 1;
+}
+
+/* CSC of nrow x ncol: pointers monotone from 0, indices in range, strictly increasing.
+ * upper != 0 additionally demands row <= col (P). */
+static tscvx_setup_status check_csc(const tscvx_int *Mp, const tscvx_int *Mi, tscvx_int nrow,
+                                    tscvx_int ncol, int upper) {
+    if (Mp[0] != 0) return TSCVX_SETUP_BAD_SPARSITY;
+    for (tscvx_int j = 0; j < ncol; j++) {
+        if (Mp[j + 1] < Mp[j]) return TSCVX_SETUP_BAD_SPARSITY;
+        for (tscvx_int k = Mp[j]; k < Mp[j + 1]; k++) {
+            if (Mi[k] < 0 || Mi[k] >= nrow) return TSCVX_SETUP_BAD_SPARSITY;
+            if (k > Mp[j] && Mi[k] <= Mi[k - 1]) return TSCVX_SETUP_BAD_SPARSITY;
+            if (upper && Mi[k] > j) return TSCVX_SETUP_P_NOT_UPPER;
+        }
+    }
+    if (Mp[ncol] > INT_MAX / 4) return TSCVX_SETUP_TOO_LARGE;
+    return TSCVX_SETUP_OK;
+}
+
+static tscvx_int nnz_of(const tscvx_int *Mp, tscvx_int ncol) { return Mp ? Mp[ncol] : 0; }
+
+static tscvx_setup_status check_data(const tscvx_data *d) {
+    if (d->n < 1 || d->p < 0 || d->m < 0) return TSCVX_SETUP_BAD_DIMENSIONS;
+    if (d->n > INT_MAX / 8 || d->p > INT_MAX / 8 || d->m > INT_MAX / 8)
+        return TSCVX_SETUP_TOO_LARGE;
+    if (d->c == NULL) return TSCVX_SETUP_NULL_ARGUMENT;
+    if (d->p > 0 && (d->Ap == NULL || d->Ai == NULL || d->Ax == NULL || d->b == NULL))
+        return TSCVX_SETUP_NULL_ARGUMENT;
+    if (d->m > 0 && (d->Gp == NULL || d->Gi == NULL || d->Gx == NULL || d->h == NULL))
+        return TSCVX_SETUP_NULL_ARGUMENT;
+    if (d->Pp != NULL && (d->Pi == NULL || d->Px == NULL)) return TSCVX_SETUP_NULL_ARGUMENT;
+    if (d->l < 0 || d->nsoc < 0 || (d->nsoc > 0 && d->q == NULL)) return TSCVX_SETUP_BAD_CONES;
+    long long rows = d->l;
+    for (tscvx_int k = 0; k < d->nsoc; k++) {
+        if (d->q[k] < 1) return TSCVX_SETUP_BAD_CONES;
+        rows += d->q[k];
+        if (rows > d->m) return TSCVX_SETUP_BAD_CONES; /* cones larger than the rows */
+    }
+    if (rows != d->m) return TSCVX_SETUP_BAD_CONES;
+    tscvx_setup_status s;
+    if (d->Pp && (s = check_csc(d->Pp, d->Pi, d->n, d->n, 1)) != TSCVX_SETUP_OK) return s;
+    if (d->Ap && d->p == 0 && d->Ap[d->n] != 0) return TSCVX_SETUP_BAD_SPARSITY;
+    if (d->Ap && (s = check_csc(d->Ap, d->Ai, d->p, d->n, 0)) != TSCVX_SETUP_OK) return s;
+    if (d->Gp && d->m == 0 && d->Gp[d->n] != 0) return TSCVX_SETUP_BAD_SPARSITY;
+    if (d->Gp && (s = check_csc(d->Gp, d->Gi, d->m, d->n, 0)) != TSCVX_SETUP_OK) return s;
+    if (!all_finite(d->c, d->n) || (d->p > 0 && !all_finite(d->b, d->p)) ||
+        (d->m > 0 && !all_finite(d->h, d->m)) ||
+        (d->Pp && !all_finite(d->Px, nnz_of(d->Pp, d->n))) ||
+        (d->Ap && !all_finite(d->Ax, nnz_of(d->Ap, d->n))) ||
+        (d->Gp && !all_finite(d->Gx, nnz_of(d->Gp, d->n))))
+        return TSCVX_SETUP_NONFINITE_DATA;
+    return TSCVX_SETUP_OK;
+}
+
+/* KKT upper-triangle entries, from the data (the order of kkt.c's enumerate()). */
+static long long count_kkt_nnz(const tscvx_data *d, tscvx_int dense_max, tscvx_int *nexp,
+                               tscvx_int *ncone) {
+    long long cnt = (long long)nnz_of(d->Pp, d->n) + nnz_of(d->Ap, d->n) + d->p +
+                    nnz_of(d->Gp, d->n);
+    for (tscvx_int j = 0; j < d->n; j++) {
+        int has_diag = 0;
+        if (d->Pp)
+            for (tscvx_int k = d->Pp[j]; k < d->Pp[j + 1]; k++) has_diag |= d->Pi[k] == j;
+        cnt += !has_diag;
+    }
+    long long nc = d->l;
+    *nexp = 0;
+    for (tscvx_int k = 0; k < d->nsoc; k++) {
+        const long long q = d->q[k];
+        if (q > dense_max) {
+            nc += 2 * q + 3;
+            (*nexp)++;
+        } else {
+            nc += q * (q + 1) / 2;
+        }
+    }
+    *ncone = nc > INT_MAX / 4 ? INT_MAX / 4 : (tscvx_int)nc;
+    return cnt + nc;
+}
+
+/* ---- setup ------------------------------------------------------------------------------- */
+
+enum { MODE_COUNT, MODE_ANALYSE, MODE_SETUP };
+
+#define ALLOC(ptr, count, type) ((ptr) = (type *)tscvx_arena_alloc(a, (size_t)(count), sizeof(type)))
+
+/* Claim every persistent array except the factor's Li/Lx. */
+static void alloc_persistent(tscvx_workspace *ws, tscvx_arena *a, tscvx_int nnzP,
+                             tscvx_int nnzA, tscvx_int nnzG) {
+    const tscvx_int n = ws->n, p = ws->p, m = ws->m, nsoc = ws->K.nsoc;
+    tscvx_kkt *k = &ws->kkt;
+    const tscvx_int dim = k->dim;
+    tscvx_int *q, *off;
+    ALLOC(q, nsoc, tscvx_int);
+    ALLOC(off, nsoc, tscvx_int);
+    ws->K.q = q, ws->K.off = off;
+    ALLOC(ws->P.p, n + 1, tscvx_int);
+    ALLOC(ws->P.i, nnzP, tscvx_int);
+    ALLOC(ws->P.x, nnzP, tscvx_float);
+    ALLOC(ws->A.p, n + 1, tscvx_int);
+    ALLOC(ws->A.i, nnzA, tscvx_int);
+    ALLOC(ws->G.p, n + 1, tscvx_int);
+    ALLOC(ws->G.i, nnzG, tscvx_int);
+    ALLOC(ws->c, n, tscvx_float);
+    ALLOC(ws->b, p, tscvx_float);
+    ALLOC(ws->h, m, tscvx_float);
+    ALLOC(ws->D, n, tscvx_float);
+    ALLOC(ws->EA, p, tscvx_float);
+    ALLOC(ws->EG, m, tscvx_float);
+    /* KKT */
+    ALLOC(k->Kp, dim + 1, tscvx_int);
+    ALLOC(k->Ki, k->nnz, tscvx_int);
+    ALLOC(k->Kx, k->nnz, tscvx_float);
+    ALLOC(k->regsign, dim, signed char);
+    ALLOC(k->pinv, dim, tscvx_int);
+    ALLOC(k->mapP, nnzP, tscvx_int);
+    ALLOC(k->mapA, nnzA, tscvx_int);
+    ALLOC(k->mapG, nnzG, tscvx_int);
+    ALLOC(k->mapDiag, n + p, tscvx_int);
+    ALLOC(k->mapCone, k->ncone, tscvx_int);
+    ALLOC(k->expanded, nsoc, tscvx_int);
+    ALLOC(k->Lp, dim + 1, tscvx_int);
+    ALLOC(k->Parent, dim, tscvx_int);
+    ALLOC(k->Lnz, dim, tscvx_int);
+    ALLOC(k->Flag, dim, tscvx_int);
+}
+
+/* Claim the factor and the iteration vectors (after the ordering's scratch is released). */
+static void alloc_iterates(tscvx_workspace *ws, tscvx_arena *a) {
+    const tscvx_int n = ws->n, p = ws->p, m = ws->m, nsoc = ws->K.nsoc;
+    tscvx_kkt *k = &ws->kkt;
+    const tscvx_int dim = k->dim;
+    ALLOC(k->Li, (size_t)k->lnz + 1, tscvx_int);
+    ALLOC(k->Lx, (size_t)k->lnz + 1, tscvx_float);
+    ALLOC(k->D, dim, tscvx_float);
+    ALLOC(k->Y, dim, tscvx_float);
+    ALLOC(k->rhs, dim, tscvx_float);
+    ALLOC(k->sol, dim, tscvx_float);
+    k->Pattern = (tscvx_int *)k->rhs; /* used by the factorization only, rhs by solves only */
+    k->res = k->Y; /* the factor's work vector is free during solves */
+    /* cones and iterates */
+    ALLOC(ws->W.w, m, tscvx_float);
+    ALLOC(ws->W.eta, nsoc, tscvx_float);
+    tscvx_float **nvec[] = {&ws->x, &ws->rx, &ws->Px, &ws->x1, &ws->dx, &ws->wn,
+                            &ws->bx};
+    tscvx_float **pvec[] = {&ws->y, &ws->ry, &ws->y1, &ws->dy, &ws->by};
+    tscvx_float **mvec[] = {&ws->z, &ws->s, &ws->lambda, &ws->rz, &ws->z1,
+                            &ws->dz, &ws->ds, &ws->wm, &ws->wm2, &ws->wm3,
+                            &ws->bz, &ws->bs};
+    for (size_t i = 0; i < sizeof nvec / sizeof nvec[0]; i++) ALLOC(*nvec[i], n, tscvx_float);
+    for (size_t i = 0; i < sizeof pvec / sizeof pvec[0]; i++) ALLOC(*pvec[i], p, tscvx_float);
+    for (size_t i = 0; i < sizeof mvec / sizeof mvec[0]; i++) ALLOC(*mvec[i], m, tscvx_float);
+    ALLOC(ws->log, ws->st.max_iter + 1, tscvx_iter_log);
+}
+
+static void copy_ints(tscvx_int *dst, const tscvx_int *src, tscvx_int n) {
+    for (tscvx_int i = 0; i < n; i++) dst[i] = src[i];
+}
+
+static void copy_floats(tscvx_float *dst, const tscvx_float *src, tscvx_int n) {
+    for (tscvx_int i = 0; i < n; i++) dst[i] = src[i];
+}
+
+/* CSC copy (pattern and values) of a possibly absent matrix (absent = no entries) */
+static void copy_csc(tscvx_csc *M, const tscvx_int *Mp, const tscvx_int *Mi,
+                     const tscvx_float *Mx, tscvx_int nrow, tscvx_int ncol) {
+    M->nrow = nrow, M->ncol = ncol, M->nnz = nnz_of(Mp, ncol);
+    for (tscvx_int j = 0; j <= ncol; j++) M->p[j] = Mp ? Mp[j] : 0;
+    if (M->nnz > 0) copy_ints(M->i, Mi, M->nnz);
+    if (M->nnz > 0 && Mx != NULL) copy_floats(M->x, Mx, M->nnz);
+}
+
+/* A and G keep their values in the KKT matrix, at their map slots */
+static void map_values(tscvx_csc *M, tscvx_float *Kx, const tscvx_int *map,
+                       const tscvx_float *Mx) {
+    M->x = Kx, M->xmap = map;
+    for (tscvx_int k = 0; k < M->nnz; k++) CSC_VAL(M, k) = Mx[k];
+}
+
+static tscvx_float norm_inf(const tscvx_float *v, tscvx_int n) {
+    tscvx_float r = 0.0;
+    for (tscvx_int i = 0; i < n; i++) r = fmax(r, fabs(v[i]));
+    return r;
+}
+
+/* inf-norms of the caller's (unscaled) numbers, for relative residuals; NULL = unchanged */
+static void data_norms(tscvx_workspace *ws, const tscvx_float *Px, const tscvx_float *c,
+                       const tscvx_float *b, const tscvx_float *h) {
+    if (Px) ws->norm_P = norm_inf(Px, ws->P.nnz);
+    if (c) ws->norm_c = norm_inf(c, ws->n);
+    if (b) ws->norm_b = norm_inf(b, ws->p);
+    if (h) ws->norm_h = norm_inf(h, ws->m);
+}
+
+/* The one set-up path. MODE_COUNT only counts bytes (scratch size); MODE_ANALYSE runs up to
+ * the symbolic factorization and reports the arena size; MODE_SETUP builds the workspace. */
+static tscvx_setup_status build(const tscvx_data *d, const tscvx_settings *st, tscvx_arena *a,
+                                int mode, tscvx_workspace **out, size_t *need) {
+    if (d == NULL || st == NULL) return TSCVX_SETUP_NULL_ARGUMENT;
+    tscvx_setup_status status = check_settings(st);
+    if (status == TSCVX_SETUP_OK) status = check_data(d);
+    if (status != TSCVX_SETUP_OK) return status;
+
+    tscvx_int nexp, ncone;
+    const long long nnzK = count_kkt_nnz(d, st->soc_dense_max, &nexp, &ncone);
+    const long long dim = (long long)d->n + d->p + d->m + 2LL * nexp;
+    if (nnzK > INT_MAX / 8 || dim > INT_MAX / 16) return TSCVX_SETUP_TOO_LARGE;
+
+    tscvx_workspace local;
+    tscvx_workspace *ws = (tscvx_workspace *)tscvx_arena_alloc(a, 1, sizeof(tscvx_workspace));
+    if (mode == MODE_COUNT) ws = &local;
+    if (ws == NULL) return mode == MODE_SETUP ? TSCVX_SETUP_ARENA_TOO_SMALL
+                                              : TSCVX_SETUP_SCRATCH_TOO_SMALL;
+    memset(ws, 0, sizeof *ws);
+    ws->st = *st;
+    ws->n = d->n, ws->p = d->p, ws->m = d->m;
+    ws->K.l = d->l, ws->K.nsoc = d->nsoc, ws->K.m = d->m, ws->K.degree = d->l + d->nsoc;
+    ws->kkt.backend = &tscvx_backend_ldl;
+    ws->kkt.dim = (tscvx_int)dim, ws->kkt.nnz = (tscvx_int)nnzK;
+    ws->kkt.nexp = nexp, ws->kkt.ncone = ncone;
+    ws->log_cap = st->max_iter + 1;
+    const tscvx_int nnzP = nnz_of(d->Pp, d->n), nnzA = nnz_of(d->Ap, d->n);
+    const tscvx_int nnzG = nnz_of(d->Gp, d->n);
+    alloc_persistent(ws, a, nnzP, nnzA, nnzG);
+    const size_t mark = a->top;
+    const size_t tmp_ints = tscvx_kkt_temp_ints(ws->kkt.dim, ws->kkt.nnz);
+    tscvx_int *tmp = (tscvx_int *)tscvx_arena_alloc(a, tmp_ints, sizeof(tscvx_int));
+    if (mode == MODE_COUNT) {
+        *need = a->high + TSCVX_ALIGN; /* + worst-case alignment of the caller's pointer */
+        return TSCVX_SETUP_OK;
+    }
+    if (a->overflow) return mode == MODE_SETUP ? TSCVX_SETUP_ARENA_TOO_SMALL
+                                               : TSCVX_SETUP_SCRATCH_TOO_SMALL;
+
+    /* copy the data and cones into the arena */
+    tscvx_int *q = (tscvx_int *)ws->K.q, *off = (tscvx_int *)ws->K.off;
+    for (tscvx_int k = 0, o = d->l; k < d->nsoc; k++) q[k] = d->q[k], off[k] = o, o += d->q[k];
+    copy_csc(&ws->P, d->Pp, d->Pi, d->Px, d->n, d->n);
+    copy_csc(&ws->A, d->Ap, d->Ai, NULL, d->p, d->n);
+    copy_csc(&ws->G, d->Gp, d->Gi, NULL, d->m, d->n);
+    copy_floats(ws->c, d->c, d->n);
+    if (d->p > 0) copy_floats(ws->b, d->b, d->p);
+    if (d->m > 0) copy_floats(ws->h, d->h, d->m);
+
+    /* ordering, pattern, maps and symbolic factorization (temporary memory released after) */
+    const long lnz = tscvx_kkt_build(ws, tmp);
+    if (lnz < 0 || lnz > INT_MAX / 4) return TSCVX_SETUP_TOO_LARGE;
+    a->top = mark;
+    ws->kkt.lnz = (tscvx_int)lnz;
+    alloc_iterates(ws, a);
+    if (mode == MODE_ANALYSE) {
+        *need = a->high + TSCVX_ALIGN;
+        return TSCVX_SETUP_OK;
+    }
+    if (a->overflow) return TSCVX_SETUP_ARENA_TOO_SMALL;
+
+    for (tscvx_int k = 0; k < ws->kkt.nnz; k++) ws->kkt.Kx[k] = 0.0;
+    map_values(&ws->A, ws->kkt.Kx, ws->kkt.mapA, d->Ax);
+    map_values(&ws->G, ws->kkt.Kx, ws->kkt.mapG, d->Gx);
+    data_norms(ws, d->Pp ? d->Px : NULL, d->c, d->b, d->h);
+    tscvx_equilibrate(ws);
+    ws->arena_used = a->top, ws->arena_high = a->high;
+    ws->info.status = TSCVX_UNSOLVED;
+    ws->info.kkt_dim = ws->kkt.dim, ws->info.kkt_nnz = ws->kkt.nnz;
+    ws->info.factor_nnz = ws->kkt.lnz;
+    ws->info.arena_used = ws->arena_used, ws->info.arena_high_water = ws->arena_high;
+    ws->ready = 1;
+    *out = ws;
+    return TSCVX_SETUP_OK;
+}
+
+tscvx_setup_status tscvx_scratch_size(const tscvx_data *data, const tscvx_settings *settings,
+                                      size_t *scratch_bytes) {
+    if (scratch_bytes == NULL) return TSCVX_SETUP_NULL_ARGUMENT;
+    tscvx_arena a;
+    arena_init(&a, NULL, 0);
+    return build(data, settings, &a, MODE_COUNT, NULL, scratch_bytes);
+}
+
+tscvx_setup_status tscvx_workspace_size(const tscvx_data *data, const tscvx_settings *settings,
+                                        void *scratch, size_t scratch_bytes,
+                                        size_t *arena_bytes) {
+    if (scratch == NULL || arena_bytes == NULL) return TSCVX_SETUP_NULL_ARGUMENT;
+    tscvx_arena a;
+    arena_init(&a, scratch, scratch_bytes);
+    return build(data, settings, &a, MODE_ANALYSE, NULL, arena_bytes);
+}
+
+tscvx_setup_status tscvx_setup(tscvx_workspace **ws, void *arena, size_t arena_bytes,
+                               const tscvx_data *data, const tscvx_settings *settings) {
+    if (ws == NULL || arena == NULL) return TSCVX_SETUP_NULL_ARGUMENT;
+    *ws = NULL;
+    tscvx_arena a;
+    arena_init(&a, arena, arena_bytes);
+    size_t unused = 0;
+    return build(data, settings, &a, MODE_SETUP, ws, &unused);
+}
+
+/* ---- updates ----------------------------------------------------------------------------- */
+
+tscvx_setup_status tscvx_update_data(tscvx_workspace *ws, const tscvx_float *Px,
+                                     const tscvx_float *c, const tscvx_float *Ax,
+                                     const tscvx_float *b, const tscvx_float *Gx,
+                                     const tscvx_float *h) {
+    if (ws == NULL) return TSCVX_SETUP_NULL_ARGUMENT;
+    if ((Px && !all_finite(Px, ws->P.nnz)) || (c && !all_finite(c, ws->n)) ||
+        (Ax && !all_finite(Ax, ws->A.nnz)) || (b && !all_finite(b, ws->p)) ||
+        (Gx && !all_finite(Gx, ws->G.nnz)) || (h && !all_finite(h, ws->m))) {
+        ws->ready = 0;
+        ws->info.status = TSCVX_INVALID_INPUT;
+        return TSCVX_SETUP_NONFINITE_DATA;
+    }
+    data_norms(ws, Px, c, b, h);
+    tscvx_scale_update(ws, Px, c, Ax, b, Gx, h);
+    ws->ready = 1;
+    ws->info.status = TSCVX_UNSOLVED;
+    return TSCVX_SETUP_OK;
+}
+
+tscvx_setup_status tscvx_update_settings(tscvx_workspace *ws, const tscvx_settings *st) {
+    if (ws == NULL || st == NULL) return TSCVX_SETUP_NULL_ARGUMENT;
+    const tscvx_setup_status s = check_settings(st);
+    if (s != TSCVX_SETUP_OK) return s;
+    if (st->max_iter > ws->log_cap - 1 || st->soc_dense_max != ws->st.soc_dense_max ||
+        st->ruiz_iters != ws->st.ruiz_iters)
+        return TSCVX_SETUP_BAD_SETTINGS; /* structural: fixed at setup */
+    ws->st = *st;
+    return TSCVX_SETUP_OK;
+}
+
+/* ---- solve and results ------------------------------------------------------------------- */
+
+tscvx_solve_status tscvx_solve(tscvx_workspace *ws) {
+    if (ws == NULL) return TSCVX_INVALID_INPUT;
+    if (!ws->ready) {
+        ws->info.status = TSCVX_INVALID_INPUT;
+        return TSCVX_INVALID_INPUT;
+    }
+    return tscvx_ipm(ws);
+}
+
+tscvx_setup_status tscvx_get_solution(const tscvx_workspace *ws, tscvx_float *x, tscvx_float *y,
+                                      tscvx_float *z, tscvx_float *s) {
+    if (ws == NULL) return TSCVX_SETUP_NULL_ARGUMENT;
+    if (!ws->ready || ws->info.status == TSCVX_UNSOLVED) return TSCVX_SETUP_NOT_READY;
+    tscvx_unscale_solution(ws, x, y, z, s);
+    return TSCVX_SETUP_OK;
+}
+
+tscvx_setup_status tscvx_get_info(const tscvx_workspace *ws, tscvx_info *info) {
+    if (ws == NULL || info == NULL) return TSCVX_SETUP_NULL_ARGUMENT;
+    *info = ws->info;
+    return TSCVX_SETUP_OK;
+}
+
+tscvx_setup_status tscvx_get_iter_log(const tscvx_workspace *ws, tscvx_int k,
+                                      tscvx_iter_log *row) {
+    if (ws == NULL || row == NULL) return TSCVX_SETUP_NULL_ARGUMENT;
+    if (k < 0 || k >= ws->log_cap || k > ws->info.iterations) return TSCVX_SETUP_BAD_INDEX;
+    *row = ws->log[k];
+    return TSCVX_SETUP_OK;
+}

@@ -1,0 +1,144 @@
+/* Cone operations on K = R_+^l x Q^{q_1} x ... x Q^{q_nsoc}.
+ *
+ * SOC algebra (Jordan algebra of Q^q, u = (u0, u1)):
+ *   u o v = (u'v, u0 v1 + v0 u1),  e = (1, 0),  det u = u0^2 - |u1|^2,  J = diag(1, -I).
+ * Nesterov-Todd scaling (Vandenberghe, "The CVXOPT linear and quadratic cone program
+ * solvers", sec. 4; ECOS paper sec. 3): with sbar = s/sqrt(det s), zbar = z/sqrt(det z),
+ *   gamma = sqrt((1 + sbar'zbar)/2),  wbar = (sbar + J zbar)/(2 gamma)   (det wbar = 1),
+ *   eta = (det s / det z)^{1/4},  W = eta Wbar,
+ *   Wbar = [wbar0, wbar1'; wbar1, I + wbar1 wbar1'/(1 + wbar0)],  Wbar^{-1} = J Wbar J,
+ *   W'W = eta^2 (2 wbar wbar' - J),  lambda = W z = W^{-1} s.
+ */
+#include <math.h>
+
+#include "socp_internal.h"
+
+static tscvx_float dot(const tscvx_float *u, const tscvx_float *v, tscvx_int n) {
+    tscvx_float d = 0.0;
+    for (tscvx_int i = 0; i < n; i++) d += u[i] * v[i];
+    return d;
+}
+
+static tscvx_float norm2(const tscvx_float *u, tscvx_int n) { return sqrt(dot(u, u, n)); }
+
+/* det u = u0^2 - |u1|^2, written as (u0 - |u1|)(u0 + |u1|) against cancellation */
+static tscvx_float soc_det(const tscvx_float *u, tscvx_int q) {
+    tscvx_float r = norm2(u + 1, q - 1);
+    return (u[0] - r) * (u[0] + r);
+}
+
+void tscvx_cone_prod(const tscvx_cones *K, const tscvx_float *u, const tscvx_float *v,
+                     tscvx_float *out) {
+    for (tscvx_int i = 0; i < K->l; i++) out[i] = u[i] * v[i];
+    for (tscvx_int k = 0; k < K->nsoc; k++) {
+        const tscvx_int o = K->off[k], q = K->q[k];
+        const tscvx_float u0 = u[o], v0 = v[o];
+        const tscvx_float uv = dot(u + o, v + o, q);
+        for (tscvx_int j = 1; j < q; j++) out[o + j] = u0 * v[o + j] + v0 * u[o + j];
+        out[o] = uv;
+    }
+}
+
+/* u o w = v:  w0 = (u0 v0 - u1'v1)/det u,  w1 = (v1 - w0 u1)/u0 */
+void tscvx_cone_div(const tscvx_cones *K, const tscvx_float *u, const tscvx_float *v,
+                    tscvx_float *out) {
+    for (tscvx_int i = 0; i < K->l; i++) out[i] = v[i] / u[i];
+    for (tscvx_int k = 0; k < K->nsoc; k++) {
+        const tscvx_int o = K->off[k], q = K->q[k];
+        const tscvx_float u0 = u[o];
+        const tscvx_float w0 = (u0 * v[o] - dot(u + o + 1, v + o + 1, q - 1)) / soc_det(u + o, q);
+        for (tscvx_int j = 1; j < q; j++) out[o + j] = (v[o + j] - w0 * u[o + j]) / u0;
+        out[o] = w0;
+    }
+}
+
+int tscvx_nt_scaling(const tscvx_cones *K, const tscvx_float *s, const tscvx_float *z,
+                     tscvx_nt *W, tscvx_float *lambda) {
+    for (tscvx_int i = 0; i < K->l; i++) {
+        if (!(s[i] > 0.0) || !(z[i] > 0.0)) return -1;
+        W->w[i] = sqrt(s[i] / z[i]);
+        lambda[i] = sqrt(s[i] * z[i]);
+    }
+    for (tscvx_int k = 0; k < K->nsoc; k++) {
+        const tscvx_int o = K->off[k], q = K->q[k];
+        const tscvx_float sdet = soc_det(s + o, q), zdet = soc_det(z + o, q);
+        if (!(sdet > 0.0) || !(zdet > 0.0) || !(s[o] > 0.0) || !(z[o] > 0.0)) return -1;
+        const tscvx_float sn = sqrt(sdet), zn = sqrt(zdet);
+        tscvx_float *w = W->w + o, *lam = lambda + o;
+        /* w = sbar + J zbar, normalized: |w|_J = 2 gamma */
+        w[0] = s[o] / sn + z[o] / zn;
+        for (tscvx_int j = 1; j < q; j++) w[j] = s[o + j] / sn - z[o + j] / zn;
+        const tscvx_float wdet = soc_det(w, q);
+        if (!(wdet > 0.0)) return -1;
+        const tscvx_float wn = sqrt(wdet), gamma = 0.5 * wn;
+        for (tscvx_int j = 1; j < q; j++) w[j] /= wn;
+        w[0] = sqrt(1.0 + dot(w + 1, w + 1, q - 1)); /* det wbar = 1 exactly */
+        W->eta[k] = sqrt(sn / zn);
+        /* lambda = W z without cancellation (CVXOPT cone notes):
+         *  lambda0 = gamma,  lambda1 = (c1 s1 + c2 z1)/(sbar0 + zbar0 + 2 gamma),
+         *  c1 = (gamma + zbar0)/|s|_J, c2 = (gamma + sbar0)/|z|_J, all times sqrt(|s|_J |z|_J) */
+        const tscvx_float scale = sqrt(sn * zn);
+        const tscvx_float coef = 1.0 / (s[o] / sn + z[o] / zn + 2.0 * gamma);
+        const tscvx_float c1 = (gamma + z[o] / zn) / sn, c2 = (gamma + s[o] / sn) / zn;
+        lam[0] = gamma * scale;
+        for (tscvx_int j = 1; j < q; j++)
+            lam[j] = scale * coef * (c1 * s[o + j] + c2 * z[o + j]);
+    }
+    return 0;
+}
+
+void tscvx_nt_apply(const tscvx_cones *K, const tscvx_nt *W, int inverse, const tscvx_float *v,
+                    tscvx_float *out) {
+    for (tscvx_int i = 0; i < K->l; i++) out[i] = inverse ? v[i] / W->w[i] : v[i] * W->w[i];
+    for (tscvx_int k = 0; k < K->nsoc; k++) {
+        const tscvx_int o = K->off[k], q = K->q[k];
+        const tscvx_float *w = W->w + o;
+        const tscvx_float sgn = inverse ? -1.0 : 1.0; /* Wbar^{-1} = J Wbar J */
+        const tscvx_float scale = inverse ? 1.0 / W->eta[k] : W->eta[k];
+        const tscvx_float w1v1 = dot(w + 1, v + o + 1, q - 1);
+        const tscvx_float v0 = v[o];
+        const tscvx_float coef = sgn * v0 + w1v1 / (1.0 + w[0]);
+        for (tscvx_int j = 1; j < q; j++) out[o + j] = scale * (v[o + j] + coef * w[j]);
+        out[o] = scale * (w[0] * v0 + sgn * w1v1);
+    }
+}
+
+/* SOC: with f(a) = det(u + a du) = A a^2 + 2 B a + C, C > 0, the boundary is first met at
+ * a = C / (sqrt(B^2 - A C) - B) unless du is in K (then never). */
+tscvx_float tscvx_cone_max_step(const tscvx_cones *K, const tscvx_float *u,
+                                const tscvx_float *du, tscvx_float alpha_max) {
+    tscvx_float alpha = alpha_max;
+    for (tscvx_int i = 0; i < K->l; i++)
+        if (du[i] < 0.0 && u[i] < alpha * -du[i]) alpha = -u[i] / du[i];
+    for (tscvx_int k = 0; k < K->nsoc; k++) {
+        const tscvx_int o = K->off[k], q = K->q[k];
+        const tscvx_float dn = norm2(du + o + 1, q - 1);
+        if (du[o] >= dn) continue; /* direction inside the cone */
+        const tscvx_float A = (du[o] - dn) * (du[o] + dn);
+        const tscvx_float B = u[o] * du[o] - dot(u + o + 1, du + o + 1, q - 1);
+        const tscvx_float C = soc_det(u + o, q);
+        if (!(C > 0.0)) return 0.0;
+        tscvx_float disc = B * B - A * C;
+        if (disc < 0.0) disc = 0.0;
+        const tscvx_float den = sqrt(disc) - B;
+        if (den > 0.0 && C < alpha * den) alpha = C / den;
+    }
+    return alpha;
+}
+
+tscvx_float tscvx_cone_shift_needed(const tscvx_cones *K, const tscvx_float *u) {
+    tscvx_float t = -INFINITY;
+    for (tscvx_int i = 0; i < K->l; i++)
+        if (-u[i] > t) t = -u[i];
+    for (tscvx_int k = 0; k < K->nsoc; k++) {
+        const tscvx_int o = K->off[k], q = K->q[k];
+        const tscvx_float v = norm2(u + o + 1, q - 1) - u[o];
+        if (v > t) t = v;
+    }
+    return t;
+}
+
+void tscvx_cone_add_identity(const tscvx_cones *K, tscvx_float *u, tscvx_float t) {
+    for (tscvx_int i = 0; i < K->l; i++) u[i] += t;
+    for (tscvx_int k = 0; k < K->nsoc; k++) u[K->off[k]] += t;
+}

@@ -1,0 +1,403 @@
+/* Primal-dual interior-point method on the homogeneous self-dual embedding.
+ *
+ * Embedding (ECOS, extended with the quadratic objective as in Clarabel, Goulart & Chen 2024):
+ *   rx = P x + A'y + G'z + c tau = 0          s in K, z in K, tau >= 0, kappa >= 0
+ *   ry = A x - b tau = 0
+ *   rz = G x + s - h tau = 0
+ *   rtau = kappa + c'x + b'y + h'z + x'Px/tau = 0
+ * tau > 0, kappa = 0 at a solution (x/tau, ...); tau = 0, kappa > 0 gives an infeasibility
+ * certificate. Each iteration: Nesterov-Todd scaling, one factorization of
+ *   K = [P A' G'; A 0 0; G 0 -W'W],
+ * the constant solve K (x1, y1, z1) = (-c, b, h), and two Newton solves (Mehrotra
+ * predictor-corrector) of
+ *   K (x2, y2, z2) = (-dx, -dy, -dz + W (lambda \ ds)),
+ *   dtau from the tau row, (dx, dy, dz) = (x2, y2, z2) + dtau (x1, y1, z1),
+ *   ds = -W (lambda \ ds) - W'W dz,  dkappa = -(dk + kappa dtau)/tau,
+ * with the affine targets (d = r, ds = lambda o lambda, dk = tau kappa) and the combined ones
+ * (d = (1-sigma) r, ds = lambda o lambda + (W^{-1} ds_a) o (W dz_a) - sigma mu e,
+ *  dk = tau kappa + dtau_a dkappa_a - sigma mu), sigma = (1 - alpha_a)^3.
+ */
+#include <math.h>
+
+#include "socp_internal.h"
+
+
+/* ---- small dense/sparse kernels ---------------------------------------------------------- */
+
+static tscvx_float vdot(const tscvx_float *u, const tscvx_float *v, tscvx_int n) {
+    tscvx_float d = 0.0;
+    for (tscvx_int i = 0; i < n; i++) d += u[i] * v[i];
+    return d;
+}
+
+/* |u ./ s|_inf (undo a diagonal scaling) */
+static tscvx_float vnorm_inf_div(const tscvx_float *u, const tscvx_float *s, tscvx_int n) {
+    tscvx_float r = 0.0;
+    for (tscvx_int i = 0; i < n; i++) {
+        const tscvx_float v = fabs(u[i] / s[i]);
+        r = v > r ? v : r;
+    }
+    return r;
+}
+
+static void vcopy(tscvx_float *dst, const tscvx_float *src, tscvx_int n) {
+    for (tscvx_int i = 0; i < n; i++) dst[i] = src[i];
+}
+
+/* y += M x (M mapped: values in the KKT matrix) */
+static void spmv(const tscvx_csc *M, const tscvx_float *x, tscvx_float *y) {
+    for (tscvx_int j = 0; j < M->ncol; j++)
+        for (tscvx_int k = M->p[j]; k < M->p[j + 1]; k++) y[M->i[k]] += CSC_VAL(M, k) * x[j];
+}
+
+/* y += M' x (M mapped) */
+static void spmv_t(const tscvx_csc *M, const tscvx_float *x, tscvx_float *y) {
+    for (tscvx_int j = 0; j < M->ncol; j++) {
+        tscvx_float acc = 0.0;
+        for (tscvx_int k = M->p[j]; k < M->p[j + 1]; k++) acc += CSC_VAL(M, k) * x[M->i[k]];
+        y[j] += acc;
+    }
+}
+
+/* y = P x, P symmetric given by its upper triangle */
+static void spmv_sym(const tscvx_csc *P, const tscvx_float *x, tscvx_float *y) {
+    for (tscvx_int j = 0; j < P->ncol; j++) y[j] = 0.0;
+    for (tscvx_int j = 0; j < P->ncol; j++)
+        for (tscvx_int k = P->p[j]; k < P->p[j + 1]; k++) {
+            const tscvx_int i = P->i[k];
+            y[i] += P->x[k] * x[j];
+            if (i != j) y[j] += P->x[k] * x[i];
+        }
+}
+
+/* ---- residuals and convergence measures -------------------------------------------------- */
+
+typedef struct {
+    tscvx_float pcost, dcost, gap_abs, gap_rel, pres, dres, mu;
+} measures;
+
+/* rx, ry, rz, rtau of the embedding at the current iterate; Px = P x. */
+static void residuals(tscvx_workspace *ws) {
+    const tscvx_int n = ws->n, p = ws->p, m = ws->m;
+    const tscvx_float tau = ws->tau;
+    spmv_sym(&ws->P, ws->x, ws->Px);
+    for (tscvx_int j = 0; j < n; j++) ws->rx[j] = ws->Px[j] + ws->c[j] * tau;
+    spmv_t(&ws->A, ws->y, ws->rx);
+    spmv_t(&ws->G, ws->z, ws->rx);
+    for (tscvx_int i = 0; i < p; i++) ws->ry[i] = -ws->b[i] * tau;
+    spmv(&ws->A, ws->x, ws->ry);
+    for (tscvx_int i = 0; i < m; i++) ws->rz[i] = ws->s[i] - ws->h[i] * tau;
+    spmv(&ws->G, ws->x, ws->rz);
+    const tscvx_float xPx = vdot(ws->x, ws->Px, n);
+    ws->rtau = ws->kappa + vdot(ws->c, ws->x, n) + vdot(ws->b, ws->y, p) +
+               vdot(ws->h, ws->z, m) + xPx / tau;
+}
+
+/* Residuals and objectives of (x, y, z, s)/tau in the ORIGINAL units (undo Ruiz and cs). */
+static measures measure(tscvx_workspace *ws) {
+    const tscvx_int n = ws->n, p = ws->p, m = ws->m;
+    const tscvx_float tau = ws->tau, cs = ws->cs;
+    measures r;
+    const tscvx_float xPx = vdot(ws->x, ws->Px, n) / (tau * tau);
+    r.pcost = (0.5 * xPx + vdot(ws->c, ws->x, n) / tau) / cs;
+    r.dcost = (-0.5 * xPx - (vdot(ws->b, ws->y, p) + vdot(ws->h, ws->z, m)) / tau) / cs;
+    r.gap_abs = fabs(r.pcost - r.dcost);
+    r.gap_rel = r.gap_abs / fmax(1.0, fmin(fabs(r.pcost), fabs(r.dcost)));
+    const tscvx_float pa = vnorm_inf_div(ws->ry, ws->EA, p) / tau / (1.0 + ws->norm_b);
+    const tscvx_float pg = vnorm_inf_div(ws->rz, ws->EG, m) / tau / (1.0 + ws->norm_h);
+    r.pres = fmax(pa, pg);
+    r.dres = vnorm_inf_div(ws->rx, ws->D, n) / cs / tau / (1.0 + ws->norm_c);
+    r.mu = (vdot(ws->s, ws->z, m) + tau * ws->kappa) / (ws->K.degree + 1);
+    return r;
+}
+
+static int converged(const tscvx_workspace *ws, const measures *r, int reduced) {
+    const tscvx_settings *st = &ws->st;
+    const tscvx_float feas = reduced ? st->tol_feas_inacc : st->tol_feas;
+    const tscvx_float ga = reduced ? st->tol_gap_abs_inacc : st->tol_gap_abs;
+    const tscvx_float gr = reduced ? st->tol_gap_rel_inacc : st->tol_gap_rel;
+    return r->pres <= feas && r->dres <= feas && (r->gap_abs <= ga || r->gap_rel <= gr);
+}
+
+/* Primal infeasibility: |A'y + G'z| <= tol (-(b'y + h'z)), original units, kappa > tau. */
+static int primal_infeasible(tscvx_workspace *ws) {
+    const tscvx_int n = ws->n;
+    const tscvx_float rho = -(vdot(ws->b, ws->y, ws->p) + vdot(ws->h, ws->z, ws->m)) / ws->cs;
+    if (!(rho > 0.0) || !(ws->kappa > ws->tau)) return 0;
+    tscvx_float *aty = ws->wn; /* A'y + G'z = rx - Px - c tau (scaled) */
+    for (tscvx_int j = 0; j < n; j++) aty[j] = ws->rx[j] - ws->Px[j] - ws->c[j] * ws->tau;
+    return vnorm_inf_div(aty, ws->D, n) / ws->cs <= ws->st.tol_infeas * rho;
+}
+
+/* Dual infeasibility: |Ax|, |Gx + s| <= tol (-c'x) and |Px| <= tol max(-c'x, |P| |x|)
+ * (x in the null space of a P perturbed by tol |P|), original units, kappa > tau. */
+static int dual_infeasible(tscvx_workspace *ws) {
+    const tscvx_int n = ws->n, p = ws->p, m = ws->m;
+    const tscvx_float rho = -vdot(ws->c, ws->x, n) / ws->cs;
+    if (!(rho > 0.0) || !(ws->kappa > ws->tau)) return 0;
+    const tscvx_float tol = ws->st.tol_infeas * rho;
+    tscvx_float r = 0.0, xnorm = 0.0;
+    for (tscvx_int i = 0; i < p; i++)
+        r = fmax(r, fabs((ws->ry[i] + ws->b[i] * ws->tau) / ws->EA[i]));
+    for (tscvx_int i = 0; i < m; i++)
+        r = fmax(r, fabs((ws->rz[i] + ws->h[i] * ws->tau) / ws->EG[i]));
+    for (tscvx_int j = 0; j < n; j++) xnorm = fmax(xnorm, fabs(ws->D[j] * ws->x[j]));
+    const tscvx_float px = vnorm_inf_div(ws->Px, ws->D, n) / ws->cs;
+    return r <= tol && px <= fmax(tol, ws->st.tol_infeas * ws->norm_P * xnorm);
+}
+
+/* ---- output ------------------------------------------------------------------------------ */
+
+/* (x, y, z, s) in original units: x = D x/tau, y = EA y/(cs tau), z = EG z/(cs tau),
+ * s = s/(EG tau). Certificates are normalized instead: b'y + h'z = -1 (primal infeasible,
+ * x and s NaN) or c'x = -1 (dual infeasible, y and z NaN). Any output may be NULL. */
+void tscvx_unscale_solution(const tscvx_workspace *ws, tscvx_float *x, tscvx_float *y,
+                            tscvx_float *z, tscvx_float *s) {
+    const tscvx_int n = ws->n, p = ws->p, m = ws->m;
+    tscvx_float px = 1.0 / ws->tau, pd = 1.0 / (ws->tau * ws->cs);
+    if (ws->info.status == TSCVX_PRIMAL_INFEASIBLE) {
+        px = NAN;
+        pd = -1.0 / (vdot(ws->b, ws->y, p) + vdot(ws->h, ws->z, m));
+    } else if (ws->info.status == TSCVX_DUAL_INFEASIBLE) {
+        px = -ws->cs / vdot(ws->c, ws->x, n);
+        pd = NAN;
+    }
+    for (tscvx_int j = 0; x && j < n; j++) x[j] = ws->D[j] * ws->x[j] * px;
+    for (tscvx_int i = 0; y && i < p; i++) y[i] = ws->EA[i] * ws->y[i] * pd;
+    for (tscvx_int i = 0; z && i < m; i++) z[i] = ws->EG[i] * ws->z[i] * pd;
+    for (tscvx_int i = 0; s && i < m; i++) s[i] = ws->s[i] / ws->EG[i] * px;
+}
+
+static void save_best(tscvx_workspace *ws, tscvx_float merit, tscvx_int k) {
+    vcopy(ws->bx, ws->x, ws->n);
+    vcopy(ws->by, ws->y, ws->p);
+    vcopy(ws->bz, ws->z, ws->m);
+    vcopy(ws->bs, ws->s, ws->m);
+    ws->btau = ws->tau, ws->bkappa = ws->kappa, ws->bmerit = merit, ws->best_iter = k;
+}
+
+static void restore_best(tscvx_workspace *ws) {
+    vcopy(ws->x, ws->bx, ws->n);
+    vcopy(ws->y, ws->by, ws->p);
+    vcopy(ws->z, ws->bz, ws->m);
+    vcopy(ws->s, ws->bs, ws->m);
+    ws->tau = ws->btau, ws->kappa = ws->bkappa;
+}
+
+/* ---- factorization and Newton directions ------------------------------------------------- */
+
+/* Write the NT blocks and factor; on a bad pivot raise the regularization (bounded). */
+static int factor(tscvx_workspace *ws) {
+    for (int attempt = 0; attempt < 4; attempt++) {
+        tscvx_kkt_cone_values(&ws->kkt, &ws->K, &ws->W, ws->delta);
+        ws->info.factorizations++;
+        if (ws->kkt.backend->numeric(&ws->kkt) == 0) return 0;
+        ws->delta *= 100.0;
+        tscvx_kkt_data_values(ws, ws->delta);
+    }
+    return -1;
+}
+
+/* The constant system K (x1, y1, z1) = (-c, b, h) and the tau-row coefficient
+ *   den = -kappa/tau + xi'x1 + b'y1 + h'z1 - xhat'P xhat,  xi = c + 2 P xhat, xhat = x/tau.
+ * (The equivalent -(kappa/tau + |x1 - xhat|_P^2 + |W z1|^2) is exact only for exact solves;
+ * the direct form shares its rounding errors with the numerator, which cancel in dtau.) */
+static int constant_solve(tscvx_workspace *ws) {
+    const tscvx_int n = ws->n, m = ws->m;
+    const tscvx_float tau = ws->tau;
+    for (tscvx_int j = 0; j < n; j++) ws->wn[j] = -ws->c[j];
+    if (tscvx_kkt_solve(&ws->kkt, n, ws->p, m, ws->wn, ws->b, ws->h, ws->x1, ws->y1, ws->z1,
+                        ws->refine_now) < 0)
+        return -1;
+    tscvx_float den = -ws->kappa / tau + vdot(ws->b, ws->y1, ws->p) + vdot(ws->h, ws->z1, m);
+    for (tscvx_int j = 0; j < n; j++)
+        den += (ws->c[j] + 2.0 * ws->Px[j] / tau) * ws->x1[j] - ws->x[j] * ws->Px[j] / (tau * tau);
+    ws->tau_den = den;
+    return isfinite(den) && den != 0.0 ? 0 : -1;
+}
+
+/* Newton direction for linear targets lin*(rx, ry, rz, rtau), complementarity target dsv
+ * (m; may be wm2, it is consumed first) and dk. Result in dx, dy, dz, ds, dtau, dkappa. */
+static int direction(tscvx_workspace *ws, tscvx_float lin, const tscvx_float *dsv,
+                     tscvx_float dk) {
+    const tscvx_int n = ws->n, p = ws->p, m = ws->m;
+    tscvx_float *wlds = ws->wm3; /* W (lambda \ ds) */
+    tscvx_cone_div(&ws->K, ws->lambda, dsv, ws->wm2);
+    tscvx_nt_apply(&ws->K, &ws->W, 0, ws->wm2, wlds);
+    for (tscvx_int j = 0; j < n; j++) ws->wn[j] = -lin * ws->rx[j];
+    for (tscvx_int i = 0; i < p; i++) ws->dy[i] = -lin * ws->ry[i];
+    for (tscvx_int i = 0; i < m; i++) ws->wm[i] = -lin * ws->rz[i] + wlds[i];
+    if (tscvx_kkt_solve(&ws->kkt, n, p, m, ws->wn, ws->dy, ws->wm, ws->dx, ws->dy, ws->dz,
+                        ws->refine_now) < 0)
+        return -1;
+    /* tau row: dtau (-kappa/tau + xi'x1 + b'y1 + h'z1 - x'Px/tau^2)
+     *          = -lin rtau + dk/tau - xi'x2 - b'y2 - h'z2,   xi = c + 2 P x/tau */
+    tscvx_float num = -lin * ws->rtau + dk / ws->tau;
+    for (tscvx_int j = 0; j < n; j++)
+        num -= (ws->c[j] + 2.0 * ws->Px[j] / ws->tau) * ws->dx[j];
+    num -= vdot(ws->b, ws->dy, p) + vdot(ws->h, ws->dz, m);
+    ws->dtau = num / ws->tau_den;
+    for (tscvx_int j = 0; j < n; j++) ws->dx[j] += ws->dtau * ws->x1[j];
+    for (tscvx_int i = 0; i < p; i++) ws->dy[i] += ws->dtau * ws->y1[i];
+    for (tscvx_int i = 0; i < m; i++) ws->dz[i] += ws->dtau * ws->z1[i];
+    /* ds = -W (lambda \ ds) - W'W dz */
+    tscvx_nt_apply(&ws->K, &ws->W, 0, ws->dz, ws->wm);
+    tscvx_nt_apply(&ws->K, &ws->W, 0, ws->wm, ws->wm2);
+    for (tscvx_int i = 0; i < m; i++) ws->ds[i] = -wlds[i] - ws->wm2[i];
+    ws->dkappa = -(dk + ws->kappa * ws->dtau) / ws->tau;
+    return isfinite(ws->dtau) && isfinite(ws->dkappa) ? 0 : -1;
+}
+
+/* Largest step in (0, amax] keeping s, z, tau, kappa in their cones. */
+static tscvx_float max_step(const tscvx_workspace *ws, tscvx_float amax) {
+    tscvx_float a = tscvx_cone_max_step(&ws->K, ws->s, ws->ds, amax);
+    a = tscvx_cone_max_step(&ws->K, ws->z, ws->dz, a);
+    if (ws->dtau < 0.0 && ws->tau < a * -ws->dtau) a = -ws->tau / ws->dtau;
+    if (ws->dkappa < 0.0 && ws->kappa < a * -ws->dkappa) a = -ws->kappa / ws->dkappa;
+    return a;
+}
+
+static void take_step(tscvx_workspace *ws, tscvx_float a) {
+    for (tscvx_int j = 0; j < ws->n; j++) ws->x[j] += a * ws->dx[j];
+    for (tscvx_int i = 0; i < ws->p; i++) ws->y[i] += a * ws->dy[i];
+    for (tscvx_int i = 0; i < ws->m; i++) ws->z[i] += a * ws->dz[i], ws->s[i] += a * ws->ds[i];
+    ws->tau += a * ws->dtau;
+    ws->kappa += a * ws->dkappa;
+}
+
+/* ---- initial point (ECOS): W = I, then shift s and z into the cones --------------------- */
+
+static int initialize(tscvx_workspace *ws) {
+    const tscvx_int n = ws->n, p = ws->p, m = ws->m;
+    for (tscvx_int i = 0; i < ws->K.l; i++) ws->W.w[i] = 1.0;
+    for (tscvx_int k = 0; k < ws->K.nsoc; k++) {
+        const tscvx_int o = ws->K.off[k];
+        ws->W.eta[k] = 1.0, ws->W.w[o] = 1.0;
+        for (tscvx_int j = 1; j < ws->K.q[k]; j++) ws->W.w[o + j] = 0.0;
+    }
+    if (factor(ws) != 0) return -1;
+    /* primal: K (x, y, -s) = (0, b, h): min |Gx - h| s.t. Ax = b, s = h - Gx */
+    for (tscvx_int j = 0; j < n; j++) ws->wn[j] = 0.0;
+    if (tscvx_kkt_solve(&ws->kkt, n, p, m, ws->wn, ws->b, ws->h, ws->x, ws->y, ws->s,
+                        ws->st.refine_iters) < 0)
+        return -1;
+    for (tscvx_int i = 0; i < m; i++) ws->s[i] = -ws->s[i];
+    /* dual: K (x', y, z) = (-c, 0, 0) */
+    for (tscvx_int j = 0; j < n; j++) ws->wn[j] = -ws->c[j];
+    for (tscvx_int i = 0; i < p; i++) ws->dy[i] = 0.0;
+    for (tscvx_int i = 0; i < m; i++) ws->wm[i] = 0.0;
+    if (tscvx_kkt_solve(&ws->kkt, n, p, m, ws->wn, ws->dy, ws->wm, ws->dx, ws->y, ws->z,
+                        ws->st.refine_iters) < 0)
+        return -1;
+    /* shift into the interior: u += (1 + t) e when the smallest eigenvalue -t > -1 */
+    const tscvx_float ts = tscvx_cone_shift_needed(&ws->K, ws->s);
+    const tscvx_float tz = tscvx_cone_shift_needed(&ws->K, ws->z);
+    if (m > 0 && ts > -1.0) tscvx_cone_add_identity(&ws->K, ws->s, 1.0 + ts);
+    if (m > 0 && tz > -1.0) tscvx_cone_add_identity(&ws->K, ws->z, 1.0 + tz);
+    ws->tau = 1.0, ws->kappa = 1.0;
+    return 0;
+}
+
+/* ---- the loop ---------------------------------------------------------------------------- */
+
+static void log_row(tscvx_workspace *ws, tscvx_int k, const measures *r, tscvx_float step) {
+    if (k >= ws->log_cap) return;
+    tscvx_iter_log *row = &ws->log[k];
+    row->iter = k, row->pcost = r->pcost, row->dcost = r->dcost, row->gap = r->gap_abs;
+    row->pres = r->pres, row->dres = r->dres, row->mu = r->mu, row->step = step;
+}
+
+static void finish_info(tscvx_workspace *ws, tscvx_solve_status st, tscvx_int k,
+                        const measures *r) {
+    ws->info.status = st, ws->info.iterations = k;
+    ws->info.pcost = r->pcost, ws->info.dcost = r->dcost, ws->info.gap_abs = r->gap_abs;
+    ws->info.gap_rel = r->gap_rel, ws->info.pres = r->pres, ws->info.dres = r->dres;
+    ws->info.mu = r->mu;
+}
+
+/* After a failure or the iteration limit: the best iterate, if it meets reduced tolerances. */
+static tscvx_solve_status fallback(tscvx_workspace *ws, tscvx_solve_status why, measures *r) {
+    if (ws->best_iter < 0) return why;
+    restore_best(ws);
+    residuals(ws);
+    *r = measure(ws);
+    return converged(ws, r, 1) ? TSCVX_SOLVED_INACCURATE : why;
+}
+
+/* Mehrotra predictor: affine direction (ds = lambda o lambda, dk = tau kappa, full residual
+ * targets); returns -1 on failure, else writes the centering sigma = (1 - alpha_aff)^3. */
+static int predictor(tscvx_workspace *ws, tscvx_float *sigma) {
+    tscvx_cone_prod(&ws->K, ws->lambda, ws->lambda, ws->wm2);
+    if (direction(ws, 1.0, ws->wm2, ws->tau * ws->kappa) != 0) return -1;
+    *sigma = pow(1.0 - max_step(ws, 1.0), 3.0);
+    return 0;
+}
+
+/* Mehrotra corrector: ds = lambda o lambda + (W^{-1} ds_a) o (W dz_a) - sigma mu e,
+ * dk = tau kappa + dtau_a dkappa_a - sigma mu, residual targets scaled by (1 - sigma). */
+static int corrector(tscvx_workspace *ws, tscvx_float sigma, tscvx_float mu) {
+    tscvx_nt_apply(&ws->K, &ws->W, 1, ws->ds, ws->wm);
+    tscvx_nt_apply(&ws->K, &ws->W, 0, ws->dz, ws->wm2);
+    tscvx_cone_prod(&ws->K, ws->wm, ws->wm2, ws->wm3);
+    tscvx_cone_prod(&ws->K, ws->lambda, ws->lambda, ws->wm2);
+    for (tscvx_int i = 0; i < ws->m; i++) ws->wm2[i] += ws->wm3[i];
+    tscvx_cone_add_identity(&ws->K, ws->wm2, -sigma * mu);
+    const tscvx_float dk = ws->tau * ws->kappa + ws->dtau * ws->dkappa - sigma * mu;
+    return direction(ws, 1.0 - sigma, ws->wm2, dk);
+}
+
+tscvx_solve_status tscvx_ipm(tscvx_workspace *ws) {
+    tscvx_solve_status status = TSCVX_MAX_ITER;
+    measures r = {0, 0, 0, 0, 0, 0, 0};
+    tscvx_float step = 0.0, mu0 = 1.0, sigma = 0.0;
+    tscvx_int k = 0, stalls = 0;
+    ws->delta = ws->st.static_reg;
+    ws->best_iter = -1;
+    ws->info.factorizations = 0;
+    ws->refine_now = ws->st.refine_iters;
+    tscvx_kkt_data_values(ws, ws->delta);
+    if (initialize(ws) != 0) {
+        finish_info(ws, TSCVX_NUMERICAL_ERROR, 0, &r);
+        return TSCVX_NUMERICAL_ERROR;
+    }
+    for (k = 0; k <= ws->st.max_iter; k++) {
+        residuals(ws);
+        r = measure(ws);
+        log_row(ws, k, &r, step);
+        if (!isfinite(r.pcost + r.dcost + r.pres + r.dres)) {
+            status = fallback(ws, TSCVX_NUMERICAL_ERROR, &r);
+            break;
+        }
+        /* best iterate: the smallest worst ratio to the tolerances */
+        const tscvx_float merit = fmax(fmax(r.pres, r.dres) / ws->st.tol_feas,
+                                       fmin(r.gap_abs / ws->st.tol_gap_abs,
+                                            r.gap_rel / ws->st.tol_gap_rel));
+        if (ws->best_iter < 0 || merit < ws->bmerit) save_best(ws, merit, k);
+        if (converged(ws, &r, 0)) { status = TSCVX_SOLVED; break; }
+        if (primal_infeasible(ws)) { status = TSCVX_PRIMAL_INFEASIBLE; break; }
+        if (dual_infeasible(ws)) { status = TSCVX_DUAL_INFEASIBLE; break; }
+        if (k == ws->st.max_iter) { status = fallback(ws, TSCVX_MAX_ITER, &r); break; }
+
+        /* inexact Newton: early directions need no refinement (mu >= 1e-3 mu_0) */
+        if (k == 0) mu0 = r.mu;
+        ws->refine_now = r.mu < 1e-3 * mu0 || ws->kkt.nexp > 0 ? ws->st.refine_iters : 0;
+        /* NT scaling, one factorization, constant solve, predictor-corrector */
+        if (tscvx_nt_scaling(&ws->K, ws->s, ws->z, &ws->W, ws->lambda) != 0 || factor(ws) != 0 ||
+            constant_solve(ws) != 0 || predictor(ws, &sigma) != 0 ||
+            corrector(ws, sigma, r.mu) != 0) {
+            status = fallback(ws, TSCVX_NUMERICAL_ERROR, &r);
+            break;
+        }
+        /* step: a fraction of the way to the boundary of the cones */
+        step = fmin(1.0, ws->st.step_fraction * max_step(ws, 1.0 / ws->st.step_fraction));
+        stalls = step < 1e-8 ? stalls + 1 : 0;
+        if (stalls >= 3 || !(step > 0.0)) {
+            status = fallback(ws, TSCVX_NUMERICAL_ERROR, &r);
+            break;
+        }
+        take_step(ws, step);
+    }
+    if (k > ws->st.max_iter) k = ws->st.max_iter;
+    finish_info(ws, status, k, &r);
+    return status;
+}

@@ -1,0 +1,191 @@
+/* Private definitions of the SOCP solver: arena, cones, KKT system, workspace. */
+#ifndef TSCVX_SOCP_INTERNAL_H
+#define TSCVX_SOCP_INTERNAL_H
+
+#include <stddef.h>
+
+#include "tscvx_socp.h"
+
+/* ---- arena: bump allocator over the caller's memory -------------------------------------- */
+
+typedef struct {
+    unsigned char *base; /* caller memory, or NULL when only counting bytes */
+    size_t cap;          /* bytes available */
+    size_t top;          /* bytes in use */
+    size_t high;         /* most bytes ever in use */
+    int overflow;        /* set when a request did not fit */
+} tscvx_arena;
+
+/* 16-byte aligned block of `count * size` bytes; NULL on overflow or in counting mode. */
+void *tscvx_arena_alloc(tscvx_arena *a, size_t count, size_t size);
+
+/* ---- cones: K = R_+^l x Q^{q_1} x ... ---------------------------------------------------- */
+
+typedef struct {
+    tscvx_int l;          /* nonnegative orthant dimension */
+    tscvx_int nsoc;       /* number of second-order cones */
+    const tscvx_int *q;   /* nsoc cone dimensions (in the arena) */
+    const tscvx_int *off; /* nsoc row offsets of each SOC within the m cone rows */
+    tscvx_int m;          /* l + sum(q) */
+    tscvx_int degree;     /* l + nsoc, the barrier degree nu */
+} tscvx_cones;
+
+/* Nesterov-Todd scaling point of K, with W symmetric: lambda = W z = W^{-1} s. */
+typedef struct {
+    tscvx_float *w;   /* m: orthant rows sqrt(s_i/z_i); SOC rows the unit-det point wbar */
+    tscvx_float *eta; /* nsoc: SOC scale eta = (det s / det z)^{1/4} */
+} tscvx_nt;
+
+/* u o v (Jordan product) */
+void tscvx_cone_prod(const tscvx_cones *K, const tscvx_float *u, const tscvx_float *v,
+                     tscvx_float *out);
+/* w = u \ v, i.e. u o w = v (u in int K) */
+void tscvx_cone_div(const tscvx_cones *K, const tscvx_float *u, const tscvx_float *v,
+                    tscvx_float *out);
+/* NT scaling of (s, z) in int K x int K and lambda = W z. Returns 0, or -1 if s or z left K. */
+int tscvx_nt_scaling(const tscvx_cones *K, const tscvx_float *s, const tscvx_float *z,
+                     tscvx_nt *W, tscvx_float *lambda);
+/* out = W v, or W^{-1} v when inverse != 0 */
+void tscvx_nt_apply(const tscvx_cones *K, const tscvx_nt *W, int inverse, const tscvx_float *v,
+                    tscvx_float *out);
+/* Largest alpha <= alpha_max with u + alpha du in K (u in int K). */
+tscvx_float tscvx_cone_max_step(const tscvx_cones *K, const tscvx_float *u,
+                                const tscvx_float *du, tscvx_float alpha_max);
+/* Smallest t with u + t e in K, e the identity (t < 0 when u is interior). */
+tscvx_float tscvx_cone_shift_needed(const tscvx_cones *K, const tscvx_float *u);
+/* u += t e */
+void tscvx_cone_add_identity(const tscvx_cones *K, tscvx_float *u, tscvx_float t);
+
+/* ---- KKT system -------------------------------------------------------------------------- */
+/*
+ *  K = [ P + d I    A'      G'              ]   rows: x (n), y (p), z (m), extra (2 per
+ *      [ A         -d I     0               ]         expanded SOC: v-row then u-row)
+ *      [ G          0      -(W'W) - d I     ]
+ *  stored as the upper triangle of the AMD-permuted matrix (CSC) so that LDL needs no
+ *  permutation; the maps below send problem data and cone-block entries to their slots.
+ */
+typedef struct tscvx_kkt tscvx_kkt;
+
+/* Backend seam: the only door to the factorization library. */
+typedef struct {
+    const char *name;
+    /* symbolic analysis of kkt->Kp/Ki, writes factor sizes; returns nnz(L) or -1 */
+    long (*symbolic)(tscvx_kkt *kkt);
+    /* numeric factorization of kkt->Kx; returns 0 or -1 (zero pivot) */
+    int (*numeric)(tscvx_kkt *kkt);
+    /* x := K^{-1} x in permuted coordinates */
+    void (*solve)(tscvx_kkt *kkt, tscvx_float *x);
+} tscvx_backend;
+
+struct tscvx_kkt {
+    const tscvx_backend *backend;
+    tscvx_int dim;        /* n + p + m + 2 * nexp */
+    tscvx_int nnz;        /* entries of the permuted upper triangle */
+    tscvx_int nexp;       /* SOCs with a sparse expansion */
+    tscvx_int *Kp;        /* dim+1 column pointers (permuted upper triangle) */
+    tscvx_int *Ki;        /* nnz row indices */
+    tscvx_float *Kx;      /* nnz values */
+    signed char *regsign; /* dim (permuted): sign of the static regularization (+x, -y/z, 0) */
+    tscvx_int *pinv;      /* dim: inverse of perm */
+    tscvx_int *mapP;      /* nnz(P): slot of each P entry */
+    tscvx_int *mapA;      /* nnz(A): slot of each A entry */
+    tscvx_int *mapG;      /* nnz(G): slot of each G entry */
+    tscvx_int *mapDiag;   /* n + p: diagonal slots of the x and y blocks */
+    tscvx_int *mapCone;   /* ncone: slots of the cone block, in the order of kkt_cone_values */
+    tscvx_int ncone;      /* number of cone-block entries */
+    tscvx_int *expanded;  /* nsoc: index of the expansion (0..nexp-1), or -1 for dense */
+    /* LDL' factors and work arrays (dim or nnz(L)) */
+    tscvx_int *Lp, *Parent, *Lnz, *Flag, *Pattern, *Li;
+    tscvx_float *Lx, *D, *Y;
+    tscvx_int lnz;        /* nnz(L) */
+    tscvx_int npos;       /* expected positive pivots: n + nexp (inertia check) */
+    tscvx_float delta;    /* static regularization in the stored values */
+    tscvx_float kmax;     /* largest |entry| of the factored matrix */
+    /* refinement work (dim each, permuted); res shares memory with the factor's Y */
+    tscvx_float *rhs, *sol, *res;
+};
+
+extern const tscvx_backend tscvx_backend_ldl;
+
+/* Solve K [dx; dy; dz] = [rx; ry; rz] with iterative refinement; vectors in original order.
+ * Returns the number of refinement steps, or -1 when the residual stays non-finite. */
+int tscvx_kkt_solve(tscvx_kkt *kkt, tscvx_int n, tscvx_int p, tscvx_int m,
+                    const tscvx_float *rx, const tscvx_float *ry, const tscvx_float *rz,
+                    tscvx_float *dx, tscvx_float *dy, tscvx_float *dz, tscvx_int refine_iters);
+
+/* Write the cone block -(W'W) - d I (and expansions) into the KKT values. */
+void tscvx_kkt_cone_values(tscvx_kkt *kkt, const tscvx_cones *K, const tscvx_nt *W,
+                           tscvx_float delta);
+
+/* ---- workspace --------------------------------------------------------------------------- */
+
+/* A CSC matrix in the arena. Values are x[k], or x[xmap[k]] when xmap is set: A and G keep
+ * their (scaled) values only in the KKT matrix, so x = Kx and xmap = the KKT map. */
+typedef struct {
+    tscvx_int nrow, ncol, nnz;
+    tscvx_int *p;          /* ncol+1 */
+    tscvx_int *i;          /* nnz */
+    tscvx_float *x;        /* nnz values, or the KKT values */
+    const tscvx_int *xmap; /* nnz: slot of entry k in x, or NULL */
+} tscvx_csc;
+
+#define CSC_VAL(M, k) ((M)->x[(M)->xmap[k]]) /* value of entry k of a mapped matrix */
+
+struct tscvx_workspace {
+    tscvx_settings st;
+    tscvx_int n, p, m;
+    tscvx_cones K;
+    /* equilibrated data: Ps = cs D P D, cs = cost scale, As = EA A D, Gs = EG G D */
+    tscvx_csc P, A, G;
+    tscvx_float *c, *b, *h; /* n, p, m: cs D c, EA b, EG h */
+    tscvx_float *D, *EA, *EG; /* n, p, m: Ruiz scalings (EG constant on each SOC) */
+    tscvx_float cs;           /* cost scaling */
+    tscvx_float norm_b, norm_h, norm_c, norm_P; /* inf-norms of the original b, h, c, P */
+    tscvx_kkt kkt;
+    tscvx_nt W;
+    /* iterates (scaled space, homogeneous): x n, y p, z m, s m, tau, kappa */
+    tscvx_float *x, *y, *z, *s, tau, kappa;
+    tscvx_float *lambda; /* m: scaled variable lambda = W z */
+    /* residuals: rx n, ry p, rz m, rtau; Px n */
+    tscvx_float *rx, *ry, *rz, rtau, *Px;
+    /* Newton directions: constant part (x1, y1, z1), varying part (x2, y2, z2), step */
+    tscvx_float *x1, *y1, *z1;
+    tscvx_float *dx, *dy, *dz, *ds, dtau, dkappa; /* (x2, y2, z2) are solved into (dx, dy, dz) */
+    tscvx_float tau_den; /* denominator of the tau row (fixed per factorization) */
+    tscvx_float delta;   /* current static regularization */
+    tscvx_int refine_now; /* refinement steps allowed in this iteration */
+    tscvx_float *wm, *wm2, *wm3; /* m: work vectors in the cone space */
+    tscvx_float *wn;             /* n: work vector */
+    /* best iterate so far */
+    tscvx_float *bx, *by, *bz, *bs, btau, bkappa, bmerit;
+    tscvx_int best_iter;
+    /* results (original units) */
+    tscvx_info info;
+    tscvx_iter_log *log; /* max_iter + 1 rows */
+    tscvx_int log_cap;
+    int ready; /* data valid and set up */
+    size_t arena_used, arena_high;
+};
+
+/* Ruiz equilibration in place (setup), and scaling of updated numbers with it. */
+void tscvx_equilibrate(tscvx_workspace *ws);
+void tscvx_scale_update(tscvx_workspace *ws, const tscvx_float *Px, const tscvx_float *c,
+                        const tscvx_float *Ax, const tscvx_float *b, const tscvx_float *Gx,
+                        const tscvx_float *h);
+
+/* Solution in original units (certificates normalized), from the final iterate. */
+void tscvx_unscale_solution(const tscvx_workspace *ws, tscvx_float *x, tscvx_float *y,
+                            tscvx_float *z, tscvx_float *s);
+
+/* The interior-point loop. */
+tscvx_solve_status tscvx_ipm(tscvx_workspace *ws);
+
+/* Temporary ints of tscvx_kkt_build, and the build itself (AMD ordering, permuted pattern,
+ * maps, symbolic factorization; returns nnz(L) or -1). */
+size_t tscvx_kkt_temp_ints(tscvx_int dim, tscvx_int nnz);
+long tscvx_kkt_build(tscvx_workspace *ws, tscvx_int *tmp);
+
+/* Fill the static (data) part of the KKT values from the scaled data; cone block zero. */
+void tscvx_kkt_data_values(tscvx_workspace *ws, tscvx_float delta);
+
+#endif /* TSCVX_SOCP_INTERNAL_H */

@@ -1,0 +1,154 @@
+/* End-to-end solves with known answers, infeasibility, bad input, data updates, log. */
+#include <string.h>
+
+#include "ctest_util.h"
+#include "tscvx_socp.h"
+
+static unsigned char arena[1 << 16];
+
+static tscvx_solve_status solve(const tscvx_data *d, tscvx_float *x, tscvx_info *info) {
+    tscvx_settings st;
+    tscvx_default_settings(&st);
+    tscvx_workspace *ws = NULL;
+    size_t nscratch = 0, narena = 0;
+    CHECK(tscvx_scratch_size(d, &st, &nscratch) == TSCVX_SETUP_OK, "scratch size");
+    CHECK(nscratch <= sizeof arena, "scratch %zu", nscratch);
+    CHECK(tscvx_workspace_size(d, &st, arena, sizeof arena, &narena) == TSCVX_SETUP_OK, "size");
+    CHECK(tscvx_setup(&ws, arena, narena, d, &st) == TSCVX_SETUP_OK, "setup");
+    if (ws == NULL) return TSCVX_INVALID_INPUT;
+    const tscvx_solve_status s = tscvx_solve(ws);
+    tscvx_get_info(ws, info);
+    CHECK(info->arena_high_water <= narena, "high water %zu > %zu", info->arena_high_water, narena);
+    if (x) tscvx_get_solution(ws, x, NULL, NULL, NULL);
+    return s;
+}
+
+/* min -x1 - x2 s.t. |(x1, x2)| <= 1 */
+static void test_soc(void) {
+    tscvx_int Gp[] = {0, 1, 2}, Gi[] = {1, 2}, q[] = {3};
+    tscvx_float Gx[] = {-1, -1}, h[] = {1, 0, 0}, c[] = {-1, -1}, x[2];
+    tscvx_data d = {2, 0, 3, NULL, NULL, NULL, c, NULL, NULL, NULL, NULL, Gp, Gi, Gx, h, 0, 1, q};
+    tscvx_info info;
+    CHECK(solve(&d, x, &info) == TSCVX_SOLVED, "soc status");
+    CHECK(fabs(x[0] - sqrt(0.5)) < 1e-7 && fabs(x[1] - sqrt(0.5)) < 1e-7, "soc x %g %g", x[0], x[1]);
+    CHECK(fabs(info.pcost + sqrt(2.0)) < 1e-7, "soc obj %g", info.pcost);
+}
+
+/* min 1/2 (x1^2 + x2^2) - x1 s.t. x1 + x2 = 0, x2 >= -10 */
+static void test_qp(void) {
+    tscvx_int Pp[] = {0, 1, 2}, Pi[] = {0, 1}, Ap[] = {0, 1, 2}, Ai[] = {0, 0};
+    tscvx_int Gp[] = {0, 0, 1}, Gi[] = {0};
+    tscvx_float Px[] = {1, 1}, c[] = {-1, 0}, Ax[] = {1, 1}, b[] = {0}, Gx[] = {-1}, h[] = {10};
+    tscvx_float x[2];
+    tscvx_data d = {2, 1, 1, Pp, Pi, Px, c, Ap, Ai, Ax, b, Gp, Gi, Gx, h, 1, 0, NULL};
+    tscvx_info info;
+    CHECK(solve(&d, x, &info) == TSCVX_SOLVED, "qp status");
+    CHECK(fabs(x[0] - 0.5) < 1e-7 && fabs(x[1] + 0.5) < 1e-7, "qp x %g %g", x[0], x[1]);
+    CHECK(fabs(info.pcost + 0.25) < 1e-8, "qp obj %g", info.pcost);
+}
+
+/* x >= 1 and x <= 0: primal infeasible; min -x s.t. x >= 0: dual infeasible */
+static void test_infeasible(void) {
+    tscvx_int Gp[] = {0, 2}, Gi[] = {0, 1};
+    tscvx_float Gx[] = {-1, 1}, h[] = {-1, 0}, c[] = {1};
+    tscvx_data d = {1, 0, 2, NULL, NULL, NULL, c, NULL, NULL, NULL, NULL, Gp, Gi, Gx, h, 2, 0, NULL};
+    tscvx_info info;
+    CHECK(solve(&d, NULL, &info) == TSCVX_PRIMAL_INFEASIBLE, "primal infeasible");
+    tscvx_int Gp2[] = {0, 1}, Gi2[] = {0};
+    tscvx_float Gx2[] = {-1}, h2[] = {0}, c2[] = {-1};
+    tscvx_data d2 = {1, 0, 1, NULL, NULL, NULL, c2, NULL, NULL, NULL, NULL, Gp2, Gi2, Gx2, h2,
+                     1, 0, NULL};
+    CHECK(solve(&d2, NULL, &info) == TSCVX_DUAL_INFEASIBLE, "dual infeasible");
+}
+
+static tscvx_setup_status try_setup(const tscvx_data *d) {
+    tscvx_settings st;
+    tscvx_default_settings(&st);
+    tscvx_workspace *ws = NULL;
+    return tscvx_setup(&ws, arena, sizeof arena, d, &st);
+}
+
+static void test_bad_input(void) {
+    tscvx_int Pp[] = {0, 1, 2}, Pi[] = {0, 1}, Gp[] = {0, 1, 2}, Gi[] = {1, 2}, q[] = {3};
+    tscvx_float Px[] = {1, 1}, Gx[] = {-1, -1}, h[] = {1, 0, 0}, c[] = {-1, -1};
+    tscvx_data ok = {2, 0, 3, Pp, Pi, Px, c, NULL, NULL, NULL, NULL, Gp, Gi, Gx, h, 0, 1, q};
+    CHECK(try_setup(&ok) == TSCVX_SETUP_OK, "valid data refused");
+    tscvx_data d = ok;
+    tscvx_float cnan[] = {NAN, 1};
+    d.c = cnan;
+    CHECK(try_setup(&d) == TSCVX_SETUP_NONFINITE_DATA, "NaN accepted");
+    d = ok;
+    tscvx_float hinf[] = {INFINITY, 0, 0};
+    d.h = hinf;
+    CHECK(try_setup(&d) == TSCVX_SETUP_NONFINITE_DATA, "inf accepted");
+    d = ok;
+    tscvx_int qbig[] = {4};
+    d.q = qbig;
+    CHECK(try_setup(&d) == TSCVX_SETUP_BAD_CONES, "cone larger than the rows accepted");
+    d = ok;
+    tscvx_int Pp2[] = {0, 2, 2}, Pi2[] = {0, 1};
+    d.Pp = Pp2, d.Pi = Pi2;
+    CHECK(try_setup(&d) == TSCVX_SETUP_P_NOT_UPPER, "lower-triangular P accepted");
+    d = ok;
+    tscvx_int Gi3[] = {5, 2};
+    d.Gi = Gi3;
+    CHECK(try_setup(&d) == TSCVX_SETUP_BAD_SPARSITY, "row index out of range accepted");
+    d = ok;
+    d.m = 4;
+    CHECK(try_setup(&d) == TSCVX_SETUP_BAD_CONES, "dimension mismatch accepted");
+    d = ok;
+    d.n = 0;
+    CHECK(try_setup(&d) == TSCVX_SETUP_BAD_DIMENSIONS, "n = 0 accepted");
+    d = ok;
+    d.c = NULL;
+    CHECK(try_setup(&d) == TSCVX_SETUP_NULL_ARGUMENT, "NULL c accepted");
+    CHECK(try_setup(NULL) == TSCVX_SETUP_NULL_ARGUMENT, "NULL data accepted");
+    tscvx_settings st;
+    tscvx_default_settings(&st);
+    st.step_fraction = 1.5;
+    tscvx_workspace *ws = NULL;
+    CHECK(tscvx_setup(&ws, arena, sizeof arena, &ok, &st) == TSCVX_SETUP_BAD_SETTINGS,
+          "bad settings accepted");
+    tscvx_default_settings(&st);
+    CHECK(tscvx_setup(&ws, arena, 64, &ok, &st) == TSCVX_SETUP_ARENA_TOO_SMALL, "tiny arena");
+    CHECK(tscvx_solve(NULL) == TSCVX_INVALID_INPUT, "solve(NULL)");
+    for (int s = 0; s <= TSCVX_SETUP_NSTATUS; s++)
+        CHECK(tscvx_setup_status_message((tscvx_setup_status)s) != NULL, "message");
+    for (int s = 0; s <= TSCVX_NSTATUS; s++)
+        CHECK(tscvx_solve_status_message((tscvx_solve_status)s) != NULL, "message");
+}
+
+/* update: same sparsity, new numbers; NaN update invalidates until a valid one */
+static void test_update(void) {
+    tscvx_int Gp[] = {0, 1, 2}, Gi[] = {1, 2}, q[] = {3};
+    tscvx_float Gx[] = {-1, -1}, h[] = {1, 0, 0}, c[] = {-1, -1}, x[2];
+    tscvx_data d = {2, 0, 3, NULL, NULL, NULL, c, NULL, NULL, NULL, NULL, Gp, Gi, Gx, h, 0, 1, q};
+    tscvx_settings st;
+    tscvx_default_settings(&st);
+    tscvx_workspace *ws = NULL;
+    CHECK(tscvx_setup(&ws, arena, sizeof arena, &d, &st) == TSCVX_SETUP_OK, "setup");
+    CHECK(tscvx_solve(ws) == TSCVX_SOLVED, "first solve");
+    tscvx_float h2[] = {2, 0, 0}, bad[] = {NAN, 0, 0};
+    CHECK(tscvx_update_data(ws, NULL, NULL, NULL, NULL, NULL, bad) == TSCVX_SETUP_NONFINITE_DATA,
+          "NaN update accepted");
+    CHECK(tscvx_solve(ws) == TSCVX_INVALID_INPUT, "solve after bad update");
+    CHECK(tscvx_update_data(ws, NULL, NULL, NULL, NULL, NULL, h2) == TSCVX_SETUP_OK, "update");
+    CHECK(tscvx_solve(ws) == TSCVX_SOLVED, "second solve");
+    tscvx_get_solution(ws, x, NULL, NULL, NULL);
+    CHECK(fabs(x[0] - sqrt(2.0)) < 1e-7, "updated x %g", x[0]);
+    tscvx_info info;
+    tscvx_get_info(ws, &info);
+    tscvx_iter_log row;
+    CHECK(tscvx_get_iter_log(ws, info.iterations, &row) == TSCVX_SETUP_OK, "log row");
+    CHECK(row.iter == info.iterations && fabs(row.pcost - info.pcost) < 1e-12, "log content");
+    CHECK(tscvx_get_iter_log(ws, info.iterations + 1, &row) == TSCVX_SETUP_BAD_INDEX, "log range");
+}
+
+int main(void) {
+    test_soc();
+    test_qp();
+    test_infeasible();
+    test_bad_input();
+    test_update();
+    return ct_report("test_solver");
+}

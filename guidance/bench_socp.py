@@ -1,0 +1,437 @@
+"""Benchmark of the flight SOCP runtime against Clarabel, ECOS and QOCO.
+
+Problem sets: (a) the convex subproblems of the reference SCvx on the default landing (6-DoF,
+N = 50), (b) the 3-DoF lossless-convexification powered-descent SOCP of Acikmese & Blackmore
+(N = 50, generated here), (c) seeded random SOCPs. For each solver the table gives the median
+time of the solver's own solve call (set-up excluded), the median IPM iteration count and, for
+this runtime, the arena bytes. ``--callgrind`` adds instruction counts per solve (valgrind).
+
+    python -m guidance.bench_socp [--quick] [--callgrind]
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import statistics
+import subprocess
+import tempfile
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import scipy.sparse as sp
+
+from guidance.conic import ConicProblem, clarabel_cones
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+# ---- (b) 3-DoF lossless convexification (Acikmese & Blackmore 2013) -----------------------
+
+
+def lcvx_3dof(N: int = 50, t_f: float = 75.0) -> ConicProblem:
+    """Fuel-optimal 3-DoF Mars landing as an SOCP (lossless convexification, log-mass form).
+
+    Per node k = 0..N: r (3), v (3), z = ln m, u = T/m (3), sigma (slack of |u|). Trapezoidal
+    (FOH) dynamics, |u_k| <= sigma_k, the linearized thrust bounds
+    mu1_k (1 - (z_k - z0_k)) <= sigma_k <= mu2_k (1 - (z_k - z0_k)), mass bounds, glideslope
+    |(r2, r3)| tan(gs) <= r1, thrust pointing u1 >= cos(theta) sigma; maximize final mass.
+    Units: m, s, kg (Mars lander numbers of the LCvx literature).
+    """
+    g = np.array([-3.7114, 0.0, 0.0])
+    m_wet, isp = 1905.0, 225.0
+    alpha = 1.0 / (isp * 9.807)
+    T_max = 6.0 * 3100.0 * math.cos(math.radians(27.0))
+    rho1, rho2 = 0.3 * T_max, 0.8 * T_max
+    r0 = np.array([1500.0, 0.0, 2000.0])
+    v0 = np.array([-75.0, 0.0, 100.0])
+    tan_gs = math.tan(math.radians(4.0))  # glideslope 86 deg from vertical
+    cos_pt = math.cos(math.radians(60.0))
+    dt = t_f / N
+    nv = 11  # r 0:3, v 3:6, z 6, u 7:10, sigma 10
+    nx = nv * (N + 1)
+
+    def ix(k: int, j: int) -> int:
+        return nv * k + j
+
+    eq_rows: list[list[tuple[int, float]]] = []
+    eq_rhs: list[float] = []
+    # boundary conditions
+    for j in range(3):
+        eq_rows.append([(ix(0, j), 1.0)])
+        eq_rhs.append(r0[j])
+        eq_rows.append([(ix(0, 3 + j), 1.0)])
+        eq_rhs.append(v0[j])
+        eq_rows.append([(ix(N, j), 1.0)])
+        eq_rhs.append(0.0)
+        eq_rows.append([(ix(N, 3 + j), 1.0)])
+        eq_rhs.append(0.0)
+    eq_rows.append([(ix(0, 6), 1.0)])
+    eq_rhs.append(math.log(m_wet))
+    # dynamics
+    for k in range(N):
+        for j in range(3):
+            eq_rows.append(
+                [
+                    (ix(k + 1, j), 1.0),
+                    (ix(k, j), -1.0),
+                    (ix(k, 3 + j), -dt / 2),
+                    (ix(k + 1, 3 + j), -dt / 2),
+                    (ix(k + 1, 7 + j), dt**2 / 12),
+                    (ix(k, 7 + j), -(dt**2) / 12),
+                ]
+            )
+            eq_rhs.append(0.0)
+            eq_rows.append(
+                [
+                    (ix(k + 1, 3 + j), 1.0),
+                    (ix(k, 3 + j), -1.0),
+                    (ix(k, 7 + j), -dt / 2),
+                    (ix(k + 1, 7 + j), -dt / 2),
+                ]
+            )
+            eq_rhs.append(g[j] * dt)
+        eq_rows.append(
+            [
+                (ix(k + 1, 6), 1.0),
+                (ix(k, 6), -1.0),
+                (ix(k, 10), alpha * dt / 2),
+                (ix(k + 1, 10), alpha * dt / 2),
+            ]
+        )
+        eq_rhs.append(0.0)
+    nonneg_rows: list[list[tuple[int, float]]] = []
+    nonneg_rhs: list[float] = []
+    soc_rows: list[list[tuple[int, float]]] = []
+    soc_rhs: list[float] = []
+    soc_dims: list[int] = []
+    for k in range(N + 1):
+        t = k * dt
+        z0 = math.log(m_wet - alpha * rho2 * t)
+        z1 = math.log(m_wet - alpha * rho1 * t)
+        mu1, mu2 = rho1 * math.exp(-z0), rho2 * math.exp(-z0)
+        # sigma >= mu1 (1 - (z - z0))  <=>  -sigma - mu1 z + s = -mu1 (1 + z0)
+        nonneg_rows.append([(ix(k, 10), -1.0), (ix(k, 6), -mu1)])
+        nonneg_rhs.append(-mu1 * (1.0 + z0))
+        # sigma <= mu2 (1 - (z - z0))  <=>  sigma + mu2 z + s = mu2 (1 + z0)
+        nonneg_rows.append([(ix(k, 10), 1.0), (ix(k, 6), mu2)])
+        nonneg_rhs.append(mu2 * (1.0 + z0))
+        # z0 <= z <= z1
+        nonneg_rows.append([(ix(k, 6), -1.0)])
+        nonneg_rhs.append(-z0)
+        nonneg_rows.append([(ix(k, 6), 1.0)])
+        nonneg_rhs.append(z1)
+        # pointing: u1 >= cos * sigma
+        nonneg_rows.append([(ix(k, 7), -1.0), (ix(k, 10), cos_pt)])
+        nonneg_rhs.append(0.0)
+        # |u| <= sigma
+        soc_rows += [[(ix(k, 10), -1.0)]] + [[(ix(k, 7 + j), -1.0)] for j in range(3)]
+        soc_rhs += [0.0] * 4
+        soc_dims.append(4)
+        # glideslope: (r1, tan r2, tan r3) in Q3
+        soc_rows += [[(ix(k, 0), -1.0)], [(ix(k, 1), -tan_gs)], [(ix(k, 2), -tan_gs)]]
+        soc_rhs += [0.0] * 3
+        soc_dims.append(3)
+    all_rows = eq_rows + nonneg_rows + soc_rows
+    b = np.array(eq_rhs + nonneg_rhs + soc_rhs)
+    cones = [("zero", len(eq_rows)), ("nonneg", len(nonneg_rows))] + [("soc", d) for d in soc_dims]
+    ri, ci, vals = [], [], []
+    for r, row in enumerate(all_rows):
+        for c, v in row:
+            ri.append(r)
+            ci.append(c)
+            vals.append(v)
+    A = sp.csc_matrix((vals, (ri, ci)), shape=(len(all_rows), nx))
+    q = np.zeros(nx)
+    q[ix(N, 6)] = -1.0  # maximize the final log-mass
+    return ConicProblem(P=None, q=q, A=A, b=b, cones=cones)
+
+
+# ---- solvers: each returns (solve seconds, iterations, status) -----------------------------
+
+
+@dataclass
+class Run:
+    seconds: float
+    iterations: int
+    status: str
+
+
+def _split_c_form(prob: ConicProblem):
+    from guidance import csocp
+
+    s = csocp._split(prob)
+    A = sp.csc_matrix(prob.A)
+    Aeq = sp.csc_matrix(A[s.eq_rows, :])
+    G = sp.csc_matrix(A[s.g_rows, :])
+    return s, Aeq, prob.b[s.eq_rows], G, prob.b[s.g_rows]
+
+
+def run_ours(prob: ConicProblem, reps: int) -> tuple[Run, int]:
+    from guidance import csocp
+
+    solver = csocp.Solver(prob)
+    best = math.inf
+    sol = None
+    for _ in range(reps):
+        sol = solver.solve()
+        best = min(best, sol.solve_time_s)
+    assert sol is not None
+    return Run(best, sol.iterations, sol.status), solver.arena_bytes
+
+
+def run_clarabel(prob: ConicProblem, reps: int) -> Run:
+    import clarabel
+
+    st = clarabel.DefaultSettings()
+    st.verbose = False
+    P = prob.P if prob.P is not None else sp.csc_matrix((prob.n, prob.n))
+    best, sol = math.inf, None
+    for _ in range(reps):
+        solver = clarabel.DefaultSolver(
+            sp.csc_matrix(P),
+            prob.q,
+            sp.csc_matrix(prob.A),
+            prob.b,
+            clarabel_cones(prob.cones),
+            st,
+        )
+        t0 = time.perf_counter()
+        sol = solver.solve()
+        best = min(best, time.perf_counter() - t0)
+    return Run(best, int(sol.iterations), str(sol.status))
+
+
+def run_ecos(prob: ConicProblem, reps: int) -> Run | None:
+    if prob.P is not None:
+        return None  # ECOS has no quadratic objective
+    import ecos
+
+    s, Aeq, beq, G, h = _split_c_form(prob)
+    dims = {"l": int(s.l), "q": [int(d) for d in s.soc]}
+    best, out = math.inf, None
+    for _ in range(reps):
+        kw = {"A": Aeq, "b": beq} if Aeq.shape[0] else {}
+        out = ecos.solve(prob.q, G, h, dims, verbose=False, **kw)
+        best = min(best, float(out["info"]["timing"]["tsolve"]))
+    return Run(best, int(out["info"]["iter"]), str(out["info"]["infostring"]))
+
+
+def run_qoco(prob: ConicProblem, reps: int) -> Run:
+    import qoco
+
+    s, Aeq, beq, G, h = _split_c_form(prob)
+    P = sp.csc_matrix(prob.P) if prob.P is not None else None
+    best, res = math.inf, None
+    for _ in range(reps):
+        solver = qoco.QOCO()
+        solver.setup(
+            prob.n,
+            G.shape[0],
+            Aeq.shape[0],
+            P,
+            prob.q,
+            Aeq if Aeq.shape[0] else None,
+            beq if Aeq.shape[0] else None,
+            G,
+            h,
+            int(s.l),
+            len(s.soc),
+            s.soc.astype(np.int32),
+            verbose=0,
+        )
+        t0 = time.perf_counter()
+        res = solver.solve()
+        best = min(best, time.perf_counter() - t0)
+    return Run(best, int(res.iters), str(res.status))
+
+
+# ---- instruction counts (callgrind) --------------------------------------------------------
+
+
+def dump_c_problem(prob: ConicProblem, path: Path) -> None:
+    """Write the C form of `prob` for c_runtime/tests/bench_driver.c."""
+    from guidance import csocp
+
+    S = csocp.Solver(prob)
+    P, A, G = S._P, S._Aeq, S._G
+    hdr = [
+        prob.n,
+        A.shape[0],
+        G.shape[0],
+        S.split.l,
+        len(S._soc),
+        -1 if P is None else P.nnz,
+        A.nnz,
+        G.nnz,
+    ]
+    with open(path, "wb") as f:
+        f.write(np.array(hdr, np.int32).tobytes())
+        f.write(S._soc.astype(np.int32).tobytes())
+        if P is not None:
+            for arr in (P.indptr.astype(np.int32), P.indices.astype(np.int32), P.data):
+                f.write(arr.tobytes())
+        f.write(S._c.tobytes())
+        for M, v in ((A, S._beq), (G, S._h)):
+            for arr in (M.indptr.astype(np.int32), M.indices.astype(np.int32), M.data, v):
+                f.write(np.ascontiguousarray(arr).tobytes())
+
+
+def _callgrind(cmd: list[str], toggle: str) -> int | None:
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "cg.out"
+        r = subprocess.run(
+            [
+                "valgrind",
+                "--tool=callgrind",
+                f"--callgrind-out-file={out}",
+                f"--toggle-collect={toggle}",
+                *cmd,
+            ],
+            capture_output=True,
+            text=True,
+            check=False,
+        )
+        for line in r.stderr.splitlines():
+            if "Collected :" in line:
+                return int(line.split(":")[-1].strip())
+    return None
+
+
+def instructions_ours(prob: ConicProblem) -> int | None:
+    driver = ROOT / "build" / "ctest" / "bench_driver"
+    if not driver.exists():
+        return None
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "prob.bin"
+        dump_c_problem(prob, path)
+        return _callgrind([str(driver), str(path), "1"], "tscvx_solve")
+
+
+_QOCO_SCRIPT = """
+import pickle, sys
+from guidance.bench_socp import run_qoco
+run_qoco(pickle.load(open(sys.argv[1], "rb")), 1)
+"""
+
+
+def instructions_qoco(prob: ConicProblem) -> int | None:
+    import pickle
+    import sys
+
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "prob.pkl"
+        with open(path, "wb") as f:
+            pickle.dump(prob, f)
+        return _callgrind([sys.executable, "-c", _QOCO_SCRIPT, str(path)], "*qoco_solve*")
+
+
+# ---- the table -----------------------------------------------------------------------------
+
+
+def random_set(count: int = 30) -> list[ConicProblem]:
+    import sys
+
+    sys.path.insert(0, str(ROOT / "tests"))
+    from socp_problems import random_feasible  # type: ignore[import-not-found]
+
+    return [random_feasible(seed, n=int(40 + 4 * seed % 80)) for seed in range(count)]
+
+
+def landing_set(limit: int | None = None) -> list[ConicProblem]:
+    from guidance.params import Scenario
+    from guidance.scvx import collect_subproblems
+
+    subs = collect_subproblems(Scenario())
+    return subs[:limit] if limit else subs
+
+
+def _median(xs: list[float]) -> float:
+    return statistics.median(xs) if xs else math.nan
+
+
+def bench_set(name: str, probs: list[ConicProblem], reps: int) -> list[str]:
+    solvers: dict[str, Callable[[ConicProblem, int], Run | None]] = {
+        "clarabel": run_clarabel,
+        "ecos": run_ecos,
+        "qoco": run_qoco,
+    }
+    ours_t, ours_it, arena, bad = [], [], [], 0
+    others: dict[str, tuple[list[float], list[int]]] = {k: ([], []) for k in solvers}
+    for prob in probs:
+        run, nbytes = run_ours(prob, reps)
+        ours_t.append(run.seconds)
+        ours_it.append(run.iterations)
+        arena.append(nbytes)
+        bad += run.status not in ("solved", "solved_inaccurate")
+        for key, fn in solvers.items():
+            try:
+                r = fn(prob, reps)
+            except Exception:  # a failing reference solver is reported, not fatal
+                r = None
+            if r is not None:
+                others[key][0].append(r.seconds)
+                others[key][1].append(r.iterations)
+    t_ours = _median(ours_t)
+    lines = [
+        f"{name} ({len(probs)} problems, n={probs[0].n}, m={probs[0].m}, "
+        f"nnz(A)={probs[0].A.nnz}; not solved by tscvx: {bad})",
+        f"  {'solver':<10}{'median ms':>11}{'ratio':>8}{'iters':>7}{'arena KB':>10}",
+        f"  {'tscvx':<10}{1e3 * t_ours:>11.3f}{1.0:>8.2f}{_median(ours_it):>7.0f}"
+        f"{max(arena) / 1024:>10.0f}",
+    ]
+    for key, (ts, its) in others.items():
+        if ts:
+            t = _median(ts)
+            lines.append(
+                f"  {key:<10}{1e3 * t:>11.3f}{t / t_ours:>8.2f}{_median(its):>7.0f}{'heap':>10}"
+            )
+        else:
+            lines.append(f"  {key:<10}{'n/a':>11}")
+    return lines
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Print the benchmark table. ``argv`` defaults to no options (the CLI passes its own)."""
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
+    ap.add_argument("--quick", action="store_true", help="fewer problems and repetitions")
+    ap.add_argument("--callgrind", action="store_true", help="instruction counts (slow)")
+    args = ap.parse_args([] if argv is None else argv)
+    reps = 2 if args.quick else 5
+    sets = [
+        (
+            "(a) 6-DoF landing subproblems, default scenario, N=50",
+            landing_set(6 if args.quick else None),
+        ),
+        ("(b) 3-DoF LCvx powered descent, N=50", [lcvx_3dof(50)]),
+        ("(c) random SOCPs", random_set(10 if args.quick else 30)),
+    ]
+    print(
+        f"SOCP benchmark: median of per-problem best-of-{reps} solve-call times "
+        f"(set-up excluded); ratio = solver time / tscvx time"
+    )
+    for name, probs in sets:
+        for line in bench_set(name, probs, reps):
+            print(line)
+    if args.callgrind:
+        print("instructions per solve (callgrind, first problem of each set):")
+        for name, probs in sets[:2]:
+            ours = instructions_ours(probs[0])
+            qoco = instructions_qoco(probs[0])
+            ratio = f"{qoco / ours:.2f}x" if ours and qoco else "n/a"
+            print(
+                f"  {name[:4]} tscvx {ours or 'n/a':>12}  qoco {qoco or 'n/a':>12}  "
+                f"qoco/tscvx {ratio}"
+            )
+    return 0
+
+
+if __name__ == "__main__":
+    import sys
+
+    os.environ.setdefault("OMP_NUM_THREADS", "1")
+    raise SystemExit(main(sys.argv[1:]))

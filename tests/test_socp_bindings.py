@@ -1,0 +1,134 @@
+"""ctypes bindings of the flight SOCP runtime: bad input, updates, iteration log, errors."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+from socp_problems import random_feasible
+
+from guidance import csocp
+from guidance.conic import ConicProblem, solve_clarabel
+
+
+def small_soc() -> ConicProblem:
+    """min -x1 - x2  s.t. |(x1, x2)| <= 1,  x1 + x2 >= -5,  x1 - x2 = 0."""
+    A = sp.csc_matrix(np.array([[1.0, -1.0], [-1.0, -1.0], [0.0, 0.0], [-1.0, 0.0], [0, -1.0]]))
+    b = np.array([0.0, 5.0, 1.0, 0.0, 0.0])
+    return ConicProblem(
+        P=None, q=np.array([-1.0, -1.0]), A=A, b=b, cones=[("zero", 1), ("nonneg", 1), ("soc", 3)]
+    )
+
+
+def test_small_soc_solution_and_duals() -> None:
+    prob = small_soc()
+    sol = csocp.solve(prob)
+    ref = solve_clarabel(prob)
+    assert sol.status == "solved"
+    assert np.allclose(sol.x, [np.sqrt(0.5)] * 2, atol=1e-8)
+    assert np.allclose(sol.z, ref.z, atol=1e-6)
+    assert np.allclose(sol.s, ref.s, atol=1e-6)
+    assert sol.s[0] == 0.0  # zero-cone slack
+
+
+@pytest.mark.parametrize(
+    ("mutate", "needle"),
+    [
+        (lambda p: p.q.__setitem__(0, np.nan), "NaN"),
+        (lambda p: p.b.__setitem__(2, np.inf), "NaN or infinity"),
+        (lambda p: p.A.data.__setitem__(0, np.nan), "NaN"),
+        (lambda p: p.cones.__setitem__(2, ("soc", 4)), "cones cover more rows"),
+        (lambda p: p.cones.__setitem__(2, ("soc", 2)), "cones cover 4 rows"),
+        (lambda p: p.cones.__setitem__(0, ("box", 1)), "unknown cone kind"),
+        (lambda p: p.cones.__setitem__(0, ("zero", 0)), "dimension must be >= 1"),
+    ],
+)
+def test_bad_input_is_invalid_input(mutate, needle: str) -> None:
+    prob = small_soc()
+    prob.A = prob.A.copy()
+    mutate(prob)
+    sol = csocp.solve(prob)
+    assert sol.status == "invalid_input"
+    assert needle in sol.info["message"]
+
+
+def test_dimension_mismatch_and_bad_P() -> None:
+    prob = small_soc()
+    bad = ConicProblem(P=None, q=np.ones(3), A=prob.A, b=prob.b, cones=prob.cones)
+    assert csocp.solve(bad).status == "invalid_input"
+    lower = sp.csc_matrix(np.array([[1.0, 0.0], [0.5, 1.0]]))  # entry below the diagonal
+    bad = ConicProblem(P=lower, q=prob.q, A=prob.A, b=prob.b, cones=prob.cones)
+    sol = csocp.solve(bad)
+    assert sol.status == "invalid_input"
+    assert "upper triangle" in sol.info["message"]
+    wrong = ConicProblem(P=sp.csc_matrix(np.eye(3)), q=prob.q, A=prob.A, b=prob.b, cones=prob.cones)
+    assert csocp.solve(wrong).status == "invalid_input"
+
+
+def test_update_equals_fresh_setup_and_no_new_symbolic_work() -> None:
+    rng = np.random.default_rng(7)
+    prob = random_feasible(3, n=30, with_P=True)
+    solver = csocp.Solver(prob)
+    first = solver.solve()
+    info0 = solver.info()
+    for _ in range(3):
+        q2 = prob.q + 0.1 * rng.standard_normal(prob.n)
+        A2 = prob.A.copy()
+        A2.data = A2.data * (1 + 0.05 * rng.standard_normal(A2.nnz))
+        b2 = prob.b + 0.1 * np.abs(rng.standard_normal(prob.m))
+        P2 = prob.P.copy()
+        P2.data = P2.data * 1.1
+        assert solver.update(q=q2, A_values=A2.data, b=b2, P_values=P2.data) == 0
+        upd = solver.solve()
+        fresh = csocp.solve(ConicProblem(P=P2, q=q2, A=A2, b=b2, cones=prob.cones))
+        assert upd.status == fresh.status == "solved"
+        assert abs(upd.obj - fresh.obj) <= 1e-7 * max(1, abs(fresh.obj))
+        assert solver.info()["factor_nnz"] == info0["factor_nnz"]
+    assert first.ok
+    # a NaN update makes the workspace refuse to solve until valid data arrive
+    assert solver.update(q=np.full(prob.n, np.nan)) != 0
+    assert solver.solve().status == "invalid_input"
+    assert solver.update(q=prob.q) == 0
+    assert solver.solve().status == "solved"
+
+
+def test_iteration_log_and_info() -> None:
+    prob = random_feasible(11)
+    sol = csocp.solve(prob, log=True)
+    log = sol.info["log"]
+    assert len(log) == sol.iterations + 1
+    assert [row["iter"] for row in log] == list(range(sol.iterations + 1))
+    assert set(log[0]) == {"iter", "pcost", "dcost", "gap", "pres", "dres", "mu", "step"}
+    assert log[-1]["pcost"] == pytest.approx(sol.obj)
+    assert log[-1]["mu"] < log[0]["mu"]
+    assert sol.info["arena_high_water"] <= sol.info["arena_used"] + 10 * 2**20
+
+
+def test_max_iterations_status() -> None:
+    sol = csocp.solve(random_feasible(5), max_iter=2)
+    assert sol.status == "max_iterations"
+    assert sol.iterations == 2
+
+
+def test_unknown_setting_is_an_error() -> None:
+    with pytest.raises(TypeError):
+        csocp.Solver(small_soc(), tolerance=1)
+
+
+def test_missing_library_message(monkeypatch, tmp_path) -> None:
+    monkeypatch.setenv("TSCVX_LIB", str(tmp_path / "nope.so"))
+    monkeypatch.setattr(csocp, "_lib_cache", None)
+    with pytest.raises(csocp.LibraryNotBuiltError, match="make lib"):
+        csocp.solve(small_soc())
+
+
+def test_session_reuses_the_workspace() -> None:
+    prob = random_feasible(21, n=25)
+    session = csocp.Session()
+    for scale in (1.0, 1.5, 2.0):
+        p = ConicProblem(P=prob.P, q=prob.q * scale, A=prob.A, b=prob.b * scale, cones=prob.cones)
+        sol = session.solve(p)
+        ref = solve_clarabel(p)
+        assert sol.status == "solved"
+        assert abs(sol.obj - ref.obj) <= 1e-6 * max(1, abs(ref.obj))
+    assert session.setups == 1

@@ -1,0 +1,72 @@
+"""Flight SOCP runtime vs Clarabel on every convex subproblem met while solving the default
+landing and the ten catalog scenarios with the reference SCvx (Clarabel backend), and on the
+3-DoF lossless-convexification landing SOCP."""
+
+from __future__ import annotations
+
+import pytest
+from test_socp_random import OBJ_RTOL, RES_TOL, cone_violation, residuals
+
+from guidance import csocp
+from guidance.bench_socp import lcvx_3dof
+from guidance.conic import solve_clarabel
+
+scvx = pytest.importorskip("guidance.scvx")
+catalog = pytest.importorskip("guidance.catalog")
+
+
+@pytest.fixture(scope="module", params=list(catalog.SCENARIOS))
+def subproblems(request):
+    return request.param, scvx.collect_subproblems(catalog.SCENARIOS[request.param])
+
+
+def test_landing_subproblems_match_clarabel(subproblems) -> None:
+    name, probs = subproblems
+    assert probs, f"no subproblems recorded for {name}"
+    solver = None
+    compared = len(probs)
+    for k, prob in enumerate(probs):
+        ref = solve_clarabel(prob)
+        # one workspace per scenario: later subproblems reuse it through update() whenever
+        # the sparsity is unchanged (what the flight SCvx loop does)
+        if solver is None or not _same_pattern(solver.prob, prob):
+            solver = csocp.Solver(prob)
+        else:
+            assert solver.update(q=prob.q, A_values=prob.A.data, b=prob.b) == 0
+        sol = solver.solve()
+        assert sol.status == "solved", (name, k, sol.status)
+        pres, dres = residuals(prob, sol)
+        assert pres <= RES_TOL and dres <= RES_TOL, (name, k, pres, dres)
+        if ref.status != "solved":  # compare objectives only where Clarabel solves
+            compared -= 1
+            continue
+        assert abs(sol.obj - ref.obj) <= OBJ_RTOL * max(1.0, abs(ref.obj)), (name, k)
+        assert cone_violation(prob.cones, sol.s) <= 1e-9 * (1 + abs(sol.s).max())
+        assert solver.arena_bytes <= 4 * 2**20
+    assert compared >= len(probs) - 3, f"Clarabel solved only {compared} of {len(probs)}"
+
+
+def _same_pattern(a, b) -> bool:
+    return (
+        a.cones == b.cones
+        and a.A.shape == b.A.shape
+        and (a.A.indptr == b.A.indptr).all()
+        and (a.A.indices == b.A.indices).all()
+        and (a.P is None) == (b.P is None)
+    )
+
+
+@pytest.mark.parametrize("t_f", [70.0, 75.0, 90.0])
+def test_lcvx_3dof_matches_clarabel(t_f: float) -> None:
+    prob = lcvx_3dof(50, t_f)
+    ref = solve_clarabel(prob)
+    sol = csocp.solve(prob)
+    assert ref.status == sol.status == "solved"
+    assert abs(sol.obj - ref.obj) <= OBJ_RTOL * max(1.0, abs(ref.obj))
+    assert max(residuals(prob, sol)) <= RES_TOL
+
+
+def test_lcvx_3dof_too_short_is_infeasible() -> None:
+    prob = lcvx_3dof(50, 50.0)
+    assert solve_clarabel(prob).status == "primal_infeasible"
+    assert csocp.solve(prob).status == "primal_infeasible"

@@ -1,0 +1,131 @@
+"""Flight SOCP runtime vs Clarabel on seeded random SOCPs: feasible (with and without P),
+primal infeasible, dual infeasible (unbounded) and badly scaled families."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from socp_problems import (
+    badly_scaled,
+    random_dual_infeasible,
+    random_feasible,
+    random_primal_infeasible,
+)
+
+from guidance import csocp
+from guidance.conic import ConicProblem, ConicSolution, solve_clarabel
+
+OBJ_RTOL = 1e-6
+RES_TOL = 1e-7
+
+
+def residuals(prob: ConicProblem, sol: ConicSolution) -> tuple[float, float]:
+    """Relative primal and dual residuals in Clarabel's form (infinity norms)."""
+    pres = np.linalg.norm(prob.A @ sol.x + sol.s - prob.b, np.inf) / (
+        1.0 + np.linalg.norm(prob.b, np.inf)
+    )
+    Px = prob.P @ sol.x + prob.P.T @ sol.x - prob.P.diagonal() * sol.x if prob.P is not None else 0
+    dres = np.linalg.norm(Px + prob.q + prob.A.T @ sol.z, np.inf) / (
+        1.0 + np.linalg.norm(prob.q, np.inf)
+    )
+    return float(pres), float(dres)
+
+
+def cone_violation(cones, v: np.ndarray, dual: bool = False) -> float:
+    """How far v is outside K (primal: zero cones must be 0; dual: zero cones are free)."""
+    worst, row = 0.0, 0
+    for kind, dim in cones:
+        u = v[row : row + dim]
+        if kind == "zero":
+            worst = max(worst, 0.0 if dual else float(np.max(np.abs(u))))
+        elif kind == "nonneg":
+            worst = max(worst, float(np.max(-u, initial=0.0)))
+        else:
+            worst = max(worst, float(np.linalg.norm(u[1:]) - u[0]))
+        row += dim
+    return worst
+
+
+def check_against_clarabel(prob: ConicProblem) -> tuple[ConicSolution, ConicSolution]:
+    ref = solve_clarabel(prob)
+    sol = csocp.solve(prob)
+    if ref.status == "solved":
+        assert sol.status in ("solved", "solved_inaccurate"), (sol.status, ref.status)
+        rel = abs(sol.obj - ref.obj) / max(1.0, abs(ref.obj))
+        assert rel <= OBJ_RTOL, (sol.obj, ref.obj)
+        pres, dres = residuals(prob, sol)
+        assert pres <= RES_TOL and dres <= RES_TOL, (pres, dres)
+        scale = 1.0 + np.linalg.norm(sol.s, np.inf)
+        assert cone_violation(prob.cones, sol.s) <= 1e-9 * scale
+        assert cone_violation(prob.cones, sol.z, dual=True) <= 1e-9 * (
+            1.0 + np.linalg.norm(sol.z, np.inf)
+        )
+    return sol, ref
+
+
+# 240 feasible problems: 120 without P, 120 with P; sizes 3..60 variables, mixed cones
+@pytest.mark.parametrize("block", range(8))
+def test_random_feasible_match_clarabel(block: int) -> None:
+    solved = 0
+    for seed in range(30 * block, 30 * block + 30):
+        prob = random_feasible(seed, with_P=bool(seed % 2))
+        sol, _ref = check_against_clarabel(prob)
+        solved += sol.status == "solved"
+    assert solved >= 28  # the rest must still pass the accuracy checks as solved_inaccurate
+
+
+def test_random_feasible_large_cones_use_sparse_expansion() -> None:
+    """SOCs above soc_dense_max take the diagonal + rank-2 KKT expansion."""
+    for seed in range(20):
+        prob = random_feasible(1000 + seed, soc_max=40)
+        ref = solve_clarabel(prob)
+        for dense_max in (2, 16):
+            sol = csocp.solve(prob, soc_dense_max=dense_max)
+            if ref.status == "solved":
+                assert sol.ok
+                assert abs(sol.obj - ref.obj) <= OBJ_RTOL * max(1.0, abs(ref.obj))
+                pres, dres = residuals(prob, sol)
+                assert max(pres, dres) <= RES_TOL
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_primal_infeasible_certificate(seed: int) -> None:
+    prob = random_primal_infeasible(seed)
+    ref = solve_clarabel(prob)
+    sol = csocp.solve(prob)
+    assert ref.status == "primal_infeasible"
+    assert sol.status == "primal_infeasible"
+    z = sol.z  # normalized so that b'z = -1
+    assert prob.b @ z == pytest.approx(-1.0, rel=1e-9)
+    assert np.linalg.norm(prob.A.T @ z, np.inf) <= 1e-7 * max(1.0, np.linalg.norm(z, np.inf))
+    assert cone_violation(prob.cones, z, dual=True) <= 1e-9 * np.linalg.norm(z, np.inf)
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_dual_infeasible_certificate(seed: int) -> None:
+    prob = random_dual_infeasible(seed)
+    ref = solve_clarabel(prob)
+    sol = csocp.solve(prob)
+    if ref.status != "dual_infeasible":
+        pytest.skip(f"Clarabel: {ref.status}")
+    assert sol.status == "dual_infeasible"
+    x, s = sol.x, sol.s  # normalized so that q'x = -1
+    assert prob.q @ x == pytest.approx(-1.0, rel=1e-9)
+    xn = max(1.0, np.linalg.norm(x, np.inf))
+    assert np.linalg.norm(prob.A @ x + s, np.inf) <= 1e-7 * xn
+    if prob.P is not None:
+        Pfull = prob.P + prob.P.T - np.diag(prob.P.diagonal())
+        assert np.linalg.norm(Pfull @ x, np.inf) <= 1e-6 * xn * abs(prob.P).max()
+    assert cone_violation(prob.cones, s) <= 1e-9 * max(1.0, np.linalg.norm(s, np.inf))
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_badly_scaled(seed: int) -> None:
+    prob = badly_scaled(seed)
+    ref = solve_clarabel(prob)
+    sol = csocp.solve(prob)
+    if ref.status == "solved":
+        assert sol.ok, sol.status
+        assert abs(sol.obj - ref.obj) <= OBJ_RTOL * max(1.0, abs(ref.obj))
+        pres, dres = residuals(prob, sol)
+        assert max(pres, dres) <= RES_TOL, (pres, dres)
