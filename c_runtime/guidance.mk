@@ -1,22 +1,32 @@
 # Generated model and guidance layer of the flight library (included by the top Makefile).
 #   $(BUILD)/generated/tscvx_model.[ch]  CasADi -> C (codegen/generate.py), reproducible
-#   $(BUILD)/libtscvx_gnc.{a,so}           generated model + FOH discretization
+#   $(BUILD)/libtscvx_gnc.a               guidance: SCvx loop, subproblem, guess, FOH, model
+#   $(BUILD)/libtscvx_gnc.so              the same + the SOCP runtime (for the Python bindings)
+#   $(BUILD)/pdg_example                  plain C example: static libraries + Debian deps only
+#   make ctest-gnc                        guidance C tests under valgrind + no-malloc check
+#   make budget-gnc                       RAD750 budget table (guidance/budget.py)
 
 GEN_DIR    := $(BUILD)/generated
 GNC_OBJDIR := $(BUILD)/obj/gnc
 GNC_SRCS   := $(wildcard c_runtime/guidance/*.c)
+GNC_HDRS   := $(wildcard c_runtime/guidance/*.h) c_runtime/include/tscvx_guidance.h \
+              c_runtime/include/tscvx_socp.h c_runtime/include/tscvx_types.h
 GNC_OBJS   := $(patsubst c_runtime/guidance/%.c,$(GNC_OBJDIR)/%.o,$(GNC_SRCS)) $(GNC_OBJDIR)/tscvx_model.o
 GNC_CFLAGS := -std=c99 -Wall -Wextra -Werror -O2 -fPIC -Ic_runtime/include -Ic_runtime/guidance -I$(GEN_DIR)
+# static link line of a flight application: guidance, SOCP runtime, SuiteSparse, libm
+GNC_LINK   := $(BUILD)/libtscvx_gnc.a $(BUILD)/libtscvx.a -lamd -lldl -lsuitesparseconfig -lm
+GNC_TESTS  := test_guidance
 
 $(GEN_DIR)/tscvx_model.c $(GEN_DIR)/tscvx_model.h &: codegen/generate.py guidance/model.py | $(STAMP)
 	$(PY) codegen/generate.py $(GEN_DIR)
+	@touch $(GEN_DIR)/tscvx_model.c $(GEN_DIR)/tscvx_model.h  # the generator keeps identical files untouched
 
 # CasADi's generated entry points share one signature and ignore some arguments.
 $(GNC_OBJDIR)/tscvx_model.o: $(GEN_DIR)/tscvx_model.c
 	@mkdir -p $(GNC_OBJDIR)
 	$(CC) $(GNC_CFLAGS) -Wno-unused-parameter -c $< -o $@
 
-$(GNC_OBJDIR)/%.o: c_runtime/guidance/%.c $(wildcard c_runtime/guidance/*.h) $(GEN_DIR)/tscvx_model.h
+$(GNC_OBJDIR)/%.o: c_runtime/guidance/%.c $(GNC_HDRS) $(GEN_DIR)/tscvx_model.h
 	@mkdir -p $(GNC_OBJDIR)
 	$(CC) $(GNC_CFLAGS) -c $< -o $@
 
@@ -24,8 +34,34 @@ $(BUILD)/libtscvx_gnc.a: $(GNC_OBJS)
 	rm -f $@
 	ar rcs $@ $(GNC_OBJS)
 
-$(BUILD)/libtscvx_gnc.so: $(GNC_OBJS)
-	$(CC) -shared -o $@ $(GNC_OBJS) -lm
+$(BUILD)/libtscvx_gnc.so: $(GNC_OBJS) $(CRT_OBJS)
+	$(CC) -shared -o $@ $(GNC_OBJS) $(CRT_OBJS) -lamd -lldl -lsuitesparseconfig -lm
+
+$(BUILD)/pdg_example: c_runtime/examples/pdg_example.c c_runtime/include/tscvx_guidance.h $(BUILD)/libtscvx_gnc.a $(BUILD)/libtscvx.a
+	$(CC) -std=c99 -Wall -Wextra -Werror -O2 -Ic_runtime/include $< -o $@ $(GNC_LINK)
+
+$(BUILD)/pdg_budget_driver: c_runtime/examples/pdg_budget_driver.c c_runtime/include/tscvx_guidance.h $(BUILD)/libtscvx_gnc.a $(BUILD)/libtscvx.a
+	$(CC) -std=c99 -Wall -Wextra -Werror -O2 -g -Ic_runtime/include $< -o $@ $(GNC_LINK)
+
+$(BUILD)/ctest/%: c_runtime/guidance/tests/%.c c_runtime/include/tscvx_guidance.h $(BUILD)/libtscvx_gnc.a $(BUILD)/libtscvx.a
+	@mkdir -p $(BUILD)/ctest
+	$(CC) -std=c99 -Wall -Wextra -Werror -O1 -g -Ic_runtime/include $< -o $@ $(GNC_LINK)
 
 gnc: $(BUILD)/libtscvx_gnc.a $(BUILD)/libtscvx_gnc.so
 lib: gnc
+example: $(BUILD)/pdg_example
+lib: example
+
+ctest-gnc: lib $(addprefix $(BUILD)/ctest/,$(GNC_TESTS)) $(BUILD)/pdg_budget_driver
+	@set -e; for t in $(GNC_TESTS); do \
+	  echo "== $$t (valgrind)"; valgrind -q --error-exitcode=1 --leak-check=full \
+	    --errors-for-leak-kinds=definite $(BUILD)/ctest/$$t; done
+	@echo "== no heap allocation inside pdg_solve (malloc interposition, native run)"
+	@$(BUILD)/pdg_budget_driver | tee $(BUILD)/ctest/pdg_budget_driver.out | grep -q '^heap_allocations_in_solve 0$$' \
+	  || { cat $(BUILD)/ctest/pdg_budget_driver.out; echo "heap allocation inside pdg_solve"; exit 1; }
+
+budget-gnc: setup lib $(BUILD)/pdg_budget_driver
+	$(PY) -m guidance.budget
+
+.PHONY: gnc example ctest-gnc budget-gnc
+ctest: ctest-gnc

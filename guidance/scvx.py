@@ -209,6 +209,16 @@ class SCvxSolver:
             accepted = dJ == 0.0 or dL <= 0.0 or rho >= st.rho0
             tau_r = _changed_fraction(prev_mask, mask) if masks is not None else None
             eta_new = _trust_update(eta, rho if dL > 0 else 1.0, accepted, st, tau_r)
+            newly_forced = False
+            if mask is not None:
+                # Full-constraint guard: a candidate that violates a constraint the mask
+                # dropped is rejected, and the constraint is put back for the rest of the solve.
+                # The retry starts from the same reference (which meets every convex
+                # constraint, so the subproblem stays feasible) with the same radius.
+                dropped = (h.reshape(-1) > st.defect_tol) & ~mask
+                if dropped.any():
+                    forced |= dropped
+                    newly_forced, accepted, eta_new = True, False, eta
             history.append(
                 IterationRecord(
                     k + 1,
@@ -239,15 +249,6 @@ class SCvxSolver:
                 and defect <= st.defect_tol
                 and viol <= st.defect_tol
             )
-            newly_forced = False
-            if mask is not None:
-                # A constraint the mask dropped and the candidate violates is put back for the
-                # rest of the solve; a converged answer must meet the full problem.
-                dropped = (h.reshape(-1) > st.defect_tol) & ~mask
-                if dropped.any():
-                    newly_forced = bool((dropped & ~forced).any())
-                    forced |= dropped
-                    converged = False
             if converged:
                 status, reason = "solved", "converged"
                 break

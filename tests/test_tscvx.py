@@ -44,3 +44,24 @@ def test_dropped_tight_constraints_are_put_back(reference: SCvxResult) -> None:
     a = audit(r.x, r.u, r.t_f, scenario.params)
     assert a.max_path_violation <= 1e-6
     assert abs(r.m_f - reference.m_f) <= 1e-3
+
+
+def test_reference_masks_without_warm_start_match_in_c_and_python(
+    reference: SCvxResult,
+) -> None:
+    """The reduced subproblems and the guard behave the same in the flight library."""
+    cguidance = pytest.importorskip("guidance.cguidance")
+    if not cguidance.LIB_PATH.exists():
+        pytest.skip("run `make lib` first")
+    scenario = SCENARIOS["north"]
+
+    def mask(k: int) -> np.ndarray:
+        return reference.masks[min(k, len(reference.masks)) - 1]
+
+    py = solve_tscvx(scenario, None, lambda s, k: mask(k))
+    c = cguidance.solve_c(scenario, masks=mask)
+    assert py.status == c.status == "solved"
+    assert abs(py.iterations - c.iterations) <= 1
+    assert abs(py.m_f - c.m_f) <= 1e-3  # the stopping rule leaves ~1e-4 of drift
+    for r in (py, c):
+        assert audit(r.x, r.u, r.t_f, scenario.params).max_path_violation <= 1e-6

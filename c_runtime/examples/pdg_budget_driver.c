@@ -1,0 +1,152 @@
+/*
+ * pdg_budget_driver.c -- one complete guidance call, for the RAD750 budget (guidance/budget.py).
+ *
+ *   pdg_budget_driver [--repeat R]
+ *
+ * Sets up the workspace for the default scenario (outside the measured call), then calls
+ * pdg_solve once (R times for wall-clock timing). Instructions are counted by running this
+ * program under `valgrind --tool=callgrind --toggle-collect=pdg_solve`. It prints
+ * `key value` lines: status, iterations, m_f, arena bytes, arena high-water, the stack
+ * high-water of pdg_solve (measured by painting the stack below the caller's frame with a
+ * pattern and finding the deepest overwritten byte), heap allocations made inside pdg_solve
+ * (malloc interposition) and the wall time per call.
+ */
+#define _GNU_SOURCE
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "tscvx_guidance.h"
+
+/* ---- heap allocations inside the measured call (glibc interposition) --------------------- */
+extern void *__libc_malloc(size_t);
+extern void *__libc_calloc(size_t, size_t);
+extern void *__libc_realloc(void *, size_t);
+static volatile int counting = 0;
+static volatile long n_alloc = 0;
+void *malloc(size_t n)
+{
+    if (counting) n_alloc++;
+    return __libc_malloc(n);
+}
+void *calloc(size_t a, size_t b)
+{
+    if (counting) n_alloc++;
+    return __libc_calloc(a, b);
+}
+void *realloc(void *p, size_t n)
+{
+    if (counting) n_alloc++;
+    return __libc_realloc(p, n);
+}
+
+/* ---- stack painting ---------------------------------------------------------------------- */
+#define PAINT_BYTES (4u << 20) /* 4 MB below the caller's frame (default stack limit 8 MB) */
+#define PAINT 0xA5u
+
+static __attribute__((noinline)) void paint_stack(void)
+{
+    unsigned char buf[PAINT_BYTES];
+    unsigned char *p = buf;
+    __asm__ volatile("" : "+r"(p) : : "memory"); /* the compiler cannot drop the writes */
+    memset(p, PAINT, PAINT_BYTES);
+    __asm__ volatile("" : : "r"(p) : "memory");
+}
+
+/* Bytes used below this frame's buffer top: the deepest non-pattern byte. */
+static __attribute__((noinline)) size_t painted_depth(void)
+{
+    unsigned char buf[PAINT_BYTES];
+    const volatile unsigned char *p = buf;
+    size_t i;
+    __asm__ volatile("" : "+r"(p) : : "memory"); /* contents unknown to the compiler */
+    for (i = 0; i < PAINT_BYTES; ++i) { /* p[0] is the deepest address */
+        if (p[i] != PAINT) {
+            return PAINT_BYTES - i;
+        }
+    }
+    return 0;
+}
+
+static double now_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static __attribute__((noinline)) pdg_status measured_call(pdg_workspace *ws,
+                                                          const pdg_scenario *scn,
+                                                          pdg_result *res)
+{
+    return pdg_solve(ws, scn, NULL, res);
+}
+
+int main(int argc, char **argv)
+{
+    static double x[PDG_N_MAX * PDG_NSTATE], u[PDG_N_MAX * PDG_NCTRL];
+    pdg_settings st;
+    pdg_scenario scn;
+    pdg_result res;
+    pdg_workspace *ws = NULL;
+    pdg_setup_status s = PDG_SETUP_SCRATCH_TOO_SMALL;
+    void *arena = NULL;
+    size_t need = 0, stack;
+    int repeat = 1, i, tries;
+    double t0, wall;
+    pdg_status status;
+
+    for (i = 1; i + 1 < argc; ++i) {
+        if (strcmp(argv[i], "--repeat") == 0) {
+            repeat = atoi(argv[i + 1]);
+            repeat = repeat < 1 ? 1 : (repeat > 1000 ? 1000 : repeat);
+        }
+    }
+    pdg_default_settings(&st);
+    pdg_default_scenario(&scn);
+    for (tries = 0; tries < 4 && s == PDG_SETUP_SCRATCH_TOO_SMALL; ++tries) {
+        free(arena);
+        arena = need ? malloc(need) : NULL;
+        s = pdg_workspace_size(scn.params.N, scn.params.final_roll_free, &st, arena, need,
+                               &need);
+    }
+    free(arena);
+    if (s != PDG_SETUP_OK || !(arena = malloc(need))) {
+        fprintf(stderr, "sizing failed: %s\n", pdg_setup_status_message(s));
+        return 1;
+    }
+    memset(arena, 0, need);
+    s = pdg_setup(&ws, arena, need, scn.params.N, scn.params.final_roll_free, &st);
+    if (s != PDG_SETUP_OK) {
+        fprintf(stderr, "pdg_setup: %s\n", pdg_setup_status_message(s));
+        return 1;
+    }
+    res.x = x;
+    res.u = u;
+    paint_stack();
+    counting = 1;
+    t0 = now_s();
+    status = measured_call(ws, &scn, &res);
+    wall = now_s() - t0;
+    counting = 0;
+    stack = painted_depth();
+    for (i = 1; i < repeat; ++i) {
+        t0 = now_s();
+        measured_call(ws, &scn, &res);
+        wall = (now_s() - t0) < wall ? (now_s() - t0) : wall;
+    }
+    printf("status %s\n", pdg_status_name(status));
+    printf("iterations %d\n", res.iterations);
+    printf("subproblems %d\n", res.subproblems_solved);
+    printf("socp_iterations %d\n", res.socp_iterations);
+    printf("m_f %.12f\n", x[PDG_NSTATE * (scn.params.N - 1) + 13]);
+    printf("arena_bytes %zu\n", need);
+    printf("arena_high_water %zu\n", pdg_arena_high_water(ws));
+    printf("stack_high_water %zu\n", stack);
+    printf("heap_allocations_in_solve %ld\n", n_alloc);
+    printf("wall_s_min %.6f\n", wall);
+    free(arena);
+    return status == PDG_SOLVED ? 0 : 3;
+}

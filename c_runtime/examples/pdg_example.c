@@ -1,0 +1,112 @@
+/*
+ * pdg_example.c -- the flight guidance library used from plain C, without Python.
+ *
+ * Solves the default landing scenario of DESIGN.md and prints the iteration log, the
+ * summary and the trajectory (one line per node). Links only the static libraries and
+ * their Debian dependencies:
+ *
+ *   cc -std=c99 -Ic_runtime/include pdg_example.c build/libtscvx_gnc.a build/libtscvx.a \
+ *      -lamd -lldl -lsuitesparseconfig -lm
+ *
+ * All memory comes from one arena obtained once before the solve (malloc here stands for
+ * the flight computer's statically reserved SRAM block); the library never allocates.
+ */
+#define _POSIX_C_SOURCE 199309L
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <time.h>
+
+#include "tscvx_guidance.h"
+
+static double now_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+int main(void)
+{
+    pdg_settings st;
+    pdg_scenario scn;
+    pdg_options opt = {0};
+    pdg_result res;
+    pdg_workspace *ws = NULL;
+    pdg_setup_status s;
+    void *scratch = NULL, *arena;
+    size_t need = 0;
+    double x[PDG_N_MAX * PDG_NSTATE], u[PDG_N_MAX * PDG_NCTRL];
+    int N, i, k, tries;
+
+    pdg_default_settings(&st);
+    pdg_default_scenario(&scn);
+    N = scn.params.N;
+
+    /* 2. size the arena (the scratch may be reused as the arena) */
+    s = PDG_SETUP_SCRATCH_TOO_SMALL;
+    for (tries = 0; tries < 4 && s == PDG_SETUP_SCRATCH_TOO_SMALL; ++tries) {
+        free(scratch);
+        scratch = need ? malloc(need) : NULL;
+        if (need && !scratch) {
+            fprintf(stderr, "out of memory\n");
+            return 1;
+        }
+        s = pdg_workspace_size(N, scn.params.final_roll_free, &st, scratch, need, &need);
+    }
+    free(scratch);
+    if (s != PDG_SETUP_OK) {
+        fprintf(stderr, "pdg_workspace_size: %s\n", pdg_setup_status_message(s));
+        return 1;
+    }
+    /* 3. set up in one arena */
+    arena = malloc(need);
+    if (!arena) {
+        fprintf(stderr, "out of memory\n");
+        return 1;
+    }
+    s = pdg_setup(&ws, arena, need, N, scn.params.final_roll_free, &st);
+    if (s != PDG_SETUP_OK) {
+        fprintf(stderr, "pdg_setup: %s\n", pdg_setup_status_message(s));
+        free(arena);
+        return 1;
+    }
+    /* 4. solve */
+    res.x = x;
+    res.u = u;
+    opt.clock_s = now_s;
+    {
+        const double t0 = now_s();
+        pdg_solve(ws, &scn, &opt, &res);
+        printf("solve time %.1f ms\n", 1e3 * (now_s() - t0));
+    }
+    printf("  k        J         dJ         dL        rho    radius   |vc|_1  tight  sub[ms]  "
+           "step\n");
+    for (i = 0; i < pdg_log_length(ws); ++i) {
+        pdg_log_row r;
+        pdg_get_log(ws, i, &r);
+        printf("%3d %10.5f %10.3e %10.3e %8.3f %9.4f %8.1e %6d %8.1f  %s\n", r.k, r.J, r.dJ,
+               r.dL, r.rho, r.eta, r.vc_norm1, r.n_tight, 1e3 * r.subproblem_time_s,
+               r.accepted ? "acc" : "rej");
+    }
+    printf("status %s (%s)\niterations %d, subproblems %d, t_f %.6f, m_f %.6f, fuel %.6f\n",
+           pdg_status_name(res.status), res.message, res.iterations, res.subproblems_solved,
+           res.t_f, x[PDG_NSTATE * (N - 1) + 13], scn.m0 - x[PDG_NSTATE * (N - 1) + 13]);
+    printf("largest defect %.2e, largest path-constraint value %.2e\n", res.max_defect,
+           res.max_violation);
+    printf("arena %zu bytes, high-water %zu bytes\n", need, pdg_arena_high_water(ws));
+    printf("\n node      t      r1       r2       r3       v1       v2       v3       q0       "
+           "q1       q2       q3       w1       w2       w3       m        T1       T2       "
+           "T3      |T|\n");
+    for (k = 0; k < N; ++k) {
+        const double *xk = x + PDG_NSTATE * k, *uk = u + PDG_NCTRL * k;
+        printf("%4d %7.4f", k, res.t_f * k / (N - 1));
+        for (i = 0; i < PDG_NSTATE; ++i) {
+            printf(" %8.4f", xk[i]);
+        }
+        printf(" %8.4f %8.4f %8.4f %8.4f\n", uk[0], uk[1], uk[2],
+               sqrt(uk[0] * uk[0] + uk[1] * uk[1] + uk[2] * uk[2]));
+    }
+    free(arena);
+    return res.status == PDG_SOLVED ? 0 : 3;
+}

@@ -1,0 +1,120 @@
+/* Internal declarations of the guidance layer (not part of the public API). */
+#ifndef PDG_INTERNAL_H
+#define PDG_INTERNAL_H
+
+#include <stddef.h>
+
+#include "foh.h"
+#include "tscvx_guidance.h"
+#include "tscvx_socp.h"
+
+#define NX PDG_NX
+#define NU PDG_NU
+#define NC PDG_NCON
+#define IM 13                 /* mass index in the state */
+#define N_TR_SCALAR 6         /* states under the scalar part of the trust region */
+#define N_TR_PAIRS 4          /* rotation-invariant pairs */
+#define N_NU_BLOCKS (N_TR_SCALAR + N_TR_PAIRS)
+#define SIGMA_MIN 1e-2        /* lower bound on t_f (guidance/subproblem.py) */
+#define TIGHT_DUAL_TOL 1e-5   /* guidance/constraints.py */
+#define N_DISC (NX + NX * NX + 2 * NX * NU + 2 * NX) /* per interval: x_next A Bm Bp S z */
+
+extern const int pdg_tr_scalar_states[N_TR_SCALAR];
+extern const int pdg_tr_pairs[N_TR_PAIRS][2];
+
+/* Offsets of one interval's discretization record (N_DISC doubles). A, Bm, Bp row-major. */
+#define D_XN 0
+#define D_A (D_XN + NX)
+#define D_BM (D_A + NX * NX)
+#define D_BP (D_BM + NX * NU)
+#define D_S (D_BP + NX * NU)
+#define D_Z (D_S + NX)
+
+/* Index ranges of the decision vector (guidance/subproblem.py Layout). */
+typedef struct {
+    int N, ix, iu, isig, inu, ivc, ibuf, n, n_traj;
+} pdg_layout;
+
+/* Affine scaling x = Sx x_hat + cx, u = Su u_hat, t_f = Ss sigma_hat. */
+typedef struct {
+    double Sx[NX], cx[NX], Su, Ss;
+} pdg_scaling;
+
+/* Sink of the one routine that emits the subproblem: pattern at setup, numbers per solve. */
+typedef struct {
+    int mode;        /* 0: count, 1: record pattern (row, col), 2: write values */
+    int cnt;         /* entries emitted so far */
+    int p;           /* rows below p are equalities (A), the others cone rows (G) */
+    int *row, *col;  /* mode 1 */
+    const int *dest; /* mode 2: entry -> slot (A slot, or nnz_A + G slot) */
+    double *Ax, *Gx; /* mode 2 */
+    int nnz_A;
+} pdg_emitter;
+
+/* Values that the emission needs (mode 2). */
+typedef struct {
+    const pdg_scenario *scn;
+    const pdg_scaling *sc;
+    const double *disc;         /* (N-1) x N_DISC */
+    const double *zref;         /* scaled iterate */
+    const unsigned char *keep;  /* 7N, NULL = keep everything */
+    double eta, lam;
+    double *b, *h, *c;          /* outputs: p, m, n */
+} pdg_values;
+
+struct pdg_workspace {
+    int ready;
+    int N, roll_free;
+    pdg_settings st;
+    pdg_layout lay;
+    int n, p, m, nnz_A, nnz_G, nnz;
+    int l, nsoc;
+    /* rows of G (0-based within G) of the blocks the labelling reads */
+    int g_mass, g_tmin, g_soc;
+    /* pattern (fixed at setup) */
+    int *Ap, *Ai, *Gp, *Gi, *q, *dest;
+    /* subproblem numbers */
+    double *Ax, *Gx, *b, *h, *c;
+    tscvx_workspace *socp;
+    /* scenario-dependent */
+    pdg_scenario scn;
+    double pvec[PDG_NP];
+    pdg_scaling sc;
+    double scales[NC];
+    /* iterates, discretizations and buffers */
+    double *z, *znew, *zdual;
+    double *disc, *disc_new, *aug, *augw;
+    double *x, *u, *xn, *un, *hval; /* physical iterate, candidate, path constraint values */
+    unsigned char *mask, *prev_mask, *forced, *tight, *keep;
+    double *gwork;                  /* guess work space */
+    /* record of the last solve */
+    pdg_log_row *log;
+    int n_log;
+    unsigned char *masks_out;
+    int n_masks_out;
+    size_t arena_bytes, arena_high;
+};
+
+/* pdg_scenario.c */
+int pdg_check_scenario(const pdg_scenario *s, char *msg);
+void pdg_param_vector(const pdg_params *p, double *pv);
+double pdg_tan_glideslope(const pdg_params *p);
+double pdg_cos_gimbal(const pdg_params *p);
+double pdg_tilt_q_max(const pdg_params *p);
+double pdg_omega_max(const pdg_params *p);
+void pdg_x_final_target(const pdg_params *p, double *xf);
+void pdg_dcm_bi(const double *q, double C[3][3]);
+
+/* pdg_guess.c: needs 40 N doubles of work */
+#define PDG_GUESS_WORK_PER_NODE 40
+void pdg_initial_guess(const pdg_scenario *s, double *x, double *u, double *t_f, double *work);
+void pdg_project_guess(const pdg_scenario *s, double *x, double *u, double *t_f);
+
+/* pdg_subproblem.c */
+void pdg_layout_init(pdg_layout *lay, int N);
+void pdg_emit(pdg_emitter *e, const pdg_layout *lay, int roll_free, const pdg_values *v);
+void pdg_cone_dims(int N, int *l, int *nsoc, int *q);
+int pdg_rows_eq(int N, int roll_free);
+void pdg_scaling_init(pdg_scaling *sc, const pdg_scenario *s, double t_f_guess);
+
+#endif

@@ -1,0 +1,312 @@
+/* Defaults (paper Table 1, guidance/params.py) and scenario validation (the rules, order and
+ * field names of guidance/scenario.py). */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "pdg_internal.h"
+
+#define DEG (3.14159265358979323846 / 180.0)
+#define UNIT_QUATERNION_TOL 1e-6
+
+void pdg_default_params(pdg_params *p)
+{
+    const double I_sp = 30.0, P_amb = 0.1, A_noz = 0.5, rho_SA_CA = 0.2;
+    if (!p) {
+        return;
+    }
+    memset(p, 0, sizeof *p);
+    p->g_I[0] = -1.0;
+    p->J_B[0] = 0.001;
+    p->J_B[1] = 0.01;
+    p->J_B[2] = 0.01;
+    p->r_T_B[0] = -0.01;
+    p->alpha_mdot = 1.0 / I_sp;
+    p->beta_mdot = P_amb * A_noz / I_sp;
+    p->aero_coeff = 0.5 * rho_SA_CA;
+    p->m_dry = 2.0;
+    p->T_min = 0.3;
+    p->T_max = 5.0;
+    p->gimbal_max_deg = 20.0;
+    p->tilt_max_deg = 90.0;
+    p->glideslope_deg = 20.0;
+    p->omega_max_deg = 90.0;
+    p->v_f[0] = -0.1;
+    p->q_f[0] = 1.0;
+    p->final_roll_free = 1;
+    p->N = 50;
+}
+
+void pdg_default_scenario(pdg_scenario *s)
+{
+    if (!s) {
+        return;
+    }
+    memset(s, 0, sizeof *s);
+    s->r0[0] = 4.0;
+    s->r0[1] = 4.0;
+    s->v0[1] = -1.0;
+    s->v0[2] = -2.0;
+    s->q0[0] = 1.0;
+    s->m0 = 3.0;
+    pdg_default_params(&s->params);
+}
+
+void pdg_default_settings(pdg_settings *st)
+{
+    if (!st) {
+        return;
+    }
+    st->lam = 500.0;
+    st->rho0 = 0.0;
+    st->rho1 = 0.1;
+    st->rho2 = 0.7;
+    st->alpha = 2.0;
+    st->beta = 2.0;
+    st->eta_init = 2.0;
+    st->eta_lb = 0.001;
+    st->eta_ub = 10.0;
+    st->iter_max = 20;
+    st->max_subproblems = 60;
+    st->step_tol = 5e-3;
+    st->vc_tol = 1e-6;
+    st->defect_tol = 1e-5;
+    st->rk4_substeps = 8;
+    st->tight_tol = 1e-6;
+    st->socp_tol = 1e-9;
+    st->socp_max_iter = 200;
+}
+
+/* ---- derived quantities (guidance/params.py properties) ---------------------------------- */
+
+double pdg_tan_glideslope(const pdg_params *p) { return tan(p->glideslope_deg * DEG); }
+double pdg_cos_gimbal(const pdg_params *p) { return cos(p->gimbal_max_deg * DEG); }
+double pdg_omega_max(const pdg_params *p) { return p->omega_max_deg * DEG; }
+double pdg_tilt_q_max(const pdg_params *p)
+{
+    return sqrt((1.0 - cos(p->tilt_max_deg * DEG)) / 2.0);
+}
+
+/* The parameter vector of the generated model (guidance/model.py param_vector). */
+void pdg_param_vector(const pdg_params *p, double *pv)
+{
+    int i;
+    pv[0] = p->g_I[0];
+    for (i = 0; i < 3; ++i) {
+        pv[1 + i] = p->J_B[i];
+        pv[4 + i] = p->r_T_B[i];
+        pv[7 + i] = p->r_cp_B[i];
+    }
+    pv[10] = p->alpha_mdot;
+    pv[11] = p->beta_mdot;
+    pv[12] = p->aero_coeff;
+}
+
+void pdg_x_final_target(const pdg_params *p, double *xf)
+{
+    int i;
+    for (i = 0; i < NX; ++i) {
+        xf[i] = 0.0;
+    }
+    for (i = 0; i < 3; ++i) {
+        xf[i] = p->r_f[i];
+        xf[3 + i] = p->v_f[i];
+        xf[10 + i] = p->omega_f[i];
+    }
+    for (i = 0; i < 4; ++i) {
+        xf[6 + i] = p->q_f[i];
+    }
+}
+
+/* C_B<-I(q), homogeneous form (guidance/model.py _dcm_entries). */
+void pdg_dcm_bi(const double *q, double C[3][3])
+{
+    const double q0 = q[0], q1 = q[1], q2 = q[2], q3 = q[3];
+    const double s0 = q0 * q0, s1 = q1 * q1, s2 = q2 * q2, s3 = q3 * q3;
+    C[0][0] = s0 + s1 - s2 - s3;
+    C[0][1] = 2 * (q1 * q2 + q0 * q3);
+    C[0][2] = 2 * (q1 * q3 - q0 * q2);
+    C[1][0] = 2 * (q1 * q2 - q0 * q3);
+    C[1][1] = s0 - s1 + s2 - s3;
+    C[1][2] = 2 * (q2 * q3 + q0 * q1);
+    C[2][0] = 2 * (q1 * q3 + q0 * q2);
+    C[2][1] = 2 * (q2 * q3 - q0 * q1);
+    C[2][2] = s0 - s1 - s2 + s3;
+}
+
+/* ---- validation -------------------------------------------------------------------------- */
+
+static int fail(char *msg, const char *field, const char *text)
+{
+    if (msg) {
+        snprintf(msg, PDG_MESSAGE_LEN, "scenario field '%s': %s", field, text);
+    }
+    return 1;
+}
+
+static int finite_all(const double *v, int n)
+{
+    int i;
+    for (i = 0; i < n; ++i) {
+        if (!isfinite(v[i])) {
+            return 0;
+        }
+    }
+    return 1;
+}
+
+static double norm(const double *v, int n)
+{
+    double s = 0.0;
+    int i;
+    for (i = 0; i < n; ++i) {
+        s += v[i] * v[i];
+    }
+    return sqrt(s);
+}
+
+/* Finiteness of every number (the JSON parser's check in Python), field by field. */
+static int check_finite(const pdg_scenario *s, char *msg)
+{
+    const pdg_params *p = &s->params;
+    struct {
+        const char *name;
+        const double *v;
+        int n;
+    } f[] = {
+        {"r0", s->r0, 3}, {"v0", s->v0, 3}, {"q0", s->q0, 4}, {"w0", s->w0, 3},
+        {"m0", &s->m0, 1}, {"g_I", p->g_I, 3}, {"J_B", p->J_B, 3}, {"r_T_B", p->r_T_B, 3},
+        {"r_cp_B", p->r_cp_B, 3}, {"alpha_mdot", &p->alpha_mdot, 1},
+        {"beta_mdot", &p->beta_mdot, 1}, {"aero_coeff", &p->aero_coeff, 1},
+        {"m_dry", &p->m_dry, 1}, {"T_min", &p->T_min, 1}, {"T_max", &p->T_max, 1},
+        {"gimbal_max_deg", &p->gimbal_max_deg, 1}, {"tilt_max_deg", &p->tilt_max_deg, 1},
+        {"glideslope_deg", &p->glideslope_deg, 1}, {"omega_max_deg", &p->omega_max_deg, 1},
+        {"r_f", p->r_f, 3}, {"v_f", p->v_f, 3}, {"q_f", p->q_f, 4}, {"omega_f", p->omega_f, 3},
+    };
+    size_t i;
+    for (i = 0; i < sizeof f / sizeof f[0]; ++i) {
+        if (!finite_all(f[i].v, f[i].n)) {
+            return fail(msg, f[i].name, "must be finite");
+        }
+    }
+    return 0;
+}
+
+static int check_params(const pdg_params *p, char *msg)
+{
+    char text[200];
+    struct {
+        const char *name;
+        double v;
+    } pos[] = {{"alpha_mdot", p->alpha_mdot}, {"aero_coeff", p->aero_coeff},
+               {"m_dry", p->m_dry},           {"T_min", p->T_min},
+               {"T_max", p->T_max},           {"omega_max_deg", p->omega_max_deg}};
+    size_t i;
+    for (i = 0; i < sizeof pos / sizeof pos[0]; ++i) {
+        if (pos[i].v <= 0.0) {
+            snprintf(text, sizeof text, "must be positive, got %.17g", pos[i].v);
+            return fail(msg, pos[i].name, text);
+        }
+    }
+    if (p->beta_mdot < 0.0) {
+        snprintf(text, sizeof text, "must be non-negative, got %.17g", p->beta_mdot);
+        return fail(msg, "beta_mdot", text);
+    }
+    if (p->J_B[0] <= 0.0 || p->J_B[1] <= 0.0 || p->J_B[2] <= 0.0) {
+        snprintf(text, sizeof text, "inertia diagonal must be positive, got (%g, %g, %g)",
+                 p->J_B[0], p->J_B[1], p->J_B[2]);
+        return fail(msg, "J_B", text);
+    }
+    if (p->T_min >= p->T_max) {
+        snprintf(text, sizeof text, "T_min = %g must be below T_max = %g", p->T_min, p->T_max);
+        return fail(msg, "T_min", text);
+    }
+    if (!(0.0 < p->gimbal_max_deg && p->gimbal_max_deg < 90.0)) {
+        return fail(msg, "gimbal_max_deg", "must lie in (0, 90) degrees");
+    }
+    if (!(0.0 < p->tilt_max_deg && p->tilt_max_deg <= 180.0)) {
+        return fail(msg, "tilt_max_deg", "must lie in (0, 180] degrees");
+    }
+    if (!(0.0 <= p->glideslope_deg && p->glideslope_deg < 90.0)) {
+        return fail(msg, "glideslope_deg", "must lie in [0, 90) degrees");
+    }
+    if (fabs(norm(p->q_f, 4) - 1.0) > UNIT_QUATERNION_TOL) {
+        return fail(msg, "q_f", "must be a unit quaternion");
+    }
+    if (p->g_I[0] >= 0.0 || p->g_I[1] != 0.0 || p->g_I[2] != 0.0) {
+        return fail(msg, "g_I", "gravity must point along -e1 (e1 is up)");
+    }
+    if (!(PDG_N_MIN <= p->N && p->N <= PDG_N_MAX)) {
+        snprintf(text, sizeof text, "must lie in [3, 400], got %d", p->N);
+        return fail(msg, "N", text);
+    }
+    if (p->r_f[0] < 0.0) {
+        return fail(msg, "r_f", "landing point must not be below the surface");
+    }
+    if (p->final_roll_free != 0 && p->final_roll_free != 1) {
+        return fail(msg, "final_roll_free", "expected true or false");
+    }
+    return 0;
+}
+
+int pdg_check_scenario(const pdg_scenario *s, char *msg)
+{
+    const pdg_params *p;
+    char text[200];
+    double nq, horizontal, gs, tilt_q, wn;
+    if (!s) {
+        return fail(msg, "<root>", "no scenario given (NULL)");
+    }
+    p = &s->params;
+    if (check_finite(s, msg) || check_params(p, msg)) {
+        return 1;
+    }
+    nq = norm(s->q0, 4);
+    if (fabs(nq - 1.0) > UNIT_QUATERNION_TOL) {
+        snprintf(text, sizeof text, "must be a unit quaternion, |q0| = %.9g", nq);
+        return fail(msg, "q0", text);
+    }
+    if (s->m0 <= p->m_dry) {
+        snprintf(text, sizeof text, "m0 = %g must exceed the dry mass m_dry = %g", s->m0,
+                 p->m_dry);
+        return fail(msg, "m0", text);
+    }
+    horizontal = norm(s->r0 + 1, 2);
+    gs = p->glideslope_deg * DEG;
+    if (sin(gs) * horizontal > cos(gs) * s->r0[0] + 1e-12) {
+        snprintf(text, sizeof text,
+                 "start is below the %g deg glideslope cone (altitude %g, horizontal "
+                 "distance %g)",
+                 p->glideslope_deg, s->r0[0], horizontal);
+        return fail(msg, "r0", text);
+    }
+    tilt_q = norm(s->q0 + 2, 2);
+    if (tilt_q > pdg_tilt_q_max(p) + 1e-12) {
+        double c = 1.0 - 2.0 * tilt_q * tilt_q;
+        c = c < -1.0 ? -1.0 : (c > 1.0 ? 1.0 : c);
+        snprintf(text, sizeof text, "initial tilt %.3f deg exceeds tilt_max_deg = %g",
+                 acos(c) / DEG, p->tilt_max_deg);
+        return fail(msg, "q0", text);
+    }
+    wn = norm(s->w0, 3);
+    if (wn > pdg_omega_max(p) + 1e-12) {
+        snprintf(text, sizeof text, "|w0| = %.3f deg/U_T exceeds omega_max_deg = %g", wn / DEG,
+                 p->omega_max_deg);
+        return fail(msg, "w0", text);
+    }
+    /* Roll decoupling: J2 = J3 and no off-axis engine or pressure offset -> omega_1 const. */
+    if (p->J_B[1] == p->J_B[2] && p->r_T_B[1] == 0.0 && p->r_T_B[2] == 0.0 &&
+        p->r_cp_B[1] == 0.0 && p->r_cp_B[2] == 0.0 && s->w0[0] != p->omega_f[0]) {
+        snprintf(text, sizeof text,
+                 "the engine cannot make roll torque (J2 = J3, r_T on the body axis), so the "
+                 "roll rate is constant: w0[0] = %g cannot reach omega_f[0] = %g",
+                 s->w0[0], p->omega_f[0]);
+        return fail(msg, "w0", text);
+    }
+    return 0;
+}
+
+int pdg_validate_scenario(const pdg_scenario *scenario, char *message)
+{
+    return pdg_check_scenario(scenario, message);
+}

@@ -1,0 +1,1084 @@
+/* SCvx (paper Algorithm 1) and its T-SCvx hooks (Algorithm 2): a transcription of
+ * guidance/scvx.py on top of the SOCP runtime. Workspace set-up (one arena), the solve loop,
+ * the exact penalty J on the FULL constraint set, the trust-region rules, the convergence
+ * test and the tight-constraint labelling of guidance/constraints.py. */
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "pdg_internal.h"
+
+/* ---- message tables ---------------------------------------------------------------------- */
+
+static const char *const setup_messages[PDG_SETUP_NSTATUS] = {
+    "ok",
+    "a required pointer is NULL",
+    "N outside [3, 400]",
+    "a setting is NaN or out of range",
+    "scratch too small: retry with the returned size",
+    "arena smaller than pdg_workspace_size()",
+    "the SOCP runtime refused the subproblem",
+    "workspace not set up",
+    "index out of range",
+};
+
+static const char *const status_messages[PDG_NSTATUS] = {
+    "converged",
+    "virtual control could not be driven to zero: no feasible landing found",
+    "iteration limit reached with zero virtual control",
+    "a convex subproblem could not be solved",
+    "invalid input: nothing was solved",
+};
+
+static const char *const status_names[PDG_NSTATUS] = {
+    "solved", "infeasible", "max_iterations", "solver_error", "invalid_input",
+};
+
+/* Python names of the SOCP statuses (guidance/conic.py Status). */
+static const char *socp_status_name(int s)
+{
+    switch (s) {
+    case TSCVX_SOLVED: return "solved";
+    case TSCVX_SOLVED_INACCURATE: return "solved_inaccurate";
+    case TSCVX_PRIMAL_INFEASIBLE: return "primal_infeasible";
+    case TSCVX_DUAL_INFEASIBLE: return "dual_infeasible";
+    case TSCVX_MAX_ITER: return "max_iterations";
+    case TSCVX_INVALID_INPUT: return "invalid_input";
+    default: return "numerical_error";
+    }
+}
+
+const char *pdg_setup_status_message(pdg_setup_status s)
+{
+    return (unsigned)s < PDG_SETUP_NSTATUS ? setup_messages[s] : "unknown status";
+}
+const char *pdg_status_message(pdg_status s)
+{
+    return (unsigned)s < PDG_NSTATUS ? status_messages[s] : "unknown status";
+}
+const char *pdg_status_name(pdg_status s)
+{
+    return (unsigned)s < PDG_NSTATUS ? status_names[s] : "unknown";
+}
+
+/* ---- arena ------------------------------------------------------------------------------- */
+
+#define ALIGN 16u
+
+typedef struct {
+    unsigned char *base; /* NULL: count only */
+    size_t cap, top, high;
+    int overflow;
+} arena;
+
+static void *take(arena *a, size_t count, size_t size)
+{
+    size_t start = (a->top + (ALIGN - 1)) & ~(size_t)(ALIGN - 1);
+    size_t bytes;
+    if (size != 0 && count > (SIZE_MAX / 4) / size) {
+        a->overflow = 1;
+        return NULL;
+    }
+    bytes = count * size;
+    a->top = start + bytes;
+    if (a->top > a->high) {
+        a->high = a->top;
+    }
+    if (!a->base || a->top > a->cap) {
+        a->overflow = 1;
+        return NULL;
+    }
+    return a->base + start;
+}
+
+static int settings_ok(const pdg_settings *s)
+{
+    const double d[] = {s->lam, s->rho0, s->rho1, s->rho2, s->alpha, s->beta, s->eta_init,
+                        s->eta_lb, s->eta_ub, s->step_tol, s->vc_tol, s->defect_tol,
+                        s->tight_tol, s->socp_tol};
+    size_t i;
+    for (i = 0; i < sizeof d / sizeof d[0]; ++i) {
+        if (!isfinite(d[i])) {
+            return 0;
+        }
+    }
+    return s->lam > 0 && s->rho0 <= s->rho1 && s->rho1 <= s->rho2 && s->alpha >= 1.0 &&
+           s->beta >= 1.0 && s->eta_lb > 0 && s->eta_lb <= s->eta_ub && s->eta_init > 0 &&
+           s->iter_max >= 1 && s->iter_max <= 100 && s->max_subproblems >= 1 &&
+           s->max_subproblems <= 500 && s->step_tol >= 0 && s->vc_tol >= 0 &&
+           s->defect_tol >= 0 && s->tight_tol >= 0 && s->rk4_substeps >= 1 &&
+           s->rk4_substeps <= PDG_MAX_SUBSTEPS && s->socp_tol > 0 && s->socp_tol < 1 &&
+           s->socp_max_iter >= 1 && s->socp_max_iter <= 500;
+}
+
+static void socp_settings(const pdg_settings *st, tscvx_settings *ts)
+{
+    tscvx_default_settings(ts);
+    ts->max_iter = st->socp_max_iter;
+    ts->tol_gap_abs = st->socp_tol;
+    ts->tol_gap_rel = st->socp_tol;
+    ts->tol_feas = st->socp_tol;
+}
+
+static void socp_data(const pdg_workspace *ws, tscvx_data *d)
+{
+    memset(d, 0, sizeof *d);
+    d->n = ws->n;
+    d->p = ws->p;
+    d->m = ws->m;
+    d->c = ws->c;
+    d->Ap = ws->Ap;
+    d->Ai = ws->Ai;
+    d->Ax = ws->Ax;
+    d->b = ws->b;
+    d->Gp = ws->Gp;
+    d->Gi = ws->Gi;
+    d->Gx = ws->Gx;
+    d->h = ws->h;
+    d->l = ws->l;
+    d->nsoc = ws->nsoc;
+    d->q = ws->q;
+}
+
+/* Builds the CSC patterns of A and G from the emitted (row, col) list and the map from
+ * emission order to value slots. Returns 0, or -1 on a duplicate entry. */
+static int build_csc(pdg_workspace *ws, const int *row, const int *col, int *ent)
+{
+    const int n = ws->n, p = ws->p;
+    int e, j, k;
+    for (j = 0; j <= n; ++j) {
+        ws->Ap[j] = 0;
+        ws->Gp[j] = 0;
+    }
+    for (e = 0; e < ws->nnz; ++e) {
+        if (row[e] < p) {
+            ws->Ap[col[e] + 1]++;
+        } else {
+            ws->Gp[col[e] + 1]++;
+        }
+    }
+    for (j = 0; j < n; ++j) {
+        ws->Ap[j + 1] += ws->Ap[j];
+        ws->Gp[j + 1] += ws->Gp[j];
+    }
+    /* place: a stable counting sort by column; ent[slot] = entry, Ap/Gp shifted by one */
+    for (e = 0; e < ws->nnz; ++e) {
+        if (row[e] < p) {
+            const int s = ws->Ap[col[e]]++;
+            ws->Ai[s] = row[e];
+            ent[s] = e;
+        } else {
+            const int s = ws->Gp[col[e]]++;
+            ws->Gi[s] = row[e] - p;
+            ent[ws->nnz_A + s] = e;
+        }
+    }
+    for (j = n; j > 0; --j) {
+        ws->Ap[j] = ws->Ap[j - 1];
+        ws->Gp[j] = ws->Gp[j - 1];
+    }
+    ws->Ap[0] = ws->Gp[0] = 0;
+    /* sort rows within each column (insertion sort; columns are short) */
+    for (k = 0; k < 2; ++k) {
+        const int *Pp = k ? ws->Gp : ws->Ap;
+        int *Pi = k ? ws->Gi : ws->Ai;
+        int *en = k ? ent + ws->nnz_A : ent;
+        for (j = 0; j < n; ++j) {
+            int a, b;
+            for (a = Pp[j] + 1; a < Pp[j + 1]; ++a) {
+                const int r = Pi[a], t = en[a];
+                for (b = a - 1; b >= Pp[j] && Pi[b] > r; --b) {
+                    Pi[b + 1] = Pi[b];
+                    en[b + 1] = en[b];
+                }
+                Pi[b + 1] = r;
+                en[b + 1] = t;
+            }
+            for (a = Pp[j] + 1; a < Pp[j + 1]; ++a) {
+                if (Pi[a] == Pi[a - 1]) {
+                    return -1;
+                }
+            }
+        }
+    }
+    for (k = 0; k < ws->nnz_A + ws->nnz_G; ++k) {
+        ws->dest[ent[k]] = k;
+    }
+    return 0;
+}
+
+enum { BUILD_SIZE, BUILD_SETUP };
+
+/* Sizes of the subproblem for N and the terminal condition (no memory needed). */
+static void problem_dims(pdg_workspace *w, int N, int roll_free, const pdg_settings *st)
+{
+    pdg_emitter em;
+    memset(w, 0, sizeof *w);
+    w->N = N;
+    w->roll_free = roll_free ? 1 : 0;
+    w->st = *st;
+    pdg_layout_init(&w->lay, N);
+    w->n = w->lay.n;
+    w->p = pdg_rows_eq(N, w->roll_free);
+    pdg_cone_dims(N, &w->l, &w->nsoc, NULL);
+    w->m = w->l + 18 * N + 12 * (N - 1) + 12 * N; /* path cones, nu pairs, trust pairs */
+    em.mode = 0;
+    em.cnt = 0;
+    em.p = w->p;
+    pdg_emit(&em, &w->lay, w->roll_free, NULL);
+    w->nnz = em.cnt;
+    w->nnz_A = NX * (N - 1) * (1 + NX + 2 * NU + 2) + NX + 9 + (w->roll_free ? 2 : 4);
+    w->nnz_G = w->nnz - w->nnz_A;
+    w->g_mass = w->l - 2 * N; /* rows of G: mass block, then T_min, then the cones */
+    w->g_tmin = w->l - N;
+    w->g_soc = w->l;
+}
+
+/* Claims every persistent array of the workspace from the arena (NULLs when it is short). */
+static void claim_arrays(pdg_workspace *t, arena *a)
+{
+    const size_t N = (size_t)t->N, nI = N - 1, n = (size_t)t->n;
+    t->Ap = (int *)take(a, n + 1, sizeof(int));
+    t->Ai = (int *)take(a, (size_t)t->nnz_A, sizeof(int));
+    t->Gp = (int *)take(a, n + 1, sizeof(int));
+    t->Gi = (int *)take(a, (size_t)t->nnz_G, sizeof(int));
+    t->q = (int *)take(a, (size_t)t->nsoc, sizeof(int));
+    t->dest = (int *)take(a, (size_t)t->nnz, sizeof(int));
+    t->Ax = (double *)take(a, (size_t)t->nnz_A, sizeof(double));
+    t->Gx = (double *)take(a, (size_t)t->nnz_G, sizeof(double));
+    t->b = (double *)take(a, (size_t)t->p, sizeof(double));
+    t->h = (double *)take(a, (size_t)t->m, sizeof(double));
+    t->c = (double *)take(a, n, sizeof(double));
+    t->z = (double *)take(a, n, sizeof(double));
+    t->znew = (double *)take(a, n, sizeof(double));
+    t->zdual = (double *)take(a, (size_t)t->m, sizeof(double));
+    t->disc = (double *)take(a, nI * N_DISC, sizeof(double));
+    t->disc_new = (double *)take(a, nI * N_DISC, sizeof(double));
+    t->aug = (double *)take(a, PDG_NAUG, sizeof(double));
+    t->augw = (double *)take(a, PDG_NAUG, sizeof(double));
+    t->x = (double *)take(a, N * NX, sizeof(double));
+    t->u = (double *)take(a, N * NU, sizeof(double));
+    t->xn = (double *)take(a, N * NX, sizeof(double));
+    t->un = (double *)take(a, N * NU, sizeof(double));
+    t->hval = (double *)take(a, N * NC, sizeof(double));
+    t->gwork = (double *)take(a, N * PDG_GUESS_WORK_PER_NODE, sizeof(double));
+    t->mask = (unsigned char *)take(a, N * NC, 1);
+    t->prev_mask = (unsigned char *)take(a, N * NC, 1);
+    t->forced = (unsigned char *)take(a, N * NC, 1);
+    t->tight = (unsigned char *)take(a, N * NC, 1);
+    t->keep = (unsigned char *)take(a, N * NC, 1);
+    t->log = (pdg_log_row *)take(a, (size_t)t->st.max_subproblems, sizeof(pdg_log_row));
+    t->masks_out = (unsigned char *)take(a, (size_t)t->st.iter_max * N * NC, 1);
+}
+
+/* The one set-up path. BUILD_SIZE stops after the SOCP's analysis and returns the arena size
+ * in *need; BUILD_SETUP builds the workspace. When the memory is short, *need is a size that
+ * gets further (the exact one once the pattern fits). */
+static pdg_setup_status build(void *mem, size_t bytes, int N, int roll_free,
+                              const pdg_settings *st, int mode, pdg_workspace **out,
+                              size_t *need)
+{
+    const pdg_setup_status short_memory =
+        mode == BUILD_SETUP ? PDG_SETUP_ARENA_TOO_SMALL : PDG_SETUP_SCRATCH_TOO_SMALL;
+    arena a;
+    pdg_workspace dims, *ws;
+    pdg_emitter em;
+    tscvx_settings ts;
+    tscvx_data d;
+    size_t mark, skip = 0, nscr = 0, nsocp = 0, socp_at, total;
+    int *row, *col, *ent, e, i, n_eq = 0, l, nsoc;
+
+    if (!st || !need) {
+        return PDG_SETUP_NULL_ARGUMENT;
+    }
+    *need = 0;
+    if (N < PDG_N_MIN || N > PDG_N_MAX) {
+        return PDG_SETUP_BAD_SIZE;
+    }
+    if (!settings_ok(st)) {
+        return PDG_SETUP_BAD_SETTINGS;
+    }
+    if (mem) { /* align the arena start; the +ALIGN of every size covers this */
+        skip = (ALIGN - ((uintptr_t)mem % ALIGN)) % ALIGN;
+    }
+    a.base = mem && bytes > skip ? (unsigned char *)mem + skip : NULL;
+    a.cap = mem && bytes > skip ? bytes - skip : 0;
+    a.top = a.high = 0;
+    a.overflow = 0;
+
+    /* 1. the workspace, its arrays and the temporaries of the pattern build */
+    problem_dims(&dims, N, roll_free, st);
+    ws = (pdg_workspace *)take(&a, 1, sizeof(pdg_workspace));
+    if (ws) {
+        *ws = dims;
+    } else {
+        ws = &dims; /* count only */
+    }
+    claim_arrays(ws, &a);
+    mark = a.top;
+    row = (int *)take(&a, (size_t)ws->nnz, sizeof(int));
+    col = (int *)take(&a, (size_t)ws->nnz, sizeof(int));
+    ent = (int *)take(&a, (size_t)ws->nnz, sizeof(int));
+    if (a.overflow) {
+        *need = a.high + ALIGN;
+        return short_memory;
+    }
+    /* 2. the sparsity pattern, fixed from here on */
+    pdg_cone_dims(N, &l, &nsoc, ws->q);
+    em.mode = 1;
+    em.cnt = 0;
+    em.p = ws->p;
+    em.row = row;
+    em.col = col;
+    pdg_emit(&em, &ws->lay, ws->roll_free, NULL);
+    for (e = 0; e < ws->nnz; ++e) {
+        n_eq += row[e] < ws->p;
+    }
+    if (em.cnt != ws->nnz || n_eq != ws->nnz_A || build_csc(ws, row, col, ent) != 0) {
+        return PDG_SETUP_SOCP_ERROR; /* an inconsistent pattern is a bug: report, never crash */
+    }
+    a.top = mark; /* temporaries released */
+    /* placeholder numbers (finite); every solve writes the real ones */
+    for (i = 0; i < ws->nnz_A; ++i) {
+        ws->Ax[i] = 1.0;
+    }
+    for (i = 0; i < ws->nnz_G; ++i) {
+        ws->Gx[i] = -1.0;
+    }
+    for (i = 0; i < ws->p; ++i) {
+        ws->b[i] = 0.0;
+    }
+    for (i = 0; i < ws->m; ++i) {
+        ws->h[i] = 1.0;
+    }
+    for (i = 0; i < ws->n; ++i) {
+        ws->c[i] = 1.0;
+    }
+    /* 3. the SOCP workspace: symbolic analysis in the rest of the memory, then set-up there */
+    socp_settings(st, &ts);
+    socp_data(ws, &d);
+    if (tscvx_scratch_size(&d, &ts, &nscr) != TSCVX_SETUP_OK) {
+        return PDG_SETUP_SOCP_ERROR;
+    }
+    socp_at = (a.top + (ALIGN - 1)) & ~(size_t)(ALIGN - 1);
+    if (socp_at + nscr > a.cap) {
+        *need = (socp_at + nscr > a.high ? socp_at + nscr : a.high) + ALIGN;
+        return short_memory;
+    }
+    if (tscvx_workspace_size(&d, &ts, a.base + socp_at, a.cap - socp_at, &nsocp) !=
+        TSCVX_SETUP_OK) {
+        return PDG_SETUP_SOCP_ERROR;
+    }
+    total = socp_at + (nsocp > nscr ? nsocp : nscr);
+    *need = (total > a.high ? total : a.high) + ALIGN;
+    if (mode == BUILD_SIZE) {
+        return PDG_SETUP_OK;
+    }
+    if (socp_at + nsocp > a.cap) {
+        return PDG_SETUP_ARENA_TOO_SMALL;
+    }
+    if (tscvx_setup(&ws->socp, a.base + socp_at, a.cap - socp_at, &d, &ts) != TSCVX_SETUP_OK) {
+        return PDG_SETUP_SOCP_ERROR;
+    }
+    {
+        tscvx_info info;
+        size_t hw;
+        tscvx_get_info(ws->socp, &info);
+        hw = socp_at + (info.arena_high_water > nscr ? info.arena_high_water : nscr);
+        ws->arena_high = skip + (hw > a.high ? hw : a.high);
+    }
+    ws->arena_bytes = bytes;
+    ws->ready = 1;
+    *out = ws;
+    return PDG_SETUP_OK;
+}
+
+pdg_setup_status pdg_workspace_size(int N, int final_roll_free, const pdg_settings *settings,
+                                    void *scratch, size_t scratch_bytes, size_t *bytes)
+{
+    return build(scratch, scratch_bytes, N, final_roll_free, settings, BUILD_SIZE, NULL, bytes);
+}
+
+pdg_setup_status pdg_setup(pdg_workspace **ws, void *arena_mem, size_t arena_bytes, int N,
+                           int final_roll_free, const pdg_settings *settings)
+{
+    size_t need = 0;
+    if (!ws || !arena_mem) {
+        return PDG_SETUP_NULL_ARGUMENT;
+    }
+    *ws = NULL;
+    return build(arena_mem, arena_bytes, N, final_roll_free, settings, BUILD_SETUP, ws, &need);
+}
+
+/* ---- pieces of the iteration ------------------------------------------------------------- */
+
+static void to_physical(const pdg_workspace *ws, const double *z, double *x, double *u,
+                        double *t_f)
+{
+    const pdg_layout *L = &ws->lay;
+    int k, i;
+    for (k = 0; k < ws->N; ++k) {
+        for (i = 0; i < NX; ++i) {
+            x[NX * k + i] = z[L->ix + NX * k + i] * ws->sc.Sx[i] + ws->sc.cx[i];
+        }
+        for (i = 0; i < NU; ++i) {
+            u[NU * k + i] = z[L->iu + NU * k + i] * ws->sc.Su;
+        }
+    }
+    *t_f = z[L->isig] * ws->sc.Ss;
+}
+
+static void to_scaled(const pdg_workspace *ws, const double *x, const double *u, double t_f,
+                      double *z)
+{
+    const pdg_layout *L = &ws->lay;
+    int k, i;
+    for (i = 0; i < L->n; ++i) {
+        z[i] = 0.0;
+    }
+    for (k = 0; k < ws->N; ++k) {
+        for (i = 0; i < NX; ++i) {
+            z[L->ix + NX * k + i] = (x[NX * k + i] - ws->sc.cx[i]) / ws->sc.Sx[i];
+        }
+        for (i = 0; i < NU; ++i) {
+            z[L->iu + NU * k + i] = u[NU * k + i] / ws->sc.Su;
+        }
+    }
+    z[L->isig] = t_f / ws->sc.Ss;
+}
+
+/* FOH discretization of all intervals about (x, u, t_f) into disc ((N-1) x N_DISC). */
+static int discretize(pdg_workspace *ws, const double *x, const double *u, double t_f,
+                      double *disc)
+{
+    const int N = ws->N;
+    const double dtau = 1.0 / (N - 1);
+    int k, i, j;
+    for (k = 0; k < N - 1; ++k) {
+        double *D = disc + (size_t)k * N_DISC;
+        const double *aug = ws->aug;
+        if (pdg_foh_interval(x + NX * k, u + NU * k, u + NU * (k + 1), t_f, dtau, ws->pvec,
+                             ws->st.rk4_substeps, ws->aug, D + D_Z, ws->augw) != 0) {
+            return -1;
+        }
+        for (i = 0; i < NX; ++i) {
+            D[D_XN + i] = aug[PDG_AUG_X + i];
+            D[D_S + i] = aug[PDG_AUG_S + i];
+            for (j = 0; j < NX; ++j) {
+                D[D_A + NX * i + j] = aug[PDG_AUG_A + NX * j + i];
+            }
+            for (j = 0; j < NU; ++j) {
+                D[D_BM + NU * i + j] = aug[PDG_AUG_BM + NX * j + i];
+                D[D_BP + NU * i + j] = aug[PDG_AUG_BP + NX * j + i];
+            }
+        }
+    }
+    return 0;
+}
+
+/* h (N x 7) in each constraint's own units (guidance/constraints.py). */
+static void path_values(const pdg_workspace *ws, const double *x, const double *u, double *h)
+{
+    const pdg_params *p = &ws->scn.params;
+    const double tg = pdg_tan_glideslope(p), qm = pdg_tilt_q_max(p), wm = pdg_omega_max(p);
+    const double cg = pdg_cos_gimbal(p);
+    int k;
+    for (k = 0; k < ws->N; ++k) {
+        const double *xk = x + NX * k, *uk = u + NU * k;
+        const double T = sqrt(uk[0] * uk[0] + uk[1] * uk[1] + uk[2] * uk[2]);
+        double *hk = h + NC * k;
+        hk[0] = p->m_dry - xk[IM];
+        hk[1] = tg * sqrt(xk[1] * xk[1] + xk[2] * xk[2]) - xk[0];
+        hk[2] = sqrt(xk[8] * xk[8] + xk[9] * xk[9]) - qm;
+        hk[3] = sqrt(xk[10] * xk[10] + xk[11] * xk[11] + xk[12] * xk[12]) - wm;
+        hk[4] = T - p->T_max;
+        hk[5] = cg * T - uk[0];
+        hk[6] = p->T_min - T;
+    }
+}
+
+/* J on the full constraint set; the largest defect and path-constraint value. */
+static double penalty(pdg_workspace *ws, const double *x, const double *u, const double *disc,
+                      double *h, double *defect, double *viol)
+{
+    const double *Sx = ws->sc.Sx;
+    double blocks = 0.0, vsum = 0.0, dmax = 0.0, hmax = -INFINITY;
+    int k, i;
+    for (k = 0; k < ws->N - 1; ++k) {
+        double d[NX];
+        for (i = 0; i < NX; ++i) {
+            const double di = x[NX * (k + 1) + i] - disc[(size_t)k * N_DISC + D_XN + i];
+            dmax = fabs(di) > dmax ? fabs(di) : dmax;
+            d[i] = di / Sx[i];
+        }
+        for (i = 0; i < N_TR_SCALAR; ++i) {
+            blocks += fabs(d[pdg_tr_scalar_states[i]]);
+        }
+        for (i = 0; i < N_TR_PAIRS; ++i) {
+            blocks += hypot(d[pdg_tr_pairs[i][0]], d[pdg_tr_pairs[i][1]]);
+        }
+    }
+    path_values(ws, x, u, h);
+    for (k = 0; k < ws->N * NC; ++k) {
+        vsum += (h[k] > 0.0 ? h[k] : 0.0) / ws->scales[k % NC];
+        hmax = h[k] > hmax ? h[k] : hmax;
+    }
+    *defect = dmax;
+    *viol = hmax;
+    return -(x[NX * (ws->N - 1) + IM] - ws->sc.cx[IM]) / Sx[IM] + ws->st.lam * (blocks + vsum);
+}
+
+/* Tight labels (7N): slack <= tol max(1, scale) or multiplier >= TIGHT_DUAL_TOL. */
+static int label_tight(pdg_workspace *ws, const double *h, const unsigned char *keep,
+                       unsigned char *tight)
+{
+    static const int soc_off[6] = {0, 0, 3, 6, 10, 14};
+    int k, c, count = 0;
+    for (k = 0; k < ws->N; ++k) {
+        for (c = 0; c < NC; ++c) {
+            const double scale = ws->scales[c] > 1.0 ? ws->scales[c] : 1.0;
+            double dual = 0.0;
+            int t;
+            if (!keep || keep[NC * k + c]) {
+                if (c == 0) {
+                    dual = ws->zdual[ws->g_mass + k];
+                } else if (c == 6) {
+                    dual = ws->zdual[ws->g_tmin + k];
+                } else {
+                    dual = ws->zdual[ws->g_soc + 18 * k + soc_off[c]];
+                }
+            }
+            t = (-h[NC * k + c] <= ws->st.tight_tol * scale) || dual >= TIGHT_DUAL_TOL;
+            tight[NC * k + c] = (unsigned char)t;
+            count += t;
+        }
+    }
+    return count;
+}
+
+static double trust_update(const pdg_settings *st, double eta, double rho, int accepted,
+                           int use_tau, double tau_r)
+{
+    const double shrink = use_tau ? pow(st->alpha, tau_r) : st->alpha;
+    const double grow = use_tau ? pow(st->beta, 1.0 - tau_r) : st->beta;
+    if (!accepted) {
+        eta = eta / st->alpha; /* a rejection always contracts (see guidance/scvx.py) */
+    } else if (rho < st->rho1) {
+        eta = eta / shrink;
+    } else if (rho >= st->rho2) {
+        eta = eta * grow;
+    }
+    eta = eta > st->eta_lb ? eta : st->eta_lb;
+    return eta < st->eta_ub ? eta : st->eta_ub;
+}
+
+/* Assembles the subproblem about the scaled iterate z and hands its numbers to the SOCP. */
+static int assemble(pdg_workspace *ws, const double *z, const double *disc,
+                    const unsigned char *keep, double eta)
+{
+    pdg_emitter em;
+    pdg_values v;
+    em.mode = 2;
+    em.cnt = 0;
+    em.p = ws->p;
+    em.dest = ws->dest;
+    em.Ax = ws->Ax;
+    em.Gx = ws->Gx;
+    em.nnz_A = ws->nnz_A;
+    v.scn = &ws->scn;
+    v.sc = &ws->sc;
+    v.disc = disc;
+    v.zref = z;
+    v.keep = keep;
+    v.eta = eta;
+    v.lam = ws->st.lam;
+    v.b = ws->b;
+    v.h = ws->h;
+    v.c = ws->c;
+    pdg_emit(&em, &ws->lay, ws->roll_free, &v);
+    return tscvx_update_data(ws->socp, NULL, ws->c, ws->Ax, ws->b, ws->Gx, ws->h) ==
+                   TSCVX_SETUP_OK
+               ? 0
+               : -1;
+}
+
+static void prepare_scenario(pdg_workspace *ws, const pdg_scenario *s, double t_f_guess)
+{
+    const pdg_params *p = &s->params;
+    ws->scn = *s;
+    pdg_param_vector(p, ws->pvec);
+    pdg_scaling_init(&ws->sc, s, t_f_guess);
+    ws->scales[0] = ws->sc.Sx[IM];
+    ws->scales[1] = ws->sc.Sx[0];
+    ws->scales[2] = 1.0;
+    ws->scales[3] = pdg_omega_max(p);
+    ws->scales[4] = ws->scales[5] = ws->scales[6] = ws->sc.Su;
+}
+
+static int check_workspace_scenario(const pdg_workspace *ws, const pdg_scenario *s, char *msg)
+{
+    if (pdg_check_scenario(s, msg)) {
+        return 1;
+    }
+    if (s->params.N != ws->N) {
+        snprintf(msg, PDG_MESSAGE_LEN,
+                 "scenario field 'N': the workspace was set up for N = %d, got %d", ws->N,
+                 s->params.N);
+        return 1;
+    }
+    if ((s->params.final_roll_free ? 1 : 0) != ws->roll_free) {
+        snprintf(msg, PDG_MESSAGE_LEN,
+                 "scenario field 'final_roll_free': the workspace was set up for %s",
+                 ws->roll_free ? "true" : "false");
+        return 1;
+    }
+    return 0;
+}
+
+static const char *const state_names[NX] = {"r1", "r2", "r3", "v1", "v2", "v3", "q0",
+                                            "q1", "q2", "q3", "w1", "w2", "w3", "m"};
+
+/* Why the iteration limit was hit (guidance/scvx.py _diagnose). */
+static pdg_status diagnose(pdg_workspace *ws, double vc, double defect, double viol,
+                           int iterations, int stalled, char *msg)
+{
+    const pdg_settings *st = &ws->st;
+    double best = -1.0;
+    int k, i, bk = 0, bi = 0, len;
+    if (vc <= st->vc_tol) {
+        snprintf(msg, PDG_MESSAGE_LEN,
+                 "%snot converged after %d iterations; virtual control is zero, largest "
+                 "defect %.2e, largest path-constraint value %.2e",
+                 stalled ? "step rejected at the smallest trust radius; " : "", iterations,
+                 defect, viol);
+        return PDG_MAX_ITERATIONS;
+    }
+    for (k = 0; k < ws->N - 1; ++k) { /* disc holds the current iterate's discretization */
+        for (i = 0; i < NX; ++i) {
+            const double r =
+                fabs((ws->x[NX * (k + 1) + i] - ws->disc[(size_t)k * N_DISC + D_XN + i]) /
+                     ws->sc.Sx[i]);
+            if (r > best) {
+                best = r;
+                bk = k;
+                bi = i;
+            }
+        }
+    }
+    len = snprintf(msg, PDG_MESSAGE_LEN,
+                   "virtual control %.3g > %g after %d iterations; largest defect %.3g at "
+                   "interval %d, state %s",
+                   vc, st->vc_tol, iterations, defect, bk, state_names[bi]);
+    if (len > 0 && len < PDG_MESSAGE_LEN &&
+        ws->x[NX * (ws->N - 1) + IM] <= ws->scn.params.m_dry + 1e-6 * ws->sc.Sx[IM]) {
+        snprintf(msg + len, (size_t)(PDG_MESSAGE_LEN - len),
+                 "; mass at the floor (m_f = %.6f = m_dry): not enough fuel",
+                 ws->x[NX * (ws->N - 1) + IM]);
+    }
+    return PDG_INFEASIBLE;
+}
+
+/* Mask for iteration k into ws->mask; returns 1 when there is one (0: full problem). */
+static int mask_for(pdg_workspace *ws, const pdg_options *o, int k)
+{
+    const int n = NC * ws->N;
+    int i;
+    if (o->masks) {
+        const int r = (k < o->n_masks ? k : o->n_masks) - 1;
+        for (i = 0; i < n; ++i) {
+            ws->mask[i] = o->masks[(size_t)r * n + i] ? 1 : 0;
+        }
+        return 1;
+    }
+    if (o->mask_fn) {
+        if (!o->mask_fn(o->mask_ctx, k, ws->mask, n)) {
+            return 0;
+        }
+        for (i = 0; i < n; ++i) {
+            ws->mask[i] = ws->mask[i] ? 1 : 0;
+        }
+        return 1;
+    }
+    return 0;
+}
+
+static int all_finite(const double *v, size_t n)
+{
+    size_t i;
+    for (i = 0; i < n; ++i) {
+        if (!isfinite(v[i])) {
+            return 0;
+        }
+    }
+    return 1;
+}
+
+/* ---- Algorithm 1 / 2 --------------------------------------------------------------------- */
+
+/* The candidate z_new of one subproblem, evaluated on the FULL constraint set. */
+typedef struct {
+    double t_f;       /* physical t_f of z_new */
+    double J;         /* penalty J(z_new) */
+    double defect;    /* largest nonlinear defect (physical units) */
+    double viol;      /* largest path-constraint value */
+    double L;         /* predicted cost: the subproblem objective */
+    double vc;        /* virtual control + buffers, max(sum, 0) */
+    double step;      /* |z_new - z|_inf over the trajectory variables */
+    int n_tight;
+} candidate;
+
+/* Checks the call and the scenario, takes the guess, sets the scaling and evaluates J at the
+ * guess. Returns PDG_SOLVED to go on, otherwise the status to return. */
+static pdg_status start(pdg_workspace *ws, const pdg_scenario *scn, const pdg_options *opt,
+                        pdg_result *res, double *J, double *defect, double *viol)
+{
+    const int N = ws->N;
+    double t_f;
+    if (!res->x || !res->u) {
+        snprintf(res->message, PDG_MESSAGE_LEN, "result arrays x and u must be given");
+        return PDG_INVALID_INPUT;
+    }
+    if (check_workspace_scenario(ws, scn, res->message)) {
+        return PDG_INVALID_INPUT;
+    }
+    if (opt->masks && opt->n_masks < 1) {
+        snprintf(res->message, PDG_MESSAGE_LEN, "masks: n_masks must be at least 1");
+        return PDG_INVALID_INPUT;
+    }
+    if ((opt->guess_x != NULL) != (opt->guess_u != NULL)) {
+        snprintf(res->message, PDG_MESSAGE_LEN, "guess: give x, u and t_f together");
+        return PDG_INVALID_INPUT;
+    }
+    if (opt->guess_x) { /* used as given, as the reference's solve(guess=...) does */
+        if (!all_finite(opt->guess_x, (size_t)N * NX) ||
+            !all_finite(opt->guess_u, (size_t)N * NU) || !isfinite(opt->guess_t_f) ||
+            !(opt->guess_t_f > 0.0)) {
+            snprintf(res->message, PDG_MESSAGE_LEN,
+                     "guess: x, u and t_f must be finite and t_f positive");
+            return PDG_INVALID_INPUT;
+        }
+        memcpy(ws->x, opt->guess_x, sizeof(double) * (size_t)N * NX);
+        memcpy(ws->u, opt->guess_u, sizeof(double) * (size_t)N * NU);
+        t_f = opt->guess_t_f;
+    } else {
+        pdg_initial_guess(scn, ws->x, ws->u, &t_f, ws->gwork);
+    }
+    prepare_scenario(ws, scn, t_f);
+    to_scaled(ws, ws->x, ws->u, t_f, ws->z);
+    to_physical(ws, ws->z, ws->x, ws->u, &t_f);
+    memset(ws->forced, 0, (size_t)N * NC);
+    if (discretize(ws, ws->x, ws->u, t_f, ws->disc) != 0) {
+        snprintf(res->message, PDG_MESSAGE_LEN, "model evaluation failed at the initial guess");
+        return PDG_SOLVER_ERROR;
+    }
+    *J = penalty(ws, ws->x, ws->u, ws->disc, ws->hval, defect, viol);
+    return PDG_SOLVED;
+}
+
+/* Discretizes about z_new and evaluates it: J, defects, predicted cost L, virtual control,
+ * step and tight labels (paper Eq. (11), (12)). Returns 0, or -1 if the model fails. */
+static int evaluate(pdg_workspace *ws, const unsigned char *keep, candidate *cd)
+{
+    const pdg_layout *L = &ws->lay;
+    double sum = 0.0;
+    int i;
+    to_physical(ws, ws->znew, ws->xn, ws->un, &cd->t_f);
+    if (discretize(ws, ws->xn, ws->un, cd->t_f, ws->disc_new) != 0) {
+        return -1;
+    }
+    cd->J = penalty(ws, ws->xn, ws->un, ws->disc_new, ws->hval, &cd->defect, &cd->viol);
+    for (i = L->ivc; i < L->n; ++i) {
+        sum += ws->znew[i];
+    }
+    cd->L = -ws->znew[L->ix + NX * (ws->N - 1) + IM] + ws->st.lam * sum;
+    cd->vc = sum > 0.0 ? sum : 0.0;
+    cd->step = 0.0;
+    for (i = 0; i < L->n_traj; ++i) {
+        const double d = fabs(ws->znew[i] - ws->z[i]);
+        cd->step = d > cd->step ? d : cd->step;
+    }
+    cd->n_tight = label_tight(ws, ws->hval, keep, ws->tight);
+    return 0;
+}
+
+/* The candidate becomes the iterate (its discretization is kept for the next subproblem). */
+static void accept(pdg_workspace *ws, int k)
+{
+    const size_t n_mask = (size_t)NC * ws->N;
+    double *swap = ws->disc;
+    memcpy(ws->masks_out + (size_t)k * n_mask, ws->tight, n_mask);
+    memcpy(ws->z, ws->znew, sizeof(double) * (size_t)ws->lay.n);
+    memcpy(ws->x, ws->xn, sizeof(double) * (size_t)ws->N * NX);
+    memcpy(ws->u, ws->un, sizeof(double) * (size_t)ws->N * NU);
+    ws->disc = ws->disc_new;
+    ws->disc_new = swap;
+}
+
+/* Puts back (forces) every constraint the mask dropped that the candidate violates; returns
+ * the number put back. */
+static int put_back_dropped(pdg_workspace *ws)
+{
+    int i, dropped = 0;
+    for (i = 0; i < NC * ws->N; ++i) {
+        if (ws->hval[i] > ws->st.defect_tol && !ws->mask[i]) {
+            ws->forced[i] = 1;
+            dropped++;
+        }
+    }
+    return dropped;
+}
+
+/* tau_r of Algorithm 2: fraction of mask entries changed since the previous subproblem. */
+static double changed_fraction(const pdg_workspace *ws)
+{
+    int i, changed = 0;
+    for (i = 0; i < NC * ws->N; ++i) {
+        changed += ws->prev_mask[i] != ws->mask[i];
+    }
+    return (double)changed / (NC * ws->N);
+}
+
+static void failed_row(pdg_log_row *r, double J)
+{
+    r->J = J;
+    r->dJ = r->dL = r->rho = r->vc_norm1 = NAN;
+    r->n_tight = 0;
+    r->accepted = 0;
+}
+
+pdg_status pdg_solve(pdg_workspace *ws, const pdg_scenario *scenario, const pdg_options *opt,
+                     pdg_result *res)
+{
+    static const pdg_options no_options = {NULL, NULL, 0.0, NULL, 0, NULL, NULL, NULL};
+    const pdg_settings *st;
+    int k = 0, it, have_masks, prev_has_mask = 0, stalled = 0;
+    double J = NAN, defect = NAN, viol = NAN, eta, vc = INFINITY;
+    pdg_status status;
+
+    if (!res) {
+        return PDG_INVALID_INPUT;
+    }
+    res->status = PDG_INVALID_INPUT;
+    res->message[0] = '\0';
+    res->iterations = res->subproblems_solved = res->socp_iterations = 0;
+    res->t_f = res->max_defect = res->max_violation = NAN;
+    if (!ws || !ws->ready) {
+        snprintf(res->message, PDG_MESSAGE_LEN, "workspace not set up (call pdg_setup)");
+        return PDG_INVALID_INPUT;
+    }
+    ws->n_log = ws->n_masks_out = 0;
+    opt = opt ? opt : &no_options;
+    st = &ws->st;
+    status = start(ws, scenario, opt, res, &J, &defect, &viol);
+    if (status != PDG_SOLVED) {
+        res->status = status;
+        return status;
+    }
+    status = PDG_MAX_ITERATIONS;
+    have_masks = opt->masks != NULL || opt->mask_fn != NULL;
+    eta = st->eta_init;
+
+    /* k counts successions (accepted steps); a rejection retries the same k (Algorithm 1) */
+    for (it = 0; it < st->max_subproblems && k < st->iter_max; ++it) {
+        pdg_log_row *r = &ws->log[ws->n_log++];
+        const double t0 = opt->clock_s ? opt->clock_s() : 0.0;
+        const int has_mask = have_masks ? mask_for(ws, opt, k + 1) : 0;
+        const unsigned char *keep = NULL;
+        candidate cd;
+        tscvx_info info;
+        double dJ, dL, rho, tau_r = 0.0, eta_new;
+        int sst, i, accepted, converged, newly_forced;
+
+        /* 1. mask (T-SCvx): the caller's, plus what the full-constraint guard put back */
+        if (has_mask) {
+            for (i = 0; i < NC * ws->N; ++i) {
+                ws->mask[i] |= ws->forced[i];
+                ws->keep[i] = (i % NC == 6) ? 1 : ws->mask[i]; /* T_min always kept */
+            }
+            keep = ws->keep;
+        }
+        /* 2. convex subproblem about z with radius eta, solved by the SOCP runtime */
+        sst = assemble(ws, ws->z, ws->disc, keep, eta) == 0 ? (int)tscvx_solve(ws->socp)
+                                                             : TSCVX_INVALID_INPUT;
+        tscvx_get_info(ws->socp, &info);
+        memset(r, 0, sizeof *r);
+        r->k = k + 1;
+        r->eta = eta;
+        r->solver_status = sst;
+        r->solver_iterations = sst == TSCVX_INVALID_INPUT ? 0 : info.iterations;
+        res->socp_iterations += r->solver_iterations;
+        if (sst != TSCVX_SOLVED && sst != TSCVX_SOLVED_INACCURATE) {
+            failed_row(r, J);
+            status = PDG_SOLVER_ERROR;
+            snprintf(res->message, PDG_MESSAGE_LEN,
+                     "subproblem at iteration %d: conic solver returned %s", k + 1,
+                     socp_status_name(sst));
+            break;
+        }
+        tscvx_get_solution(ws->socp, ws->znew, NULL, ws->zdual, NULL);
+        /* 3. the candidate on the full nonlinear problem */
+        if (evaluate(ws, keep, &cd) != 0) {
+            failed_row(r, J);
+            status = PDG_SOLVER_ERROR;
+            snprintf(res->message, PDG_MESSAGE_LEN,
+                     "iteration %d: model evaluation failed at the subproblem solution", k + 1);
+            break;
+        }
+        /* 4. rho = actual / predicted change; acceptance and trust radius, Eq. (13) */
+        dJ = J - cd.J;
+        dL = J - cd.L;
+        vc = cd.vc;
+        rho = dL != 0.0 ? dJ / dL : NAN;
+        accepted = dJ == 0.0 || dL <= 0.0 || rho >= st->rho0;
+        if (have_masks && prev_has_mask && has_mask) {
+            tau_r = changed_fraction(ws);
+        }
+        eta_new = trust_update(st, eta, dL > 0 ? rho : 1.0, accepted, have_masks, tau_r);
+        /* Full-constraint guard of T-SCvx: a candidate that violates a constraint the mask
+         * dropped is rejected and the constraint put back for the rest of the solve; the retry
+         * starts from the same reference (which meets every convex constraint, so the
+         * subproblem stays feasible) with the same radius. */
+        newly_forced = has_mask && put_back_dropped(ws) > 0;
+        if (newly_forced) {
+            accepted = 0;
+            eta_new = eta;
+        }
+        r->J = cd.J;
+        r->dJ = dJ;
+        r->dL = dL;
+        r->rho = rho;
+        r->vc_norm1 = cd.vc;
+        r->n_tight = cd.n_tight;
+        r->accepted = accepted;
+        r->subproblem_time_s = opt->clock_s ? opt->clock_s() - t0 : 0.0;
+        prev_has_mask = has_mask;
+        if (has_mask) {
+            memcpy(ws->prev_mask, ws->mask, (size_t)NC * ws->N);
+        }
+        if (accepted) {
+            accept(ws, k);
+            ws->n_masks_out = ++k;
+            J = cd.J;
+            defect = cd.defect;
+            viol = cd.viol;
+        }
+        /* 5. convergence on the FULL constraint set; T-SCvx never returns what it rejects */
+        converged = accepted && cd.step <= st->step_tol && vc <= st->vc_tol &&
+                    defect <= st->defect_tol && viol <= st->defect_tol;
+        if (converged) {
+            status = PDG_SOLVED;
+            snprintf(res->message, PDG_MESSAGE_LEN, "converged");
+            break;
+        }
+        if (!accepted && eta <= st->eta_lb && !newly_forced) {
+            stalled = 1; /* same reference, same radius: it would be rejected forever */
+            break;
+        }
+        eta = eta_new;
+    }
+    if (status == PDG_MAX_ITERATIONS) {
+        status = diagnose(ws, vc, defect, viol, k, stalled, res->message);
+    }
+    to_physical(ws, ws->z, res->x, res->u, &res->t_f);
+    res->status = status;
+    res->iterations = k;
+    res->subproblems_solved = ws->n_log;
+    res->max_defect = defect;
+    res->max_violation = viol;
+    return status;
+}
+
+/* ---- record of the last solve ------------------------------------------------------------ */
+
+int pdg_log_length(const pdg_workspace *ws) { return ws && ws->ready ? ws->n_log : 0; }
+
+pdg_setup_status pdg_get_log(const pdg_workspace *ws, int i, pdg_log_row *row)
+{
+    if (!ws || !row) {
+        return PDG_SETUP_NULL_ARGUMENT;
+    }
+    if (!ws->ready) {
+        return PDG_SETUP_NOT_READY;
+    }
+    if (i < 0 || i >= ws->n_log) {
+        return PDG_SETUP_BAD_INDEX;
+    }
+    *row = ws->log[i];
+    return PDG_SETUP_OK;
+}
+
+pdg_setup_status pdg_get_mask(const pdg_workspace *ws, int k, unsigned char *mask)
+{
+    if (!ws || !mask) {
+        return PDG_SETUP_NULL_ARGUMENT;
+    }
+    if (!ws->ready) {
+        return PDG_SETUP_NOT_READY;
+    }
+    if (k < 0 || k >= ws->n_masks_out) {
+        return PDG_SETUP_BAD_INDEX;
+    }
+    memcpy(mask, ws->masks_out + (size_t)k * NC * ws->N, (size_t)NC * ws->N);
+    return PDG_SETUP_OK;
+}
+
+size_t pdg_arena_high_water(const pdg_workspace *ws) { return ws ? ws->arena_high : 0; }
+
+void pdg_problem_size(const pdg_workspace *ws, int *n, int *p, int *m, int *nnz_A, int *nnz_G)
+{
+    if (!ws) {
+        return;
+    }
+    if (n) *n = ws->n;
+    if (p) *p = ws->p;
+    if (m) *m = ws->m;
+    if (nnz_A) *nnz_A = ws->nnz_A;
+    if (nnz_G) *nnz_G = ws->nnz_G;
+}
+
+/* ---- test hooks -------------------------------------------------------------------------- */
+
+int pdg_debug_guess(pdg_workspace *ws, const pdg_scenario *s, double *x, double *u, double *t_f)
+{
+    char msg[PDG_MESSAGE_LEN];
+    if (!ws || !ws->ready || !x || !u || !t_f) {
+        return PDG_INVALID_INPUT;
+    }
+    if (check_workspace_scenario(ws, s, msg)) {
+        return PDG_INVALID_INPUT;
+    }
+    pdg_initial_guess(s, x, u, t_f, ws->gwork);
+    return 0;
+}
+
+int pdg_debug_assemble(pdg_workspace *ws, const pdg_scenario *s, const double *x,
+                       const double *u, double t_f, double eta, double *c, double *Ax,
+                       double *b, double *Gx, double *h, int *Ap, int *Ai, int *Gp, int *Gi)
+{
+    char msg[PDG_MESSAGE_LEN];
+    double tf2;
+    int i;
+    if (!ws || !ws->ready || !x || !u) {
+        return PDG_INVALID_INPUT;
+    }
+    if (check_workspace_scenario(ws, s, msg)) {
+        return PDG_INVALID_INPUT;
+    }
+    prepare_scenario(ws, s, t_f);
+    to_scaled(ws, x, u, t_f, ws->z);
+    to_physical(ws, ws->z, ws->x, ws->u, &tf2);
+    if (discretize(ws, x, u, t_f, ws->disc) != 0 || assemble(ws, ws->z, ws->disc, NULL, eta)) {
+        return PDG_SOLVER_ERROR;
+    }
+    for (i = 0; c && i < ws->n; ++i) c[i] = ws->c[i];
+    for (i = 0; Ax && i < ws->nnz_A; ++i) Ax[i] = ws->Ax[i];
+    for (i = 0; Gx && i < ws->nnz_G; ++i) Gx[i] = ws->Gx[i];
+    for (i = 0; b && i < ws->p; ++i) b[i] = ws->b[i];
+    for (i = 0; h && i < ws->m; ++i) h[i] = ws->h[i];
+    for (i = 0; Ap && i <= ws->n; ++i) Ap[i] = ws->Ap[i];
+    for (i = 0; Gp && i <= ws->n; ++i) Gp[i] = ws->Gp[i];
+    for (i = 0; Ai && i < ws->nnz_A; ++i) Ai[i] = ws->Ai[i];
+    for (i = 0; Gi && i < ws->nnz_G; ++i) Gi[i] = ws->Gi[i];
+    return 0;
+}

@@ -1,0 +1,240 @@
+/*
+ * tscvx_guidance.h -- flight guidance: successive convexification (SCvx, paper Algorithm 1)
+ * of the 6-DoF powered-descent problem, with the T-SCvx hooks (per-iteration constraint
+ * masks, external warm start) of Algorithm 2. The one public header of the guidance layer.
+ *
+ * Units and conventions: ../../shared/DESIGN.md (nondimensional U_L, U_T, U_M; e1 up; state
+ * x = (r_I, v_I, q_B<-I scalar first, omega_B, m) in R^14, control u = T_B in R^3 with
+ * first-order hold, t_f the time dilation). Angles in degrees where the scenario contract
+ * uses degrees. The algorithm is the ground reference's (guidance/scvx.py, subproblem.py,
+ * guess.py, constraints.py) transcribed: the same scaling, subproblem, penalty, trust-region
+ * rules, convergence test and tight-constraint labelling, so both give the same trajectory.
+ *
+ * Lifecycle (memory is claimed in exactly one place, from ONE caller-provided arena):
+ *
+ *   1. pdg_default_settings(&st); pdg_default_scenario(&scn)      -- Table 1 values
+ *   2. pdg_workspace_size(N, roll_free, &st, scratch, nscratch, &need)
+ *        lays out the subproblem pattern and runs the SOCP's symbolic analysis in caller
+ *        scratch. If the scratch is too small it returns PDG_SETUP_SCRATCH_TOO_SMALL with
+ *        `need` = a larger scratch size to retry with (at most two retries: the first learns
+ *        the pattern size, the second the analysis size). On success `need` = arena bytes.
+ *        The scratch may be the arena that will be given to pdg_setup.
+ *   3. pdg_setup(&ws, arena, bytes, N, roll_free, &st)
+ *        builds the subproblem's sparsity (CSC, fixed from now on), the SOCP workspace and
+ *        every buffer (discretization, iterates, log, masks) inside the arena.
+ *   4. pdg_solve(ws, &scenario, &options, &result)     -- any number of times; no allocation,
+ *        no recursion, every loop bounded. The scenario is validated first (the same rules
+ *        and field names as guidance/scenario.py): a bad one returns PDG_INVALID_INPUT with
+ *        the message in result.message, and nothing is solved.
+ *   5. pdg_get_log / pdg_get_mask / pdg_arena_high_water  -- the last solve's record.
+ *   6. cleanup is trivial: the caller owns the arena.
+ *
+ * Each SCvx iteration writes new numbers into the fixed pattern: FOH discretization of the
+ * N-1 intervals from the CasADi-generated model, the subproblem data (equalities A z = b:
+ * dynamics with virtual control, boundary conditions; cone rows G z + s = h: virtual-control
+ * epigraphs, virtual buffers, trust region, path constraints), one SOCP solve, the exact
+ * penalty J on the FULL constraint set, rho = dJ / dL and the trust-region update.
+ *
+ * Constraint masks (T-SCvx): a mask has 7N bytes (node-major, entry 7k + c, nonzero = keep).
+ * A masked-out path constraint keeps its place in the fixed pattern with zero coefficients
+ * and a trivially met right-hand side, so it does not constrain the subproblem (the KKT size
+ * is that of the full problem; a reduced-pattern workspace per mask is future work). T_min
+ * (c = 6) is always kept. Before returning "solved", the full constraint set is checked and
+ * any violated constraint the mask dropped is put back for the remaining iterations.
+ */
+#ifndef TSCVX_GUIDANCE_H
+#define TSCVX_GUIDANCE_H
+
+#include <stddef.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define PDG_NSTATE 14 /* state dimension */
+#define PDG_NCTRL 3   /* control dimension */
+#define PDG_NCON 7    /* path constraints per node (mask entries per node) */
+#define PDG_N_MIN 3
+#define PDG_N_MAX 400
+#define PDG_MESSAGE_LEN 256
+
+/* ---- status codes ------------------------------------------------------------------------ */
+
+typedef enum {
+    PDG_SETUP_OK = 0,
+    PDG_SETUP_NULL_ARGUMENT,     /* a required pointer is NULL */
+    PDG_SETUP_BAD_SIZE,          /* N outside [PDG_N_MIN, PDG_N_MAX] */
+    PDG_SETUP_BAD_SETTINGS,      /* a setting is NaN or outside its documented range */
+    PDG_SETUP_SCRATCH_TOO_SMALL, /* retry pdg_workspace_size with the returned size */
+    PDG_SETUP_ARENA_TOO_SMALL,   /* arena smaller than pdg_workspace_size() */
+    PDG_SETUP_SOCP_ERROR,        /* the SOCP runtime refused the subproblem pattern */
+    PDG_SETUP_NOT_READY,         /* workspace not set up */
+    PDG_SETUP_BAD_INDEX,         /* log or mask index out of range */
+    PDG_SETUP_NSTATUS
+} pdg_setup_status;
+
+/* Outcome of pdg_solve (the same names as the Python reference's statuses). */
+typedef enum {
+    PDG_SOLVED = 0,        /* converged: small step, no virtual control, defects and path
+                              constraints met (the FULL constraint set) */
+    PDG_INFEASIBLE,        /* virtual control still > vc_tol after iter_max iterations */
+    PDG_MAX_ITERATIONS,    /* virtual control zero but not converged */
+    PDG_SOLVER_ERROR,      /* a subproblem could not be solved (or the model failed) */
+    PDG_INVALID_INPUT,     /* bad scenario, guess, mask or workspace: nothing was solved */
+    PDG_NSTATUS
+} pdg_status;
+
+const char *pdg_setup_status_message(pdg_setup_status status);
+const char *pdg_status_message(pdg_status status);
+/* "solved", "infeasible", "max_iterations", "solver_error", "invalid_input" */
+const char *pdg_status_name(pdg_status status);
+
+/* ---- problem ----------------------------------------------------------------------------- */
+
+/* Vehicle, environment, constraints and boundary conditions: the trajectory `params`
+ * contract of DESIGN.md, field by field, same names and units. */
+typedef struct {
+    double g_I[3];          /* gravity, inertial frame (must be along -e1) */
+    double J_B[3];          /* diagonal of the inertia */
+    double r_T_B[3];        /* engine position, body frame */
+    double r_cp_B[3];       /* centre of pressure, body frame */
+    double alpha_mdot;      /* 1 / (I_sp g0) */
+    double beta_mdot;       /* back-pressure mass loss */
+    double aero_coeff;      /* c_A in A_B = -c_A |v_B| v_B */
+    double m_dry;
+    double T_min, T_max;
+    double gimbal_max_deg;
+    double tilt_max_deg;
+    double glideslope_deg;
+    double omega_max_deg;   /* deg / U_T */
+    double r_f[3], v_f[3], q_f[4], omega_f[3];
+    int final_roll_free;    /* 1: only q2(t_f) = q3(t_f) = 0; 0: q(t_f) = q_f */
+    int N;                  /* nodes; must equal the N given to pdg_setup */
+} pdg_params;
+
+typedef struct {
+    double r0[3], v0[3], q0[4], w0[3]; /* w0 in rad / U_T */
+    double m0;
+    pdg_params params;
+} pdg_scenario;
+
+/* Paper Table 1 and the tolerances of guidance/params.py SCvxSettings. */
+typedef struct {
+    double lam;             /* penalty weight on virtual control and buffers, > 0 */
+    double rho0, rho1, rho2;/* acceptance / shrink / grow thresholds, rho0 <= rho1 <= rho2 */
+    double alpha, beta;     /* trust-region shrink and growth factors, >= 1 */
+    double eta_init;        /* initial trust radius (scaled units) */
+    double eta_lb, eta_ub;  /* trust-radius bounds, 0 < eta_lb <= eta_ub */
+    int iter_max;           /* accepted steps at most, 1..100 */
+    int max_subproblems;    /* subproblem solves at most (rejections included), 1..500 */
+    double step_tol;        /* convergence: scaled inf-norm of an accepted step */
+    double vc_tol;          /* convergence: virtual control + buffers (scaled) */
+    double defect_tol;      /* convergence: nonlinear defects and path constraints */
+    int rk4_substeps;       /* RK4 steps per FOH interval, 1..64 */
+    double tight_tol;       /* slack threshold of the tight-constraint labelling */
+    /* conic subproblem solver (tscvx_socp.h) */
+    double socp_tol;        /* gap and feasibility tolerances (the reference uses 1e-9) */
+    int socp_max_iter;      /* IPM iteration limit, 1..500 */
+} pdg_settings;
+
+/* Returns k-th mask (7N bytes, nonzero = keep) into `mask` for SCvx iteration k = 1, 2, ...;
+ * returns 1 when it wrote a mask, 0 to solve the full problem at that iteration. */
+typedef int (*pdg_mask_fn)(void *ctx, int k, unsigned char *mask, int n_entries);
+
+typedef struct {
+    /* Warm start (all three or none): x (N x 14, node-major), u (N x 3), t_f. Used as given,
+     * as the Python reference's solve(guess=...) does (no projection; t_f also sets the
+     * sigma scaling). NULL: the built-in guess (cubic Hermite + projection, guess.py). */
+    const double *guess_x;
+    const double *guess_u;
+    double guess_t_f;
+    /* Masks, either a table (n_masks rows of 7N bytes; iteration k uses row
+     * min(k, n_masks) - 1) or a callback. Both NULL: plain SCvx (no masks). */
+    const unsigned char *masks;
+    int n_masks;
+    pdg_mask_fn mask_fn;
+    void *mask_ctx;
+    /* Optional monotonic clock (seconds) for the log's subproblem times; NULL = no timing. */
+    double (*clock_s)(void);
+} pdg_options;
+
+typedef struct {
+    pdg_status status;
+    char message[PDG_MESSAGE_LEN]; /* why (the reason of the Python reference), or the input
+                                      error as "scenario field 'q0': ..." */
+    double *x;                /* caller array N x 14 (node-major): the trajectory */
+    double *u;                /* caller array N x 3: thrust T_B at the nodes (FOH) */
+    double t_f;
+    int iterations;           /* accepted steps */
+    int subproblems_solved;   /* convex subproblems solved, rejections included */
+    double max_defect;        /* max |x_{k+1} - F(x_k, u_k, u_k+1, t_f)|, physical units */
+    double max_violation;     /* max path-constraint value h (<= 0 when met) */
+    int socp_iterations;      /* IPM iterations summed over the subproblems */
+} pdg_result;
+
+/* One row of the iteration log (the Python reference's columns). */
+typedef struct {
+    int k;                    /* iteration (succession) the subproblem belongs to */
+    double J;                 /* penalty at the subproblem's solution */
+    double dJ, dL, rho;       /* actual and predicted change, their ratio */
+    double eta;               /* trust radius used */
+    double vc_norm1;          /* virtual control (block norm) + buffers, scaled */
+    int n_tight;              /* tight constraints at the solution */
+    double subproblem_time_s; /* 0 without options.clock_s */
+    int accepted;
+    int solver_status;        /* tscvx_solve_status of the subproblem */
+    int solver_iterations;
+} pdg_log_row;
+
+typedef struct pdg_workspace pdg_workspace; /* opaque, lives in the arena */
+
+/* ---- API --------------------------------------------------------------------------------- */
+
+void pdg_default_settings(pdg_settings *settings);
+void pdg_default_params(pdg_params *params);
+/* The default scenario of DESIGN.md (r0 = (4, 4, 0), v0 = (0, -1, -2), m0 = 3, ...). */
+void pdg_default_scenario(pdg_scenario *scenario);
+
+pdg_setup_status pdg_workspace_size(int N, int final_roll_free, const pdg_settings *settings,
+                                    void *scratch, size_t scratch_bytes, size_t *bytes);
+
+pdg_setup_status pdg_setup(pdg_workspace **ws, void *arena, size_t arena_bytes, int N,
+                           int final_roll_free, const pdg_settings *settings);
+
+/* Validates the scenario as guidance/scenario.py does; 0 = valid, otherwise writes the
+ * message ("scenario field 'm0': ...") into `message` (PDG_MESSAGE_LEN bytes). */
+int pdg_validate_scenario(const pdg_scenario *scenario, char *message);
+
+/* Runs SCvx (T-SCvx with masks). `options` may be NULL. result->x and result->u must point
+ * to N x 14 and N x 3 doubles. */
+pdg_status pdg_solve(pdg_workspace *ws, const pdg_scenario *scenario,
+                     const pdg_options *options, pdg_result *result);
+
+/* Log rows 0 .. pdg_log_length() - 1 and accepted-iteration masks 0 .. iterations - 1 (7N
+ * bytes each: the tight-constraint labels of the accepted solution) of the last solve. */
+int pdg_log_length(const pdg_workspace *ws);
+pdg_setup_status pdg_get_log(const pdg_workspace *ws, int i, pdg_log_row *row);
+pdg_setup_status pdg_get_mask(const pdg_workspace *ws, int k, unsigned char *mask);
+
+/* Most bytes of the arena ever used (setup scratch included) and the size of the
+ * subproblem: variables n, equality rows p, cone rows m, nonzeros of A and G. */
+size_t pdg_arena_high_water(const pdg_workspace *ws);
+void pdg_problem_size(const pdg_workspace *ws, int *n, int *p, int *m, int *nnz_A, int *nnz_G);
+
+/* For tests: assembles the subproblem about the physical iterate (x, u, t_f) of `scenario`
+ * with trust radius eta (scaling, guess-independent: Ss = t_f) and copies its data out:
+ * c (n), A values (nnz_A, the CSC order of Ap/Ai), b (p), G values, h (m), and the pattern
+ * (Ap n+1, Ai, Gp n+1, Gi; any pointer may be NULL). Returns 0 or a pdg_status. */
+int pdg_debug_assemble(pdg_workspace *ws, const pdg_scenario *scenario, const double *x,
+                       const double *u, double t_f, double eta, double *c, double *Ax,
+                       double *b, double *Gx, double *h, int *Ap, int *Ai, int *Gp, int *Gi);
+
+/* For tests: the initial guess (cubic Hermite + projection) into x (N x 14), u, t_f. */
+int pdg_debug_guess(pdg_workspace *ws, const pdg_scenario *scenario, double *x, double *u,
+                    double *t_f);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* TSCVX_GUIDANCE_H */

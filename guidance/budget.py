@@ -1,0 +1,244 @@
+"""RAD750 budget check of one complete guidance call (DESIGN.md, "The RAD750 budget model").
+
+    python -m guidance.budget [--no-build] [--json] [--check-noalloc]
+
+Builds ``build/pdg_budget_driver`` (c_runtime/examples/pdg_budget_driver.c: the default
+scenario, workspace set up before the measured call, then one ``pdg_solve``), and measures:
+
+- time: host instructions of ``pdg_solve`` counted by ``valgrind --tool=callgrind
+  --toggle-collect=pdg_solve``; RAD750-equivalent seconds = 1.3 x instructions /
+  (0.5 x 200e6) (RISC expansion 1.3, 0.5 instructions per cycle at 200 MHz). Budget 1 s.
+- memory: code + constant data (``size`` of the static libraries the flight image links:
+  libtscvx_gnc.a, libtscvx.a and SuiteSparse's libamd.a, libldl.a, libsuitesparseconfig.a;
+  libc/libm are the flight OS's) + the arena high-water mark reported by the library + the
+  stack high-water mark of the call (stack painting in the driver). Budget 60 MB.
+
+The driver also counts heap allocations inside the call (malloc interposition): it must be 0.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+BUILD = ROOT / "build"
+DRIVER = BUILD / "pdg_budget_driver"
+LIBS = [BUILD / "libtscvx_gnc.a", BUILD / "libtscvx.a"]
+SUITESPARSE = ["libamd.a", "libldl.a", "libsuitesparseconfig.a"]
+SYSTEM_LIB_DIRS = [Path("/usr/lib/x86_64-linux-gnu"), Path("/usr/lib")]
+
+# The planning model (DESIGN.md). Printed with every report.
+RISC_EXPANSION = 1.3
+IPC = 0.5
+CLOCK_HZ = 200e6
+TIME_BUDGET_S = 1.0
+MEMORY_BUDGET_B = 60 * 2**20
+
+
+@dataclass
+class Budget:
+    status: str
+    iterations: int
+    subproblems: int
+    socp_iterations: int
+    m_f: float
+    instructions: int
+    instructions_by_part: dict[str, int]
+    rad750_s: float
+    code_bytes: int  # text
+    const_data_bytes: int  # data (initialized); bss is counted too, it is zero here
+    arena_bytes: int
+    arena_high_water: int
+    stack_high_water: int
+    heap_allocations_in_solve: int
+    host_wall_s: float
+
+    @property
+    def memory_bytes(self) -> int:
+        return (
+            self.code_bytes + self.const_data_bytes + self.arena_high_water + self.stack_high_water
+        )
+
+    @property
+    def instruction_budget(self) -> float:
+        return TIME_BUDGET_S * IPC * CLOCK_HZ / RISC_EXPANSION
+
+    def within_time(self) -> bool:
+        return self.rad750_s <= TIME_BUDGET_S
+
+    def within_memory(self) -> bool:
+        return self.memory_bytes <= MEMORY_BUDGET_B
+
+
+def rad750_seconds(instructions: float) -> float:
+    return RISC_EXPANSION * instructions / (IPC * CLOCK_HZ)
+
+
+def build(quiet: bool = True) -> None:
+    cmd = ["make", "-s", "-C", str(ROOT), "lib", str(DRIVER.relative_to(ROOT))]
+    subprocess.run(cmd, check=True, capture_output=quiet)
+
+
+def _run_driver(prefix: list[str] | None = None, cwd: str | None = None) -> dict[str, str]:
+    out = subprocess.run(
+        (prefix or []) + [str(DRIVER), "--repeat", "1" if prefix else "3"],
+        capture_output=True,
+        text=True,
+        cwd=cwd,
+        check=False,
+    )
+    if out.returncode not in (0, 3):
+        raise RuntimeError(f"budget driver failed ({out.returncode}): {out.stderr[-2000:]}")
+    kv = {}
+    for line in out.stdout.splitlines():
+        key, _, value = line.partition(" ")
+        kv[key] = value
+    return kv
+
+
+def count_instructions() -> tuple[int, dict[str, int]]:
+    """Instructions inside pdg_solve (callgrind), with the SOCP / discretization split."""
+    if shutil.which("valgrind") is None:
+        raise RuntimeError("valgrind not found (Debian package valgrind)")
+    with tempfile.TemporaryDirectory() as tmp:
+        out_file = Path(tmp) / "callgrind.out"
+        _run_driver(
+            ["valgrind", "--tool=callgrind", f"--callgrind-out-file={out_file}",
+             "--toggle-collect=pdg_solve"],
+            cwd=tmp,
+        )  # fmt: skip
+        text = out_file.read_text()
+        m = re.search(r"^(?:summary|totals):\s*(\d+)", text, re.MULTILINE)
+        if not m:
+            raise RuntimeError("no instruction total in the callgrind output")
+        total = int(m.group(1))
+        parts: dict[str, int] = {}
+        if shutil.which("callgrind_annotate"):
+            ann = subprocess.run(
+                ["callgrind_annotate", "--inclusive=yes", str(out_file)],
+                capture_output=True, text=True, check=False,
+            ).stdout  # fmt: skip
+            for name, key in (("tscvx_solve", "socp_solve"), ("discretize", "discretization")):
+                mm = re.search(rf"^\s*([\d,]+)\s.*:{name}\s", ann, re.MULTILINE)
+                if mm:
+                    parts[key] = int(mm.group(1).replace(",", ""))
+            parts["rest"] = total - sum(parts.values())
+    return total, parts
+
+
+def code_size() -> tuple[int, int]:
+    """(text, data + bss) of the static libraries of the flight image."""
+    files = [str(p) for p in LIBS]
+    for name in SUITESPARSE:
+        for d in SYSTEM_LIB_DIRS:
+            if (d / name).exists():
+                files.append(str(d / name))
+                break
+    out = subprocess.run(["size", "-t", *files], capture_output=True, text=True, check=True)
+    text = data = 0
+    for line in out.stdout.splitlines():
+        if line.rstrip().endswith("(TOTALS)"):
+            f = line.split()
+            text += int(f[0])
+            data += int(f[1]) + int(f[2])
+    return text, data
+
+
+def measure(do_build: bool = True) -> Budget:
+    if do_build:
+        build()
+    native = _run_driver()
+    instr, parts = count_instructions()
+    text, data = code_size()
+    return Budget(
+        status=native["status"],
+        iterations=int(native["iterations"]),
+        subproblems=int(native["subproblems"]),
+        socp_iterations=int(native["socp_iterations"]),
+        m_f=float(native["m_f"]),
+        instructions=instr,
+        instructions_by_part=parts,
+        rad750_s=rad750_seconds(instr),
+        code_bytes=text,
+        const_data_bytes=data,
+        arena_bytes=int(native["arena_bytes"]),
+        arena_high_water=int(native["arena_high_water"]),
+        stack_high_water=int(native["stack_high_water"]),
+        heap_allocations_in_solve=int(native["heap_allocations_in_solve"]),
+        host_wall_s=float(native["wall_s_min"]),
+    )
+
+
+def _mb(b: float) -> str:
+    return f"{b / 2**20:9.3f} MB"
+
+
+def report(b: Budget) -> str:
+    lines = [
+        "RAD750 budget, default scenario, one complete guidance call (pdg_solve)",
+        f"  solve: {b.status}, {b.iterations} iterations, {b.subproblems} subproblems, "
+        f"{b.socp_iterations} IPM iterations, m_f = {b.m_f:.9f}",
+        "  model: RAD750 s = 1.3 x instructions / (0.5 x 200e6); budget 1 s "
+        f"= {b.instruction_budget / 1e6:.1f} M host instructions",
+        "",
+        f"  {'item':44s} {'measured':>16s} {'budget':>14s}  ok",
+        f"  {'host instructions (callgrind)':44s} {b.instructions / 1e6:14.1f} M "
+        f"{b.instruction_budget / 1e6:12.1f} M  {'yes' if b.within_time() else 'NO'}",
+    ]
+    for key, val in b.instructions_by_part.items():
+        lines.append(f"  {'  of which ' + key:44s} {val / 1e6:14.1f} M")
+    lines += [
+        f"  {'RAD750-equivalent time':44s} {b.rad750_s:14.3f} s {TIME_BUDGET_S:12.3f} s  "
+        f"{'yes' if b.within_time() else 'NO'}",
+        f"  {'code (text of the static libraries)':44s} {_mb(b.code_bytes):>16s}",
+        f"  {'constant/static data (data + bss)':44s} {_mb(b.const_data_bytes):>16s}",
+        f"  {'arena high-water (library report)':44s} {_mb(b.arena_high_water):>16s}"
+        f"   (arena {b.arena_bytes} B)",
+        f"  {'stack high-water (painted stack)':44s} {_mb(b.stack_high_water):>16s}"
+        f"   ({b.stack_high_water} B)",
+        f"  {'memory total':44s} {_mb(b.memory_bytes):>16s} {_mb(MEMORY_BUDGET_B):>14s}  "
+        f"{'yes' if b.within_memory() else 'NO'}",
+        f"  {'heap allocations inside pdg_solve':44s} {b.heap_allocations_in_solve:16d} "
+        f"{0:14d}  {'yes' if b.heap_allocations_in_solve == 0 else 'NO'}",
+        f"  {'host wall time (not the model)':44s} {b.host_wall_s * 1e3:14.1f} ms",
+    ]
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(prog="guidance budget", description=__doc__.splitlines()[0])
+    ap.add_argument("--no-build", action="store_true", help="use the built driver as is")
+    ap.add_argument("--json", action="store_true", help="print the figures as JSON")
+    ap.add_argument(
+        "--check-noalloc", action="store_true",
+        help="only run the driver natively and fail unless pdg_solve made no heap allocation",
+    )  # fmt: skip
+    args = ap.parse_args(argv)
+    if not args.no_build:
+        build()
+    if args.check_noalloc:
+        kv = _run_driver()
+        n = int(kv["heap_allocations_in_solve"])
+        print(f"heap allocations inside pdg_solve: {n} (status {kv['status']})")
+        return 0 if n == 0 else 1
+    b = measure(do_build=False)
+    if args.json:
+        d = asdict(b)
+        d.update(memory_bytes=b.memory_bytes, within_time=b.within_time(),
+                 within_memory=b.within_memory())  # fmt: skip
+        print(json.dumps(d, indent=2))
+    else:
+        print(report(b))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,366 @@
+"""ctypes bindings to the flight guidance library (c_runtime/include/tscvx_guidance.h).
+
+``solve_c`` runs the WHOLE SCvx / T-SCvx solve in C (guess, discretization, subproblems, SOCP,
+penalty, trust region, labelling) and returns the same :class:`guidance.scvx.SCvxResult` as
+the Python reference. The workspace (one arena) is set up once per (N, terminal condition,
+settings) and reused.
+
+    from guidance.cguidance import solve_c
+    res = solve_c(scenario)                       # SCvx
+    res = solve_c(scenario, masks=list_of_masks)  # T-SCvx masks (7N entries each)
+"""
+
+from __future__ import annotations
+
+import ctypes as ct
+import dataclasses
+import time
+from collections.abc import Callable, Sequence
+from functools import lru_cache
+from pathlib import Path
+
+import numpy as np
+
+from guidance.params import NC, NU, NX, Params, Scenario, SCvxSettings
+from guidance.scenario import ScenarioError
+from guidance.scvx import IterationRecord, SCvxResult
+
+LIB_PATH = Path(__file__).resolve().parent.parent / "build" / "libtscvx_gnc.so"
+MESSAGE_LEN = 256
+STATUS_NAMES = ("solved", "infeasible", "max_iterations", "solver_error", "invalid_input")
+SOCP_STATUS_NAMES = (
+    "unsolved",
+    "solved",
+    "solved_inaccurate",
+    "primal_infeasible",
+    "dual_infeasible",
+    "max_iterations",
+    "numerical_error",
+    "invalid_input",
+)
+
+_d = ct.c_double
+_i = ct.c_int
+_dp = ct.POINTER(ct.c_double)
+_ucp = ct.POINTER(ct.c_ubyte)
+
+
+class LibraryNotBuiltError(RuntimeError):
+    pass
+
+
+class _Params(ct.Structure):
+    _fields_ = [
+        ("g_I", _d * 3), ("J_B", _d * 3), ("r_T_B", _d * 3), ("r_cp_B", _d * 3),
+        ("alpha_mdot", _d), ("beta_mdot", _d), ("aero_coeff", _d), ("m_dry", _d),
+        ("T_min", _d), ("T_max", _d), ("gimbal_max_deg", _d), ("tilt_max_deg", _d),
+        ("glideslope_deg", _d), ("omega_max_deg", _d), ("r_f", _d * 3), ("v_f", _d * 3),
+        ("q_f", _d * 4), ("omega_f", _d * 3), ("final_roll_free", _i), ("N", _i),
+    ]  # fmt: skip
+
+
+class _Scenario(ct.Structure):
+    _fields_ = [("r0", _d * 3), ("v0", _d * 3), ("q0", _d * 4), ("w0", _d * 3), ("m0", _d),
+                ("params", _Params)]  # fmt: skip
+
+
+SETTING_FIELDS = (
+    "lam", "rho0", "rho1", "rho2", "alpha", "beta", "eta_init", "eta_lb", "eta_ub",
+    "iter_max", "max_subproblems", "step_tol", "vc_tol", "defect_tol", "rk4_substeps",
+    "tight_tol", "socp_tol", "socp_max_iter",
+)  # fmt: skip
+_INT_SETTINGS = {"iter_max", "max_subproblems", "rk4_substeps", "socp_max_iter"}
+
+
+class _Settings(ct.Structure):
+    _fields_ = [(f, _i if f in _INT_SETTINGS else _d) for f in SETTING_FIELDS]
+
+
+MASK_FN = ct.CFUNCTYPE(_i, ct.c_void_p, _i, _ucp, _i)
+_CLOCK = ct.CFUNCTYPE(ct.c_double)(time.perf_counter)  # subproblem times of the log
+
+
+class _Options(ct.Structure):
+    _fields_ = [
+        ("guess_x", _dp), ("guess_u", _dp), ("guess_t_f", _d), ("masks", _ucp),
+        ("n_masks", _i), ("mask_fn", MASK_FN), ("mask_ctx", ct.c_void_p),
+        ("clock_s", ct.CFUNCTYPE(ct.c_double)),
+    ]  # fmt: skip
+
+
+class _Result(ct.Structure):
+    _fields_ = [
+        ("status", _i), ("message", ct.c_char * MESSAGE_LEN), ("x", _dp), ("u", _dp),
+        ("t_f", _d), ("iterations", _i), ("subproblems_solved", _i), ("max_defect", _d),
+        ("max_violation", _d), ("socp_iterations", _i),
+    ]  # fmt: skip
+
+
+class _LogRow(ct.Structure):
+    _fields_ = [
+        ("k", _i), ("J", _d), ("dJ", _d), ("dL", _d), ("rho", _d), ("eta", _d),
+        ("vc_norm1", _d), ("n_tight", _i), ("subproblem_time_s", _d), ("accepted", _i),
+        ("solver_status", _i), ("solver_iterations", _i),
+    ]  # fmt: skip
+
+
+@lru_cache(maxsize=1)
+def library() -> ct.CDLL:
+    if not LIB_PATH.exists():
+        raise LibraryNotBuiltError(f"{LIB_PATH} not found: run `make lib`")
+    lib = ct.CDLL(str(LIB_PATH))
+    sz = ct.c_size_t
+    lib.pdg_default_settings.argtypes = [ct.POINTER(_Settings)]
+    lib.pdg_default_scenario.argtypes = [ct.POINTER(_Scenario)]
+    lib.pdg_workspace_size.argtypes = [_i, _i, ct.POINTER(_Settings), ct.c_void_p, sz,
+                                       ct.POINTER(sz)]  # fmt: skip
+    lib.pdg_setup.argtypes = [ct.POINTER(ct.c_void_p), ct.c_void_p, sz, _i, _i,
+                              ct.POINTER(_Settings)]  # fmt: skip
+    lib.pdg_solve.argtypes = [ct.c_void_p, ct.POINTER(_Scenario), ct.POINTER(_Options),
+                              ct.POINTER(_Result)]  # fmt: skip
+    lib.pdg_validate_scenario.argtypes = [ct.POINTER(_Scenario), ct.c_char_p]
+    lib.pdg_get_log.argtypes = [ct.c_void_p, _i, ct.POINTER(_LogRow)]
+    lib.pdg_get_mask.argtypes = [ct.c_void_p, _i, _ucp]
+    lib.pdg_log_length.argtypes = [ct.c_void_p]
+    lib.pdg_arena_high_water.argtypes = [ct.c_void_p]
+    lib.pdg_arena_high_water.restype = sz
+    lib.pdg_setup_status_message.argtypes = [_i]
+    lib.pdg_setup_status_message.restype = ct.c_char_p
+    lib.pdg_problem_size.argtypes = [ct.c_void_p] + [ct.POINTER(_i)] * 5
+    lib.pdg_debug_assemble.argtypes = [ct.c_void_p, ct.POINTER(_Scenario), _dp, _dp, _d, _d,
+                                       _dp, _dp, _dp, _dp, _dp] + [ct.POINTER(_i)] * 4  # fmt: skip
+    lib.pdg_debug_guess.argtypes = [ct.c_void_p, ct.POINTER(_Scenario), _dp, _dp, _dp]
+    return lib
+
+
+def _fill(arr: ct.Array, values: Sequence[float]) -> None:
+    for i, v in enumerate(values):
+        arr[i] = float(v)
+
+
+def c_scenario(scenario: Scenario) -> _Scenario:
+    s, p = scenario.initial, scenario.params
+    out = _Scenario()
+    for name in ("r0", "v0", "q0", "w0"):
+        _fill(getattr(out, name), getattr(s, name))
+    out.m0 = float(s.m0)
+    cp = out.params
+    for f in dataclasses.fields(Params):
+        v = getattr(p, f.name)
+        if isinstance(v, tuple):
+            _fill(getattr(cp, f.name), v)
+        elif f.name in ("final_roll_free", "N"):
+            setattr(cp, f.name, int(v))
+        else:
+            setattr(cp, f.name, float(v))
+    return out
+
+
+def c_settings(settings: SCvxSettings | None = None, **socp: float | int) -> _Settings:
+    st = _Settings()
+    library().pdg_default_settings(ct.byref(st))
+    if settings is not None:
+        for f in dataclasses.fields(SCvxSettings):
+            if f.name in SETTING_FIELDS:
+                v = getattr(settings, f.name)
+                setattr(st, f.name, int(v) if f.name in _INT_SETTINGS else float(v))
+    for k, v in socp.items():
+        setattr(st, k, v)
+    return st
+
+
+class Workspace:
+    """One arena holding the whole guidance workspace for (N, terminal condition, settings)."""
+
+    def __init__(self, N: int, final_roll_free: bool, settings: _Settings) -> None:
+        lib = library()
+        self.lib, self.N, self.settings = lib, N, settings
+        need = ct.c_size_t(0)
+        scratch = None
+        for _ in range(4):  # bounded: pattern size, then analysis size, then exact size
+            buf = (ct.c_char * max(need.value, 1))() if need.value else None
+            st = lib.pdg_workspace_size(N, int(final_roll_free), ct.byref(settings), buf,
+                                        need.value, ct.byref(need))  # fmt: skip
+            scratch = buf
+            if st == 0:
+                break
+            if st != 4:  # PDG_SETUP_SCRATCH_TOO_SMALL
+                raise RuntimeError(lib.pdg_setup_status_message(st).decode())
+        del scratch
+        self.arena_bytes = need.value
+        self.arena = (ct.c_char * self.arena_bytes)()
+        self.ws = ct.c_void_p()
+        st = lib.pdg_setup(ct.byref(self.ws), self.arena, self.arena_bytes, N,
+                           int(final_roll_free), ct.byref(settings))  # fmt: skip
+        if st != 0:
+            raise RuntimeError(f"pdg_setup: {lib.pdg_setup_status_message(st).decode()}")
+
+    @property
+    def high_water(self) -> int:
+        return int(self.lib.pdg_arena_high_water(self.ws))
+
+    def problem_size(self) -> dict[str, int]:
+        vals = [_i() for _ in range(5)]
+        self.lib.pdg_problem_size(self.ws, *[ct.byref(v) for v in vals])
+        return dict(zip(("n", "p", "m", "nnz_A", "nnz_G"), [v.value for v in vals], strict=True))
+
+
+_WORKSPACES: dict[tuple, Workspace] = {}
+
+
+def workspace(scenario: Scenario, settings: SCvxSettings | None = None,
+              **socp: float | int) -> Workspace:  # fmt: skip
+    st = c_settings(settings, **socp)
+    key = (scenario.params.N, scenario.params.final_roll_free, bytes(st))
+    if key not in _WORKSPACES:
+        _WORKSPACES[key] = Workspace(scenario.params.N, scenario.params.final_roll_free, st)
+    return _WORKSPACES[key]
+
+
+def validate_c(scenario: Scenario) -> str | None:
+    """The C validation's message for a scenario, or None when it is accepted."""
+    msg = ct.create_string_buffer(MESSAGE_LEN)
+    bad = library().pdg_validate_scenario(ct.byref(c_scenario(scenario)), msg)
+    return msg.value.decode() if bad else None
+
+
+def _dptr(a: np.ndarray) -> _dp:
+    return a.ctypes.data_as(_dp)
+
+
+def solve_c(
+    scenario: Scenario,
+    settings: SCvxSettings | None = None,
+    guess: tuple[np.ndarray, np.ndarray, float] | None = None,
+    masks: Callable[[int], np.ndarray | None] | Sequence[np.ndarray] | None = None,
+    **socp: float | int,
+) -> SCvxResult:
+    """The whole SCvx / T-SCvx solve in the C library. Bad input raises ScenarioError (the
+    C validation's message, naming the field) like the Python reference."""
+    lib = library()
+    N = scenario.params.N
+    if not 3 <= N <= 400:
+        raise ScenarioError("N", f"must lie in [3, 400], got {N}")
+    ws = workspace(scenario, settings, **socp)
+    cs = c_scenario(scenario)
+    opt = _Options()
+    keep: list[object] = []
+    if guess is not None:
+        gx = np.ascontiguousarray(guess[0], dtype=float).reshape(N, NX)
+        gu = np.ascontiguousarray(guess[1], dtype=float).reshape(N, NU)
+        keep += [gx, gu]
+        opt.guess_x, opt.guess_u, opt.guess_t_f = _dptr(gx), _dptr(gu), float(guess[2])
+    if masks is not None:
+        if callable(masks):
+
+            def _cb(ctx, k, out, n, fn=masks):
+                m = fn(int(k))
+                if m is None:
+                    return 0
+                m = np.asarray(m, dtype=bool).reshape(-1)
+                ct.memmove(out, m.astype(np.uint8).ctypes.data, n)
+                return 1
+
+            cb = MASK_FN(_cb)
+            keep.append(cb)
+            opt.mask_fn = cb
+        else:
+            table = np.ascontiguousarray(np.asarray(masks, dtype=bool), dtype=np.uint8)
+            table = table.reshape(len(masks), NC * N)
+            keep.append(table)
+            opt.masks = table.ctypes.data_as(_ucp)
+            opt.n_masks = len(masks)
+    opt.clock_s = _CLOCK
+    x, u = np.zeros((N, NX)), np.zeros((N, NU))
+    res = _Result()
+    res.x, res.u = _dptr(x), _dptr(u)
+    t_start = time.perf_counter()  # the guidance call only (set-up is a one-time init)
+    status = lib.pdg_solve(ws.ws, ct.byref(cs), ct.byref(opt), ct.byref(res))
+    solve_time = time.perf_counter() - t_start
+    message = res.message.decode()
+    if status == 4:  # PDG_INVALID_INPUT
+        field = message.split("'")[1] if message.startswith("scenario field '") else "<input>"
+        if message.startswith("scenario field '"):
+            raise ScenarioError(field, message.split("': ", 1)[1])
+        raise ValueError(message)
+    history = []
+    row = _LogRow()
+    for i in range(lib.pdg_log_length(ws.ws)):
+        lib.pdg_get_log(ws.ws, i, ct.byref(row))
+        history.append(
+            IterationRecord(
+                row.k,
+                row.J,
+                row.dJ,
+                row.dL,
+                row.rho,
+                row.eta,
+                row.vc_norm1,
+                row.n_tight,
+                row.subproblem_time_s,
+                bool(row.accepted),
+                SOCP_STATUS_NAMES[row.solver_status]
+                if 0 <= row.solver_status < len(SOCP_STATUS_NAMES)
+                else "numerical_error",
+                row.solver_iterations,
+            )
+        )
+    mask_log = np.zeros((res.iterations, NC * N), np.uint8)
+    for k in range(res.iterations):
+        lib.pdg_get_mask(ws.ws, k, mask_log[k].ctypes.data_as(_ucp))
+    return SCvxResult(
+        status=STATUS_NAMES[status],
+        reason=message,
+        x=x,
+        u=u,
+        t_f=float(res.t_f),
+        iterations=int(res.iterations),
+        subproblems_solved=int(res.subproblems_solved),
+        solve_time_s=solve_time,
+        history=history,
+        masks=mask_log,
+        max_defect=float(res.max_defect),
+        max_violation=float(res.max_violation),
+    )
+
+
+def c_guess(scenario: Scenario) -> tuple[np.ndarray, np.ndarray, float]:
+    """The C initial guess (for tests against guidance.guess.initial_guess)."""
+    ws = workspace(scenario)
+    N = scenario.params.N
+    x, u, tf = np.zeros((N, NX)), np.zeros((N, NU)), ct.c_double(0.0)
+    st = library().pdg_debug_guess(ws.ws, ct.byref(c_scenario(scenario)), _dptr(x), _dptr(u),
+                                   ct.byref(tf))  # fmt: skip
+    if st != 0:
+        raise ValueError(f"pdg_debug_guess returned {st}")
+    return x, u, tf.value
+
+
+def c_assemble(scenario: Scenario, x: np.ndarray, u: np.ndarray, t_f: float,
+               eta: float) -> dict[str, np.ndarray]:  # fmt: skip
+    """The C subproblem about (x, u, t_f), scaling with Ss = t_f (for tests)."""
+    import scipy.sparse as sp
+
+    ws = workspace(scenario)
+    size = ws.problem_size()
+    n, p, m, na, ng = (size[k] for k in ("n", "p", "m", "nnz_A", "nnz_G"))
+    c, Ax, b, Gx, h = np.zeros(n), np.zeros(na), np.zeros(p), np.zeros(ng), np.zeros(m)
+    Ap, Ai = np.zeros(n + 1, np.int32), np.zeros(na, np.int32)
+    Gp, Gi = np.zeros(n + 1, np.int32), np.zeros(ng, np.int32)
+    ip = ct.POINTER(_i)
+    xx = np.ascontiguousarray(x, dtype=float)
+    uu = np.ascontiguousarray(u, dtype=float)
+    st = library().pdg_debug_assemble(
+        ws.ws, ct.byref(c_scenario(scenario)), _dptr(xx), _dptr(uu), float(t_f), float(eta),
+        _dptr(c), _dptr(Ax), _dptr(b), _dptr(Gx), _dptr(h), Ap.ctypes.data_as(ip),
+        Ai.ctypes.data_as(ip), Gp.ctypes.data_as(ip), Gi.ctypes.data_as(ip),
+    )  # fmt: skip
+    if st != 0:
+        raise ValueError(f"pdg_debug_assemble returned {st}")
+    return {
+        "c": c,
+        "A": sp.csc_matrix((Ax, Ai, Ap), shape=(p, n)),
+        "b": b,
+        "G": sp.csc_matrix((Gx, Gi, Gp), shape=(m, n)),
+        "h": h,
+    }
