@@ -26,7 +26,7 @@ from guidance.catalog import SCENARIOS
 from guidance.constraints import constraint_scales
 from guidance.guess import initial_guess
 from guidance.model import discretize
-from guidance.params import NC, InitialState, Params, Scenario
+from guidance.params import NC, InitialState, Params, Scenario, SCvxSettings
 from guidance.scenario import ScenarioError, scenario_from_dict, validate
 from guidance.scvx import SCvxResult, SCvxSolver, solve_scvx
 from guidance.subproblem import Scaling, SubproblemTemplate, physical, scaled
@@ -78,7 +78,8 @@ def _python_split(scn: Scenario, eta: float) -> tuple[dict, dict]:
     tpl = SubproblemTemplate(scn.params.N, scn.params.final_roll_free)
     z = scaled(x, u, tf, tpl.lay, sc)
     xp, up, tp = physical(z, tpl.lay, sc)
-    prob = tpl.assemble(discretize(xp, up, tp, scn.params, 8), z, eta, 500.0, scn, sc)
+    substeps = SCvxSettings().rk4_substeps
+    prob = tpl.assemble(discretize(xp, up, tp, scn.params, substeps), z, eta, 500.0, scn, sc)
     p = sum(d for kind, d in prob.cones if kind == "zero")
     A = prob.A.tocsr()
     py = {"A": A[:p], "b": prob.b[:p], "G": A[p:], "h": prob.b[p:], "c": prob.q}

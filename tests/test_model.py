@@ -14,7 +14,7 @@ from guidance.model import (
     dynamics_functions,
     param_vector,
 )
-from guidance.params import Params
+from guidance.params import Params, SCvxSettings
 from guidance.verify import dynamics_numpy, foh_control
 
 P = Params()
@@ -106,7 +106,7 @@ def _integrate(x0: np.ndarray, uk: np.ndarray, uk1: np.ndarray, t1: float) -> np
 
 def test_discretization_matches_solve_ivp(samples) -> None:
     """x_next and the sensitivities of the FOH map agree with scipy integration (1e-6)."""
-    F = discretization_function(8)
+    F = discretization_function(SCvxSettings().rk4_substeps)  # what SCvx uses
     p = param_vector(P)
     sigma, dtau = 6.0, 1.0 / 49
     t1 = sigma * dtau

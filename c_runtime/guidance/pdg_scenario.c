@@ -71,7 +71,7 @@ void pdg_default_settings(pdg_settings *st)
     st->step_tol = 5e-3;
     st->vc_tol = 1e-6;
     st->defect_tol = 1e-5;
-    st->rk4_substeps = 8;
+    st->rk4_substeps = 2;
     st->tight_tol = 1e-6;
     st->socp_tol = 1e-9;
     st->socp_max_iter = 200;
