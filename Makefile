@@ -46,9 +46,14 @@ lint: setup
 test: setup lib ctest lint pytest
 
 # ---- user-facing jobs ----------------------------------------------------------------------
+# The default landing three ways: the ground reference, the flight library, and T-SCvx with
+# the shipped networks (warm start + tight-constraint masks) in the flight library.
 demo: setup lib
 	@mkdir -p out
-	$(VENV)/bin/guidance solve --method scvx --backend clarabel --out out/default.npz --plot out/default.png
+	$(VENV)/bin/guidance solve --method scvx --backend clarabel --out out/scvx.npz --plot out/scvx.png
+	$(VENV)/bin/guidance solve --method scvx --backend c --out out/scvx_c.npz --plot out/scvx_c.png
+	$(VENV)/bin/guidance solve --method tscvx --backend c --out out/tscvx_c.npz --plot out/tscvx_c.png
+	./$(BUILD)/pdg_example > out/pdg_example.txt && tail -n 3 out/pdg_example.txt
 
 bench: setup lib
 	$(VENV)/bin/guidance bench

@@ -8,16 +8,18 @@ import platform
 import numpy as np
 
 from guidance.catalog import SCENARIOS
-from guidance.scvx import solve_scvx
+from guidance.params import SCvxSettings
 
 
-def run_scvx_bench(backends: list[str], repeats: int = 1) -> None:
+def run_scvx_bench(backends: list[str], repeats: int = 1, method: str = "scvx") -> None:
+    from guidance.cli import run_solve
+
     print(
         f"SCvx benchmark: {len(SCENARIOS)} scenarios, N = 50, host {platform.machine()}, "
         f"{os.cpu_count()} cores, repeats {repeats}"
     )
     for backend in backends:
-        print(f"\nbackend: {backend}")
+        print(f"\nmethod: {method}, backend: {backend}")
         print(
             f"{'scenario':12s} {'status':10s} {'k':>3s} {'solves':>6s} {'t_f':>7s} "
             f"{'m_f':>8s} {'total[s]':>9s} {'sub[ms]':>8s}"
@@ -26,7 +28,7 @@ def run_scvx_bench(backends: list[str], repeats: int = 1) -> None:
         for name, scenario in SCENARIOS.items():
             best = None
             for _ in range(repeats):
-                r = solve_scvx(scenario, backend=backend)
+                r = run_solve(scenario, method, backend, SCvxSettings())
                 if best is None or r.solve_time_s < best.solve_time_s:
                     best = r
             assert best is not None

@@ -117,7 +117,7 @@ def cmd_scenario(args: argparse.Namespace) -> int:
 def cmd_bench(args: argparse.Namespace) -> int:
     from guidance.bench import run_scvx_bench
 
-    run_scvx_bench(backends=args.backend, repeats=args.repeats)
+    run_scvx_bench(backends=args.backend, repeats=args.repeats, method=args.method)
     if not args.skip_socp:
         try:
             from guidance import bench_socp
@@ -179,6 +179,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--backend", nargs="+", default=["clarabel"], choices=["clarabel", "c-socp", "c"]
     )
     b.add_argument("--repeats", type=int, default=1)
+    b.add_argument("--method", choices=["scvx", "tscvx"], default="scvx")
     b.add_argument("--skip-socp", action="store_true", help="skip the conic solver benchmark")
     b.set_defaults(func=cmd_bench)
 
