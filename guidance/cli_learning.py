@@ -1,9 +1,299 @@
-"""Subcommands of the learning half (dataset, train, export, baselines)."""
+"""Subcommands of the learning half: ``dataset``, ``train``, ``export``, ``baselines``.
+
+    guidance dataset --n-base 1592 --run-dir data/runs/default --output data/dataset.npz
+    guidance train --dataset data/dataset.npz --train-dir data/train --sizes all
+    guidance export --train-dir data/train --dataset data/dataset.npz --models-dir models
+    guidance baselines --dataset data/dataset.npz --models-dir models
+
+Heavy imports (torch, onnx) happen inside the commands.
+"""
 
 from __future__ import annotations
 
 import argparse
+import json
+import sys
+from pathlib import Path
+
+# Sizes trained by ``guidance train`` (label -> architecture). "flight" sizes are meant to fit
+# DESIGN.md's budget (<= 5 million host instructions per inference, see INSTR_PER_MAC);
+# "reference" sizes are the paper's (Section "Training, Validation, and Testing").
+FLIGHT_SIZES = {
+    "flight-s": dict(tokens="scalar", d_model=32, n_heads=2, n_layers=2, d_ff=64),
+    "flight-m": dict(tokens="scalar", d_model=64, n_heads=2, n_layers=2, d_ff=128),
+    "flight-mlp": dict(tokens="single", d_model=256, n_heads=2, n_layers=2, d_ff=512),
+}
+REFERENCE_SIZES = {
+    "constraint": dict(tokens="single", d_model=384, n_heads=2, n_layers=4, d_ff=2048),
+    "solution": dict(tokens="single", d_model=768, n_heads=2, n_layers=4, d_ff=2048),
+}
+# Planning estimate of host (x86-64) instructions per multiply-accumulate of the C inference:
+# scalar double code, load + FMA + loop overhead. The C runtime's callgrind count is the
+# authority; this only ranks the candidates before the C build exists.
+INSTR_PER_MAC = 2.0
+INSTR_BUDGET = 5e6
+# Epochs per fold. The constraint task has one row per (landing, iteration), about 14 times
+# the solution task's rows, so it needs fewer passes.
+TRAIN_DEFAULTS = {"epochs": 2, "solution_epochs": 8, "reference_epochs": 2, "lr": 1e-3}
+DEFAULT_DATASET = "data/dataset.npz"
+DEFAULT_RUN_DIR = "data/runs/default"
+DEFAULT_TRAIN_DIR = "data/train"
+DEFAULT_MODELS_DIR = "models"
 
 
 def add_commands(sub: argparse._SubParsersAction) -> None:
     """Registers the learning subcommands on the main parser."""
+    from guidance.dataset import SamplingRanges
+
+    d = sub.add_parser(
+        "dataset",
+        help="sample landings, solve them with SCvx (all cores, resumable), rotate, pack",
+    )
+    d.add_argument("--n-base", type=int, default=1592, help="base samples (before rotation)")
+    d.add_argument("--seed", type=int, default=0)
+    d.add_argument("--run-dir", default=DEFAULT_RUN_DIR, help="per-sample files (resumable)")
+    d.add_argument("--output", default=DEFAULT_DATASET, help="packed dataset (.npz)")
+    d.add_argument("--workers", type=int, default=0, help="worker processes (0: all cores)")
+    d.add_argument("--pack-only", action="store_true", help="pack the samples solved so far")
+    d.add_argument("--no-progress", action="store_true")
+    d.set_defaults(func=cmd_dataset, ranges=SamplingRanges())
+
+    t = sub.add_parser("train", help="train the constraint and solution transformers")
+    t.add_argument("--dataset", default=DEFAULT_DATASET)
+    t.add_argument("--train-dir", default=DEFAULT_TRAIN_DIR, help="checkpoints and report")
+    t.add_argument("--kind", choices=["constraint", "solution", "both"], default="both")
+    t.add_argument(
+        "--sizes",
+        default="all",
+        help="comma list of flight-s, flight-m, flight-mlp, reference; or 'flight' / 'all'",
+    )
+    t.add_argument(
+        "--epochs", type=int, default=TRAIN_DEFAULTS["epochs"], help="per fold, constraint net"
+    )
+    t.add_argument(
+        "--solution-epochs",
+        type=int,
+        default=TRAIN_DEFAULTS["solution_epochs"],
+        help="per fold, solution net",
+    )
+    t.add_argument(
+        "--reference-epochs",
+        type=int,
+        default=TRAIN_DEFAULTS["reference_epochs"],
+        help="per fold, for the paper-size reference (the paper: 2)",
+    )
+    t.add_argument("--lr", type=float, default=TRAIN_DEFAULTS["lr"])
+    t.add_argument("--max-minutes", type=float, default=0.0, help="cap per model (0: none)")
+    t.add_argument("--threads", type=int, default=0, help="torch threads (0: default)")
+    t.add_argument("--seed", type=int, default=0, help="split and initialization seed")
+    t.set_defaults(func=cmd_train)
+
+    e = sub.add_parser("export", help="export the best flight-size networks to ONNX")
+    e.add_argument("--train-dir", default=DEFAULT_TRAIN_DIR)
+    e.add_argument("--dataset", default=DEFAULT_DATASET, help="for the inference measurements")
+    e.add_argument("--models-dir", default=DEFAULT_MODELS_DIR)
+    e.set_defaults(func=cmd_export)
+
+    b = sub.add_parser("baselines", help="lookup-table baselines against the networks")
+    b.add_argument("--dataset", default=DEFAULT_DATASET)
+    b.add_argument("--models-dir", default=DEFAULT_MODELS_DIR)
+    b.add_argument("--interp-train", type=int, default=1000, help="subset (paper: 100)")
+    b.add_argument("--interp-test", type=int, default=100, help="subset (paper: 10)")
+    b.add_argument("--max-queries", type=int, default=2000, help="test rows for KD-tree / NN")
+    b.add_argument("--seed", type=int, default=0, help="the split seed used in training")
+    b.add_argument("--json", help="write the results here (default: MODELS_DIR/baselines.json)")
+    b.set_defaults(func=cmd_baselines)
+
+
+# ---- dataset ------------------------------------------------------------------------------
+def cmd_dataset(args: argparse.Namespace) -> int:
+    from guidance.dataset import generate, pack, summary
+
+    if not args.pack_only:
+        try:
+            counts = generate(
+                args.run_dir,
+                args.n_base,
+                seed=args.seed,
+                ranges=args.ranges,
+                workers=args.workers or None,
+                progress=not args.no_progress,
+            )
+        except KeyboardInterrupt:
+            print(
+                f"\ninterrupted: solved samples are kept in {args.run_dir}; "
+                "run the same command again to resume",
+                file=sys.stderr,
+            )
+            return 130
+        print(f"solved this run: {counts}")
+    header = pack(args.run_dir, args.output, n_base=args.n_base)
+    print(summary(header))
+    print(f"wrote {args.output}")
+    return 0
+
+
+# ---- train --------------------------------------------------------------------------------
+def _sizes(spec: str) -> list[str]:
+    if spec == "all":
+        return [*FLIGHT_SIZES, "reference"]
+    if spec == "flight":
+        return list(FLIGHT_SIZES)
+    names = [s.strip() for s in spec.split(",") if s.strip()]
+    for n in names:
+        if n not in FLIGHT_SIZES and n != "reference":
+            raise SystemExit(f"unknown size {n!r} (known: {', '.join(FLIGHT_SIZES)}, reference)")
+    return names
+
+
+def cmd_train(args: argparse.Namespace) -> int:
+    from guidance.dataset import load_dataset
+    from guidance.nn.train import TrainConfig, summarize, train
+
+    ds = load_dataset(args.dataset)
+    out = Path(args.train_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    kinds = ["constraint", "solution"] if args.kind == "both" else [args.kind]
+    for kind in kinds:
+        for size in _sizes(args.sizes):
+            arch = REFERENCE_SIZES[kind] if size == "reference" else FLIGHT_SIZES[size]
+            epochs = args.epochs if kind == "constraint" else args.solution_epochs
+            if size == "reference":
+                epochs = args.reference_epochs
+            cfg = TrainConfig(
+                epochs=epochs,
+                lr=args.lr if size != "reference" else min(args.lr, 3e-4),
+                split_seed=args.seed,
+                threads=args.threads,
+                max_seconds=60 * args.max_minutes if args.max_minutes > 0 else float("inf"),
+            )
+            res = train(ds, kind, arch, cfg)
+            res.metrics["size"] = size
+            res.metrics["dataset"] = {
+                "path": str(args.dataset),
+                "n_base": ds.header["n_base"],
+                "n_samples": ds.header["n_samples"],
+                "created_utc": ds.header["created_utc"],
+                "feasible_fraction": ds.header["feasible_fraction"],
+            }
+            res.save(out / f"{kind}-{size}.pt")
+            est = INSTR_PER_MAC * res.metrics["macs"]
+            entry = {
+                "kind": kind,
+                "size": size,
+                "arch": res.arch.to_dict(),
+                "est_instructions": est,
+                "fits_budget": est <= INSTR_BUDGET,
+                "final_val_loss": res.metrics["history"][-1]["val"],
+                "heldout_val_loss": _fold1_val(res.metrics["history"]),
+                **{k: v for k, v in res.metrics.items() if k not in ("history", "test_bases")},
+            }
+            (out / f"{kind}-{size}.json").write_text(json.dumps(entry, indent=1, default=float))
+            print(summarize(res), flush=True)
+    print(f"wrote checkpoints and reports to {out}")
+    return 0
+
+
+def sweep_report(train_dir: Path) -> dict[str, dict]:
+    """Every trained model's report (``KIND-SIZE.json`` beside its checkpoint)."""
+    return {
+        p.stem: json.loads(p.read_text())
+        for p in sorted(train_dir.glob("*.json"))
+        if p.stem.split("-")[0] in ("constraint", "solution")
+    }
+
+
+def _fold1_val(history: list[dict]) -> float:
+    """Validation loss at the end of fold 1: the only validation rows that the sequential
+    K-fold (one model trained through the folds, as in the paper) has never trained on."""
+    return [h["val"] for h in history if h["fold"] == 1][-1]
+
+
+def best_checkpoints(train_dir: Path) -> dict[str, str]:
+    """Per kind, the flight-fitting checkpoint with the lowest held-out (fold 1) val loss."""
+    report = sweep_report(train_dir)
+    best: dict[str, tuple[float, str]] = {}
+    for name, r in report.items():
+        if not r["fits_budget"]:
+            continue
+        if r["kind"] not in best or r["heldout_val_loss"] < best[r["kind"]][0]:
+            best[r["kind"]] = (r["heldout_val_loss"], name)
+    return {k: v[1] for k, v in best.items()}
+
+
+# ---- export -------------------------------------------------------------------------------
+def cmd_export(args: argparse.Namespace) -> int:
+    from guidance.baselines import task_data
+    from guidance.dataset import load_dataset
+    from guidance.nn.card import measure_onnx, write_card
+    from guidance.nn.export import export_onnx
+    from guidance.nn.train import load_checkpoint
+    from guidance.params import Params
+
+    train_dir, models = Path(args.train_dir), Path(args.models_dir)
+    models.mkdir(parents=True, exist_ok=True)
+    best = best_checkpoints(train_dir)
+    if not best:
+        print(f"no flight-size checkpoint in {train_dir}: run `guidance train`", file=sys.stderr)
+        return 1
+    ds = load_dataset(args.dataset)
+    report = sweep_report(train_dir)
+    metrics: dict = {"sweep": report, "shipped": {}, "dataset_header": ds.header}
+    for kind, name in sorted(best.items()):
+        res = load_checkpoint(train_dir / f"{name}.pt")
+        path = models / f"{kind}.onnx"
+        export_onnx(
+            res,
+            path,
+            Params().to_json_dict(),
+            extra={"checkpoint": name, "metrics": _brief(res.metrics)},
+        )
+        td = task_data(ds, kind, seed=int(res.metrics["train_config"]["split_seed"]))
+        ort = measure_onnx(path, kind, td.X_te_raw[:500])
+        metrics["shipped"][kind] = {
+            "checkpoint": name,
+            "file": path.name,
+            "bytes": path.stat().st_size,
+            "onnxruntime": ort,
+            **{k: v for k, v in res.metrics.items() if k != "test_bases"},
+            "arch": res.arch.to_dict(),
+        }
+        print(f"wrote {path} ({name}, {path.stat().st_size:,} bytes): {ort}")
+    (models / "metrics.json").write_text(json.dumps(metrics, indent=1, default=float))
+    write_card(models)
+    print(f"wrote {models / 'metrics.json'} and {models / 'MODEL_CARD.md'}")
+    return 0
+
+
+def _brief(m: dict) -> dict:
+    keep = ("threshold", "test", "test_mse", "ood_mse", "n_params", "macs")
+    return {k: m[k] for k in keep if k in m}
+
+
+# ---- baselines ----------------------------------------------------------------------------
+def cmd_baselines(args: argparse.Namespace) -> int:
+    from guidance.baselines import format_table, results_json, run_baselines
+    from guidance.dataset import load_dataset
+    from guidance.nn.card import write_card
+
+    ds = load_dataset(args.dataset)
+    res = run_baselines(
+        ds,
+        args.models_dir,
+        interp_train=args.interp_train,
+        interp_test=args.interp_test,
+        max_queries=args.max_queries,
+        seed=args.seed,
+    )
+    for kind in res:
+        print(format_table(kind, res[kind]))
+        print()
+    models = Path(args.models_dir)
+    out = Path(args.json) if args.json else models / "baselines.json"
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(results_json({"dataset": ds.header, "results": res}))
+    print(f"wrote {out}")
+    if not args.json and (models / "metrics.json").exists():
+        write_card(models)
+        print(f"updated {models / 'MODEL_CARD.md'}")
+    return 0

@@ -1,0 +1,575 @@
+"""Training data: sampled landings solved by SCvx, with the eight 45-degree rotations.
+
+Pipeline (paper, "Data Sampling Strategy"):
+
+1. Base samples. Sample ``i`` of a run is drawn from its own generator seeded by
+   ``(seed, i)`` over :class:`SamplingRanges` (positive east/north only), redrawn until
+   :func:`guidance.scenario.validate` accepts it. A dataset of n samples is therefore the
+   prefix of any larger one with the same seed and ranges.
+2. Solve. Every base sample is solved by the reference SCvx in a pool of worker processes
+   (one thread each). Each finished sample is written atomically to
+   ``OUT/samples/NNNNNN.npz``; a restart skips the ids already there, so an interrupted run
+   loses at most the solves in flight.
+3. Augment and pack. The solved base samples are rotated about the up axis by 0, 45, ..., 315
+   degrees (``guidance.symmetry``: rotated r, v and q; same omega_B, T_B, m, t_f and masks) and
+   written as one versioned ``.npz`` with a JSON header (ranges, seed, code version, SCvx
+   settings, parameters, creation time).
+
+theta (16) = r0 (3), v0 (3), q0 (4), w0 (3, rad/U_T), m0, glideslope_deg, tilt_max_deg.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import os
+import signal
+import subprocess
+import sys
+import time
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from guidance.params import NC, NU, NX, InitialState, Params, Scenario, SCvxSettings
+from guidance.scenario import ScenarioError, validate
+
+FORMAT = "tscvx-dataset"
+FORMAT_VERSION = 1
+N_THETA = 16
+THETA_NAMES = (
+    "r0_1",
+    "r0_2",
+    "r0_3",
+    "v0_1",
+    "v0_2",
+    "v0_3",
+    "q0_0",
+    "q0_1",
+    "q0_2",
+    "q0_3",
+    "w0_1",
+    "w0_2",
+    "w0_3",
+    "m0",
+    "glideslope_deg",
+    "tilt_max_deg",
+)
+N_ROTATIONS = 8
+ROTATION_DEG = tuple(45.0 * j for j in range(N_ROTATIONS))
+STATUSES = ("solved", "infeasible", "max_iterations", "solver_error", "error")
+MAX_DRAWS = 1000
+
+
+@dataclass(frozen=True)
+class SamplingRanges:
+    """Uniform ranges of the base samples (the paper's Table 5 made physical).
+
+    The paper samples r0 up to 10 and 13.8 U_L, |v0| up to 2.8 U_L/U_T and m0 down to 0.003;
+    with this vehicle (I_sp = 30, m_dry = 2, m0 <= 3) most such starts cannot land. These
+    ranges keep the draws mostly feasible around the default landing (r0 = (4, 4, 0),
+    v0 = (0, -1, -2), m0 = 3, about 76 % of the propellant burnt). Draws below the glideslope,
+    beyond the tilt limit or the rate limit are redrawn (``validate``).
+    """
+
+    altitude: tuple[float, float] = (2.0, 6.0)  # r0_1, U_L
+    horizontal: tuple[float, float] = (0.0, 4.0)  # r0_2, r0_3 (positive east/north), U_L
+    v_up: tuple[float, float] = (-1.2, 0.0)  # v0_1, U_L/U_T
+    v_horizontal: tuple[float, float] = (-1.5, 0.5)  # v0_2, v0_3, U_L/U_T
+    m0: tuple[float, float] = (2.6, 3.0)  # U_M, within (m_dry, 3]
+    glideslope_deg: tuple[float, float] = (5.0, 40.0)
+    tilt_max_deg: tuple[float, float] = (45.0, 90.0)
+    tilt0_deg: tuple[float, float] = (0.0, 30.0)  # initial tilt (capped by tilt_max)
+    omega0: tuple[float, float] = (-0.4, 0.4)  # w0_2, w0_3 in rad/U_T; w0_1 = 0 (no roll rate)
+
+    def to_json_dict(self) -> dict[str, list[float]]:
+        return {f.name: list(getattr(self, f.name)) for f in dataclasses.fields(self)}
+
+    @classmethod
+    def from_json_dict(cls, d: dict[str, Any]) -> SamplingRanges:
+        return cls(**{k: tuple(v) for k, v in d.items()})
+
+
+def _quaternion_from(roll: float, tilt: float, tilt_axis: float) -> np.ndarray:
+    """q_B<-I of a vehicle turned by ``roll`` about the up axis then tilted by ``tilt``.
+
+    The tilt axis is horizontal at angle ``tilt_axis`` from east. Scalar first; the result has
+    |(q2, q3)| = sin(tilt / 2), so its tilt from vertical is exactly ``tilt``.
+    """
+    # C_IB = R_tilt(axis a) R_roll(e1); q_I<-B = q_tilt (x) q_roll; q_B<-I is its conjugate.
+    a = np.array([0.0, math.cos(tilt_axis), math.sin(tilt_axis)])
+    qt = np.concatenate([[math.cos(tilt / 2)], math.sin(tilt / 2) * a])
+    qr = np.array([math.cos(roll / 2), math.sin(roll / 2), 0.0, 0.0])
+    w1, x1, y1, z1 = qt
+    w2, x2, y2, z2 = qr
+    q_ib = np.array(
+        [
+            w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2,
+            w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
+            w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
+            w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2,
+        ]
+    )
+    q = q_ib * np.array([1.0, -1.0, -1.0, -1.0])
+    return q / np.linalg.norm(q)
+
+
+def draw_scenario(
+    rng: np.random.Generator, ranges: SamplingRanges, params: Params | None = None
+) -> tuple[Scenario, int]:
+    """One physical base scenario and the number of rejected draws before it."""
+    base = params or Params()
+    for rejected in range(MAX_DRAWS):
+        u = rng.uniform
+        gs = u(*ranges.glideslope_deg)
+        tilt_max = u(*ranges.tilt_max_deg)
+        r0 = (u(*ranges.altitude), u(*ranges.horizontal), u(*ranges.horizontal))
+        v0 = (u(*ranges.v_up), u(*ranges.v_horizontal), u(*ranges.v_horizontal))
+        tilt0 = math.radians(min(u(*ranges.tilt0_deg), tilt_max))
+        q0 = _quaternion_from(u(-math.pi, math.pi), tilt0, u(0.0, 2 * math.pi))
+        w0 = (0.0, u(*ranges.omega0), u(*ranges.omega0))
+        m0 = u(*ranges.m0)
+        scenario = Scenario(
+            InitialState(r0=r0, v0=v0, q0=tuple(q0), w0=w0, m0=m0),  # type: ignore[arg-type]
+            base.replace(glideslope_deg=gs, tilt_max_deg=tilt_max),
+        )
+        try:
+            validate(scenario)
+        except ScenarioError:
+            continue
+        return scenario, rejected
+    raise RuntimeError(f"no valid scenario in {MAX_DRAWS} draws: check the sampling ranges")
+
+
+def base_scenario(seed: int, i: int, ranges: SamplingRanges, params: Params | None = None):
+    """Base sample ``i`` of the run with ``seed`` (deterministic, independent of the others)."""
+    return draw_scenario(np.random.default_rng([seed, i]), ranges, params)
+
+
+def theta_of(scenario: Scenario) -> np.ndarray:
+    s, p = scenario.initial, scenario.params
+    return np.concatenate(
+        [s.r0, s.v0, s.q0, s.w0, [s.m0, p.glideslope_deg, p.tilt_max_deg]]
+    ).astype(np.float64)
+
+
+def scenario_of(theta: np.ndarray, params: Params | None = None) -> Scenario:
+    """Inverse of :func:`theta_of` (other parameters from ``params``)."""
+    t = [float(v) for v in theta]
+    base = params or Params()
+    initial = InitialState(
+        r0=tuple(t[0:3]),  # type: ignore[arg-type]
+        v0=tuple(t[3:6]),  # type: ignore[arg-type]
+        q0=tuple(t[6:10]),  # type: ignore[arg-type]
+        w0=tuple(t[10:13]),  # type: ignore[arg-type]
+        m0=t[13],
+    )
+    return Scenario(initial, base.replace(glideslope_deg=t[14], tilt_max_deg=t[15]))
+
+
+# ---- solving ------------------------------------------------------------------------------
+def _limit_threads() -> None:
+    for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "RAYON_NUM_THREADS"):
+        os.environ[var] = "1"
+
+
+def solve_sample(job: tuple[int, int, dict, dict, dict]) -> dict[str, Any]:
+    """Worker: draw base sample ``i``, solve it, return the record (never raises)."""
+    i, seed, ranges_d, params_d, settings_d = job
+    from guidance.scvx import solve_scvx
+
+    ranges = SamplingRanges.from_json_dict(ranges_d)
+    params = _params_from_json(params_d)
+    settings = SCvxSettings(**settings_d)
+    scenario, rejected = base_scenario(seed, i, ranges, params)
+    N = params.N
+    rec: dict[str, Any] = {"id": i, "theta": theta_of(scenario), "rejected_draws": rejected}
+    t0 = time.perf_counter()
+    try:
+        r = solve_scvx(scenario, settings)
+        rec.update(
+            status=r.status,
+            reason=r.reason,
+            x=r.x,
+            u=r.u,
+            t_f=r.t_f,
+            iterations=r.iterations,
+            subproblems=r.subproblems_solved,
+            solve_time_s=r.solve_time_s,
+            masks=r.masks.astype(np.uint8),
+        )
+    except Exception as exc:  # a crashed solve is a data point, not a lost run
+        rec.update(
+            status="error",
+            reason=f"{type(exc).__name__}: {exc}",
+            x=np.full((N, NX), np.nan),
+            u=np.full((N, NU), np.nan),
+            t_f=float("nan"),
+            iterations=0,
+            subproblems=0,
+            solve_time_s=time.perf_counter() - t0,
+            masks=np.zeros((0, NC * N), np.uint8),
+        )
+    return rec
+
+
+def _params_from_json(d: dict) -> Params:
+    return Params(**{k: tuple(v) if isinstance(v, list) else v for k, v in d.items()})
+
+
+def sample_path(out_dir: Path, i: int) -> Path:
+    return out_dir / "samples" / f"{i:06d}.npz"
+
+
+def write_sample(out_dir: Path, rec: dict[str, Any]) -> None:
+    path = sample_path(out_dir, rec["id"])
+    tmp = path.with_suffix(".tmp.npz")
+    np.savez(tmp, **{k: np.asarray(v) for k, v in rec.items()})
+    os.replace(tmp, path)
+
+
+def read_sample(path: Path) -> dict[str, Any]:
+    with np.load(path, allow_pickle=False) as f:
+        return {k: f[k] for k in f.files}
+
+
+def done_ids(out_dir: Path) -> set[int]:
+    d = out_dir / "samples"
+    if not d.is_dir():
+        return set()
+    return {int(p.name[:6]) for p in d.glob("[0-9]" * 6 + ".npz")}
+
+
+def _run_config_path(out_dir: Path) -> Path:
+    return out_dir / "run.json"
+
+
+def _check_run_config(out_dir: Path, config: dict) -> None:
+    """A restart must use the same seed, ranges, parameters and settings."""
+    path = _run_config_path(out_dir)
+    if path.exists():
+        old = json.loads(path.read_text())
+        for key in ("seed", "ranges", "params", "scvx_settings"):
+            if old.get(key) != config[key]:
+                raise ValueError(
+                    f"{out_dir} holds samples made with a different {key}; "
+                    "use another output directory"
+                )
+    else:
+        path.write_text(json.dumps(config, indent=2))
+
+
+def generate(
+    out_dir: str | Path,
+    n_base: int,
+    seed: int = 0,
+    ranges: SamplingRanges | None = None,
+    params: Params | None = None,
+    settings: SCvxSettings | None = None,
+    workers: int | None = None,
+    progress: bool = True,
+) -> dict[str, int]:
+    """Solve base samples 0..n_base-1 not yet in ``out_dir``; returns status counts."""
+    out = Path(out_dir)
+    (out / "samples").mkdir(parents=True, exist_ok=True)
+    ranges = ranges or SamplingRanges()
+    params = params or Params()
+    settings = settings or SCvxSettings()
+    config = {
+        "seed": seed,
+        "ranges": ranges.to_json_dict(),
+        "params": params.to_json_dict(),
+        "scvx_settings": dataclasses.asdict(settings),
+    }
+    _check_run_config(out, config)
+    todo = [i for i in range(n_base) if i not in done_ids(out)]
+    jobs = [(i, seed, config["ranges"], config["params"], config["scvx_settings"]) for i in todo]
+    workers = workers or os.cpu_count() or 1
+    counts: dict[str, int] = {}
+    bar = _progress(len(jobs), progress, n_base - len(jobs))
+    _limit_threads()
+    previous = signal.signal(signal.SIGTERM, _raise_interrupt)
+    try:
+        for rec in _imap(jobs, workers):
+            write_sample(out, rec)
+            counts[str(rec["status"])] = counts.get(str(rec["status"]), 0) + 1
+            bar.update(1)
+            bar.set_postfix(counts)
+    finally:
+        bar.close()
+        signal.signal(signal.SIGTERM, previous)
+    return counts
+
+
+def _raise_interrupt(signum: int, frame: object) -> None:
+    raise KeyboardInterrupt  # SIGTERM stops the pool like Ctrl-C: solved samples are kept
+
+
+def _imap(jobs: Sequence, workers: int) -> Iterable[dict]:
+    if workers <= 1 or len(jobs) <= 1:
+        yield from map(solve_sample, jobs)
+        return
+    import multiprocessing as mp
+
+    ctx = mp.get_context("spawn")  # CasADi/Clarabel state is not fork-safe
+    pool = ctx.Pool(workers, initializer=_limit_threads)
+    try:
+        yield from pool.imap_unordered(solve_sample, jobs)
+        pool.close()
+    except BaseException:
+        pool.terminate()  # Ctrl-C: finished samples are on disk already
+        raise
+    finally:
+        pool.join()
+
+
+def _progress(total: int, enabled: bool, already: int):
+    from tqdm import tqdm
+
+    return tqdm(
+        total=total,
+        disable=not enabled,
+        desc=f"solving ({already} done before)",
+        unit="landing",
+        file=sys.stderr,
+    )
+
+
+# ---- augmentation and packing -------------------------------------------------------------
+def code_version() -> str:
+    try:
+        from importlib.metadata import version
+
+        pkg = version("guidance")
+    except Exception:
+        pkg = "unknown"
+    try:
+        root = Path(__file__).resolve().parent.parent
+        rev = subprocess.run(
+            ["git", "-C", str(root), "rev-parse", "--short", "HEAD"],
+            capture_output=True,
+            text=True,
+            timeout=5,
+        ).stdout.strip()
+        dirty = subprocess.run(
+            ["git", "-C", str(root), "status", "--porcelain", "guidance"],
+            capture_output=True,
+            text=True,
+            timeout=5,
+        ).stdout.strip()
+    except (OSError, subprocess.SubprocessError):
+        rev, dirty = "", ""
+    return f"guidance {pkg}" + (f" git {rev}{'+dirty' if dirty else ''}" if rev else "")
+
+
+def rotate_theta(theta: np.ndarray, psi: float) -> np.ndarray:
+    from guidance.symmetry import rotate_states
+
+    out = np.array(theta, dtype=np.float64)
+    x0 = np.zeros(NX)
+    x0[:13] = theta[:13]
+    out[:10] = rotate_states(x0, psi)[:10]
+    return out
+
+
+def pack(out_dir: str | Path, dataset_path: str | Path, n_base: int | None = None) -> dict:
+    """Augment the solved base samples of ``out_dir`` and write the dataset; returns header."""
+    from guidance.symmetry import rotate_states
+
+    out = Path(out_dir)
+    config = json.loads(_run_config_path(out).read_text())
+    ids = sorted(done_ids(out))
+    if n_base is not None:
+        ids = [i for i in ids if i < n_base]
+    if not ids:
+        raise ValueError(f"no solved samples in {out}")
+    recs = [read_sample(sample_path(out, i)) for i in ids]
+    N = int(config["params"]["N"])
+    it_max = int(config["scvx_settings"]["iter_max"])
+    M = len(recs) * N_ROTATIONS
+    theta = np.zeros((M, N_THETA))
+    x = np.zeros((M, N, NX))
+    u = np.zeros((M, N, NU))
+    masks = np.zeros((M, it_max, NC * N), np.uint8)
+    n_masks = np.zeros(M, np.int16)
+    t_f = np.zeros(M)
+    status = np.empty(M, dtype="<U16")
+    iterations = np.zeros(M, np.int16)
+    subproblems = np.zeros(M, np.int16)
+    solve_time = np.zeros(M)
+    base_id = np.zeros(M, np.int32)
+    rot = np.zeros(M, np.int8)
+    for b, rec in enumerate(recs):
+        nm = min(len(rec["masks"]), it_max)
+        for j, deg in enumerate(ROTATION_DEG):
+            m = b * N_ROTATIONS + j
+            psi = math.radians(deg)
+            theta[m] = rotate_theta(rec["theta"], psi)
+            x[m] = rotate_states(rec["x"], psi)
+            u[m] = rec["u"]
+            masks[m, :nm] = rec["masks"][:nm]
+            n_masks[m] = nm
+            t_f[m] = rec["t_f"]
+            status[m] = str(rec["status"])
+            iterations[m] = rec["iterations"]
+            subproblems[m] = rec["subproblems"]
+            solve_time[m] = rec["solve_time_s"]
+            base_id[m] = rec["id"]
+            rot[m] = j
+    base_status = [str(r["status"]) for r in recs]
+    counts = {s: base_status.count(s) for s in sorted(set(base_status))}
+    header = {
+        "format": FORMAT,
+        "format_version": FORMAT_VERSION,
+        "created_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+        "code_version": code_version(),
+        "seed": config["seed"],
+        "sampling_ranges": config["ranges"],
+        "params": config["params"],
+        "scvx_settings": config["scvx_settings"],
+        "theta_names": list(THETA_NAMES),
+        "rotations_deg": list(ROTATION_DEG),
+        "n_base": len(recs),
+        "n_samples": M,
+        "base_status_counts": counts,
+        "feasible_fraction": counts.get("solved", 0) / len(recs),
+        "mean_rejected_draws": float(np.mean([int(r["rejected_draws"]) for r in recs])),
+        "mask_rule": "bit 7k + c, tight at the accepted subproblem of iteration k (scvx.py)",
+    }
+    path = Path(dataset_path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(path.name + ".tmp.npz")
+    np.savez_compressed(
+        tmp,
+        header=np.array(json.dumps(header)),
+        theta=theta,
+        x=x,
+        u=u,
+        t_f=t_f,
+        masks=masks,
+        n_masks=n_masks,
+        status=status,
+        iterations=iterations,
+        subproblems=subproblems,
+        solve_time_s=solve_time,
+        base_id=base_id,
+        rotation=rot,
+    )
+    os.replace(tmp, path)
+    return header
+
+
+@dataclass
+class Dataset:
+    header: dict
+    theta: np.ndarray  # (M, 16)
+    x: np.ndarray  # (M, N, 14)
+    u: np.ndarray  # (M, N, 3)
+    t_f: np.ndarray  # (M,)
+    masks: np.ndarray  # (M, iter_max, 7N) uint8, valid rows [: n_masks]
+    n_masks: np.ndarray  # (M,)
+    status: np.ndarray  # (M,) str
+    iterations: np.ndarray
+    subproblems: np.ndarray
+    solve_time_s: np.ndarray
+    base_id: np.ndarray
+    rotation: np.ndarray
+
+    @property
+    def N(self) -> int:
+        return int(self.x.shape[1])
+
+    def subset(self, idx: np.ndarray) -> Dataset:
+        fields = {
+            f.name: getattr(self, f.name)[idx]
+            for f in dataclasses.fields(self)
+            if f.name != "header"
+        }
+        return Dataset(header=self.header, **fields)
+
+    def solved(self) -> Dataset:
+        return self.subset(np.flatnonzero(self.status == "solved"))
+
+    def solution_targets(self) -> np.ndarray:
+        """(M, 17N + 1): x (N*14, node-major), u (N*3), t_f."""
+        M = len(self.theta)
+        return np.concatenate(
+            [self.x.reshape(M, -1), self.u.reshape(M, -1), self.t_f[:, None]], axis=1
+        )
+
+    def constraint_pairs(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Rows (theta, k) -> mask for every recorded iteration; also the row's sample index."""
+        rows, idx = [], []
+        for m in range(len(self.theta)):
+            for k in range(int(self.n_masks[m])):
+                rows.append(np.concatenate([self.theta[m], [k + 1.0]]))
+                idx.append((m, k))
+        if not rows:
+            return np.zeros((0, N_THETA + 1)), np.zeros((0, NC * self.N), np.uint8), np.zeros(0)
+        ii = np.array(idx)
+        return np.array(rows), self.masks[ii[:, 0], ii[:, 1]], ii[:, 0]
+
+
+def load_dataset(path: str | Path) -> Dataset:
+    with np.load(path, allow_pickle=False) as f:
+        header = json.loads(str(f["header"]))
+        if header.get("format") != FORMAT:
+            raise ValueError(f"{path} is not a {FORMAT} file")
+        if header.get("format_version") != FORMAT_VERSION:
+            raise ValueError(
+                f"{path} has format version {header.get('format_version')}, "
+                f"this code reads version {FORMAT_VERSION}"
+            )
+        arrays = {k: f[k] for k in f.files if k != "header"}
+    return Dataset(header=header, **arrays)
+
+
+def summary(header: dict) -> str:
+    c = header["base_status_counts"]
+    return (
+        f"{header['n_base']} base samples x {len(header['rotations_deg'])} rotations = "
+        f"{header['n_samples']} samples; base status {c}; feasible fraction "
+        f"{100 * header['feasible_fraction']:.1f} %"
+    )
+
+
+def random_dataset(n_base: int = 12, N: int = 50, seed: int = 0, iters: int = 5) -> Dataset:
+    """A synthetic (not physical) dataset with the real layout, for tests of the learning code.
+
+    theta from the default ranges; targets are smooth functions of theta plus noise; masks are
+    thresholds of such functions, so that there is something to learn.
+    """
+    rng = np.random.default_rng(seed)
+    ranges = SamplingRanges()
+    theta = np.array([theta_of(draw_scenario(rng, ranges)[0]) for _ in range(n_base)])
+    theta = np.concatenate(
+        [[rotate_theta(t, math.radians(d)) for d in ROTATION_DEG] for t in theta]
+    )
+    M = len(theta)
+    W = rng.standard_normal((N_THETA, N * (NX + NU) + 1)) / 4
+    y = np.tanh(theta @ W) + 0.01 * rng.standard_normal((M, W.shape[1]))
+    Wm = rng.standard_normal((N_THETA + 1, NC * N))
+    masks = np.zeros((M, SCvxSettings().iter_max, NC * N), np.uint8)
+    for k in range(iters):
+        z = np.concatenate([theta, np.full((M, 1), k + 1.0)], axis=1) @ Wm
+        masks[:, k] = z > 2.0 * z.std()
+    header = {"format": FORMAT, "format_version": FORMAT_VERSION, "n_base": n_base}
+    return Dataset(
+        header=header,
+        theta=theta,
+        x=y[:, : N * NX].reshape(M, N, NX),
+        u=y[:, N * NX : N * (NX + NU)].reshape(M, N, NU),
+        t_f=y[:, -1],
+        masks=masks,
+        n_masks=np.full(M, iters, np.int16),
+        status=np.array(["solved"] * M),
+        iterations=np.full(M, iters, np.int16),
+        subproblems=np.full(M, iters, np.int16),
+        solve_time_s=np.ones(M),
+        base_id=np.repeat(np.arange(n_base), N_ROTATIONS).astype(np.int32),
+        rotation=np.tile(np.arange(N_ROTATIONS), n_base).astype(np.int8),
+    )

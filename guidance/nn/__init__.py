@@ -1,0 +1,1 @@
+"""Transformer networks of T-SCvx: model, training, ONNX export, onnxruntime inference."""

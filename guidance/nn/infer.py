@@ -1,0 +1,226 @@
+"""Inference of the shipped networks through onnxruntime, with the checks that refuse a model
+that does not fit the problem (input/output size, trained parameters, normalization).
+
+    cm = load_model("models/constraint.onnx", "constraint", scenario.params)
+    sm = load_model("models/solution.onnx", "solution", scenario.params)
+    guess = sm.warm_start(scenario)  # prediction with the boundary conditions made exact
+    SCvxSolver(scenario, SCvxSettings(eta_init=0.01)).solve(
+        guess=guess, masks=cm.mask_fn(theta_of(scenario)))
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from guidance.dataset import N_THETA, THETA_NAMES
+from guidance.params import IM, IQ, IR, IV, IW, NC, NU, NX, Params, Scenario
+
+META_KEY = "tscvx"
+META_FORMAT = "tscvx-onnx"
+META_VERSION = 1
+# Parameters that are network inputs (theta); every other parameter must match the model's.
+INPUT_PARAMS = ("glideslope_deg", "tilt_max_deg")
+PROBE_RTOL = 1e-4
+
+
+class ModelMismatchError(ValueError):
+    """The model file cannot serve this problem; the message says why."""
+
+
+def expected_sizes(kind: str, N: int) -> tuple[int, int]:
+    if kind == "constraint":
+        return N_THETA + 1, NC * N
+    if kind == "solution":
+        return N_THETA, (NX + NU) * N + 1
+    raise ValueError(f"unknown model kind {kind!r}")
+
+
+def _fail(path: Path, msg: str) -> ModelMismatchError:
+    return ModelMismatchError(f"model {path}: {msg}")
+
+
+def _params_diff(trained: dict[str, Any], problem: Params) -> list[str]:
+    cur = problem.to_json_dict()
+    diff = []
+    for key, value in cur.items():
+        if key in INPUT_PARAMS:
+            continue
+        old = trained.get(key)
+        same = (
+            old is not None
+            and np.shape(old) == np.shape(value)
+            and np.allclose(np.asarray(old, float), np.asarray(value, float), rtol=1e-12, atol=0)
+        )
+        if not same:
+            diff.append(f"{key} (model {old!r}, problem {value!r})")
+    return diff
+
+
+class OnnxModel:
+    """One network loaded and checked. ``run`` takes raw inputs (B, d_in)."""
+
+    def __init__(self, path: str | Path, kind: str, params: Params | None = None) -> None:
+        import onnxruntime as ort
+
+        self.path = path = Path(path)
+        params = params or Params()
+        if not path.is_file():
+            raise _fail(path, "file not found (run `make models`)")
+        opts = ort.SessionOptions()
+        opts.intra_op_num_threads = 1
+        opts.inter_op_num_threads = 1
+        try:
+            self.session = ort.InferenceSession(str(path), opts, providers=["CPUExecutionProvider"])
+        except Exception as exc:
+            raise _fail(path, f"onnxruntime cannot load it: {exc}") from exc
+        raw = self.session.get_modelmeta().custom_metadata_map.get(META_KEY)
+        if raw is None:
+            raise _fail(path, f"no '{META_KEY}' metadata: not a T-SCvx model export")
+        meta = json.loads(raw)
+        if meta.get("format") != META_FORMAT or meta.get("format_version") != META_VERSION:
+            raise _fail(path, f"unsupported metadata format {meta.get('format')!r}")
+        if meta.get("kind") != kind:
+            raise _fail(path, f"is a {meta.get('kind')!r} network, a {kind!r} one was asked for")
+        d_in, d_out = expected_sizes(kind, params.N)
+        inp = self.session.get_inputs()[0]
+        out = self.session.get_outputs()[0]
+        g_in, g_out = inp.shape[-1], out.shape[-1]
+        if g_in != d_in or meta.get("d_in") != d_in:
+            raise _fail(
+                path,
+                f"input size {g_in} does not match the problem's {d_in} "
+                f"({'theta (16) and the iteration k' if kind == 'constraint' else 'theta (16)'})",
+            )
+        if g_out != d_out or meta.get("d_out") != d_out or meta.get("N") != params.N:
+            raise _fail(
+                path,
+                f"output size {g_out} (N = {meta.get('N')}) does not match the problem's "
+                f"{d_out} (N = {params.N})",
+            )
+        names = [*THETA_NAMES, "k"] if kind == "constraint" else list(THETA_NAMES)
+        if meta.get("input_names") != names:
+            raise _fail(path, f"inputs {meta.get('input_names')} differ from {names}")
+        diff = _params_diff(meta.get("params", {}), params)
+        if diff:
+            raise _fail(path, "trained for other problem parameters: " + "; ".join(diff))
+        self._check_normalization(meta, d_in, d_out)
+        self.meta = meta
+        self.kind = kind
+        self.N = params.N
+        self.input_name = inp.name
+        self.threshold = float(meta.get("threshold", 0.5))
+        self._check_probe()
+
+    def _check_normalization(self, meta: dict, d_in: int, d_out: int) -> None:
+        for key, size in (("in_mean", d_in), ("in_std", d_in), ("out_mean", d_out)):
+            v = np.asarray(meta.get(key, []), float)
+            if v.shape != (size,) or not np.all(np.isfinite(v)):
+                raise _fail(self.path, f"normalization '{key}' has not {size} finite values")
+        for key, size in (("in_std", d_in), ("out_std", d_out)):
+            v = np.asarray(meta.get(key, []), float)
+            if v.shape != (size,) or not np.all(np.isfinite(v)) or np.any(v <= 0):
+                raise _fail(self.path, f"normalization '{key}' must be {size} positive values")
+
+    def _check_probe(self) -> None:
+        """The graph must reproduce the outputs recorded at export (catches a graph whose
+        folded normalization or weights differ from its metadata)."""
+        x = np.asarray(self.meta["probe_input"], np.float32)
+        want = np.asarray(self.meta["probe_output"], np.float64)
+        got = self.run(x).astype(np.float64)
+        scale = np.maximum(np.abs(want), 1.0)
+        if got.shape != want.shape or np.any(np.abs(got - want) > PROBE_RTOL * scale):
+            raise _fail(
+                self.path,
+                "the graph does not reproduce its recorded probe outputs: its normalization "
+                "or weights do not match the metadata",
+            )
+
+    def run(self, inputs: np.ndarray) -> np.ndarray:
+        a = np.atleast_2d(np.asarray(inputs, np.float32))
+        if a.shape[1] != self.meta["d_in"]:
+            raise ValueError(f"expected inputs of size {self.meta['d_in']}, got {a.shape[1]}")
+        return self.session.run(None, {self.input_name: a})[0]
+
+
+class ConstraintModel(OnnxModel):
+    def __init__(self, path: str | Path, params: Params | None = None) -> None:
+        super().__init__(path, "constraint", params)
+
+    def probabilities(self, theta: np.ndarray, k: np.ndarray | int) -> np.ndarray:
+        theta = np.atleast_2d(theta)
+        kk = np.broadcast_to(np.asarray(k, float), (len(theta),))[:, None]
+        logits = self.run(np.concatenate([theta, kk], axis=1))
+        return 1.0 / (1.0 + np.exp(-logits.astype(np.float64)))
+
+    def mask(self, theta: np.ndarray, k: int) -> np.ndarray:
+        """Predicted tight mask (7N bools) of iteration k for one scenario."""
+        return self.probabilities(theta, k)[0] >= self.threshold
+
+    def mask_fn(self, theta: np.ndarray) -> Callable[[int], np.ndarray]:
+        """The ``masks`` argument of ``SCvxSolver.solve``: k -> predicted mask."""
+        return lambda k: self.mask(theta, k)
+
+
+class SolutionModel(OnnxModel):
+    def __init__(self, path: str | Path, params: Params | None = None) -> None:
+        super().__init__(path, "solution", params)
+
+    def solution(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+        """Warm start (x (N,14), u (N,3), t_f) for one scenario."""
+        y = self.run(theta)[0].astype(np.float64)
+        N = self.N
+        x = y[: N * NX].reshape(N, NX)
+        u = y[N * NX : N * (NX + NU)].reshape(N, NU)
+        return x, u, float(y[-1])
+
+    def warm_start(self, scenario: Scenario) -> tuple[np.ndarray, np.ndarray, float]:
+        """The ``guess`` for ``SCvxSolver.solve``: prediction + exact boundary conditions."""
+        from guidance.dataset import theta_of
+
+        return consistent_guess(*self.solution(theta_of(scenario)), scenario)
+
+
+def consistent_guess(
+    x: np.ndarray, u: np.ndarray, t_f: float, scenario: Scenario
+) -> tuple[np.ndarray, np.ndarray, float]:
+    """A predicted trajectory made to meet the boundary conditions exactly.
+
+    The network's x(0) is only close to x0, and the subproblem's boundary conditions are hard:
+    with the small reduced trust radius (0.01) a guess off by more than the radius makes the
+    first subproblem infeasible. The offsets at both ends are removed with weights that fade
+    linearly along the trajectory, quaternions are renormalized, the mass is kept in
+    [m_dry, m0] and t_f positive.
+    """
+    p = scenario.params
+    x = np.array(x, dtype=float)
+    N = len(x)
+    w0 = np.linspace(1.0, 0.0, N)[:, None]
+    start = scenario.x0 - x[0]
+    x += w0 * start
+    target = x[-1].copy()
+    target[IR], target[IV], target[IW] = p.r_f, p.v_f, p.omega_f
+    if p.final_roll_free:
+        q = target[IQ].copy()
+        q[2:4] = 0.0
+        target[IQ] = q / max(np.linalg.norm(q), 1e-9)
+    else:
+        target[IQ] = p.q_f
+    end = target - x[-1]
+    end[IM] = 0.0  # the final mass is free
+    x += (1.0 - w0) * end
+    x[:, IQ] /= np.maximum(np.linalg.norm(x[:, IQ], axis=1, keepdims=True), 1e-9)
+    x[:, IM] = np.clip(x[:, IM], p.m_dry, scenario.initial.m0)
+    x[0] = scenario.x0
+    return x, np.array(u, dtype=float), float(max(t_f, 1e-3))
+
+
+def load_model(path: str | Path, kind: str, params: Params | None = None) -> OnnxModel:
+    cls = {"constraint": ConstraintModel, "solution": SolutionModel}.get(kind)
+    if cls is None:
+        raise ValueError(f"unknown model kind {kind!r}")
+    return cls(path, params)

@@ -1,0 +1,370 @@
+"""Training of the constraint and solution networks (paper, "Training, Validation, and Testing").
+
+- Only converged (``solved``) samples are used: they are what T-SCvx warm-starts and reduces.
+- Split BY BASE SAMPLE: 20 % of the base landings (all eight rotations of each) are the test
+  split; the rest is train+validation. Splitting after augmentation, as the paper appears to,
+  would put rotations of test landings into training.
+- Standardization: mean and standard deviation of the train+validation inputs and outputs
+  (components with zero spread, e.g. the pinned final position, get scale 1).
+- K-fold with K = 3 (folds by base sample too): one model is trained through the three folds in
+  turn, each time on the other two folds, validated on the held-out one; the paper reports the
+  third fold's numbers. AdamW, batch 128, linear learning-rate warm-up (the paper's 4000 steps,
+  capped at a tenth of all steps for small data) then cosine decay.
+- Constraint network: BCE on the 7N tight bits; the decision threshold is the largest one
+  reaching the target recall of the tight set (a missed tight constraint costs an SCvx
+  iteration; a spurious one only a little speed) on a calibration split: 10 % of the
+  train+validation base landings kept out of the folds. (By the end of the sequential K-fold
+  every validation row has been trained on, and a threshold chosen there is overconfident.)
+- Solution network: MSE on standardized (x, u, t_f), with t_f weighted as N outputs in the
+  training loss (one output among 17N + 1 would otherwise be ignored, and a warm start with a
+  wrong t_f is a poor one); the reported MSE is the plain mean over all outputs.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+from torch import nn
+
+from guidance.dataset import Dataset
+from guidance.nn.model import ArchConfig, Transformer, n_params
+
+KINDS = ("constraint", "solution")
+STD_FLOOR = 1e-9
+
+
+@dataclass(frozen=True)
+class TrainConfig:
+    epochs: int = 2  # per fold (the paper: two epochs)
+    folds: int = 3
+    batch_size: int = 128
+    lr: float = 1e-3
+    weight_decay: float = 1e-4
+    warmup_steps: int = 4000
+    test_fraction: float = 0.2
+    split_seed: int = 0
+    target_recall: float = 0.99
+    calibration_fraction: float = 0.1  # of train+val base landings, constraint net only
+    max_seconds: float = float("inf")  # wall-clock cap on the whole training
+    threads: int = 0  # torch threads (0: leave torch's default)
+
+
+# ---- data ---------------------------------------------------------------------------------
+def split_bases(base_id: np.ndarray, test_fraction: float, seed: int) -> tuple[np.ndarray, ...]:
+    """(train+val base ids, test base ids), disjoint, chosen by base sample."""
+    bases = np.unique(base_id)
+    rng = np.random.default_rng(seed)
+    perm = rng.permutation(bases)
+    n_test = max(1, round(test_fraction * len(bases))) if len(bases) > 1 else 0
+    return np.sort(perm[n_test:]), np.sort(perm[:n_test])
+
+
+def xy(ds: Dataset, kind: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Inputs, targets, the row's base id and its theta (for OOD tests) for one network."""
+    if kind == "constraint":
+        X, Y, idx = ds.constraint_pairs()
+        return X, Y.astype(np.float32), ds.base_id[idx], ds.theta[idx]
+    if kind == "solution":
+        return ds.theta.copy(), ds.solution_targets(), ds.base_id.copy(), ds.theta.copy()
+    raise ValueError(f"kind must be one of {KINDS}")
+
+
+def standardization(A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    mean = A.mean(axis=0)
+    std = A.std(axis=0)
+    scale = np.maximum(np.abs(mean), 1.0)
+    std = np.where(std > STD_FLOOR * scale, std, 1.0)
+    return mean, std
+
+
+# ---- metrics ------------------------------------------------------------------------------
+def mask_metrics(y: np.ndarray, pred: np.ndarray) -> dict[str, float]:
+    y = y.astype(bool)
+    pred = pred.astype(bool)
+    tp = float(np.sum(y & pred))
+    fp = float(np.sum(~y & pred))
+    fn = float(np.sum(y & ~pred))
+    precision = tp / (tp + fp) if tp + fp else 1.0
+    recall = tp / (tp + fn) if tp + fn else 1.0
+    f1 = 2 * precision * recall / (precision + recall) if precision + recall else 0.0
+    return {
+        "binary_accuracy": float(np.mean(y == pred)),
+        "all_zeros_accuracy": float(np.mean(~y)),
+        "all_ones_accuracy": float(np.mean(y)),
+        "precision": precision,
+        "recall": recall,
+        "f1": f1,
+        "mse": float(np.mean((y.astype(float) - pred.astype(float)) ** 2)),
+        "rows_fully_correct": float(np.mean(np.all(y == pred, axis=1))),
+    }
+
+
+def mahalanobis(theta_train: np.ndarray, theta: np.ndarray) -> np.ndarray:
+    """Distance of each row of ``theta`` from the training distribution (pseudo-inverse S)."""
+    mu = theta_train.mean(axis=0)
+    S_inv = np.linalg.pinv(np.cov(theta_train, rowvar=False), hermitian=True)
+    d = theta - mu
+    return np.sqrt(np.maximum(np.einsum("ij,jk,ik->i", d, S_inv, d), 0.0))
+
+
+def ood_flags(theta_train: np.ndarray, theta_test: np.ndarray) -> tuple[np.ndarray, float]:
+    """Test points beyond the 95th percentile of the training Mahalanobis distances."""
+    cut = float(np.percentile(mahalanobis(theta_train, theta_train), 95.0))
+    return mahalanobis(theta_train, theta_test) > cut, cut
+
+
+def prob_threshold(y: np.ndarray, p: np.ndarray, target_recall: float) -> float:
+    """Largest probability threshold whose recall of the tight bits is >= target."""
+    pos = np.sort(p[y.astype(bool)])
+    if len(pos) == 0:
+        return 0.5
+    k = math.floor((1.0 - target_recall) * len(pos))
+    thr = float(pos[k]) if k < len(pos) else 0.5
+    return float(min(0.5, max(thr * (1 - 1e-6), 1e-6)))
+
+
+# ---- training -----------------------------------------------------------------------------
+def _lr_lambda(warmup: int, total: int):
+    def f(step: int) -> float:
+        if step < warmup:
+            return (step + 1) / warmup
+        frac = (step - warmup) / max(1, total - warmup)
+        return 0.05 + 0.95 * 0.5 * (1 + math.cos(math.pi * min(1.0, frac)))
+
+    return f
+
+
+def _predict(net: nn.Module, X: np.ndarray, batch: int = 4096) -> np.ndarray:
+    net.eval()
+    out = []
+    with torch.no_grad():
+        for i in range(0, len(X), batch):
+            out.append(net(torch.from_numpy(X[i : i + batch]).float()).numpy())
+    return np.concatenate(out) if out else np.zeros((0, 0))
+
+
+@dataclass
+class TrainResult:
+    kind: str
+    arch: ArchConfig
+    net: Transformer
+    in_mean: np.ndarray
+    in_std: np.ndarray
+    out_mean: np.ndarray
+    out_std: np.ndarray
+    threshold: float  # probability threshold (constraint net), 0.5 otherwise
+    metrics: dict[str, Any]
+
+    def save(self, path: str | Path) -> None:
+        torch.save(
+            {
+                "kind": self.kind,
+                "arch": self.arch.to_dict(),
+                "state_dict": self.net.state_dict(),
+                "in_mean": self.in_mean,
+                "in_std": self.in_std,
+                "out_mean": self.out_mean,
+                "out_std": self.out_std,
+                "threshold": self.threshold,
+                "metrics": self.metrics,
+            },
+            path,
+        )
+
+
+def load_checkpoint(path: str | Path) -> TrainResult:
+    ck = torch.load(path, weights_only=False)
+    arch = ArchConfig(**ck["arch"])
+    net = Transformer(arch)
+    net.load_state_dict(ck["state_dict"])
+    net.eval()
+    return TrainResult(
+        ck["kind"],
+        arch,
+        net,
+        ck["in_mean"],
+        ck["in_std"],
+        ck["out_mean"],
+        ck["out_std"],
+        ck["threshold"],
+        ck["metrics"],
+    )
+
+
+def train(
+    ds: Dataset,
+    kind: str,
+    arch: dict[str, Any] | None = None,
+    cfg: TrainConfig | None = None,
+    log=print,
+) -> TrainResult:
+    cfg = cfg or TrainConfig()
+    if cfg.threads:
+        torch.set_num_threads(cfg.threads)
+    torch.manual_seed(cfg.split_seed)
+    t_start = time.perf_counter()
+    solved = ds.solved()
+    if len(solved.theta) == 0:
+        raise ValueError("the dataset has no solved samples to train on")
+    X, Y, bid, theta = xy(solved, kind)
+    trainval_b, test_b = split_bases(solved.base_id, cfg.test_fraction, cfg.split_seed)
+    tv = np.isin(bid, trainval_b)
+    te = np.isin(bid, test_b)
+    in_mean, in_std = standardization(X[tv])
+    if kind == "solution":
+        out_mean, out_std = standardization(Y[tv])
+    else:
+        out_mean, out_std = np.zeros(Y.shape[1]), np.ones(Y.shape[1])
+    Xs = ((X - in_mean) / in_std).astype(np.float32)
+    Ys = ((Y - out_mean) / out_std).astype(np.float32)
+    a = ArchConfig(d_in=X.shape[1], d_out=Y.shape[1], **(arch or {}))
+    net = Transformer(a)
+    if kind == "constraint":
+        loss_fn = nn.BCEWithLogitsLoss()
+    else:
+        w = torch.ones(Y.shape[1])
+        w[-1] = float(ds.N)  # t_f weighs as much as N outputs
+        w = w * (len(w) / w.sum())
+
+        def loss_fn(pred: torch.Tensor, target: torch.Tensor) -> torch.Tensor:
+            return torch.mean(w * (pred - target) ** 2)
+
+    opt = torch.optim.AdamW(net.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay)
+    rng = np.random.default_rng(cfg.split_seed + 1)
+    calib_b = np.zeros(0, trainval_b.dtype)
+    if kind == "constraint" and cfg.calibration_fraction > 0 and len(trainval_b) > cfg.folds:
+        n_cal = max(1, round(cfg.calibration_fraction * len(trainval_b)))
+        calib_b = np.sort(rng.permutation(trainval_b)[:n_cal])
+    fit_b = np.setdiff1d(trainval_b, calib_b)
+    cal = np.isin(bid, calib_b)
+    fold_of_base = dict(zip(fit_b.tolist(), rng.permutation(len(fit_b)) % cfg.folds, strict=True))
+    fold = np.array([fold_of_base.get(int(b), -1) for b in bid])
+    fit = tv & ~cal
+    rows_per_fold = [int(np.sum(fit & (fold != f))) for f in range(cfg.folds)]
+    total = sum(math.ceil(r / cfg.batch_size) for r in rows_per_fold) * cfg.epochs
+    warmup = max(1, min(cfg.warmup_steps, total // 10))
+    sched = torch.optim.lr_scheduler.LambdaLR(opt, _lr_lambda(warmup, total))
+    log(
+        f"[{kind}] {a.label()}: {n_params(net):,} parameters, {a.macs():,} MACs/inference; "
+        f"{int(tv.sum())} train+val rows ({len(trainval_b)} base landings, "
+        f"{len(calib_b)} of them for calibration), "
+        f"{int(te.sum())} test rows ({len(test_b)} base landings); {total} steps, "
+        f"warm-up {warmup}"
+    )
+    history = []
+    stopped_early = False
+    for f in range(cfg.folds):
+        tr = np.flatnonzero(fit & (fold != f))
+        va = np.flatnonzero(fit & (fold == f))
+        for ep in range(cfg.epochs):
+            net.train()
+            perm = rng.permutation(tr)
+            running, nb = 0.0, 0
+            for i in range(0, len(perm), cfg.batch_size):
+                b = perm[i : i + cfg.batch_size]
+                xb, yb = torch.from_numpy(Xs[b]), torch.from_numpy(Ys[b])
+                loss = loss_fn(net(xb), yb)
+                opt.zero_grad()
+                loss.backward()
+                opt.step()
+                sched.step()
+                running += loss.item()
+                nb += 1
+                if time.perf_counter() - t_start > cfg.max_seconds:
+                    break
+            train_loss = running / max(nb, 1)
+            val_loss = float(
+                loss_fn(torch.from_numpy(_predict(net, Xs[va])), torch.from_numpy(Ys[va]))
+            )
+            history.append({"fold": f + 1, "epoch": ep + 1, "train": train_loss, "val": val_loss})
+            log(f"[{kind}] fold {f + 1} epoch {ep + 1}: train {train_loss:.4f} val {val_loss:.4f}")
+            if time.perf_counter() - t_start > cfg.max_seconds:
+                stopped_early = True
+                break
+        if stopped_early:
+            log(f"[{kind}] stopped at the wall-clock cap of {cfg.max_seconds:.0f} s")
+            break
+    net.eval()
+    threshold = 0.5
+    if kind == "constraint":
+        rows = np.flatnonzero(cal) if cal.any() else np.flatnonzero(fit & (fold == f))
+        p_cal = 1 / (1 + np.exp(-_predict(net, Xs[rows])))
+        threshold = prob_threshold(Ys[rows], p_cal, cfg.target_recall)
+    metrics = evaluate(net, kind, Xs, Ys, tv, te, theta, threshold)
+    metrics.update(
+        history=history,
+        train_seconds=time.perf_counter() - t_start,
+        stopped_early=stopped_early,
+        n_params=n_params(net),
+        macs=a.macs(),
+        train_config=dataclasses.asdict(cfg),
+        n_trainval_bases=len(trainval_b),
+        n_calibration_bases=len(calib_b),
+        n_test_bases=len(test_b),
+        test_bases=[int(b) for b in test_b],
+    )
+    return TrainResult(kind, a, net, in_mean, in_std, out_mean, out_std, threshold, metrics)
+
+
+def evaluate(
+    net: nn.Module,
+    kind: str,
+    Xs: np.ndarray,
+    Ys: np.ndarray,
+    tv: np.ndarray,
+    te: np.ndarray,
+    theta: np.ndarray,
+    threshold: float,
+) -> dict[str, Any]:
+    """Test-split metrics, on all test rows and on the out-of-distribution ones."""
+    out: dict[str, Any] = {"threshold": threshold}
+    if not te.any():
+        return out
+    ood, cut = ood_flags(theta[tv], theta[te])
+    out["ood_cut_mahalanobis"] = cut
+    out["n_test_rows"] = int(te.sum())
+    out["n_ood_rows"] = int(ood.sum())
+    pred = _predict(net, Xs[te])
+    Y = Ys[te]
+    if kind == "constraint":
+        prob = 1 / (1 + np.exp(-pred))
+        out["test"] = mask_metrics(Y, prob >= threshold)
+        out["test_at_0.5"] = mask_metrics(Y, prob >= 0.5)
+        out["test_prob_mse"] = float(np.mean((prob - Y) ** 2))
+        if ood.any():
+            out["ood"] = mask_metrics(Y[ood], prob[ood] >= threshold)
+            out["ood_prob_mse"] = float(np.mean((prob[ood] - Y[ood]) ** 2))
+    else:
+        out["test_mse"] = float(np.mean((pred - Y) ** 2))
+        out["test_mse_tf"] = float(np.mean((pred[:, -1] - Y[:, -1]) ** 2))
+        if ood.any():
+            out["ood_mse"] = float(np.mean((pred[ood] - Y[ood]) ** 2))
+        out["train_val_mse"] = float(np.mean((_predict(net, Xs[tv]) - Ys[tv]) ** 2))
+    return out
+
+
+def summarize(res: TrainResult) -> str:
+    m = res.metrics
+    head = f"{res.kind} {res.arch.label()} ({m['n_params']:,} params, {m['macs']:,} MACs)"
+    if res.kind == "constraint" and "test" in m:
+        t = m["test"]
+        return (
+            f"{head}: acc {100 * t['binary_accuracy']:.2f} % (zeros "
+            f"{100 * t['all_zeros_accuracy']:.2f} %), P {t['precision']:.3f} R {t['recall']:.3f} "
+            f"F1 {t['f1']:.3f} at p >= {res.threshold:.3g}"
+        )
+    if "test_mse" in m:
+        return f"{head}: test MSE {m['test_mse']:.4f}, OOD MSE {m.get('ood_mse', float('nan')):.4f}"
+    return head
+
+
+def metrics_json(res: TrainResult) -> str:
+    return json.dumps(res.metrics, indent=1, default=float)

@@ -1,0 +1,19 @@
+# Shipped networks: `make models` reproduces data generation, training, export and baselines.
+# Included from the top Makefile (uses $(VENV) and the `setup` target).
+# The dataset step is resumable: an interrupted `make models` continues where it stopped.
+# Override for a quicker run, e.g. `make models MODELS_N_BASE=400`.
+
+MODELS_N_BASE  ?= 1592
+MODELS_DATA    ?= data/dataset.npz
+MODELS_RUN_DIR ?= data/runs/default
+MODELS_TRAIN   ?= data/train
+GUIDANCE       := $(VENV)/bin/guidance
+
+.PHONY: models
+
+models: setup
+	nice $(GUIDANCE) dataset --n-base $(MODELS_N_BASE) --run-dir $(MODELS_RUN_DIR) --output $(MODELS_DATA)
+	rm -rf $(MODELS_TRAIN)
+	nice $(GUIDANCE) train --dataset $(MODELS_DATA) --train-dir $(MODELS_TRAIN) --sizes flight-m,flight-mlp,flight-s,reference
+	$(GUIDANCE) export --train-dir $(MODELS_TRAIN) --dataset $(MODELS_DATA) --models-dir models
+	$(GUIDANCE) baselines --dataset $(MODELS_DATA) --models-dir models

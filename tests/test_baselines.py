@@ -1,0 +1,60 @@
+"""Lookup-table baselines: exactness of the tables, the two tables from one run."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from guidance.baselines import (
+    KDTreeTable,
+    PCALinearTable,
+    format_table,
+    run_baselines,
+)
+from guidance.dataset import random_dataset
+from guidance.nn.train import mahalanobis, ood_flags
+
+
+def test_pca_linear_table_equals_delaunay_interpolation() -> None:
+    from scipy.interpolate import LinearNDInterpolator
+
+    rng = np.random.default_rng(0)
+    X, Y = rng.standard_normal((40, 4)), rng.standard_normal((40, 3))
+    table = PCALinearTable(X, Y, n_components=4)
+    Z = rng.standard_normal((25, 4)) * 0.5
+    ref = LinearNDInterpolator(table.Z, Y)(Z)
+    inside = ~np.isnan(ref).any(axis=1)
+    assert inside.sum() >= 10
+    got = np.array([table.weights(z) @ Y for z in Z[inside]])
+    np.testing.assert_allclose(got, ref[inside], atol=1e-9)
+    # outside the hull: nearest neighbour, counted
+    far = table.pca.inverse_transform(np.full((1, 4), 50.0))
+    table.predict(far)
+    assert table.outside == 1
+
+
+def test_kdtree_returns_the_table_entry() -> None:
+    rng = np.random.default_rng(1)
+    X, Y = rng.standard_normal((30, 17)), rng.standard_normal((30, 5))
+    np.testing.assert_array_equal(KDTreeTable(X, Y).predict(X[7] + 1e-9), Y[7:8])
+
+
+def test_ood_is_the_tail_of_the_training_distances() -> None:
+    rng = np.random.default_rng(2)
+    train = rng.standard_normal((500, 3))
+    d = mahalanobis(train, train)
+    assert np.mean(d > np.percentile(d, 95)) == pytest.approx(0.05, abs=0.01)
+    flags, _ = ood_flags(train, np.array([[0.0, 0.0, 0.0], [10.0, 0.0, 0.0]]))
+    assert flags.tolist() == [False, True]
+
+
+def test_both_tables_from_one_run() -> None:
+    ds = random_dataset(n_base=10, seed=3)
+    res = run_baselines(ds, None, interp_train=40, interp_test=5, max_queries=30)
+    for kind in ("constraint", "solution"):
+        r = res[kind]
+        assert set(r) == {"Linear Interpolation", "KDTree"}
+        for m in r.values():
+            assert m["time_ms"] > 0 and np.isfinite(m["mse"]) and m["peak_mb"] >= 0
+        text = format_table(kind, r)
+        assert "Inference Time (ms)" in text and "OOD MSE" in text and "Peak Memory" in text

@@ -1,0 +1,211 @@
+"""Transformers: a few training steps, ONNX export equal to PyTorch, refusal of misfit models."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+torch = pytest.importorskip("torch")
+onnx = pytest.importorskip("onnx")
+
+from guidance.dataset import random_dataset  # noqa: E402
+from guidance.nn.export import META_KEY, export_onnx, normalized_module  # noqa: E402
+from guidance.nn.infer import ModelMismatchError, load_model  # noqa: E402
+from guidance.nn.model import ArchConfig, Transformer  # noqa: E402
+from guidance.nn.train import (  # noqa: E402
+    TrainConfig,
+    mask_metrics,
+    prob_threshold,
+    split_bases,
+    train,
+)
+from guidance.params import Params  # noqa: E402
+
+TINY = dict(d_model=16, n_heads=2, n_layers=1, d_ff=32)
+SHIPPED = Path(__file__).resolve().parent.parent / "models"
+
+
+@pytest.fixture(scope="module")
+def trained(tmp_path_factory: pytest.TempPathFactory):
+    ds = random_dataset(n_base=12, seed=1)
+    cfg = TrainConfig(epochs=1, batch_size=64, threads=1)
+    out = tmp_path_factory.mktemp("models")
+    res, paths = {}, {}
+    for kind in ("constraint", "solution"):
+        res[kind] = train(ds, kind, TINY, cfg, log=lambda _: None)
+        paths[kind] = out / f"{kind}.onnx"
+        export_onnx(res[kind], paths[kind], Params().to_json_dict())
+    return res, paths
+
+
+def test_split_is_by_base_sample() -> None:
+    base_id = np.repeat(np.arange(50), 8)
+    tv, te = split_bases(base_id, 0.2, 0)
+    assert len(te) == 10 and not set(tv) & set(te)
+    assert set(tv) | set(te) == set(range(50))
+
+
+def test_a_few_training_steps_run_and_report(trained) -> None:
+    res, _ = trained
+    c, s = res["constraint"].metrics, res["solution"].metrics
+    assert all(np.isfinite(h["train"]) and np.isfinite(h["val"]) for h in c["history"])
+    assert len(c["history"]) == 3  # K = 3 folds x 1 epoch
+    for key in ("binary_accuracy", "all_zeros_accuracy", "precision", "recall", "f1"):
+        assert 0.0 <= c["test"][key] <= 1.0
+    assert np.isfinite(s["test_mse"]) and "ood_mse" in s
+    assert c["n_test_bases"] == 2 and c["n_trainval_bases"] == 10
+    assert c["n_calibration_bases"] == 1 and s["n_calibration_bases"] == 0
+
+
+def test_mask_metrics_and_threshold() -> None:
+    y = np.array([[1, 0, 0, 1], [0, 0, 1, 0]])
+    m = mask_metrics(y, np.array([[1, 0, 1, 1], [0, 0, 0, 0]]))
+    assert m["precision"] == pytest.approx(2 / 3) and m["recall"] == pytest.approx(2 / 3)
+    assert m["all_zeros_accuracy"] == pytest.approx(5 / 8)
+    p = np.array([0.9, 0.8, 0.05, 0.3, 0.2, 0.1])
+    yy = np.array([1, 1, 1, 0, 0, 0])
+    thr = prob_threshold(yy, p, 0.99)
+    assert np.all(p[yy == 1] >= thr)  # every tight bit recalled
+
+
+def test_onnx_equals_pytorch_on_1000_inputs(trained) -> None:
+    res, paths = trained
+    rng = np.random.default_rng(5)
+    for kind in ("constraint", "solution"):
+        r = res[kind]
+        X = r.in_mean + rng.standard_normal((1000, r.arch.d_in)) * r.in_std
+        X = X.astype(np.float32)
+        with torch.no_grad():
+            ref = normalized_module(r)(torch.from_numpy(X)).numpy()
+        got = load_model(paths[kind], kind).run(X)
+        np.testing.assert_allclose(got, ref, rtol=1e-5, atol=1e-5)
+
+
+def test_onnx_file_is_self_contained(trained) -> None:
+    _, paths = trained
+    for p in paths.values():
+        assert list(p.parent.glob(p.name + "*")) == [p]  # no external weight file
+        m = onnx.load(str(p), load_external_data=False)
+        assert all(not t.external_data for t in m.graph.initializer)
+
+
+def test_model_for_another_problem_is_refused(trained) -> None:
+    _, paths = trained
+    with pytest.raises(ModelMismatchError, match="output size"):
+        load_model(paths["constraint"], "constraint", Params(N=40))
+    with pytest.raises(ModelMismatchError, match="T_max"):
+        load_model(paths["solution"], "solution", Params(T_max=4.5))
+    with pytest.raises(ModelMismatchError, match="'solution' network"):
+        load_model(paths["solution"], "constraint")
+    # glideslope and tilt limit are inputs, not fixed parameters
+    load_model(paths["solution"], "solution", Params(glideslope_deg=30.0))
+
+
+def _rewrite_meta(src: Path, dst: Path, edit) -> Path:
+    m = onnx.load(str(src))
+    entry = next(e for e in m.metadata_props if e.key == META_KEY)
+    meta = json.loads(entry.value)
+    edit(meta)
+    entry.value = json.dumps(meta)
+    onnx.save(m, str(dst))
+    return dst
+
+
+def test_mismatched_normalization_is_refused(trained, tmp_path: Path) -> None:
+    _, paths = trained
+
+    def shift_mean(meta: dict) -> None:  # metadata no longer describes the folded-in graph
+        meta["in_mean"][0] += 1.0
+        meta["probe_output"] = (np.asarray(meta["probe_output"]) + 0.5).tolist()
+
+    bad = _rewrite_meta(paths["solution"], tmp_path / "shifted.onnx", shift_mean)
+    with pytest.raises(ModelMismatchError, match="normalization or weights"):
+        load_model(bad, "solution")
+
+    def zero_std(meta: dict) -> None:
+        meta["in_std"][3] = 0.0
+
+    bad = _rewrite_meta(paths["solution"], tmp_path / "zero.onnx", zero_std)
+    with pytest.raises(ModelMismatchError, match="in_std"):
+        load_model(bad, "solution")
+
+    def short(meta: dict) -> None:
+        meta["out_mean"] = meta["out_mean"][:-1]
+
+    bad = _rewrite_meta(paths["solution"], tmp_path / "short.onnx", short)
+    with pytest.raises(ModelMismatchError, match="out_mean"):
+        load_model(bad, "solution")
+
+
+def test_wrong_input_size_is_refused(trained, tmp_path: Path) -> None:
+    """A graph taking 15 inputs (e.g. theta without the tilt limit) is refused at load."""
+    _, paths = trained
+    from onnx import TensorProto, helper, numpy_helper
+
+    W = numpy_helper.from_array(np.zeros((15, 350), np.float32), "W")
+    graph = helper.make_graph(
+        [helper.make_node("MatMul", ["inputs", "W"], ["tight_logits"])],
+        "g",
+        [helper.make_tensor_value_info("inputs", TensorProto.FLOAT, ["batch", 15])],
+        [helper.make_tensor_value_info("tight_logits", TensorProto.FLOAT, ["batch", 350])],
+        [W],
+    )
+    model = helper.make_model(graph, opset_imports=[helper.make_opsetid("", 18)])
+    model.ir_version = 9
+    src = onnx.load(str(paths["constraint"]))
+    model.metadata_props.extend(src.metadata_props)
+    bad = tmp_path / "fifteen.onnx"
+    onnx.save(model, str(bad))
+    with pytest.raises(ModelMismatchError, match="input size 15"):
+        load_model(bad, "constraint")
+    with pytest.raises(ModelMismatchError, match="file not found"):
+        load_model(tmp_path / "missing.onnx", "constraint")
+
+
+def test_architecture_counts() -> None:
+    cfg = ArchConfig(
+        d_in=17, d_out=350, d_model=384, n_heads=2, n_layers=4, d_ff=2048, tokens="single"
+    )
+    n = sum(p.numel() for p in Transformer(cfg).parameters())
+    assert 8.5e6 < n < 9.3e6  # the paper's 8.91 M parameters for the constraint network
+    assert cfg.macs() > 5e6  # far beyond the flight budget (see cli_learning.INSTR_BUDGET)
+
+
+@pytest.mark.skipif(not (SHIPPED / "constraint.onnx").exists(), reason="no shipped models")
+def test_shipped_models_load_and_answer() -> None:
+    from guidance.catalog import SCENARIOS
+    from guidance.dataset import theta_of
+
+    cm = load_model(SHIPPED / "constraint.onnx", "constraint")
+    sm = load_model(SHIPPED / "solution.onnx", "solution")
+    theta = theta_of(SCENARIOS["default"])
+    mask = cm.mask(theta, 1)
+    assert mask.shape == (350,) and mask.dtype == bool
+    x, u, t_f = sm.solution(theta)
+    assert x.shape == (50, 14) and u.shape == (50, 3) and np.isfinite(t_f)
+    rng = np.random.default_rng(0)
+    X = sm.meta["in_mean"] + rng.standard_normal((1000, 16)) * np.asarray(sm.meta["in_std"])
+    batch = sm.run(X)
+    np.testing.assert_allclose(
+        batch[:3], np.concatenate([sm.run(X[i]) for i in range(3)]), rtol=1e-5, atol=1e-5
+    )
+
+
+def test_consistent_guess_meets_the_boundary_conditions() -> None:
+    from guidance.catalog import SCENARIOS
+    from guidance.nn.infer import consistent_guess
+    from guidance.scvx import initial_guess
+
+    s = SCENARIOS["tilted"]
+    x, u, t_f = initial_guess(s)
+    rng = np.random.default_rng(0)
+    noisy = x + 0.05 * rng.standard_normal(x.shape)
+    gx, _, gt = consistent_guess(noisy, u, t_f, s)
+    np.testing.assert_allclose(gx[0], s.x0, atol=1e-12)
+    np.testing.assert_allclose(gx[-1, 0:6], [0, 0, 0, -0.1, 0, 0], atol=1e-12)
+    np.testing.assert_allclose(gx[-1, 8:13], 0.0, atol=1e-12)  # upright, at rest
+    np.testing.assert_allclose(np.linalg.norm(gx[:, 6:10], axis=1), 1.0, atol=1e-12)
+    assert np.all(gx[:, 13] >= s.params.m_dry) and gt == t_f
