@@ -34,7 +34,8 @@ def test_landing_subproblems_match_clarabel(subproblems) -> None:
         else:
             assert solver.update(q=prob.q, A_values=prob.A.data, b=prob.b) == 0
         sol = solver.solve()
-        assert sol.status == "solved", (name, k, sol.status)
+        # "solved_inaccurate" (best iterate) is accepted only if it meets the same bars below
+        assert sol.status in ("solved", "solved_inaccurate"), (name, k, sol.status)
         pres, dres = residuals(prob, sol)
         assert pres <= RES_TOL and dres <= RES_TOL, (name, k, pres, dres)
         if ref.status != "solved":  # compare objectives only where Clarabel solves
