@@ -21,6 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
+from guidance.csocp import SOLVE_STATUS
 from guidance.params import NC, NU, NX, Params, Scenario, SCvxSettings
 from guidance.scenario import ScenarioError
 from guidance.scvx import IterationRecord, SCvxResult
@@ -28,16 +29,7 @@ from guidance.scvx import IterationRecord, SCvxResult
 LIB_PATH = Path(__file__).resolve().parent.parent / "build" / "libtscvx_gnc.so"
 MESSAGE_LEN = 256
 STATUS_NAMES = ("solved", "infeasible", "max_iterations", "solver_error", "invalid_input")
-SOCP_STATUS_NAMES = (
-    "unsolved",
-    "solved",
-    "solved_inaccurate",
-    "primal_infeasible",
-    "dual_infeasible",
-    "max_iterations",
-    "numerical_error",
-    "invalid_input",
-)
+SOCP_STATUS_NAMES = SOLVE_STATUS  # one table of the SOCP runtime's statuses (csocp)
 
 _d = ct.c_double
 _i = ct.c_int

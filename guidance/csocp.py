@@ -124,7 +124,7 @@ class _IterLog(ct.Structure):
 
 
 # C solve status -> ConicSolution status (index = enum value)
-_STATUS: tuple[Status, ...] = (
+SOLVE_STATUS: tuple[Status, ...] = (
     "numerical_error",  # UNSOLVED (never returned by solve)
     "solved",
     "solved_inaccurate",
@@ -455,7 +455,7 @@ class Solver:
         t0 = time.perf_counter()
         st = int(self.lib.tscvx_solve(self.ws))
         elapsed = time.perf_counter() - t0
-        status = _STATUS[st] if 0 <= st < len(_STATUS) else "numerical_error"
+        status = SOLVE_STATUS[st] if 0 <= st < len(SOLVE_STATUS) else "numerical_error"
         if status == "invalid_input":
             return _invalid(n, m, self.message)
         p, mg = self._Aeq.shape[0], self._G.shape[0]
