@@ -54,6 +54,11 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
     d.add_argument("--run-dir", default=DEFAULT_RUN_DIR, help="per-sample files (resumable)")
     d.add_argument("--output", default=DEFAULT_DATASET, help="packed dataset (.npz)")
     d.add_argument("--workers", type=int, default=0, help="worker processes (0: all cores)")
+    d.add_argument(
+        "--backend",
+        choices=["c", "clarabel", "c-socp"],
+        help="SCvx that solves the samples (default: the C library when built, else clarabel)",
+    )
     d.add_argument("--pack-only", action="store_true", help="pack the samples solved so far")
     d.add_argument("--no-progress", action="store_true")
     d.set_defaults(func=cmd_dataset, ranges=SamplingRanges())
@@ -118,6 +123,7 @@ def cmd_dataset(args: argparse.Namespace) -> int:
                 ranges=args.ranges,
                 workers=args.workers or None,
                 progress=not args.no_progress,
+                backend=args.backend,
             )
         except KeyboardInterrupt:
             print(

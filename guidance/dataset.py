@@ -28,7 +28,7 @@ import signal
 import subprocess
 import sys
 import time
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -177,10 +177,9 @@ def _limit_threads() -> None:
         os.environ[var] = "1"
 
 
-def solve_sample(job: tuple[int, int, dict, dict, dict]) -> dict[str, Any]:
+def solve_sample(job: tuple[int, int, dict, dict, dict, str]) -> dict[str, Any]:
     """Worker: draw base sample ``i``, solve it, return the record (never raises)."""
-    i, seed, ranges_d, params_d, settings_d = job
-    from guidance.scvx import solve_scvx
+    i, seed, ranges_d, params_d, settings_d, backend = job
 
     ranges = SamplingRanges.from_json_dict(ranges_d)
     params = _params_from_json(params_d)
@@ -190,7 +189,7 @@ def solve_sample(job: tuple[int, int, dict, dict, dict]) -> dict[str, Any]:
     rec: dict[str, Any] = {"id": i, "theta": theta_of(scenario), "rejected_draws": rejected}
     t0 = time.perf_counter()
     try:
-        r = solve_scvx(scenario, settings)
+        r = _solver(backend)(scenario, settings)
         rec.update(
             status=r.status,
             reason=r.reason,
@@ -215,6 +214,24 @@ def solve_sample(job: tuple[int, int, dict, dict, dict]) -> dict[str, Any]:
             masks=np.zeros((0, NC * N), np.uint8),
         )
     return rec
+
+
+def default_backend() -> str:
+    """The C library when it is built (issue 5: the flight solver makes the data), else the
+    Python reference with Clarabel."""
+    from guidance.cguidance import LIB_PATH
+
+    return "c" if LIB_PATH.exists() else "clarabel"
+
+
+def _solver(backend: str) -> Callable[[Scenario, SCvxSettings], Any]:
+    if backend == "c":
+        from guidance.cguidance import solve_c
+
+        return solve_c
+    from guidance.scvx import solve_scvx
+
+    return lambda scenario, settings: solve_scvx(scenario, settings, backend)
 
 
 def _params_from_json(d: dict) -> Params:
@@ -253,7 +270,7 @@ def _check_run_config(out_dir: Path, config: dict) -> None:
     path = _run_config_path(out_dir)
     if path.exists():
         old = json.loads(path.read_text())
-        for key in ("seed", "ranges", "params", "scvx_settings"):
+        for key in ("seed", "ranges", "params", "scvx_settings", "backend"):
             if old.get(key) != config[key]:
                 raise ValueError(
                     f"{out_dir} holds samples made with a different {key}; "
@@ -272,6 +289,7 @@ def generate(
     settings: SCvxSettings | None = None,
     workers: int | None = None,
     progress: bool = True,
+    backend: str | None = None,
 ) -> dict[str, int]:
     """Solve base samples 0..n_base-1 not yet in ``out_dir``; returns status counts."""
     out = Path(out_dir)
@@ -284,10 +302,14 @@ def generate(
         "ranges": ranges.to_json_dict(),
         "params": params.to_json_dict(),
         "scvx_settings": dataclasses.asdict(settings),
+        "backend": backend or default_backend(),
     }
     _check_run_config(out, config)
     todo = [i for i in range(n_base) if i not in done_ids(out)]
-    jobs = [(i, seed, config["ranges"], config["params"], config["scvx_settings"]) for i in todo]
+    jobs = [
+        (i, seed, config["ranges"], config["params"], config["scvx_settings"], config["backend"])
+        for i in todo
+    ]
     workers = workers or os.cpu_count() or 1
     counts: dict[str, int] = {}
     bar = _progress(len(jobs), progress, n_base - len(jobs))
@@ -431,6 +453,7 @@ def pack(out_dir: str | Path, dataset_path: str | Path, n_base: int | None = Non
         "sampling_ranges": config["ranges"],
         "params": config["params"],
         "scvx_settings": config["scvx_settings"],
+        "solver_backend": config.get("backend", "clarabel"),
         "theta_names": list(THETA_NAMES),
         "rotations_deg": list(ROTATION_DEG),
         "n_base": len(recs),
