@@ -99,6 +99,11 @@ def _clarabel_settings(tol: float, max_iter: int, verbose: bool) -> object:
     settings.tol_gap_rel = tol
     settings.tol_feas = tol
     settings.max_iter = max_iter
+    # Refine each KKT solve to 1e-10 (Clarabel's default is 1e-13 relative, 1e-12 absolute):
+    # ample for termination at 1e-9, and about a third of the solve time on the landing
+    # subproblems (objectives agree with the default to 1e-9).
+    settings.iterative_refinement_reltol = 1e-10
+    settings.iterative_refinement_abstol = 1e-10
     # Presolve may drop rows, which would forbid updating the numbers in place.
     settings.presolve_enable = False
     return settings
