@@ -6,6 +6,9 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 PIP    := $(VENV)/bin/pip
 STAMP  := $(VENV)/.installed
+# `python -m` from the checkout's root runs this checkout's package, wherever the venv's
+# editable install points (several worktrees may share one venv).
+GUIDANCE := $(PY) -m guidance
 APT_PACKAGES := libeigen3-dev libsuitesparse-dev valgrind
 BUILD  := build
 
@@ -50,16 +53,16 @@ test: setup lib ctest lint pytest
 # the shipped networks (warm start + tight-constraint masks) in the flight library.
 demo: setup lib
 	@mkdir -p out
-	$(VENV)/bin/guidance solve --method scvx --backend clarabel --out out/scvx.npz --plot out/scvx.png
-	$(VENV)/bin/guidance solve --method scvx --backend c --out out/scvx_c.npz --plot out/scvx_c.png
-	$(VENV)/bin/guidance solve --method tscvx --backend c --out out/tscvx_c.npz --plot out/tscvx_c.png
+	$(GUIDANCE) solve --method scvx --backend clarabel --out out/scvx.npz --plot out/scvx.png
+	$(GUIDANCE) solve --method scvx --backend c --out out/scvx_c.npz --plot out/scvx_c.png
+	$(GUIDANCE) solve --method tscvx --backend c --out out/tscvx_c.npz --plot out/tscvx_c.png
 	./$(BUILD)/pdg_example > out/pdg_example.txt && tail -n 3 out/pdg_example.txt
 
 bench: setup lib
-	$(VENV)/bin/guidance bench
+	$(GUIDANCE) bench
 
 budget: setup lib
-	$(VENV)/bin/guidance budget
+	$(GUIDANCE) budget
 
 # `models` (data generation, training, export) lives with the models it makes.
 -include models/models.mk

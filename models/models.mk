@@ -7,7 +7,6 @@ MODELS_N_BASE  ?= 1592
 MODELS_DATA    ?= data/dataset.npz
 MODELS_RUN_DIR ?= data/runs/default
 MODELS_TRAIN   ?= data/train
-GUIDANCE       := $(VENV)/bin/guidance
 
 .PHONY: models
 
