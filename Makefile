@@ -59,7 +59,7 @@ demo: setup lib
 	./$(BUILD)/pdg_example > out/pdg_example.txt && tail -n 3 out/pdg_example.txt
 
 bench: setup lib
-	$(GUIDANCE) bench
+	$(GUIDANCE) bench --backend clarabel c-socp c --tscvx-landings 24
 
 budget: setup lib
 	$(GUIDANCE) budget

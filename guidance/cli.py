@@ -118,6 +118,11 @@ def cmd_bench(args: argparse.Namespace) -> int:
     from guidance.bench import run_scvx_bench
 
     run_scvx_bench(backends=args.backend, repeats=args.repeats, method=args.method)
+    if args.tscvx_landings > 0:
+        from guidance import bench_tscvx
+
+        print()
+        bench_tscvx.main(args.tscvx_landings, args.tscvx_backend)
     if not args.skip_socp:
         try:
             from guidance import bench_socp
@@ -181,6 +186,13 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--repeats", type=int, default=1)
     b.add_argument("--method", choices=["scvx", "tscvx"], default="scvx")
     b.add_argument("--skip-socp", action="store_true", help="skip the conic solver benchmark")
+    b.add_argument(
+        "--tscvx-landings",
+        type=int,
+        default=0,
+        help="also compare SCvx and T-SCvx on this many fresh sampled landings",
+    )
+    b.add_argument("--tscvx-backend", default="c", choices=["clarabel", "c-socp", "c"])
     b.set_defaults(func=cmd_bench)
 
     g = sub.add_parser("budget", help="RAD750 time and memory budget of one C guidance call")

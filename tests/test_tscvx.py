@@ -65,3 +65,26 @@ def test_reference_masks_without_warm_start_match_in_c_and_python(
     assert abs(py.m_f - c.m_f) <= 1e-3  # the stopping rule leaves ~1e-4 of drift
     for r in (py, c):
         assert audit(r.x, r.u, r.t_f, scenario.params).max_path_violation <= 1e-6
+
+
+def test_tscvx_benchmark_landings_are_fresh_and_each_variant_is_audited() -> None:
+    """`guidance bench --tscvx-landings`: valid landings that no dataset seed draws, each variant
+    solved with the shipped networks and checked open loop like the reference."""
+    from guidance import bench_tscvx
+    from guidance.dataset import SamplingRanges, base_scenario, theta_of
+    from guidance.scenario import validate
+
+    landings = bench_tscvx.sample_landings(2)
+    trained = {tuple(theta_of(base_scenario(0, i, SamplingRanges())[0])) for i in range(4)}
+    for s in landings:
+        validate(s)
+        assert tuple(theta_of(s)) not in trained
+    variants = bench_tscvx.run(1, backend="c", progress=False)
+    assert [v.name for v in variants] == ["SCvx", "T-SCvx warm start", "T-SCvx (Algorithm 2)"]
+    for v in variants:
+        r = v.results[0]
+        assert r.status == "solved", (v.name, r.reason)
+        a = audit(r.x, r.u, r.t_f, landings[0].params)
+        assert a.max_path_violation <= 1e-6 and a.landing_position_error <= 1e-3, v.name
+    lines = bench_tscvx.report(variants, "c")
+    assert len(lines) == 2 + len(variants) + 1

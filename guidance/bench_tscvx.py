@@ -1,0 +1,133 @@
+"""What the networks buy: SCvx against T-SCvx on fresh sampled landings (paper Algorithm 2).
+
+The landings are drawn from the training distribution with a seed of their own (so none was
+trained on) and turned by a random multiple of 45 degrees about the up axis. Each is solved by
+plain SCvx (cubic guess, eta_init 2) and by two T-SCvx variants with the shipped networks:
+
+  warm start   the solution network's trajectory as the initial guess, eta_reduced,init 0.01
+  Algorithm 2  the same plus the constraint network's per-iteration tight masks
+
+Subproblems solved (accepted and rejected) is the figure that flight time follows; the final
+mass difference says what the warm start costs in fuel (a different local optimum).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from guidance.params import IM, Scenario, SCvxSettings
+from guidance.scvx import SCvxResult
+
+BENCH_SEED = 20261122  # not the dataset's seed: these landings were never trained on
+
+
+@dataclass
+class Variant:
+    name: str
+    results: list[SCvxResult] = field(default_factory=list)
+    wall_s: list[float] = field(default_factory=list)
+
+
+def sample_landings(n: int, seed: int = BENCH_SEED) -> list[Scenario]:
+    from guidance.dataset import SamplingRanges, base_scenario
+    from guidance.symmetry import rotate_scenario
+
+    rng = np.random.default_rng(seed)
+    ranges = SamplingRanges()
+    out = []
+    for i in range(n):
+        scenario, _ = base_scenario(seed, i, ranges)
+        out.append(rotate_scenario(scenario, math.radians(45.0 * int(rng.integers(8)))))
+    return out
+
+
+def _solver(backend: str) -> Callable[..., SCvxResult]:
+    if backend == "c":
+        from guidance.cguidance import solve_c
+
+        return solve_c
+
+    from guidance.scvx import SCvxSolver
+
+    conic_backend = "c" if backend == "c-socp" else backend
+
+    def solve(scenario, settings, guess=None, masks=None):
+        return SCvxSolver(scenario, settings, conic_backend).solve(guess=guess, masks=masks)
+
+    return solve
+
+
+def run(n: int, backend: str = "c", models_dir: Path | None = None, progress: bool = True):
+    from tqdm import tqdm
+
+    from guidance.cli import CONSTRAINT_MODEL, MODELS_DIR, SOLUTION_MODEL
+    from guidance.dataset import theta_of
+    from guidance.guess import project_guess
+    from guidance.nn.infer import ConstraintModel, SolutionModel
+    from guidance.tscvx import REDUCED_ETA_INIT
+
+    models = models_dir or MODELS_DIR
+    solve = _solver(backend)
+    full = SCvxSettings()
+    reduced = full.replace(eta_init=REDUCED_ETA_INIT)
+    variants = [Variant("SCvx"), Variant("T-SCvx warm start"), Variant("T-SCvx (Algorithm 2)")]
+    sol_model = con_model = None
+    for scenario in tqdm(sample_landings(n), desc="landings", disable=not progress):
+        if sol_model is None:
+            sol_model = SolutionModel(models / SOLUTION_MODEL, scenario.params)
+            con_model = ConstraintModel(models / CONSTRAINT_MODEL, scenario.params)
+        assert con_model is not None
+        theta = theta_of(scenario)
+        t0 = time.perf_counter()
+        guess = project_guess(scenario, *sol_model.solution(theta))
+        masks = con_model.mask_fn(theta)
+        t_nn = time.perf_counter() - t0  # both networks and the projection, in Python
+        runs = [(full, None, None), (reduced, guess, None), (reduced, guess, masks)]
+        for v, (settings, g, m) in zip(variants, runs, strict=True):
+            t0 = time.perf_counter()
+            v.results.append(solve(scenario, settings, guess=g, masks=m))
+            v.wall_s.append(time.perf_counter() - t0 + (t_nn if g is not None else 0.0))
+    return variants
+
+
+def report(variants: list[Variant], backend: str) -> list[str]:
+    base = variants[0]
+    n = len(base.results)
+    both = [i for i in range(n) if base.results[i].status == "solved"]
+    lines = [
+        f"T-SCvx benchmark: {n} fresh landings (seed {BENCH_SEED}), backend {backend}; "
+        f"fuel and ratios over the {len(both)} that SCvx solves",
+        f"{'variant':22s} {'solved':>6s} {'subprob.':>8s} {'iter.':>6s} {'time[s]':>8s} "
+        f"{'speed-up':>8s} {'dm_f med':>9s} {'dm_f min':>9s}",
+    ]
+    t_base = float(np.mean([base.wall_s[i] for i in both])) if both else math.nan
+    for v in variants:
+        ok = [i for i in both if v.results[i].status == "solved"]
+        dm = [
+            (v.results[i].x[-1, IM] - base.results[i].x[-1, IM]) / base.results[i].x[-1, IM]
+            for i in ok
+        ]
+        t = float(np.mean([v.wall_s[i] for i in both])) if both else math.nan
+        lines.append(
+            f"{v.name:22s} {sum(r.status == 'solved' for r in v.results):6d} "
+            f"{np.mean([v.results[i].subproblems_solved for i in both]):8.2f} "
+            f"{np.mean([v.results[i].iterations for i in both]):6.2f} {t:8.3f} "
+            f"{t_base / t:7.2f}x {np.median(dm):+9.1e} {np.min(dm):+9.1e}"
+        )
+    lines.append(
+        "subprob./iter./time: means per landing; dm_f: final mass relative to SCvx's "
+        "(negative: more fuel burnt); time includes the network inference for T-SCvx"
+    )
+    return lines
+
+
+def main(n: int = 24, backend: str = "c") -> int:
+    variants = run(n, backend)
+    print("\n".join(report(variants, backend)))
+    return 0
