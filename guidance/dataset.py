@@ -369,20 +369,15 @@ def code_version() -> str:
         pkg = version("guidance")
     except Exception:
         pkg = "unknown"
+    root = Path(__file__).resolve().parent.parent
+
+    def git(*args: str) -> str:
+        return subprocess.run(
+            ["git", "-C", str(root), *args], capture_output=True, text=True, timeout=5
+        ).stdout.strip()
+
     try:
-        root = Path(__file__).resolve().parent.parent
-        rev = subprocess.run(
-            ["git", "-C", str(root), "rev-parse", "--short", "HEAD"],
-            capture_output=True,
-            text=True,
-            timeout=5,
-        ).stdout.strip()
-        dirty = subprocess.run(
-            ["git", "-C", str(root), "status", "--porcelain", "guidance"],
-            capture_output=True,
-            text=True,
-            timeout=5,
-        ).stdout.strip()
+        rev, dirty = git("rev-parse", "--short", "HEAD"), git("status", "--porcelain", "guidance")
     except (OSError, subprocess.SubprocessError):
         rev, dirty = "", ""
     return f"guidance {pkg}" + (f" git {rev}{'+dirty' if dirty else ''}" if rev else "")

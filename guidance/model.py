@@ -105,20 +105,25 @@ def dynamics_expr(x: ca.SX, u: ca.SX, p: ca.SX) -> ca.SX:
     return ca.vertcat(v, v_dot, q_dot, w_dot, m_dot)
 
 
+def _with_jacobians(
+    name: str, expr: ca.SX, args: list[ca.SX], arg_names: list[str], out_names: list[str]
+) -> tuple[ca.Function, ca.Function]:
+    """ca.Functions `name`(x, u, c) -> expr and `name`_jac -> (d expr/dx, d expr/du)."""
+    x, u = args[0], args[1]
+    value = ca.Function(name, args, [expr], arg_names, out_names[:1])
+    jac = ca.Function(
+        name + "_jac", args, [ca.jacobian(expr, x), ca.jacobian(expr, u)], arg_names, out_names[1:]
+    )
+    return value, jac
+
+
 @lru_cache(maxsize=1)
 def dynamics_functions() -> tuple[ca.Function, ca.Function]:
     """f(x, u, p) and its Jacobians (A, B) = (df/dx, df/du)."""
     x, u, p = ca.SX.sym("x", NX), ca.SX.sym("u", NU), ca.SX.sym("p", NP)
-    f = dynamics_expr(x, u, p)
-    f_fun = ca.Function("tscvx_dynamics", [x, u, p], [f], ["x", "u", "p"], ["f"])
-    jac_fun = ca.Function(
-        "tscvx_dynamics_jac",
-        [x, u, p],
-        [ca.jacobian(f, x), ca.jacobian(f, u)],
-        ["x", "u", "p"],
-        ["A", "B"],
+    return _with_jacobians(
+        "tscvx_dynamics", dynamics_expr(x, u, p), [x, u, p], ["x", "u", "p"], ["f", "A", "B"]
     )
-    return f_fun, jac_fun
 
 
 # ---- path constraints: h(x, u) <= 0 in each constraint's own units, order of DESIGN.md -------
@@ -158,16 +163,13 @@ def path_constraints_expr(x: ca.SX, u: ca.SX, c: ca.SX) -> ca.SX:
 def constraint_functions() -> tuple[ca.Function, ca.Function]:
     """h(x, u, c) (7 values, <= 0 when met) and its Jacobians (dh/dx, dh/du)."""
     x, u, c = ca.SX.sym("x", NX), ca.SX.sym("u", NU), ca.SX.sym("c", len(CONSTRAINT_PARAM_NAMES))
-    h = path_constraints_expr(x, u, c)
-    h_fun = ca.Function("tscvx_path_constraints", [x, u, c], [h], ["x", "u", "c"], ["h"])
-    jac = ca.Function(
-        "tscvx_path_constraints_jac",
+    return _with_jacobians(
+        "tscvx_path_constraints",
+        path_constraints_expr(x, u, c),
         [x, u, c],
-        [ca.jacobian(h, x), ca.jacobian(h, u)],
         ["x", "u", "c"],
-        ["H_x", "H_u"],
+        ["h", "H_x", "H_u"],
     )
-    return h_fun, jac
 
 
 # ---- first-order-hold discretization -----------------------------------------------------
