@@ -92,7 +92,9 @@ def write_card(models: Path) -> Path:
     add("")
     add(
         f"`{h.get('n_base')}` base landings x 8 rotations = `{h.get('n_samples')}` samples "
-        f"(created {h.get('created_utc')}, {h.get('code_version')}, seed {h.get('seed')}). "
+        f"(created {h.get('created_utc')}, {h.get('code_version')}, seed {h.get('seed')}, "
+        f"solved by SCvx on the `{h.get('solver_backend', 'clarabel')}` backend with "
+        f"{h.get('scvx_settings', {}).get('rk4_substeps', '?')} RK4 substeps per interval). "
         f"Base status: {h.get('base_status_counts')}; feasible fraction "
         f"{_pct(h.get('feasible_fraction', 0))}. Only solved landings are used for training."
     )
