@@ -91,10 +91,11 @@ uint32_t nn_crc32(const unsigned char *p, size_t n, uint32_t crc)
 
 /* ---- sizes ------------------------------------------------------------------------------- */
 
-/* a * b + c with overflow detection (0 on overflow: no valid size is 0 here). */
-static size_t mad(size_t a, size_t b, size_t c)
+/* a * b + c, setting *overflow when it does not fit in size_t. */
+static size_t mad(size_t a, size_t b, size_t c, int *overflow)
 {
     if (a != 0 && b > ((size_t)-1 - c) / a) {
+        *overflow = 1;
         return 0;
     }
     return a * b + c;
@@ -102,24 +103,20 @@ static size_t mad(size_t a, size_t b, size_t c)
 
 size_t nn_count_weights(const nn_header *hd)
 {
+    /* dimensions are at most TSCVX_NN_MAX_DIM (2^16) here, so the small sums cannot overflow;
+     * the products can on a 32-bit size_t */
     size_t d = hd->d_model, L = hd->seq_len, ff = hd->d_ff, din = hd->d_in, dout = hd->d_out;
+    int ovf = 0;
     size_t norm = 2 * din + 2 * dout;
-    size_t enc = hd->tokens == TSCVX_NN_TOKENS_SINGLE ? mad(d, din, d) : mad(2 * L, d, 0);
-    size_t pos = mad(L, d, 0);
-    /* W_qkv, b_qkv, W_o, b_o, 2 LN, W_1, b_1, W_2, b_2, 2 LN */
-    size_t layer = mad(4 * d, d, 3 * d + d + 2 * d + ff + d + 2 * d);
-    size_t layers, dec, total;
-    layer = layer ? mad(2 * ff, d, layer) : 0;
-    layers = mad(layer, hd->n_layers, 0);
-    dec = mad(L, d, 0);
-    dec = dec ? mad(dout, dec, dout) : 0;
-    if (!enc || !pos || !layer || !layers || !dec) {
-        return 0;
-    }
-    total = mad(1, norm + enc, pos);
-    total = total ? mad(1, total, layers) : 0;
-    total = total ? mad(1, total, dec) : 0;
-    return total;
+    size_t enc = hd->tokens == TSCVX_NN_TOKENS_SINGLE ? mad(d, din, d, &ovf)
+                                                      : mad(2 * L, d, 0, &ovf);
+    size_t pos = mad(L, d, 0, &ovf);
+    /* W_qkv + W_o (4 d^2), W_1 + W_2 (2 ff d); b_qkv, b_o, 2 LN, b_1, b_2, 2 LN (9 d + ff) */
+    size_t layer = mad(2 * ff, d, mad(4 * d, d, 9 * d + ff, &ovf), &ovf);
+    size_t layers = mad(layer, hd->n_layers, 0, &ovf);
+    size_t dec = mad(dout, mad(L, d, 0, &ovf), dout, &ovf);
+    size_t total = mad(1, mad(1, mad(1, norm + enc, pos, &ovf), layers, &ovf), dec, &ovf);
+    return ovf ? 0 : total;
 }
 
 static int in_range(uint32_t v, uint32_t lo, uint32_t hi) { return v >= lo && v <= hi; }
@@ -251,7 +248,10 @@ static size_t layout_bytes(const nn_header *hd, int copy)
     return b;
 }
 
-static int must_copy(unsigned flags) { return (flags & TSCVX_NN_COPY_WEIGHTS) || !nn_host_is_little_endian(); }
+static int must_copy(unsigned flags)
+{
+    return (flags & TSCVX_NN_COPY_WEIGHTS) || !nn_host_is_little_endian();
+}
 
 tscvx_nn_status tscvx_nn_arena_size(const void *blob, size_t len, unsigned flags, size_t *bytes)
 {
