@@ -371,8 +371,10 @@ class FlightNet:
         for i, row in enumerate(x):
             r = np.ascontiguousarray(row)
             y = out[i]
-            _check(library().tscvx_nn_run(self._net, r.ctypes.data_as(_dp), r.size,
-                                          y.ctypes.data_as(_dp), y.size), "tscvx_nn_run")  # fmt: skip
+            st = library().tscvx_nn_run(
+                self._net, r.ctypes.data_as(_dp), r.size, y.ctypes.data_as(_dp), y.size
+            )
+            _check(st, "tscvx_nn_run")
         return out
 
     def tight_mask(self, logits: np.ndarray) -> np.ndarray:
@@ -388,8 +390,42 @@ class FlightNet:
         return err.value
 
 
+def load_flight_model(path: str | Path, kind: str, params=None) -> FlightNet:
+    """A weight file loaded in the C library and checked against the problem, as
+    ``guidance.nn.infer.load_model`` checks an ONNX file: kind, input/output sizes and N."""
+    from guidance.nn.infer import ModelMismatchError, expected_sizes
+    from guidance.params import Params
+
+    params = params or Params()
+    path = Path(path)
+    if not path.is_file():
+        raise ModelMismatchError(f"model {path}: file not found (run `make lib`)")
+    try:
+        net = FlightNet(path)
+    except FlightNetError as exc:
+        raise ModelMismatchError(f"model {path}: refused by the C library: {exc}") from exc
+    got = {v: k for k, v in KINDS.items()}.get(net.info.kind)
+    if got != kind:
+        raise ModelMismatchError(
+            f"model {path}: is a {got!r} network, a {kind!r} one was asked for"
+        )
+    d_in, d_out = expected_sizes(kind, params.N)
+    if net.d_in != d_in:
+        raise ModelMismatchError(
+            f"model {path}: input size {net.d_in} does not match the problem's {d_in}"
+        )
+    if net.d_out != d_out or net.info.N != params.N:
+        raise ModelMismatchError(
+            f"model {path}: output size {net.d_out} (N = {net.info.N}) does not match the "
+            f"problem's {d_out} (N = {params.N})"
+        )
+    return net
+
+
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m guidance.nn.flight", description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(
+        prog="python -m guidance.nn.flight", description=__doc__.splitlines()[0]
+    )
     ap.add_argument("onnx", help="shipped ONNX model (models/*.onnx)")
     ap.add_argument("out", help="weight file to write (build/models/*.tnn)")
     args = ap.parse_args(argv)
