@@ -25,7 +25,7 @@
  * dimensions, LayerNorm epsilon, decision threshold, number of values, CRC-32 -- then float64
  * arrays: normalization (in_mean, in_scale, out_mean, out_std), encoder, positional encoding,
  * layers, decoder, and self-test probes (inputs and the exporter's outputs). The exact layout
- * is in c_runtime/nn/nn_format.h and guidance/nn/flight.py.
+ * is in c_runtime/nn/nn_internal.h and guidance/nn/flight.py.
  *
  * Lifecycle (memory is claimed in exactly one place, from ONE caller-provided arena):
  *
