@@ -5,6 +5,7 @@
  * version, header size, dimensions (range, consistency, sizes that overflow), the blob's
  * length against its header, the CRC-32, non-finite values, non-positive scales.
  */
+#include <limits.h>
 #include <math.h>
 #include <string.h>
 
@@ -186,7 +187,8 @@ tscvx_nn_status nn_parse(const void *blob, size_t len, nn_header *hd)
         || !in_range(hd->n_layers, 0, TSCVX_NN_MAX_LAYERS)
         || !in_range(hd->n_probes, 0, TSCVX_NN_MAX_PROBES) || !in_range(hd->N, 1, 1u << 20)
         || hd->d_model % hd->n_heads != 0
-        || hd->seq_len != (hd->tokens == TSCVX_NN_TOKENS_SINGLE ? 1u : hd->d_in)) {
+        || hd->seq_len != (hd->tokens == TSCVX_NN_TOKENS_SINGLE ? 1u : hd->d_in)
+        || (uint64_t)hd->seq_len * 3u * hd->d_model > (uint64_t)INT_MAX) { /* int indices */
         return TSCVX_NN_BAD_DIMENSIONS;
     }
     n_weights = nn_count_weights(hd);
@@ -228,24 +230,24 @@ tscvx_nn_status nn_parse(const void *blob, size_t len, nn_header *hd)
 static size_t round_up(size_t n) { return (n + (ALIGN - 1)) & ~(size_t)(ALIGN - 1); }
 
 /* Arena bytes after its base is aligned (the struct, the layer table, activations, weights). */
+/* Arena bytes after its base is aligned: the struct, the layer table, activations (doubles),
+ * the weights when copied. 0 when the total does not fit in size_t (a 32-bit target). */
 static size_t layout_bytes(const nn_header *hd, int copy)
 {
-    size_t d = hd->d_model, L = hd->seq_len, b = 0;
-    b += round_up(sizeof(struct tscvx_nn));
-    b += round_up(sizeof(nn_layer) * (hd->n_layers ? hd->n_layers : 1));
-    b += round_up(sizeof(double) * hd->d_in);     /* z */
-    b += round_up(sizeof(double) * L * d);        /* h */
-    b += round_up(sizeof(double) * L * 3 * d);    /* qkv */
-    b += round_up(sizeof(double) * L * d);        /* o */
-    b += round_up(sizeof(double) * d);            /* t */
-    b += round_up(sizeof(double) * hd->d_ff);     /* f */
-    b += round_up(sizeof(double) * L);            /* sc */
-    b += round_up(sizeof(double) * hd->d_in);     /* xb */
-    b += round_up(sizeof(double) * hd->d_out);    /* yb */
+    const uint64_t d = hd->d_model, L = hd->seq_len, pad = ALIGN;
+    uint64_t b = 0;
+    b += sizeof(struct tscvx_nn) + pad;
+    b += sizeof(nn_layer) * (uint64_t)(hd->n_layers ? hd->n_layers : 1) + pad;
+    b += 8 * (2 * (uint64_t)hd->d_in + pad);      /* z, xb */
+    b += 8 * (L * d + L * 3 * d + L * d) + 3 * pad; /* h, qkv, o */
+    b += 8 * (d + (uint64_t)hd->d_ff + L + hd->d_out) + 4 * pad; /* t, f, sc, yb */
     if (copy) {
-        b += round_up(sizeof(double) * (size_t)hd->n_values);
+        if (hd->n_values > (UINT64_MAX - b) / 8) {
+            return 0;
+        }
+        b += 8 * hd->n_values + pad;
     }
-    return b;
+    return b + pad > (uint64_t)(size_t)-1 ? 0 : (size_t)b; /* + pad: the base alignment */
 }
 
 static int must_copy(unsigned flags)
@@ -267,7 +269,11 @@ tscvx_nn_status tscvx_nn_arena_size(const void *blob, size_t len, unsigned flags
     if (st != TSCVX_NN_OK) {
         return st;
     }
-    *bytes = layout_bytes(&hd, must_copy(flags)) + ALIGN; /* + slack to align the base */
+    *bytes = layout_bytes(&hd, must_copy(flags));
+    if (*bytes == 0) {
+        return TSCVX_NN_BAD_DIMENSIONS;
+    }
+    *bytes += ALIGN; /* slack to align the base */
     return TSCVX_NN_OK;
 }
 
@@ -295,18 +301,25 @@ tscvx_nn_status tscvx_nn_init(tscvx_nn **out, void *arena, size_t arena_bytes, c
         return TSCVX_NN_NULL_ARGUMENT;
     }
     *out = NULL;
-    st = tscvx_nn_arena_size(blob, len, flags, &need);
+    if (flags & ~TSCVX_NN_COPY_WEIGHTS) {
+        return TSCVX_NN_BAD_FLAGS;
+    }
+    st = nn_parse(blob, len, &hd);
     if (st != TSCVX_NN_OK) {
         return st;
     }
+    copy = must_copy(flags);
+    need = layout_bytes(&hd, copy);
+    if (need == 0) {
+        return TSCVX_NN_BAD_DIMENSIONS;
+    }
+    need += ALIGN; /* as tscvx_nn_arena_size */
     if (arena_bytes < need) {
         return TSCVX_NN_ARENA_TOO_SMALL;
     }
-    copy = must_copy(flags);
     if (!copy && ((uintptr_t)blob % sizeof(double)) != 0) {
         return TSCVX_NN_BAD_ALIGNMENT;
     }
-    nn_parse(blob, len, &hd); /* checked above */
 
     cur = (unsigned char *)arena;
     cur += (ALIGN - (uintptr_t)cur % ALIGN) % ALIGN;
