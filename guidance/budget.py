@@ -295,7 +295,7 @@ def report(b: Budget) -> str:
     return "\n".join(lines)
 
 
-def report_networks(nets: list[NetBudget]) -> str:
+def report_networks(nets: list[NetBudget], call: Budget | None = None) -> str:
     lines = [
         "Network inference (tscvx_nn_run, one call each; budget "
         f"{NN_INSTRUCTION_BUDGET / 1e6:.0f} M host instructions per inference)",
@@ -318,6 +318,12 @@ def report_networks(nets: list[NetBudget]) -> str:
             f"  T-SCvx trajectory: 1 solution + {NN_CONSTRAINT_CALLS} constraint inferences "
             f"= {total / 1e6:.1f} M host instructions = {rad750_seconds(total):.3f} s "
             f"RAD750-equivalent (budget 1 s per trajectory, SCvx solves not included)"
+        )
+    if call is not None:
+        mem = call.memory_bytes + sum(n.weights_bytes + n.arena_bytes for n in nets)
+        lines.append(
+            f"  flight image with both networks: guidance call {_mb(call.memory_bytes).strip()}"
+            f" + weights and arenas = {_mb(mem).strip()} of {_mb(MEMORY_BUDGET_B).strip()}"
         )
     return "\n".join(lines)
 
@@ -352,7 +358,7 @@ def main(argv: list[str] | None = None) -> int:
     else:
         print(report(b))
         print()
-        print(report_networks(nets))
+        print(report_networks(nets, b))
     return 0
 
 
