@@ -28,6 +28,9 @@ needs_lib = pytest.mark.skipif(not cgnc.available(), reason="build/libtscvx_gnc.
 needs_shipped = pytest.mark.skipif(
     not (MODELS / "constraint.onnx").exists(), reason="no shipped models"
 )
+needs_built = pytest.mark.skipif(
+    not (BUILD_MODELS / "constraint.tnn").exists(), reason="build/models: run make lib"
+)
 
 
 def _ort_session(path: Path):
@@ -78,6 +81,7 @@ def test_c_equals_onnxruntime_on_1000_inputs(kind: str, blobs: dict[str, bytes])
 
 
 @needs_shipped
+@needs_built
 @needs_lib
 def test_c_mask_equals_the_onnx_models_mask(blobs: dict[str, bytes]) -> None:
     from guidance.catalog import SCENARIOS
@@ -116,14 +120,13 @@ def test_weight_files_are_reproducible(blobs: dict[str, bytes]) -> None:
 
 
 @needs_shipped
+@needs_built
 @needs_lib
 def test_model_for_another_problem_is_refused() -> None:
     from guidance.nn.infer import ModelMismatchError
     from guidance.params import Params
 
     path = BUILD_MODELS / "constraint.tnn"
-    if not path.exists():
-        pytest.skip("build/models: run make lib")
     with pytest.raises(ModelMismatchError, match="output size 350"):
         flight.load_flight_model(path, "constraint", Params(N=40))
     with pytest.raises(ModelMismatchError, match="'constraint' network"):
@@ -257,7 +260,7 @@ def test_other_architectures_equal_onnxruntime(arch: dict, tmp_path: Path) -> No
 # ---- no heap allocation inside tscvx_nn_run -----------------------------------------------------
 
 
-@needs_shipped
+@needs_built
 @pytest.mark.skipif(not DRIVER.exists(), reason="build/nn_budget_driver: run make lib ctest")
 @pytest.mark.parametrize("kind", KINDS)
 def test_no_heap_allocation_inside_run(kind: str) -> None:
