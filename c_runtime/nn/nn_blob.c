@@ -229,7 +229,6 @@ tscvx_nn_status nn_parse(const void *blob, size_t len, nn_header *hd)
 
 static size_t round_up(size_t n) { return (n + (ALIGN - 1)) & ~(size_t)(ALIGN - 1); }
 
-/* Arena bytes after its base is aligned (the struct, the layer table, activations, weights). */
 /* Arena bytes after its base is aligned: the struct, the layer table, activations (doubles),
  * the weights when copied. 0 when the total does not fit in size_t (a 32-bit target). */
 static size_t layout_bytes(const nn_header *hd, int copy)
