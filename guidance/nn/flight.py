@@ -13,12 +13,14 @@ c_runtime/nn/nn_internal.h). Same ONNX file, same bytes.
 Why float64 for float32 weights: the conversion is exact (the C arithmetic is the same as
 widening float32 at run time), and it buys time, the scarce resource of the RAD750 budget,
 for memory, the plentiful one. Scalar x86-64 code at -O2 widens a float32 operand with two
-instructions (a dependency-breaking ``pxor`` and ``cvtss2sd``) against one ``movsd``: 4 instead
-of 3 instructions per multiply-add, measured 4.53 M / 5.19 M host instructions per inference
-(float32, unroll 4) against 3.4 M / 3.8 M (float64, unroll 8) -- the solution network fits the
-5 M budget only this way, and the constraint network runs up to 20 times per trajectory. The
-cost is 9.2 + 10.2 MB of weights instead of 4.6 + 5.1 MB, of the 60 MB memory budget. (On the
-PowerPC 750 ``lfs`` and ``lfd`` cost the same, so the float64 count is also the closer model.)
+instructions (a dependency-breaking ``pxor`` and ``cvtss2sd``) where a double needs one
+``movsd``: the unrolled dot product takes 36 instead of 28 instructions per 8 multiply-adds.
+Measured: 3.22 M / 3.69 M host instructions per inference (constraint / solution) with float64;
+float32 would add about 1 per multiply-add (0.88 M / 1.01 M MACs), i.e. about 4.1 M / 4.7 M --
+a first float32 build with a 4-way unroll measured 4.53 M / 5.19 M, over the 5 M budget. The
+constraint network runs up to 20 times per trajectory. The cost is 8.8 + 9.8 MB of weight
+files instead of 4.4 + 4.9 MB, of the 60 MB memory budget. (On the PowerPC 750 ``lfs`` and
+``lfd`` cost the same, so the float64 count is also the closer model of the target.)
 
 ``FlightNet(blob)`` runs the blob in the C library (build/libtscvx_gnc.so); a blob the library
 refuses raises ``FlightNetError`` with the library's status name and message.
