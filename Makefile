@@ -36,6 +36,7 @@ setup: apt $(STAMP)
 
 # ---- flight C library (rules in c_runtime/runtime.mk) --------------------------------------
 include c_runtime/runtime.mk
+include c_runtime/nn.mk
 include c_runtime/guidance.mk
 
 # ---- tests ---------------------------------------------------------------------------------

@@ -14,6 +14,12 @@ scenario, workspace set up before the measured call, then one ``pdg_solve``), an
   stack high-water mark of the call (stack painting in the driver). Budget 60 MB.
 
 The driver also counts heap allocations inside the call (malloc interposition): it must be 0.
+
+Network rows: ``build/nn_budget_driver`` (c_runtime/nn/tests/nn_budget_driver.c) runs one
+``tscvx_nn_run`` of each shipped network (build/models/*.tnn, the default scenario's theta,
+k = 1), counted with ``--toggle-collect=tscvx_nn_run``; budget 5 M host instructions per
+inference (issue 5). Memory: the weight file (read in place) + the net's arena + the stack
+high-water of the call.
 """
 
 from __future__ import annotations
@@ -41,6 +47,12 @@ IPC = 0.5
 CLOCK_HZ = 200e6
 TIME_BUDGET_S = 1.0
 MEMORY_BUDGET_B = 60 * 2**20
+# Networks (tscvx_nn.h): one inference each; 5 M host instructions per inference (issue 5).
+NN_DRIVER = BUILD / "nn_budget_driver"
+NN_MODELS = {"constraint": BUILD / "models" / "constraint.tnn",
+             "solution": BUILD / "models" / "solution.tnn"}  # fmt: skip
+NN_INSTRUCTION_BUDGET = 5_000_000
+NN_CONSTRAINT_CALLS = 20  # T-SCvx: one mask per SCvx iteration, iter_max = 20 (Table 1)
 
 
 @dataclass
@@ -78,12 +90,35 @@ class Budget:
         return self.memory_bytes <= MEMORY_BUDGET_B
 
 
+@dataclass
+class NetBudget:
+    """One inference of one network (tscvx_nn_run)."""
+
+    name: str
+    architecture: str
+    instructions: int
+    rad750_s: float
+    weights_bytes: int  # the weight file, read in place (float64 values + header + probes)
+    arena_bytes: int
+    stack_high_water: int
+    heap_allocations_in_run: int
+    host_wall_s: float
+
+    @property
+    def memory_bytes(self) -> int:
+        return self.weights_bytes + self.arena_bytes + self.stack_high_water
+
+    def within_budget(self) -> bool:
+        return self.instructions <= NN_INSTRUCTION_BUDGET
+
+
 def rad750_seconds(instructions: float) -> float:
     return RISC_EXPANSION * instructions / (IPC * CLOCK_HZ)
 
 
 def build(quiet: bool = True) -> None:
-    cmd = ["make", "-s", "-C", str(ROOT), "lib", str(DRIVER.relative_to(ROOT))]
+    cmd = ["make", "-s", "-C", str(ROOT), "lib", str(DRIVER.relative_to(ROOT)),
+           str(NN_DRIVER.relative_to(ROOT))]  # fmt: skip
     subprocess.run(cmd, check=True, capture_output=quiet)
 
 
@@ -132,6 +167,53 @@ def count_instructions() -> tuple[int, dict[str, int]]:
                     parts[key] = int(mm.group(1).replace(",", ""))
             parts["rest"] = total - sum(parts.values())
     return total, parts
+
+
+def _callgrind_total(cmd: list[str], function: str) -> int:
+    """Instructions inside ``function`` (inclusive) of one run of ``cmd`` under callgrind."""
+    if shutil.which("valgrind") is None:
+        raise RuntimeError("valgrind not found (Debian package valgrind)")
+    with tempfile.TemporaryDirectory() as tmp:
+        out_file = Path(tmp) / "callgrind.out"
+        subprocess.run(
+            ["valgrind", "--tool=callgrind", f"--callgrind-out-file={out_file}",
+             f"--toggle-collect={function}", *cmd],
+            capture_output=True, text=True, cwd=tmp, check=True,
+        )  # fmt: skip
+        m = re.search(r"^(?:summary|totals):\s*(\d+)", out_file.read_text(), re.MULTILINE)
+        if not m:
+            raise RuntimeError("no instruction total in the callgrind output")
+        return int(m.group(1))
+
+
+def measure_networks(do_build: bool = True) -> list[NetBudget]:
+    """One tscvx_nn_run of each shipped network: instructions (callgrind) and memory."""
+    if do_build:
+        build()
+    rows = []
+    for name, path in NN_MODELS.items():
+        out = subprocess.run(
+            [str(NN_DRIVER), str(path), "--repeat", "20"], capture_output=True, text=True
+        )
+        if out.returncode != 0:
+            raise RuntimeError(f"nn budget driver failed on {path}: {out.stderr[-2000:]}")
+        kv = dict(line.split(" ", 1) for line in out.stdout.splitlines() if " " in line)
+        instr = _callgrind_total([str(NN_DRIVER), str(path), "--repeat", "1"], "tscvx_nn_run")
+        rows.append(
+            NetBudget(
+                name=name,
+                architecture=f"{kv['tokens']} tokens, d {kv['d_model']}, {kv['n_layers']} "
+                f"layers, {kv['n_heads']} heads, ff {kv['d_ff']}",
+                instructions=instr,
+                rad750_s=rad750_seconds(instr),
+                weights_bytes=int(kv["blob_bytes"]),
+                arena_bytes=int(kv["arena_bytes"]),
+                stack_high_water=int(kv["stack_high_water"]),
+                heap_allocations_in_run=int(kv["heap_allocations_in_run"]),
+                host_wall_s=float(kv["wall_s_min"]),
+            )
+        )
+    return rows
 
 
 def code_size() -> tuple[int, int]:
@@ -213,6 +295,39 @@ def report(b: Budget) -> str:
     return "\n".join(lines)
 
 
+def report_networks(nets: list[NetBudget], call: Budget | None = None) -> str:
+    lines = [
+        "Network inference (tscvx_nn_run, one call each; budget "
+        f"{NN_INSTRUCTION_BUDGET / 1e6:.0f} M host instructions per inference)",
+        f"  {'network':12s} {'host instr.':>12s} {'RAD750 ms':>10s} {'weights':>10s} "
+        f"{'arena':>9s} {'stack':>7s} {'heap':>5s} {'host ms':>8s}  ok",
+    ]
+    for n in nets:
+        lines.append(
+            f"  {n.name:12s} {n.instructions / 1e6:10.3f} M {n.rad750_s * 1e3:10.1f} "
+            f"{n.weights_bytes / 2**20:7.2f} MB {n.arena_bytes:7d} B {n.stack_high_water:5d} B "
+            f"{n.heap_allocations_in_run:5d} {n.host_wall_s * 1e3:8.3f}  "
+            f"{'yes' if n.within_budget() else 'NO'}"
+        )
+    for n in nets:
+        lines.append(f"  {n.name}: {n.architecture}")
+    by = {n.name: n for n in nets}
+    if {"constraint", "solution"} <= by.keys():
+        total = by["solution"].instructions + NN_CONSTRAINT_CALLS * by["constraint"].instructions
+        lines.append(
+            f"  T-SCvx trajectory: 1 solution + {NN_CONSTRAINT_CALLS} constraint inferences "
+            f"= {total / 1e6:.1f} M host instructions = {rad750_seconds(total):.3f} s "
+            f"RAD750-equivalent (budget 1 s per trajectory, SCvx solves not included)"
+        )
+    if call is not None:
+        mem = call.memory_bytes + sum(n.weights_bytes + n.arena_bytes for n in nets)
+        lines.append(
+            f"  flight image with both networks: guidance call {_mb(call.memory_bytes).strip()}"
+            f" + weights and arenas = {_mb(mem).strip()} of {_mb(MEMORY_BUDGET_B).strip()}"
+        )
+    return "\n".join(lines)
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="guidance budget", description=__doc__.splitlines()[0])
     ap.add_argument("--no-build", action="store_true", help="use the built driver as is")
@@ -230,13 +345,20 @@ def main(argv: list[str] | None = None) -> int:
         print(f"heap allocations inside pdg_solve: {n} (status {kv['status']})")
         return 0 if n == 0 else 1
     b = measure(do_build=False)
+    nets = measure_networks(do_build=False)
     if args.json:
         d = asdict(b)
         d.update(memory_bytes=b.memory_bytes, within_time=b.within_time(),
                  within_memory=b.within_memory())  # fmt: skip
+        d["networks"] = [
+            {**asdict(n), "memory_bytes": n.memory_bytes, "within_budget": n.within_budget()}
+            for n in nets
+        ]
         print(json.dumps(d, indent=2))
     else:
         print(report(b))
+        print()
+        print(report_networks(nets, b))
     return 0
 
 

@@ -56,3 +56,44 @@ def test_time_within_budget(figures: budget.Budget) -> None:
             f"{figures.rad750_s:.1f} s RAD750-equivalent (budget 1 s); {parts}"
         )
     assert figures.rad750_s <= budget.TIME_BUDGET_S
+
+
+# ---- network inference (tscvx_nn_run), issue 5's 5 M instructions per inference -------------
+
+needs_nets = pytest.mark.skipif(
+    shutil.which("valgrind") is None or not all(p.exists() for p in budget.NN_MODELS.values()),
+    reason="valgrind or build/models/*.tnn missing (make lib)",
+)
+
+
+@pytest.fixture(scope="module")
+def nets() -> list[budget.NetBudget]:
+    return budget.measure_networks(do_build=True)
+
+
+@needs_nets
+def test_network_inference_within_5M_instructions(nets: list[budget.NetBudget]) -> None:
+    assert [n.name for n in nets] == ["constraint", "solution"]
+    text = budget.report_networks(nets)
+    print("\n" + text)
+    for n in nets:
+        figure = (
+            f"{n.name} network: {n.instructions / 1e6:.3f} M host instructions per inference "
+            f"= {n.rad750_s * 1e3:.1f} ms RAD750-equivalent (budget "
+            f"{budget.NN_INSTRUCTION_BUDGET / 1e6:.0f} M)"
+        )
+        print(figure)
+        assert n.instructions > 1e5, figure
+        assert n.within_budget(), figure
+        assert n.rad750_s == pytest.approx(budget.rad750_seconds(n.instructions))
+        assert n.name in text and "RAD750 ms" in text
+
+
+@needs_nets
+def test_network_memory_and_no_allocation(nets: list[budget.NetBudget]) -> None:
+    for n in nets:
+        assert n.heap_allocations_in_run == 0
+        assert 0 < n.arena_bytes < 1 << 20 and 0 < n.stack_high_water < 16384
+        assert n.weights_bytes == budget.NN_MODELS[n.name].stat().st_size
+        # weights in place + arena + stack, well within the 60 MB of the whole flight image
+        assert n.memory_bytes < budget.MEMORY_BUDGET_B / 4

@@ -1,0 +1,49 @@
+# Network inference of the flight library (included by the top Makefile, before guidance.mk,
+# which links $(NN_OBJS) into libtscvx_gnc.a / .so).
+#   $(BUILD)/models/{constraint,solution}.tnn  weight files from models/*.onnx
+#                                              (guidance/nn/flight.py; same ONNX, same bytes)
+#   $(BUILD)/nn_budget_driver                  one tscvx_nn_run, for callgrind (guidance/budget.py)
+#   make ctest-nn                              C tests under valgrind + no-malloc check
+#
+# -fno-tree-vectorize: the instruction count models a scalar FPU (PowerPC 750); the code must
+# not be packed into SSE2 pairs by GCC's -O2 vectorizer (GCC >= 12), which would undercount.
+
+NN_OBJDIR  := $(BUILD)/obj/nn
+NN_SRCS    := $(wildcard c_runtime/nn/*.c)
+NN_HDRS    := $(wildcard c_runtime/nn/*.h) c_runtime/include/tscvx_nn.h
+NN_OBJS    := $(patsubst c_runtime/nn/%.c,$(NN_OBJDIR)/%.o,$(NN_SRCS))
+NN_CFLAGS  := -std=c99 -Wall -Wextra -Werror -O2 -fno-tree-vectorize -fPIC -Ic_runtime/include
+NN_MODELS  := $(BUILD)/models/constraint.tnn $(BUILD)/models/solution.tnn
+NN_TESTS   := test_nn
+
+$(NN_OBJDIR)/%.o: c_runtime/nn/%.c $(NN_HDRS)
+	@mkdir -p $(NN_OBJDIR)
+	$(CC) $(NN_CFLAGS) -c $< -o $@
+
+$(BUILD)/models/%.tnn: models/%.onnx guidance/nn/flight.py | $(STAMP)
+	$(PY) -m guidance.nn.flight $< $@
+	@touch $@  # the writer keeps an identical file untouched
+
+$(BUILD)/nn_budget_driver: c_runtime/nn/tests/nn_budget_driver.c c_runtime/include/tscvx_nn.h $(BUILD)/libtscvx_gnc.a
+	$(CC) -std=c99 -Wall -Wextra -Werror -O2 -g -Ic_runtime/include $< -o $@ $(BUILD)/libtscvx_gnc.a -lm
+
+$(BUILD)/ctest/test_nn: c_runtime/nn/tests/test_nn.c $(NN_HDRS) $(BUILD)/libtscvx_gnc.a
+	@mkdir -p $(BUILD)/ctest
+	$(CC) -std=c99 -Wall -Wextra -Werror -O1 -g -Ic_runtime/include -Ic_runtime/nn $< -o $@ $(BUILD)/libtscvx_gnc.a -lm
+
+nn-models: $(NN_MODELS)
+lib: nn-models
+
+ctest-nn: lib $(BUILD)/ctest/test_nn $(BUILD)/nn_budget_driver
+	@echo "== test_nn (valgrind)"
+	@$(VALGRIND) $(BUILD)/ctest/test_nn $(NN_MODELS)
+	@echo "== no heap allocation inside tscvx_nn_run (malloc interposition, native run)"
+	@set -e; for m in $(NN_MODELS); do \
+	  $(BUILD)/nn_budget_driver $$m > $(BUILD)/ctest/nn_budget_driver.out; \
+	  grep -q '^heap_allocations_in_run 0$$' $(BUILD)/ctest/nn_budget_driver.out \
+	    || { cat $(BUILD)/ctest/nn_budget_driver.out; echo "heap allocation inside tscvx_nn_run"; exit 1; }; \
+	  grep -q '^status ok$$' $(BUILD)/ctest/nn_budget_driver.out \
+	    || { cat $(BUILD)/ctest/nn_budget_driver.out; exit 1; }; done
+
+.PHONY: nn-models ctest-nn
+ctest: ctest-nn

@@ -1,0 +1,499 @@
+/*
+ * nn_blob.c -- model blob validation and the net's set-up in the caller's arena.
+ *
+ * Everything that can be wrong with a model is found here, before any inference: magic,
+ * version, header size, dimensions (range, consistency, sizes that overflow), the blob's
+ * length against its header, the CRC-32, non-finite values, non-positive scales.
+ */
+#include <limits.h>
+#include <math.h>
+#include <string.h>
+
+#include "nn_internal.h"
+
+static const char *const status_messages[TSCVX_NN_NSTATUS] = {
+    "ok",
+    "a required pointer argument is NULL",
+    "not a T-SCvx network blob (bad magic)",
+    "unsupported network blob format version or header size",
+    "network blob length does not match its header (truncated or trailing bytes)",
+    "network blob checksum (CRC-32) mismatch: the blob is corrupt",
+    "network dimensions out of range or inconsistent (token mode, sequence length, heads)",
+    "network blob holds a NaN/inf value or a non-positive normalization scale",
+    "in-place weights need an 8-byte aligned blob (or the TSCVX_NN_COPY_WEIGHTS flag)",
+    "arena smaller than tscvx_nn_arena_size()",
+    "network not initialized (tscvx_nn_init) or its arena was overwritten",
+    "input or output size differs from the network's",
+    "an input value is NaN or infinite",
+    "the network output is not finite (overflow inside the network)",
+    "self-test failed: the recorded probe outputs are not reproduced",
+    "unknown flag bits",
+};
+
+const char *tscvx_nn_status_message(tscvx_nn_status status)
+{
+    if ((int)status < 0 || status >= TSCVX_NN_NSTATUS) {
+        return "unknown tscvx_nn_status";
+    }
+    return status_messages[status];
+}
+
+/* ---- little-endian field access (any host byte order, any alignment) --------------------- */
+
+static uint32_t rd_u32(const unsigned char *p)
+{
+    return (uint32_t)p[0] | ((uint32_t)p[1] << 8) | ((uint32_t)p[2] << 16) | ((uint32_t)p[3] << 24);
+}
+
+static uint64_t rd_u64(const unsigned char *p)
+{
+    return (uint64_t)rd_u32(p) | ((uint64_t)rd_u32(p + 4) << 32);
+}
+
+static double rd_f64(const unsigned char *p)
+{
+    uint64_t u = rd_u64(p);
+    double v;
+    memcpy(&v, &u, sizeof v); /* IEEE 754 binary64 with the integers' byte order */
+    return v;
+}
+
+/* 1 when the host stores a double as the blob does (IEEE 754 binary64, little-endian), so the
+ * weights can be read in place. */
+int nn_host_is_little_endian(void)
+{
+    const double one = 1.0; /* 0x3FF0000000000000 */
+    static const unsigned char le[8] = {0, 0, 0, 0, 0, 0, 0xF0, 0x3F};
+    unsigned char b[8];
+    memcpy(b, &one, sizeof b);
+    return memcmp(b, le, sizeof b) == 0;
+}
+
+/* CRC-32 (reflected polynomial 0xEDB88320, as zlib.crc32); `crc` = 0 to start, or a previous
+ * result to continue. The 1 KB table is built on the stack per call (init only). */
+uint32_t nn_crc32(const unsigned char *p, size_t n, uint32_t crc)
+{
+    uint32_t table[256];
+    uint32_t i, k, c;
+    size_t j;
+    for (i = 0; i < 256u; ++i) {
+        c = i;
+        for (k = 0; k < 8u; ++k) {
+            c = (c & 1u) ? 0xEDB88320u ^ (c >> 1) : c >> 1;
+        }
+        table[i] = c;
+    }
+    crc = ~crc;
+    for (j = 0; j < n; ++j) {
+        crc = table[(crc ^ p[j]) & 0xFFu] ^ (crc >> 8);
+    }
+    return ~crc;
+}
+
+/* ---- sizes ------------------------------------------------------------------------------- */
+
+/* a * b + c, setting *overflow when it does not fit in size_t. */
+static size_t mad(size_t a, size_t b, size_t c, int *overflow)
+{
+    if (a != 0 && b > ((size_t)-1 - c) / a) {
+        *overflow = 1;
+        return 0;
+    }
+    return a * b + c;
+}
+
+size_t nn_count_weights(const nn_header *hd)
+{
+    /* dimensions are at most TSCVX_NN_MAX_DIM (2^16) here, so the small sums cannot overflow;
+     * the products can on a 32-bit size_t */
+    size_t d = hd->d_model, L = hd->seq_len, ff = hd->d_ff, din = hd->d_in, dout = hd->d_out;
+    int ovf = 0;
+    size_t norm = 2 * din + 2 * dout;
+    size_t enc = hd->tokens == TSCVX_NN_TOKENS_SINGLE ? mad(d, din, d, &ovf)
+                                                      : mad(2 * L, d, 0, &ovf);
+    size_t pos = mad(L, d, 0, &ovf);
+    /* W_qkv + W_o (4 d^2), W_1 + W_2 (2 ff d); b_qkv, b_o, 2 LN, b_1, b_2, 2 LN (9 d + ff) */
+    size_t layer = mad(2 * ff, d, mad(4 * d, d, 9 * d + ff, &ovf), &ovf);
+    size_t layers = mad(layer, hd->n_layers, 0, &ovf);
+    size_t dec = mad(dout, mad(L, d, 0, &ovf), dout, &ovf);
+    size_t total = mad(1, mad(1, mad(1, norm + enc, pos, &ovf), layers, &ovf), dec, &ovf);
+    return ovf ? 0 : total;
+}
+
+static int in_range(uint32_t v, uint32_t lo, uint32_t hi) { return v >= lo && v <= hi; }
+
+/* Non-finite binary64 bit pattern: exponent all ones. Positive: sign clear, not zero. */
+static int f64_bits_finite(uint64_t u) { return ((u >> 52) & 0x7FFu) != 0x7FFu; }
+static int f64_bits_positive(uint64_t u)
+{
+    return !(u >> 63) && (u & 0x7FFFFFFFFFFFFFFFull) != 0;
+}
+
+tscvx_nn_status nn_parse(const void *blob, size_t len, nn_header *hd)
+{
+    const unsigned char *p = (const unsigned char *)blob;
+    const unsigned char *w;
+    size_t n_weights, n_probe_vals, n_values, i;
+    uint32_t crc;
+
+    if (!blob || !hd) {
+        return TSCVX_NN_NULL_ARGUMENT;
+    }
+    if (len < 8 || memcmp(p, NN_MAGIC, 8) != 0) {
+        return TSCVX_NN_BAD_MAGIC;
+    }
+    if (len < TSCVX_NN_HEADER_BYTES) {
+        return TSCVX_NN_TRUNCATED;
+    }
+    memset(hd, 0, sizeof *hd);
+    hd->version = rd_u32(p + 8);
+    hd->header_bytes = rd_u32(p + 12);
+    if (hd->version != TSCVX_NN_FORMAT_VERSION || hd->header_bytes != TSCVX_NN_HEADER_BYTES) {
+        return TSCVX_NN_BAD_VERSION;
+    }
+    hd->kind = rd_u32(p + 16);
+    hd->tokens = rd_u32(p + 20);
+    hd->d_in = rd_u32(p + 24);
+    hd->d_out = rd_u32(p + 28);
+    hd->d_model = rd_u32(p + 32);
+    hd->n_heads = rd_u32(p + 36);
+    hd->n_layers = rd_u32(p + 40);
+    hd->d_ff = rd_u32(p + 44);
+    hd->seq_len = rd_u32(p + 48);
+    hd->N = rd_u32(p + 52);
+    hd->n_probes = rd_u32(p + 56);
+    hd->ln_eps = rd_f64(p + 64);
+    hd->threshold = rd_f64(p + 72);
+    hd->n_values = rd_u64(p + 80);
+    hd->n_weights = rd_u64(p + 88);
+
+    /* length first (a truncated blob says so, whatever its other fields), then the CRC */
+    if (hd->n_values > ((uint64_t)(size_t)-1 - TSCVX_NN_HEADER_BYTES) / 8u
+        || (uint64_t)len != TSCVX_NN_HEADER_BYTES + 8u * hd->n_values) {
+        return TSCVX_NN_TRUNCATED;
+    }
+    crc = nn_crc32(p, NN_CRC_OFFSET, 0);
+    crc = nn_crc32(p + TSCVX_NN_HEADER_BYTES, len - TSCVX_NN_HEADER_BYTES, crc);
+    if (crc != rd_u32(p + NN_CRC_OFFSET)) {
+        return TSCVX_NN_BAD_CHECKSUM;
+    }
+
+    /* dimensions */
+    if ((hd->kind != TSCVX_NN_KIND_CONSTRAINT && hd->kind != TSCVX_NN_KIND_SOLUTION)
+        || (hd->tokens != TSCVX_NN_TOKENS_SINGLE && hd->tokens != TSCVX_NN_TOKENS_SCALAR)
+        || !in_range(hd->d_in, 1, TSCVX_NN_MAX_DIM) || !in_range(hd->d_out, 1, TSCVX_NN_MAX_DIM)
+        || !in_range(hd->d_model, 1, TSCVX_NN_MAX_DIM) || !in_range(hd->d_ff, 1, TSCVX_NN_MAX_DIM)
+        || !in_range(hd->n_heads, 1, TSCVX_NN_MAX_HEADS)
+        || !in_range(hd->n_layers, 0, TSCVX_NN_MAX_LAYERS)
+        || !in_range(hd->n_probes, 0, TSCVX_NN_MAX_PROBES) || !in_range(hd->N, 1, 1u << 20)
+        || hd->d_model % hd->n_heads != 0
+        || hd->seq_len != (hd->tokens == TSCVX_NN_TOKENS_SINGLE ? 1u : hd->d_in)
+        || (uint64_t)hd->seq_len * 3u * hd->d_model > (uint64_t)INT_MAX) { /* int indices */
+        return TSCVX_NN_BAD_DIMENSIONS;
+    }
+    n_weights = nn_count_weights(hd);
+    n_probe_vals = (size_t)hd->n_probes * ((size_t)hd->d_in + hd->d_out);
+    if (n_weights == 0 || hd->n_weights != (uint64_t)n_weights
+        || hd->n_values != (uint64_t)n_weights + n_probe_vals) {
+        return TSCVX_NN_BAD_DIMENSIONS;
+    }
+    if (!(hd->ln_eps > 0.0 && hd->ln_eps < 1.0)
+        || !(hd->threshold > 0.0 && hd->threshold < 1.0)) {
+        return TSCVX_NN_BAD_WEIGHTS;
+    }
+
+    /* values: all finite; in_scale and out_std positive */
+    n_values = (size_t)hd->n_values;
+    w = p + TSCVX_NN_HEADER_BYTES;
+    for (i = 0; i < n_values; ++i) {
+        if (!f64_bits_finite(rd_u64(w + 8 * i))) {
+            return TSCVX_NN_BAD_WEIGHTS;
+        }
+    }
+    for (i = 0; i < hd->d_in; ++i) { /* in_scale */
+        if (!f64_bits_positive(rd_u64(w + 8 * (hd->d_in + i)))) {
+            return TSCVX_NN_BAD_WEIGHTS;
+        }
+    }
+    for (i = 0; i < hd->d_out; ++i) { /* out_std */
+        if (!f64_bits_positive(rd_u64(w + 8 * (2 * (size_t)hd->d_in + hd->d_out + i)))) {
+            return TSCVX_NN_BAD_WEIGHTS;
+        }
+    }
+    return TSCVX_NN_OK;
+}
+
+/* ---- arena layout ------------------------------------------------------------------------ */
+
+#define ALIGN 16u
+
+static size_t round_up(size_t n) { return (n + (ALIGN - 1)) & ~(size_t)(ALIGN - 1); }
+
+/* Arena bytes after its base is aligned: the struct, the layer table, activations (doubles),
+ * the weights when copied. 0 when the total does not fit in size_t (a 32-bit target). */
+static size_t layout_bytes(const nn_header *hd, int copy)
+{
+    const uint64_t d = hd->d_model, L = hd->seq_len, pad = ALIGN;
+    uint64_t b = 0;
+    b += sizeof(struct tscvx_nn) + pad;
+    b += sizeof(nn_layer) * (uint64_t)(hd->n_layers ? hd->n_layers : 1) + pad;
+    b += 8 * (2 * (uint64_t)hd->d_in + pad);      /* z, xb */
+    b += 8 * (L * d + L * 3 * d + L * d) + 3 * pad; /* h, qkv, o */
+    b += 8 * (d + (uint64_t)hd->d_ff + L + hd->d_out) + 4 * pad; /* t, f, sc, yb */
+    if (copy) {
+        if (hd->n_values > (UINT64_MAX - b) / 8) {
+            return 0;
+        }
+        b += 8 * hd->n_values + pad;
+    }
+    return b + pad > (uint64_t)(size_t)-1 ? 0 : (size_t)b; /* + pad: the base alignment */
+}
+
+static int must_copy(unsigned flags)
+{
+    return (flags & TSCVX_NN_COPY_WEIGHTS) || !nn_host_is_little_endian();
+}
+
+tscvx_nn_status tscvx_nn_arena_size(const void *blob, size_t len, unsigned flags, size_t *bytes)
+{
+    nn_header hd;
+    tscvx_nn_status st;
+    if (!blob || !bytes) {
+        return TSCVX_NN_NULL_ARGUMENT;
+    }
+    if (flags & ~TSCVX_NN_COPY_WEIGHTS) {
+        return TSCVX_NN_BAD_FLAGS;
+    }
+    st = nn_parse(blob, len, &hd);
+    if (st != TSCVX_NN_OK) {
+        return st;
+    }
+    *bytes = layout_bytes(&hd, must_copy(flags));
+    if (*bytes == 0) {
+        return TSCVX_NN_BAD_DIMENSIONS;
+    }
+    *bytes += ALIGN; /* slack to align the base */
+    return TSCVX_NN_OK;
+}
+
+/* Bump allocation from the aligned arena (sizes were checked against layout_bytes). */
+static void *take(unsigned char **cur, size_t n)
+{
+    void *p = *cur;
+    *cur += round_up(n);
+    return p;
+}
+
+tscvx_nn_status tscvx_nn_init(tscvx_nn **out, void *arena, size_t arena_bytes, const void *blob,
+                              size_t len, unsigned flags)
+{
+    nn_header hd;
+    tscvx_nn_status st;
+    tscvx_nn *net;
+    unsigned char *cur;
+    const double *w;
+    size_t need, d, L, ff, i;
+    int copy;
+    uint32_t l;
+
+    if (!out || !arena || !blob) {
+        return TSCVX_NN_NULL_ARGUMENT;
+    }
+    *out = NULL;
+    if (flags & ~TSCVX_NN_COPY_WEIGHTS) {
+        return TSCVX_NN_BAD_FLAGS;
+    }
+    st = nn_parse(blob, len, &hd);
+    if (st != TSCVX_NN_OK) {
+        return st;
+    }
+    copy = must_copy(flags);
+    need = layout_bytes(&hd, copy);
+    if (need == 0) {
+        return TSCVX_NN_BAD_DIMENSIONS;
+    }
+    need += ALIGN; /* as tscvx_nn_arena_size */
+    if (arena_bytes < need) {
+        return TSCVX_NN_ARENA_TOO_SMALL;
+    }
+    if (!copy && ((uintptr_t)blob % sizeof(double)) != 0) {
+        return TSCVX_NN_BAD_ALIGNMENT;
+    }
+
+    cur = (unsigned char *)arena;
+    cur += (ALIGN - (uintptr_t)cur % ALIGN) % ALIGN;
+    net = (tscvx_nn *)take(&cur, sizeof *net);
+    memset(net, 0, sizeof *net);
+    net->hdr = hd;
+    net->d_in = (int)hd.d_in;
+    net->d_out = (int)hd.d_out;
+    net->d = (int)hd.d_model;
+    net->heads = (int)hd.n_heads;
+    net->n_layers = (int)hd.n_layers;
+    net->ff = (int)hd.d_ff;
+    net->L = (int)hd.seq_len;
+    net->arena_bytes = need;
+    d = hd.d_model;
+    L = hd.seq_len;
+    ff = hd.d_ff;
+    net->layers = (nn_layer *)take(&cur, sizeof(nn_layer) * (hd.n_layers ? hd.n_layers : 1));
+    net->z = (double *)take(&cur, sizeof(double) * hd.d_in);
+    net->h = (double *)take(&cur, sizeof(double) * L * d);
+    net->qkv = (double *)take(&cur, sizeof(double) * L * 3 * d);
+    net->o = (double *)take(&cur, sizeof(double) * L * d);
+    net->t = (double *)take(&cur, sizeof(double) * d);
+    net->f = (double *)take(&cur, sizeof(double) * ff);
+    net->sc = (double *)take(&cur, sizeof(double) * L);
+    net->xb = (double *)take(&cur, sizeof(double) * hd.d_in);
+    net->yb = (double *)take(&cur, sizeof(double) * hd.d_out);
+
+    if (copy) { /* the values in the host's byte order */
+        const unsigned char *src = (const unsigned char *)blob + TSCVX_NN_HEADER_BYTES;
+        double *dst = (double *)take(&cur, sizeof(double) * (size_t)hd.n_values);
+        for (i = 0; i < (size_t)hd.n_values; ++i) {
+            dst[i] = rd_f64(src + 8 * i);
+        }
+        w = dst;
+    } else {
+        w = (const double *)(const void *)((const unsigned char *)blob + TSCVX_NN_HEADER_BYTES);
+    }
+    net->weights_in_arena = copy;
+
+    /* carve the weights in the blob's order (nn_internal.h) */
+    net->in_mean = w;
+    w += hd.d_in;
+    net->in_scale = w;
+    w += hd.d_in;
+    net->out_mean = w;
+    w += hd.d_out;
+    net->out_std = w;
+    w += hd.d_out;
+    net->enc_w = w;
+    w += hd.tokens == TSCVX_NN_TOKENS_SINGLE ? d * hd.d_in : L * d;
+    net->enc_b = w;
+    w += hd.tokens == TSCVX_NN_TOKENS_SINGLE ? d : L * d;
+    net->pos = w;
+    w += L * d;
+    for (l = 0; l < hd.n_layers; ++l) {
+        nn_layer *ly = &net->layers[l];
+        ly->W_qkv = w;
+        w += 3 * d * d;
+        ly->b_qkv = w;
+        w += 3 * d;
+        ly->W_o = w;
+        w += d * d;
+        ly->b_o = w;
+        w += d;
+        ly->ln1_g = w;
+        w += d;
+        ly->ln1_b = w;
+        w += d;
+        ly->W_1 = w;
+        w += ff * d;
+        ly->b_1 = w;
+        w += ff;
+        ly->W_2 = w;
+        w += d * ff;
+        ly->b_2 = w;
+        w += d;
+        ly->ln2_g = w;
+        w += d;
+        ly->ln2_b = w;
+        w += d;
+    }
+    net->W_d = w;
+    w += hd.d_out * L * d;
+    net->b_d = w;
+    w += hd.d_out;
+    net->probe_in = w;
+    w += (size_t)hd.n_probes * hd.d_in;
+    net->probe_out = w;
+    net->cookie = NN_COOKIE;
+    *out = net;
+    return TSCVX_NN_OK;
+}
+
+tscvx_nn_status tscvx_nn_get_info(const tscvx_nn *net, tscvx_nn_info *info)
+{
+    if (!net || !info) {
+        return TSCVX_NN_NULL_ARGUMENT;
+    }
+    if (net->cookie != NN_COOKIE) {
+        return TSCVX_NN_NOT_READY;
+    }
+    info->kind = (int)net->hdr.kind;
+    info->tokens = (int)net->hdr.tokens;
+    info->d_in = net->d_in;
+    info->d_out = net->d_out;
+    info->d_model = net->d;
+    info->n_heads = net->heads;
+    info->n_layers = net->n_layers;
+    info->d_ff = net->ff;
+    info->seq_len = net->L;
+    info->N = (int)net->hdr.N;
+    info->n_probes = (int)net->hdr.n_probes;
+    info->threshold = net->hdr.threshold;
+    info->ln_eps = net->hdr.ln_eps;
+    info->n_weights = (size_t)net->hdr.n_weights;
+    info->arena_bytes = net->arena_bytes;
+    info->weights_in_arena = net->weights_in_arena;
+    return TSCVX_NN_OK;
+}
+
+tscvx_nn_status tscvx_nn_tight_mask(const tscvx_nn *net, const double *logits, int n,
+                                    unsigned char *mask)
+{
+    int i;
+    if (!net || !logits || !mask) {
+        return TSCVX_NN_NULL_ARGUMENT;
+    }
+    if (net->cookie != NN_COOKIE) {
+        return TSCVX_NN_NOT_READY;
+    }
+    if (net->hdr.kind != TSCVX_NN_KIND_CONSTRAINT || n != net->d_out) {
+        return TSCVX_NN_BAD_SIZE;
+    }
+    for (i = 0; i < n; ++i) {
+        if (isnan(logits[i])) {
+            return TSCVX_NN_BAD_INPUT;
+        }
+    }
+    for (i = 0; i < n; ++i) { /* the same formula as guidance.nn.infer.ConstraintModel */
+        mask[i] = (unsigned char)(1.0 / (1.0 + exp(-logits[i])) >= net->hdr.threshold);
+    }
+    return TSCVX_NN_OK;
+}
+
+tscvx_nn_status tscvx_nn_self_test(tscvx_nn *net, double *max_rel_err)
+{
+    uint32_t k;
+    int i;
+    double worst = 0.0;
+    tscvx_nn_status st;
+    if (!net) {
+        return TSCVX_NN_NULL_ARGUMENT;
+    }
+    if (net->cookie != NN_COOKIE) {
+        return TSCVX_NN_NOT_READY;
+    }
+    for (k = 0; k < net->hdr.n_probes; ++k) {
+        const double *xin = net->probe_in + (size_t)k * net->d_in;
+        const double *yrec = net->probe_out + (size_t)k * net->d_out;
+        for (i = 0; i < net->d_in; ++i) {
+            net->xb[i] = xin[i];
+        }
+        st = tscvx_nn_run(net, net->xb, net->d_in, net->yb, net->d_out);
+        if (st != TSCVX_NN_OK) {
+            return st;
+        }
+        for (i = 0; i < net->d_out; ++i) {
+            double ref = yrec[i];
+            double err = fabs(net->yb[i] - ref) / (fabs(ref) > 1.0 ? fabs(ref) : 1.0);
+            worst = err > worst ? err : worst;
+        }
+    }
+    if (max_rel_err) {
+        *max_rel_err = worst;
+    }
+    return worst <= NN_SELF_TEST_TOL ? TSCVX_NN_OK : TSCVX_NN_SELF_TEST_FAILED;
+}

@@ -1,0 +1,581 @@
+/*
+ * test_nn.c -- C tests of the network inference (run under valgrind by `make ctest`).
+ *
+ *   test_nn [MODEL.tnn ...]
+ *
+ * - each given model: validated, sized, built in an arena of exactly the reported size (so
+ *   valgrind sees any overrun), its recorded probes reproduced (self-test), deterministic,
+ *   the same numbers with the weights copied into the arena or read in place;
+ * - synthetic networks of both token modes, several heads and layers, against a naive
+ *   reference written here from the documented blob layout (full L x L attention);
+ * - every refusal: NULL pointers, bad magic, version, truncated / trailing bytes, CRC, bad
+ *   dimensions, NaN / inf weights, non-positive scales, misalignment, small arena, unknown
+ *   flags, wrong sizes, NaN / inf inputs, an uninitialized net, a failing self-test.
+ */
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "nn_internal.h"
+#include "tscvx_nn.h"
+
+static int failures = 0;
+#define CHECK(cond)                                                                  \
+    do {                                                                             \
+        if (!(cond)) {                                                               \
+            fprintf(stderr, "%s:%d: check failed: %s\n", __FILE__, __LINE__, #cond); \
+            ++failures;                                                              \
+        }                                                                            \
+    } while (0)
+#define CHECK_ST(expr, want)                                                              \
+    do {                                                                                  \
+        tscvx_nn_status got_ = (expr);                                                    \
+        if (got_ != (want)) {                                                             \
+            fprintf(stderr, "%s:%d: %s -> %d (%s), expected %d (%s)\n", __FILE__, __LINE__, \
+                    #expr, (int)got_, tscvx_nn_status_message(got_), (int)(want),          \
+                    tscvx_nn_status_message(want));                                       \
+            ++failures;                                                                   \
+        }                                                                                 \
+    } while (0)
+
+/* ---- helpers ----------------------------------------------------------------------------- */
+
+static uint64_t rng_state = 0x9E3779B97F4A7C15ull;
+static double urand(void) /* uniform in [-1, 1) */
+{
+    rng_state ^= rng_state << 13;
+    rng_state ^= rng_state >> 7;
+    rng_state ^= rng_state << 17;
+    return (double)(rng_state >> 11) / 4503599627370496.0 - 1.0;
+}
+
+static void wr_u32(unsigned char *p, uint32_t v)
+{
+    int i;
+    for (i = 0; i < 4; ++i) p[i] = (unsigned char)(v >> (8 * i));
+}
+static void wr_u64(unsigned char *p, uint64_t v)
+{
+    wr_u32(p, (uint32_t)v);
+    wr_u32(p + 4, (uint32_t)(v >> 32));
+}
+static void wr_f64(unsigned char *p, double v)
+{
+    uint64_t u;
+    memcpy(&u, &v, sizeof u);
+    wr_u64(p, u);
+}
+static uint32_t rd_u32(const unsigned char *p)
+{
+    return (uint32_t)p[0] | ((uint32_t)p[1] << 8) | ((uint32_t)p[2] << 16) | ((uint32_t)p[3] << 24);
+}
+static double rd_f64(const unsigned char *p)
+{
+    uint64_t u = (uint64_t)rd_u32(p) | ((uint64_t)rd_u32(p + 4) << 32);
+    double v;
+    memcpy(&v, &u, sizeof v);
+    return v;
+}
+/* Recomputes the CRC-32 of a blob edited on purpose. */
+static void reseal(unsigned char *b, size_t len)
+{
+    uint32_t crc = nn_crc32(b, NN_CRC_OFFSET, 0);
+    crc = nn_crc32(b + TSCVX_NN_HEADER_BYTES, len - TSCVX_NN_HEADER_BYTES, crc);
+    wr_u32(b + NN_CRC_OFFSET, crc);
+}
+
+static unsigned char *dup_blob(const unsigned char *b, size_t len)
+{
+    unsigned char *c = malloc(len);
+    if (c) memcpy(c, b, len);
+    return c;
+}
+
+static tscvx_nn_status try_init(const unsigned char *blob, size_t len, unsigned flags)
+{
+    size_t need = 0;
+    void *arena;
+    tscvx_nn *net = NULL;
+    tscvx_nn_status st = tscvx_nn_arena_size(blob, len, flags, &need);
+    if (st != TSCVX_NN_OK) return st;
+    arena = malloc(need);
+    st = tscvx_nn_init(&net, arena, need, blob, len, flags);
+    free(arena);
+    return st;
+}
+
+static unsigned char *read_file(const char *path, size_t *len)
+{
+    FILE *f = fopen(path, "rb");
+    unsigned char *buf = NULL;
+    long n;
+    if (!f) return NULL;
+    if (fseek(f, 0, SEEK_END) == 0 && (n = ftell(f)) > 0 && fseek(f, 0, SEEK_SET) == 0
+        && (buf = malloc((size_t)n)) != NULL) {
+        if (fread(buf, 1, (size_t)n, f) != (size_t)n) {
+            free(buf);
+            buf = NULL;
+        } else {
+            *len = (size_t)n;
+        }
+    }
+    fclose(f);
+    return buf;
+}
+
+/* ---- synthetic networks and a naive reference -------------------------------------------- */
+
+typedef struct {
+    int kind, tokens, d_in, d_out, d, H, layers, ff, n_probes;
+} arch;
+
+static size_t n_weights_of(const arch *a)
+{
+    size_t L = a->tokens ? (size_t)a->d_in : 1, d = (size_t)a->d, ff = (size_t)a->ff;
+    size_t enc = a->tokens ? 2 * L * d : d * a->d_in + d;
+    size_t layer = 3 * d * d + 3 * d + d * d + d + 2 * d + ff * d + ff + d * ff + d + 2 * d;
+    return 2 * (size_t)a->d_in + 2 * (size_t)a->d_out + enc + L * d + a->layers * layer
+           + (size_t)a->d_out * L * d + a->d_out;
+}
+
+/* A random blob of architecture `a` (probes: inputs only, outputs 0). */
+static unsigned char *make_blob(const arch *a, size_t *len)
+{
+    size_t nw = n_weights_of(a), np = (size_t)a->n_probes * (a->d_in + a->d_out), i;
+    size_t n = nw + np, L = a->tokens ? (size_t)a->d_in : 1;
+    unsigned char *b = calloc(1, TSCVX_NN_HEADER_BYTES + 8 * n);
+    unsigned char *w;
+    if (!b) return NULL;
+    memcpy(b, NN_MAGIC, 8);
+    wr_u32(b + 8, TSCVX_NN_FORMAT_VERSION);
+    wr_u32(b + 12, TSCVX_NN_HEADER_BYTES);
+    wr_u32(b + 16, (uint32_t)a->kind);
+    wr_u32(b + 20, (uint32_t)a->tokens);
+    wr_u32(b + 24, (uint32_t)a->d_in);
+    wr_u32(b + 28, (uint32_t)a->d_out);
+    wr_u32(b + 32, (uint32_t)a->d);
+    wr_u32(b + 36, (uint32_t)a->H);
+    wr_u32(b + 40, (uint32_t)a->layers);
+    wr_u32(b + 44, (uint32_t)a->ff);
+    wr_u32(b + 48, (uint32_t)L);
+    wr_u32(b + 52, 50);
+    wr_u32(b + 56, (uint32_t)a->n_probes);
+    wr_f64(b + 64, 1e-5);
+    wr_f64(b + 72, a->kind == TSCVX_NN_KIND_CONSTRAINT ? 0.25 : 0.5);
+    wr_u64(b + 80, n);
+    wr_u64(b + 88, nw);
+    w = b + TSCVX_NN_HEADER_BYTES;
+    for (i = 0; i < n; ++i) {
+        wr_f64(w + 8 * i, 0.5 * urand());
+    }
+    for (i = 0; i < (size_t)a->d_in; ++i) { /* in_scale */
+        wr_f64(w + 8 * (a->d_in + i), 0.5 + fabs(urand()));
+    }
+    for (i = 0; i < (size_t)a->d_out; ++i) { /* out_std */
+        wr_f64(w + 8 * (2 * (size_t)a->d_in + a->d_out + i), 0.5 + fabs(urand()));
+    }
+    *len = TSCVX_NN_HEADER_BYTES + 8 * n;
+    reseal(b, *len);
+    return b;
+}
+
+static void ref_ln(double *x, const double *g, const double *b, int n)
+{
+    double mu = 0, var = 0;
+    int i;
+    for (i = 0; i < n; ++i) mu += x[i] / n;
+    for (i = 0; i < n; ++i) var += (x[i] - mu) * (x[i] - mu) / n;
+    for (i = 0; i < n; ++i) x[i] = (x[i] - mu) / sqrt(var + 1e-5) * g[i] + b[i];
+}
+
+/* The forward pass straight from the layout (nn_internal.h), full attention matrices. */
+static void reference(const arch *a, const unsigned char *blob, const double *x, double *y)
+{
+    const int L = a->tokens ? a->d_in : 1, d = a->d, H = a->H, dh = d / H, ff = a->ff;
+    const int din = a->d_in, dout = a->d_out;
+    size_t nw = n_weights_of(a), i, off = 0;
+    double *W = malloc(sizeof(double) * nw);
+    double *h = malloc(sizeof(double) * L * d), *qkv = malloc(sizeof(double) * L * 3 * d);
+    double *o = malloc(sizeof(double) * L * d), *A = malloc(sizeof(double) * L * L);
+    double *t = malloc(sizeof(double) * (d > ff ? d : ff) * 2), *z = malloc(sizeof(double) * din);
+    const double *mean, *scale, *omean, *ostd, *ew, *eb, *pos, *Wd, *bd;
+    int l, r, c, j, k, hh;
+    for (i = 0; i < nw; ++i) W[i] = rd_f64(blob + TSCVX_NN_HEADER_BYTES + 8 * i);
+#define TAKE(n) (off += (size_t)(n), W + off - (size_t)(n))
+    mean = TAKE(din);
+    scale = TAKE(din);
+    omean = TAKE(dout);
+    ostd = TAKE(dout);
+    ew = TAKE(a->tokens ? (size_t)L * d : (size_t)d * din);
+    eb = TAKE(a->tokens ? (size_t)L * d : (size_t)d);
+    pos = TAKE((size_t)L * d);
+    for (j = 0; j < din; ++j) z[j] = (x[j] - mean[j]) * scale[j];
+    for (r = 0; r < L; ++r)
+        for (c = 0; c < d; ++c) {
+            double s;
+            if (a->tokens) {
+                s = z[r] * ew[r * d + c] + eb[r * d + c];
+            } else {
+                s = eb[c];
+                for (j = 0; j < din; ++j) s += ew[c * din + j] * z[j];
+            }
+            h[r * d + c] = s + pos[r * d + c];
+        }
+    for (l = 0; l < a->layers; ++l) {
+        const double *Wqkv = TAKE(3 * d * d), *bqkv = TAKE(3 * d), *Wo = TAKE(d * d),
+                     *bo = TAKE(d), *g1 = TAKE(d), *b1n = TAKE(d), *W1 = TAKE(ff * d),
+                     *b1 = TAKE(ff), *W2 = TAKE(d * ff), *b2 = TAKE(d), *g2 = TAKE(d),
+                     *b2n = TAKE(d);
+        for (r = 0; r < L; ++r)
+            for (c = 0; c < 3 * d; ++c) {
+                double s = bqkv[c];
+                for (j = 0; j < d; ++j) s += Wqkv[c * d + j] * h[r * d + j];
+                qkv[r * 3 * d + c] = s;
+            }
+        for (hh = 0; hh < H; ++hh) {
+            for (r = 0; r < L; ++r) { /* A = softmax(Q K^T / sqrt(dh)) */
+                double mx = -HUGE_VAL, sum = 0;
+                for (k = 0; k < L; ++k) {
+                    double s = 0;
+                    for (j = 0; j < dh; ++j)
+                        s += qkv[r * 3 * d + hh * dh + j] * qkv[k * 3 * d + d + hh * dh + j];
+                    A[r * L + k] = s / sqrt((double)dh);
+                    mx = A[r * L + k] > mx ? A[r * L + k] : mx;
+                }
+                for (k = 0; k < L; ++k) sum += (A[r * L + k] = exp(A[r * L + k] - mx));
+                for (k = 0; k < L; ++k) A[r * L + k] /= sum;
+            }
+            for (r = 0; r < L; ++r)
+                for (j = 0; j < dh; ++j) {
+                    double s = 0;
+                    for (k = 0; k < L; ++k) s += A[r * L + k] * qkv[k * 3 * d + 2 * d + hh * dh + j];
+                    o[r * d + hh * dh + j] = s;
+                }
+        }
+        for (r = 0; r < L; ++r) {
+            double *hr = h + r * d;
+            for (c = 0; c < d; ++c) {
+                double s = bo[c];
+                for (j = 0; j < d; ++j) s += Wo[c * d + j] * o[r * d + j];
+                t[c] = hr[c] + s;
+            }
+            memcpy(hr, t, sizeof(double) * d);
+            ref_ln(hr, g1, b1n, d);
+            for (c = 0; c < ff; ++c) {
+                double s = b1[c];
+                for (j = 0; j < d; ++j) s += W1[c * d + j] * hr[j];
+                t[c] = s > 0 ? s : 0;
+            }
+            for (c = 0; c < d; ++c) {
+                double s = b2[c];
+                for (j = 0; j < ff; ++j) s += W2[c * ff + j] * t[j];
+                t[ff + c] = s;
+            }
+            for (c = 0; c < d; ++c) hr[c] += t[ff + c];
+            ref_ln(hr, g2, b2n, d);
+        }
+    }
+    Wd = TAKE((size_t)dout * L * d);
+    bd = TAKE(dout);
+    for (c = 0; c < dout; ++c) {
+        double s = bd[c];
+        for (j = 0; j < L * d; ++j) s += Wd[(size_t)c * L * d + j] * h[j];
+        y[c] = s * ostd[c] + omean[c];
+    }
+#undef TAKE
+    free(W), free(h), free(qkv), free(o), free(A), free(t), free(z);
+}
+
+static void test_synthetic(void)
+{
+    static const arch archs[] = {
+        {TSCVX_NN_KIND_SOLUTION, TSCVX_NN_TOKENS_SCALAR, 5, 7, 8, 2, 2, 12, 0},
+        {TSCVX_NN_KIND_CONSTRAINT, TSCVX_NN_TOKENS_SCALAR, 6, 9, 12, 3, 1, 5, 0},
+        {TSCVX_NN_KIND_SOLUTION, TSCVX_NN_TOKENS_SCALAR, 3, 4, 4, 4, 3, 8, 0},
+        {TSCVX_NN_KIND_CONSTRAINT, TSCVX_NN_TOKENS_SINGLE, 17, 21, 16, 2, 2, 24, 0},
+        {TSCVX_NN_KIND_SOLUTION, TSCVX_NN_TOKENS_SINGLE, 4, 3, 9, 1, 0, 3, 0},
+        {TSCVX_NN_KIND_SOLUTION, TSCVX_NN_TOKENS_SCALAR, 1, 1, 1, 1, 1, 1, 0},
+    };
+    size_t k;
+    for (k = 0; k < sizeof archs / sizeof archs[0]; ++k) {
+        const arch *a = &archs[k];
+        size_t len = 0, need = 0;
+        unsigned char *blob = make_blob(a, &len);
+        void *arena;
+        tscvx_nn *net = NULL;
+        double x[32], y[32], yr[32], worst = 0;
+        int trial, i;
+        CHECK_ST(tscvx_nn_arena_size(blob, len, 0, &need), TSCVX_NN_OK);
+        arena = malloc(need);
+        CHECK_ST(tscvx_nn_init(&net, arena, need, blob, len, 0), TSCVX_NN_OK);
+        for (trial = 0; trial < 20 && net; ++trial) {
+            for (i = 0; i < a->d_in; ++i) x[i] = 2.0 * urand();
+            CHECK_ST(tscvx_nn_run(net, x, a->d_in, y, a->d_out), TSCVX_NN_OK);
+            reference(a, blob, x, yr);
+            for (i = 0; i < a->d_out; ++i) {
+                double e = fabs(y[i] - yr[i]) / (fabs(yr[i]) > 1 ? fabs(yr[i]) : 1);
+                worst = e > worst ? e : worst;
+            }
+        }
+        if (worst > 1e-12) {
+            fprintf(stderr, "synthetic net %zu: max relative difference %g\n", k, worst);
+        }
+        CHECK(worst <= 1e-12);
+        free(arena);
+        free(blob);
+    }
+}
+
+/* ---- a shipped model --------------------------------------------------------------------- */
+
+static void test_model(const char *path)
+{
+    static const double theta[17] = {4, 4, 0, 0, -1, -2, 1, 0, 0, 0, 0, 0, 0, 3, 20, 90, 1};
+    size_t len = 0, need = 0, need_copy = 0;
+    unsigned char *blob = read_file(path, &len);
+    void *arena, *arena2;
+    tscvx_nn *net = NULL, *net2 = NULL;
+    tscvx_nn_info info;
+    double *x, *y, *y2, err = 1;
+    int i;
+
+    CHECK(blob != NULL);
+    if (!blob) return;
+    CHECK_ST(tscvx_nn_arena_size(blob, len, 0, &need), TSCVX_NN_OK);
+    CHECK_ST(tscvx_nn_arena_size(blob, len, TSCVX_NN_COPY_WEIGHTS, &need_copy), TSCVX_NN_OK);
+    CHECK(need_copy > need + (len - TSCVX_NN_HEADER_BYTES) - 64);
+    arena = malloc(need); /* exact size: valgrind flags any overrun */
+    CHECK_ST(tscvx_nn_init(&net, arena, need, blob, len, 0), TSCVX_NN_OK);
+    CHECK_ST(tscvx_nn_get_info(net, &info), TSCVX_NN_OK);
+    CHECK(info.arena_bytes == need && !info.weights_in_arena && info.n_probes > 0);
+    CHECK(info.seq_len == (info.tokens == TSCVX_NN_TOKENS_SINGLE ? 1 : info.d_in));
+    CHECK_ST(tscvx_nn_self_test(net, &err), TSCVX_NN_OK);
+    CHECK(err < 1e-5);
+    printf("%s: kind %d, d_in %d, d_out %d, d %d, layers %d, heads %d, ff %d, arena %zu B, "
+           "self-test max rel. error %.2e\n", path, info.kind, info.d_in, info.d_out,
+           info.d_model, info.n_layers, info.n_heads, info.d_ff, need, err);
+
+    x = malloc(sizeof(double) * info.d_in);
+    y = malloc(sizeof(double) * info.d_out);
+    y2 = malloc(sizeof(double) * info.d_out);
+    for (i = 0; i < info.d_in; ++i) x[i] = i < 17 ? theta[i] : 0.0;
+    CHECK_ST(tscvx_nn_run(net, x, info.d_in, y, info.d_out), TSCVX_NN_OK);
+    CHECK_ST(tscvx_nn_run(net, x, info.d_in, y2, info.d_out), TSCVX_NN_OK);
+    CHECK(memcmp(y, y2, sizeof(double) * info.d_out) == 0); /* deterministic */
+
+    /* weights copied into the arena: bit-identical results */
+    arena2 = malloc(need_copy);
+    CHECK_ST(tscvx_nn_init(&net2, arena2, need_copy - 1, blob, len, TSCVX_NN_COPY_WEIGHTS),
+             TSCVX_NN_ARENA_TOO_SMALL);
+    CHECK_ST(tscvx_nn_init(&net2, arena2, need_copy, blob, len, TSCVX_NN_COPY_WEIGHTS),
+             TSCVX_NN_OK);
+    memset(y2, 0, sizeof(double) * info.d_out);
+    CHECK_ST(tscvx_nn_run(net2, x, info.d_in, y2, info.d_out), TSCVX_NN_OK);
+    CHECK(memcmp(y, y2, sizeof(double) * info.d_out) == 0);
+    free(arena2);
+
+    /* the mask of the tight bits */
+    if (info.kind == TSCVX_NN_KIND_CONSTRAINT) {
+        unsigned char *mask = malloc((size_t)info.d_out);
+        int n_tight = 0;
+        CHECK_ST(tscvx_nn_tight_mask(net, y, info.d_out, mask), TSCVX_NN_OK);
+        for (i = 0; i < info.d_out; ++i) {
+            CHECK(mask[i] == (1.0 / (1.0 + exp(-y[i])) >= info.threshold));
+            n_tight += mask[i];
+        }
+        CHECK(n_tight > 0 && n_tight < info.d_out);
+        CHECK_ST(tscvx_nn_tight_mask(net, y, info.d_out - 1, mask), TSCVX_NN_BAD_SIZE);
+        y2[0] = NAN;
+        CHECK_ST(tscvx_nn_tight_mask(net, y2, info.d_out, mask), TSCVX_NN_BAD_INPUT);
+        free(mask);
+    } else {
+        unsigned char m[1];
+        CHECK_ST(tscvx_nn_tight_mask(net, y, info.d_out, m), TSCVX_NN_BAD_SIZE);
+    }
+
+    /* bad calls and inputs */
+    CHECK_ST(tscvx_nn_run(NULL, x, info.d_in, y, info.d_out), TSCVX_NN_NULL_ARGUMENT);
+    CHECK_ST(tscvx_nn_run(net, NULL, info.d_in, y, info.d_out), TSCVX_NN_NULL_ARGUMENT);
+    CHECK_ST(tscvx_nn_run(net, x, info.d_in, NULL, info.d_out), TSCVX_NN_NULL_ARGUMENT);
+    CHECK_ST(tscvx_nn_run(net, x, info.d_in - 1, y, info.d_out), TSCVX_NN_BAD_SIZE);
+    CHECK_ST(tscvx_nn_run(net, x, info.d_in, y, info.d_out + 1), TSCVX_NN_BAD_SIZE);
+    CHECK_ST(tscvx_nn_run(net, x, -1, y, info.d_out), TSCVX_NN_BAD_SIZE);
+    x[3] = NAN;
+    CHECK_ST(tscvx_nn_run(net, x, info.d_in, y, info.d_out), TSCVX_NN_BAD_INPUT);
+    x[3] = -INFINITY;
+    CHECK_ST(tscvx_nn_run(net, x, info.d_in, y, info.d_out), TSCVX_NN_BAD_INPUT);
+    for (i = 0; i < info.d_in; ++i) x[i] = 1e300; /* extreme: an answer or a clear refusal */
+    {
+        tscvx_nn_status st = tscvx_nn_run(net, x, info.d_in, y, info.d_out);
+        CHECK(st == TSCVX_NN_OK || st == TSCVX_NN_NUMERICAL_ERROR);
+        if (st == TSCVX_NN_OK) {
+            for (i = 0; i < info.d_out; ++i) CHECK(isfinite(y[i]));
+        }
+    }
+    CHECK_ST(tscvx_nn_get_info(net, NULL), TSCVX_NN_NULL_ARGUMENT);
+    memset(arena, 0, need); /* an overwritten arena is noticed */
+    for (i = 0; i < info.d_in; ++i) x[i] = i < 17 ? theta[i] : 0.0;
+    CHECK_ST(tscvx_nn_run(net, x, info.d_in, y, info.d_out), TSCVX_NN_NOT_READY);
+    CHECK_ST(tscvx_nn_self_test(net, NULL), TSCVX_NN_NOT_READY);
+    CHECK_ST(tscvx_nn_get_info(net, &info), TSCVX_NN_NOT_READY);
+    free(arena);
+    free(x), free(y), free(y2);
+    free(blob);
+}
+
+/* ---- refusals of bad blobs (on a small synthetic net with probes) ------------------------- */
+
+static void test_bad_blobs(void)
+{
+    static const arch a = {TSCVX_NN_KIND_CONSTRAINT, TSCVX_NN_TOKENS_SCALAR, 4, 6, 8, 2, 1, 10, 2};
+    size_t len = 0, need = 0;
+    unsigned char *good = make_blob(&a, &len), *b, *big;
+    tscvx_nn *net = NULL;
+    void *arena;
+    const size_t w0 = TSCVX_NN_HEADER_BYTES;
+    double x[4] = {0.1, 0.2, 0.3, 0.4}, y[6], err;
+
+    CHECK(good != NULL);
+    if (!good) return;
+    CHECK_ST(try_init(good, len, 0), TSCVX_NN_OK);
+    CHECK_ST(tscvx_nn_arena_size(NULL, len, 0, &need), TSCVX_NN_NULL_ARGUMENT);
+    CHECK_ST(tscvx_nn_arena_size(good, len, 0, NULL), TSCVX_NN_NULL_ARGUMENT);
+    CHECK_ST(tscvx_nn_arena_size(good, len, 2u, &need), TSCVX_NN_BAD_FLAGS);
+    CHECK_ST(tscvx_nn_init(NULL, good, len, good, len, 0), TSCVX_NN_NULL_ARGUMENT);
+    CHECK_ST(tscvx_nn_init(&net, NULL, len, good, len, 0), TSCVX_NN_NULL_ARGUMENT);
+    CHECK(net == NULL);
+
+    /* magic, version, header size */
+    b = dup_blob(good, len);
+    b[0] = 'X';
+    CHECK_ST(try_init(b, len, 0), TSCVX_NN_BAD_MAGIC);
+    CHECK_ST(try_init(good, 7, 0), TSCVX_NN_BAD_MAGIC);
+    memcpy(b, good, len);
+    wr_u32(b + 8, 2);
+    reseal(b, len);
+    CHECK_ST(try_init(b, len, 0), TSCVX_NN_BAD_VERSION);
+    memcpy(b, good, len);
+    wr_u32(b + 12, 64);
+    reseal(b, len);
+    CHECK_ST(try_init(b, len, 0), TSCVX_NN_BAD_VERSION);
+
+    /* length */
+    CHECK_ST(try_init(good, 100, 0), TSCVX_NN_TRUNCATED);
+    CHECK_ST(try_init(good, TSCVX_NN_HEADER_BYTES, 0), TSCVX_NN_TRUNCATED);
+    CHECK_ST(try_init(good, len - 8, 0), TSCVX_NN_TRUNCATED);
+    CHECK_ST(try_init(good, len - 1, 0), TSCVX_NN_TRUNCATED);
+    big = calloc(1, len + 8);
+    memcpy(big, good, len);
+    CHECK_ST(try_init(big, len + 8, 0), TSCVX_NN_TRUNCATED);
+    memcpy(b, good, len);
+    wr_u64(b + 80, (uint64_t)1 << 62); /* a count whose byte size overflows */
+    CHECK_ST(try_init(b, len, 0), TSCVX_NN_TRUNCATED);
+
+    /* corruption */
+    memcpy(b, good, len);
+    b[len / 2] ^= 0x10;
+    CHECK_ST(try_init(b, len, 0), TSCVX_NN_BAD_CHECKSUM);
+    memcpy(b, good, len);
+    b[100] = 1; /* reserved header byte: covered by the CRC */
+    CHECK_ST(try_init(b, len, 0), TSCVX_NN_BAD_CHECKSUM);
+
+    /* dimensions (sealed: only the dimension check can refuse them) */
+#define BAD_DIM(off, val)                                          \
+    do {                                                           \
+        memcpy(b, good, len);                                      \
+        wr_u32(b + (off), (uint32_t)(val));                        \
+        reseal(b, len);                                            \
+        CHECK_ST(try_init(b, len, 0), TSCVX_NN_BAD_DIMENSIONS);    \
+    } while (0)
+    BAD_DIM(16, 3);         /* kind */
+    BAD_DIM(20, 2);         /* token mode */
+    BAD_DIM(20, 0);         /* single tokens: other weight count and seq_len */
+    BAD_DIM(24, 5);         /* d_in: weight count no longer matches */
+    BAD_DIM(24, 0);         /* d_in = 0 */
+    BAD_DIM(28, 7);         /* d_out */
+    BAD_DIM(32, 9);         /* d_model */
+    BAD_DIM(36, 3);         /* heads do not divide d_model */
+    BAD_DIM(36, 0);         /* no heads */
+    BAD_DIM(40, 2);         /* layers */
+    BAD_DIM(40, 1000);      /* layers beyond the limit */
+    BAD_DIM(44, 11);        /* d_ff */
+    BAD_DIM(48, 1);         /* seq_len of scalar tokens is d_in */
+    BAD_DIM(52, 0);         /* N */
+    BAD_DIM(56, 3);         /* probes */
+    BAD_DIM(44, 0x7FFFFFFF);/* d_ff beyond the limit */
+    memcpy(b, good, len);
+    wr_u64(b + 88, n_weights_of(&a) - 1);
+    reseal(b, len);
+    CHECK_ST(try_init(b, len, 0), TSCVX_NN_BAD_DIMENSIONS);
+
+    /* values */
+#define BAD_VAL(off, val, want)                                    \
+    do {                                                           \
+        memcpy(b, good, len);                                      \
+        wr_f64(b + (off), (val));                                  \
+        reseal(b, len);                                            \
+        CHECK_ST(try_init(b, len, 0), (want));                     \
+    } while (0)
+    BAD_VAL(w0 + 8 * 40, NAN, TSCVX_NN_BAD_WEIGHTS);              /* a weight */
+    BAD_VAL(len - 8, INFINITY, TSCVX_NN_BAD_WEIGHTS);             /* last probe value */
+    BAD_VAL(w0 + 8 * (4 + 1), 0.0, TSCVX_NN_BAD_WEIGHTS);         /* in_scale = 0 */
+    BAD_VAL(w0 + 8 * (4 + 2), -0.0, TSCVX_NN_BAD_WEIGHTS);        /* in_scale = -0 */
+    BAD_VAL(w0 + 8 * (8 + 6 + 5), -1.0, TSCVX_NN_BAD_WEIGHTS);    /* out_std < 0 */
+    BAD_VAL(w0 + 8 * 2, -1.0, TSCVX_NN_OK);                       /* in_mean may be negative */
+    BAD_VAL(64, 0.0, TSCVX_NN_BAD_WEIGHTS);                       /* LayerNorm epsilon */
+    BAD_VAL(72, 1.5, TSCVX_NN_BAD_WEIGHTS);                       /* threshold */
+    BAD_VAL(72, NAN, TSCVX_NN_BAD_WEIGHTS);
+
+    /* alignment: in place needs 8 bytes; a copy does not */
+    memcpy(big + 1, good, len);
+    CHECK_ST(try_init(big + 1, len, 0), TSCVX_NN_BAD_ALIGNMENT);
+    CHECK_ST(try_init(big + 1, len, TSCVX_NN_COPY_WEIGHTS), TSCVX_NN_OK);
+
+    /* arena: too small, and any alignment of a large-enough one */
+    CHECK_ST(tscvx_nn_arena_size(good, len, 0, &need), TSCVX_NN_OK);
+    arena = malloc(need + 3);
+    CHECK_ST(tscvx_nn_init(&net, arena, need - 1, good, len, 0), TSCVX_NN_ARENA_TOO_SMALL);
+    CHECK_ST(tscvx_nn_init(&net, (char *)arena + 3, need, good, len, 0), TSCVX_NN_OK);
+    CHECK_ST(tscvx_nn_run(net, x, 4, y, 6), TSCVX_NN_OK);
+    /* the synthetic probes record zeros: the self-test must fail */
+    CHECK_ST(tscvx_nn_self_test(net, &err), TSCVX_NN_SELF_TEST_FAILED);
+    CHECK(err > 1e-4);
+    free(arena);
+
+    free(b);
+    free(big);
+    free(good);
+}
+
+static void test_messages(void)
+{
+    int i, j;
+    for (i = 0; i < TSCVX_NN_NSTATUS; ++i) {
+        const char *m = tscvx_nn_status_message((tscvx_nn_status)i);
+        CHECK(m != NULL && strlen(m) > 1);
+        for (j = 0; j < i; ++j) CHECK(strcmp(m, tscvx_nn_status_message((tscvx_nn_status)j)) != 0);
+    }
+    CHECK(strcmp(tscvx_nn_status_message(TSCVX_NN_NSTATUS), "unknown tscvx_nn_status") == 0);
+    CHECK(strcmp(tscvx_nn_status_message((tscvx_nn_status)-1), "unknown tscvx_nn_status") == 0);
+    /* zlib's crc32 check value */
+    CHECK(nn_crc32((const unsigned char *)"123456789", 9, 0) == 0xCBF43926u);
+}
+
+int main(int argc, char **argv)
+{
+    int i;
+    test_messages();
+    test_synthetic();
+    test_bad_blobs();
+    for (i = 1; i < argc; ++i) {
+        test_model(argv[i]);
+    }
+    if (failures) {
+        fprintf(stderr, "test_nn: %d check(s) failed\n", failures);
+        return 1;
+    }
+    printf("test_nn: all checks passed (%d model file(s))\n", argc - 1);
+    return 0;
+}

@@ -1,0 +1,272 @@
+"""Flight C inference of the networks (c_runtime/include/tscvx_nn.h, guidance/nn/flight.py):
+equal to onnxruntime on the shipped networks and on other architectures, reproducible weight
+files, refusal of corrupt or mismatched models and of bad inputs, no heap allocation inside
+tscvx_nn_run."""
+
+from __future__ import annotations
+
+import json
+import struct
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from guidance import cgnc
+from guidance.nn import flight
+from guidance.nn.flight import FlightNet, FlightNetError
+
+ROOT = Path(__file__).resolve().parent.parent
+MODELS = ROOT / "models"
+BUILD_MODELS = ROOT / "build" / "models"
+DRIVER = ROOT / "build" / "nn_budget_driver"
+KINDS = ("constraint", "solution")
+TOL = 1e-5  # |C - onnxruntime| <= TOL * max(1, |onnxruntime|), element-wise (float32 graph)
+
+needs_lib = pytest.mark.skipif(not cgnc.available(), reason="build/libtscvx_gnc.so: run make lib")
+needs_shipped = pytest.mark.skipif(
+    not (MODELS / "constraint.onnx").exists(), reason="no shipped models"
+)
+needs_built = pytest.mark.skipif(
+    not (BUILD_MODELS / "constraint.tnn").exists(), reason="build/models: run make lib"
+)
+
+
+def _ort_session(path: Path):
+    ort = pytest.importorskip("onnxruntime")
+    opts = ort.SessionOptions()
+    opts.intra_op_num_threads = 1
+    return ort.InferenceSession(str(path), opts, providers=["CPUExecutionProvider"])
+
+
+def _random_inputs(meta: dict, n: int, seed: int) -> np.ndarray:
+    """Raw inputs around the training distribution (float32, as the ONNX graph takes them)."""
+    rng = np.random.default_rng(seed)
+    mean, std = np.asarray(meta["in_mean"]), np.asarray(meta["in_std"])
+    return (mean + rng.standard_normal((n, len(mean))) * std).astype(np.float32)
+
+
+def _compare(c: np.ndarray, ref: np.ndarray) -> float:
+    return float(np.max(np.abs(c - ref) / np.maximum(1.0, np.abs(ref))))
+
+
+@pytest.fixture(scope="module")
+def blobs() -> dict[str, bytes]:
+    return {k: flight.tnn_bytes(MODELS / f"{k}.onnx") for k in KINDS}
+
+
+# ---- shipped networks ---------------------------------------------------------------------------
+
+
+@needs_shipped
+@needs_lib
+@pytest.mark.parametrize("kind", KINDS)
+def test_c_equals_onnxruntime_on_1000_inputs(kind: str, blobs: dict[str, bytes]) -> None:
+    sess = _ort_session(MODELS / f"{kind}.onnx")
+    meta = json.loads(sess.get_modelmeta().custom_metadata_map["tscvx"])
+    X = _random_inputs(meta, 1000, seed=11)
+    want = sess.run(None, {"inputs": X})[0].astype(np.float64)
+    net = FlightNet(blobs[kind])
+    got = net.run(X.astype(np.float64))
+    assert got.shape == want.shape == (1000, meta["d_out"])
+    rel = _compare(got, want)
+    abs_err = float(np.max(np.abs(got - want)))
+    print(f"\n{kind}: max |C - onnxruntime| = {abs_err:.3e} (relative {rel:.3e}), 1000 inputs")
+    assert rel <= TOL
+    # the C code is the float64 NumPy forward pass of the same weights, to rounding
+    assert _compare(got[:50], flight.forward(flight.read_onnx(MODELS / f"{kind}.onnx"),
+                                             X[:50].astype(np.float64))) < 1e-11  # fmt: skip
+    assert net.self_test() < 1e-5
+
+
+@needs_shipped
+@needs_built
+@needs_lib
+def test_c_mask_equals_the_onnx_models_mask(blobs: dict[str, bytes]) -> None:
+    from guidance.catalog import SCENARIOS
+    from guidance.dataset import theta_of
+    from guidance.nn.infer import load_model
+
+    cm = load_model(MODELS / "constraint.onnx", "constraint")
+    net = flight.load_flight_model(BUILD_MODELS / "constraint.tnn", "constraint")
+    assert net.info.threshold == pytest.approx(cm.threshold, rel=0, abs=0)
+    theta = theta_of(SCENARIOS["default"])
+    agree = total = 0
+    for k in range(1, 21):
+        logits = net.run(np.concatenate([theta, [k]]))[0]
+        mask_c = net.tight_mask(logits)
+        p = 1.0 / (1.0 + np.exp(-logits))
+        clear = np.abs(p - cm.threshold) > 1e-4  # away from the decision boundary
+        agree += int(np.sum(mask_c[clear] == cm.mask(theta, k)[clear]))
+        total += int(np.sum(clear))
+    assert agree == total and total > 20 * 340
+
+
+@needs_shipped
+def test_weight_files_are_reproducible(blobs: dict[str, bytes]) -> None:
+    for kind in KINDS:
+        again = flight.tnn_bytes(MODELS / f"{kind}.onnx")
+        assert again == blobs[kind]
+        built = BUILD_MODELS / f"{kind}.tnn"
+        if built.exists():
+            assert built.read_bytes() == blobs[kind], f"{built} is stale: run make lib"
+        fw = flight.read_onnx(MODELS / f"{kind}.onnx")
+        head = struct.unpack_from("<8sII", blobs[kind])
+        assert head == (flight.MAGIC, flight.FORMAT_VERSION, flight.HEADER_BYTES)
+        n_values = struct.unpack_from("<Q", blobs[kind], 80)[0]
+        assert len(blobs[kind]) == flight.HEADER_BYTES + 8 * n_values
+        assert fw.tokens == "single" and fw.d_model == 256
+
+
+@needs_shipped
+@needs_built
+@needs_lib
+def test_model_for_another_problem_is_refused() -> None:
+    from guidance.nn.infer import ModelMismatchError
+    from guidance.params import Params
+
+    path = BUILD_MODELS / "constraint.tnn"
+    with pytest.raises(ModelMismatchError, match="output size 350"):
+        flight.load_flight_model(path, "constraint", Params(N=40))
+    with pytest.raises(ModelMismatchError, match="'constraint' network"):
+        flight.load_flight_model(path, "solution")
+    with pytest.raises(ModelMismatchError, match="file not found"):
+        flight.load_flight_model(path.with_name("missing.tnn"), "solution")
+
+
+# ---- refusals -----------------------------------------------------------------------------------
+
+
+def _edit(blob: bytes, offset: int, fmt: str, value, seal: bool = True) -> bytes:
+    b = bytearray(blob)
+    struct.pack_into(fmt, b, offset, value)
+    return flight.seal(b) if seal else bytes(b)
+
+
+@needs_shipped
+@needs_lib
+def test_corrupt_or_mismatched_blob_is_refused_with_the_message(blobs: dict[str, bytes]) -> None:
+    good = blobs["constraint"]
+    n_values = struct.unpack_from("<Q", good, 80)[0]
+    cases = {
+        "bad_magic": b"XSCVXNN\0" + good[8:],
+        "bad_version": _edit(good, 8, "<I", 2),
+        "truncated": good[:-8],
+        "bad_checksum": _edit(good, len(good) // 2, "<d", 0.123, seal=False),
+        "bad_dimensions": _edit(good, 28, "<I", 351),  # d_out no longer matches the weights
+        "bad_weights": _edit(good, flight.HEADER_BYTES + 8 * 1000, "<d", float("nan")),
+    }
+    messages = {
+        "bad_magic": "bad magic",
+        "bad_version": "format version",
+        "truncated": "length does not match",
+        "bad_checksum": "CRC-32",
+        "bad_dimensions": "dimensions",
+        "bad_weights": "NaN/inf",
+    }
+    for status, blob in cases.items():
+        with pytest.raises(FlightNetError, match=messages[status]) as info:
+            FlightNet(blob)
+        assert info.value.status == status
+    assert n_values > 1000
+    # heads that do not divide d_model
+    with pytest.raises(FlightNetError, match="bad_dimensions"):
+        FlightNet(_edit(good, 36, "<I", 3))
+
+
+@needs_shipped
+@needs_lib
+def test_bad_inputs_are_refused(blobs: dict[str, bytes]) -> None:
+    net = FlightNet(blobs["solution"], copy_weights=True)
+    assert net.info.weights_in_arena == 1
+    x = np.zeros(16)
+    x[6] = 1.0
+    assert np.all(np.isfinite(net.run(x)))
+    with pytest.raises(FlightNetError, match="bad_size"):
+        net.run(np.zeros(17))
+    for bad in (np.nan, np.inf):
+        x[3] = bad
+        with pytest.raises(FlightNetError, match="NaN or infinite") as info:
+            net.run(x)
+        assert info.value.status == "bad_input"
+    with pytest.raises(FlightNetError, match="bad_size"):
+        net.tight_mask(np.zeros(851))  # a solution network has no mask
+
+
+def test_onnx_that_is_not_a_tscvx_export_is_refused(tmp_path: Path) -> None:
+    onnx = pytest.importorskip("onnx")
+    from onnx import TensorProto, helper, numpy_helper
+
+    W = numpy_helper.from_array(np.zeros((16, 3), np.float32), "W")
+    graph = helper.make_graph(
+        [helper.make_node("MatMul", ["inputs", "W"], ["y"])], "g",
+        [helper.make_tensor_value_info("inputs", TensorProto.FLOAT, [1, 16])],
+        [helper.make_tensor_value_info("y", TensorProto.FLOAT, [1, 3])], [W],
+    )  # fmt: skip
+    model = helper.make_model(graph, opset_imports=[helper.make_opsetid("", 18)])
+    onnx.save(model, str(tmp_path / "plain.onnx"))
+    with pytest.raises(flight.OnnxLayoutError, match="no 'tscvx' metadata"):
+        flight.read_onnx(tmp_path / "plain.onnx")
+    assert flight.main([str(tmp_path / "plain.onnx"), str(tmp_path / "x.tnn")]) == 2
+    assert not (tmp_path / "x.tnn").exists()
+
+
+# ---- other architectures (random weights, exported as the shipped models are) --------------------
+
+ARCHS = [
+    dict(tokens="scalar", d_model=16, n_heads=2, n_layers=2, d_ff=24),
+    dict(tokens="scalar", d_model=12, n_heads=3, n_layers=1, d_ff=20),
+    dict(tokens="single", d_model=24, n_heads=4, n_layers=3, d_ff=40),
+]
+
+
+@needs_lib
+@pytest.mark.parametrize("arch", ARCHS, ids=lambda a: f"{a['tokens']}-d{a['d_model']}")
+def test_other_architectures_equal_onnxruntime(arch: dict, tmp_path: Path) -> None:
+    torch = pytest.importorskip("torch")
+    from guidance.nn.export import export_onnx
+    from guidance.nn.model import ArchConfig, Transformer
+    from guidance.nn.train import TrainResult
+    from guidance.params import Params
+
+    torch.manual_seed(3)
+    kind = "constraint" if arch["tokens"] == "single" else "solution"
+    d_in, d_out = (17, 350) if kind == "constraint" else (16, 851)
+    cfg = ArchConfig(d_in=d_in, d_out=d_out, dropout=0.0, **arch)
+    net = Transformer(cfg)
+    with torch.no_grad():  # the positional encoding and LayerNorms away from their defaults
+        for name, p in net.named_parameters():
+            if "pos" in name or "norm" in name:
+                p.add_(0.3 * torch.randn_like(p))
+    rng = np.random.default_rng(4)
+    res = TrainResult(
+        kind=kind, arch=cfg, net=net, in_mean=rng.standard_normal(d_in),
+        in_std=0.5 + rng.random(d_in), out_mean=rng.standard_normal(d_out),
+        out_std=0.5 + rng.random(d_out), threshold=0.2, metrics={},
+    )  # fmt: skip
+    path = tmp_path / f"{kind}.onnx"
+    meta = export_onnx(res, path, Params().to_json_dict())
+    c = FlightNet(flight.tnn_bytes(path))
+    assert (c.info.tokens, c.info.seq_len) == (flight.TOKENS[arch["tokens"]], cfg.seq_len)
+    X = _random_inputs(meta, 200, seed=5)
+    want = _ort_session(path).run(None, {"inputs": X})[0].astype(np.float64)
+    rel = _compare(c.run(X.astype(np.float64)), want)
+    print(f"\n{cfg.label()}: max relative |C - onnxruntime| = {rel:.3e}")
+    assert rel <= TOL
+    assert c.self_test() < 1e-5
+
+
+# ---- no heap allocation inside tscvx_nn_run -----------------------------------------------------
+
+
+@needs_built
+@pytest.mark.skipif(not DRIVER.exists(), reason="build/nn_budget_driver: run make lib ctest")
+@pytest.mark.parametrize("kind", KINDS)
+def test_no_heap_allocation_inside_run(kind: str) -> None:
+    path = BUILD_MODELS / f"{kind}.tnn"
+    out = subprocess.run([str(DRIVER), str(path)], capture_output=True, text=True, check=True)
+    kv = dict(line.split(" ", 1) for line in out.stdout.splitlines())
+    assert kv["status"] == "ok" and kv["kind"] == kind
+    assert kv["heap_allocations_in_run"] == "0"
+    assert 0 < int(kv["stack_high_water"]) < 16384
