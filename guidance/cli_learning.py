@@ -27,10 +27,11 @@ REFERENCE_SIZES = {
     "constraint": dict(tokens="single", d_model=384, n_heads=2, n_layers=4, d_ff=2048),
     "solution": dict(tokens="single", d_model=768, n_heads=2, n_layers=4, d_ff=2048),
 }
-# Planning estimate of host (x86-64) instructions per multiply-accumulate of the C inference:
-# scalar double code, load + FMA + loop overhead. The C runtime's callgrind count is the
-# authority; this only ranks the candidates before the C build exists.
-INSTR_PER_MAC = 2.0
+# Planning estimate of host (x86-64) instructions per multiply-accumulate of the C inference
+# (c_runtime/nn, scalar double code), calibrated on its callgrind count: 2.8 to 2.9 on the
+# networks of the first shipped set (3.22 M for 1.14 M MACs, 3.69 M for 1.27 M). It ranks the
+# candidates at export; the model card prints the callgrind count of the shipped files.
+INSTR_PER_MAC = 3.0
 INSTR_BUDGET = 5e6
 # Epochs per fold. The constraint task has one row per (landing, iteration), about 14 times
 # the solution task's rows, so it needs fewer passes.
