@@ -10,7 +10,7 @@ MODELS_TRAIN   ?= data/train
 
 .PHONY: models
 
-models: setup
+models: setup lib $(BUILD)/nn_budget_driver
 	nice $(GUIDANCE) dataset --n-base $(MODELS_N_BASE) --run-dir $(MODELS_RUN_DIR) --output $(MODELS_DATA)
 	rm -rf $(MODELS_TRAIN)
 	nice $(GUIDANCE) train --dataset $(MODELS_DATA) --train-dir $(MODELS_TRAIN) --sizes flight-m,flight-mlp,flight-s,reference
