@@ -13,9 +13,15 @@
 
 #include "socp_internal.h"
 
-static tscvx_float dot(const tscvx_float *u, const tscvx_float *v, tscvx_int n) {
+/* u'v, two terms per pass into one sum (the cones are small: loop overhead counts) */
+static inline tscvx_float dot(const tscvx_float *u, const tscvx_float *v, tscvx_int n) {
     tscvx_float d = 0.0;
-    for (tscvx_int i = 0; i < n; i++) d += u[i] * v[i];
+    tscvx_int i = 0;
+    for (; i + 2 <= n; i += 2) {
+        d += u[i] * v[i];
+        d += u[i + 1] * v[i + 1];
+    }
+    if (i < n) d += u[i] * v[i];
     return d;
 }
 
@@ -89,7 +95,10 @@ int tscvx_nt_scaling(const tscvx_cones *K, const tscvx_float *s, const tscvx_flo
 
 void tscvx_nt_apply(const tscvx_cones *K, const tscvx_nt *W, int inverse, const tscvx_float *v,
                     tscvx_float *out) {
-    for (tscvx_int i = 0; i < K->l; i++) out[i] = inverse ? v[i] / W->w[i] : v[i] * W->w[i];
+    if (inverse)
+        for (tscvx_int i = 0; i < K->l; i++) out[i] = v[i] / W->w[i];
+    else
+        for (tscvx_int i = 0; i < K->l; i++) out[i] = v[i] * W->w[i];
     for (tscvx_int k = 0; k < K->nsoc; k++) {
         const tscvx_int o = K->off[k], q = K->q[k];
         const tscvx_float *w = W->w + o;
