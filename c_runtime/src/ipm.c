@@ -229,8 +229,7 @@ static int direction(tscvx_workspace *ws, tscvx_float lin, const tscvx_float *ds
                      tscvx_float dk, tscvx_int refine) {
     const tscvx_int n = ws->n, p = ws->p, m = ws->m;
     tscvx_float *wlds = ws->ds; /* W (lambda \ ds), until ds is written at the end */
-    tscvx_cone_div(&ws->K, ws->lambda, dsv, ws->wm2);
-    tscvx_nt_apply(&ws->K, &ws->W, 0, ws->wm2, wlds);
+    tscvx_nt_div_apply(&ws->K, &ws->W, ws->lambda, dsv, ws->wm2, wlds);
     for (tscvx_int j = 0; j < n; j++) ws->wn[j] = -lin * ws->rx[j];
     for (tscvx_int i = 0; i < p; i++) ws->dy[i] = -lin * ws->ry[i];
     for (tscvx_int i = 0; i < m; i++) ws->wm[i] = -lin * ws->rz[i] + wlds[i];
@@ -248,8 +247,7 @@ static int direction(tscvx_workspace *ws, tscvx_float lin, const tscvx_float *ds
     for (tscvx_int i = 0; i < p; i++) ws->dy[i] += ws->dtau * ws->y1[i];
     for (tscvx_int i = 0; i < m; i++) ws->dz[i] += ws->dtau * ws->z1[i];
     /* ds = -W (lambda \ ds) - W'W dz */
-    tscvx_nt_apply(&ws->K, &ws->W, 0, ws->dz, ws->wm);
-    tscvx_nt_apply(&ws->K, &ws->W, 0, ws->wm, ws->wm2);
+    tscvx_nt_apply2(&ws->K, &ws->W, ws->dz, ws->wm, ws->wm2);
     for (tscvx_int i = 0; i < m; i++) ws->ds[i] = -wlds[i] - ws->wm2[i]; /* in place */
     ws->dkappa = -(dk + ws->kappa * ws->dtau) / ws->tau;
     return isfinite(ws->dtau) && isfinite(ws->dkappa) ? 0 : -1;

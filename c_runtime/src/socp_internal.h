@@ -48,6 +48,12 @@ int tscvx_nt_scaling(const tscvx_cones *K, const tscvx_float *s, const tscvx_flo
 /* out = W v, or W^{-1} v when inverse != 0 */
 void tscvx_nt_apply(const tscvx_cones *K, const tscvx_nt *W, int inverse, const tscvx_float *v,
                     tscvx_float *out);
+/* out = W (W v), one pass over the cones; work (m) receives W v only on the SOC rows */
+void tscvx_nt_apply2(const tscvx_cones *K, const tscvx_nt *W, const tscvx_float *v,
+                     tscvx_float *work, tscvx_float *out);
+/* out = W (u \ v), one pass; work (m, may be v) receives u \ v only on the SOC rows */
+void tscvx_nt_div_apply(const tscvx_cones *K, const tscvx_nt *W, const tscvx_float *u,
+                        const tscvx_float *v, tscvx_float *work, tscvx_float *out);
 /* Largest alpha <= alpha_max with u + alpha du in K (u in int K). */
 tscvx_float tscvx_cone_max_step(const tscvx_cones *K, const tscvx_float *u,
                                 const tscvx_float *du, tscvx_float alpha_max);
