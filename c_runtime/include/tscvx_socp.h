@@ -131,9 +131,10 @@ typedef struct {
                                     ones the sparse diagonal + rank-2 expansion (setup only) */
     tscvx_int kkt_backend;       /* KKT factorization (setup only): TSCVX_KKT_LDL (SuiteSparse
                                     LDL, the reference; default) or TSCVX_KKT_SUPERNODAL (own
-                                    dense-panel LDL': ~25% less wall time on x86, about the
-                                    same instruction count, a few more reduced-accuracy
-                                    endings on ill-conditioned random SOCPs) */
+                                    dense-panel LDL', no library code per iteration; on the
+                                    landing KKT about the same instructions and time, a
+                                    larger arena, and a few more reduced-accuracy endings on
+                                    ill-conditioned random SOCPs) */
 } tscvx_settings;
 
 /* ---- information after a solve ----------------------------------------------------------- */
