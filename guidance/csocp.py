@@ -17,7 +17,8 @@ Statuses: solved, solved_inaccurate, primal_infeasible (z holds the certificate,
 dual_infeasible (x, s hold the certificate, q'x = -1), max_iterations, numerical_error,
 invalid_input (``info["message"]`` says why). ``solve(prob, log=True)`` adds the iteration log
 (``info["log"]``: iter, pcost, dcost, gap, pres, dres, mu, step per iteration). Settings are
-the fields of ``tscvx_settings`` (e.g. ``max_iter``, ``tol_feas``, ``soc_dense_max``).
+the fields of ``tscvx_settings`` (e.g. ``max_iter``, ``tol_feas``, ``soc_dense_max``,
+``kkt_backend``: ``KKT_SUPERNODAL`` or ``KKT_LDL``).
 """
 
 from __future__ import annotations
@@ -83,7 +84,11 @@ _SETTING_FIELDS = [
     ("refine_iters", c_int),
     ("ruiz_iters", c_int),
     ("soc_dense_max", c_int),
+    ("kkt_backend", c_int),
 ]
+
+# tscvx_settings.kkt_backend: the runtime's own supernodal LDL' or SuiteSparse LDL (default).
+KKT_SUPERNODAL, KKT_LDL = 0, 1
 
 
 class _Settings(ct.Structure):

@@ -88,6 +88,24 @@ def test_random_feasible_large_cones_use_sparse_expansion() -> None:
                 assert max(pres, dres) <= RES_TOL
 
 
+@pytest.mark.parametrize("with_P", [False, True])
+def test_kkt_backends_agree(with_P: bool) -> None:
+    """The supernodal KKT backend (default) and the SuiteSparse LDL reference backend reach
+    the same solutions, both within the accuracy bars against Clarabel."""
+    for seed in range(500, 520):
+        prob = random_feasible(seed, with_P=with_P)
+        ref = solve_clarabel(prob)
+        sols = [csocp.solve(prob, kkt_backend=b) for b in (csocp.KKT_SUPERNODAL, csocp.KKT_LDL)]
+        if ref.status != "solved":
+            continue
+        for sol in sols:
+            assert sol.ok
+            assert abs(sol.obj - ref.obj) <= OBJ_RTOL * max(1.0, abs(ref.obj))
+            pres, dres = residuals(prob, sol)
+            assert max(pres, dres) <= RES_TOL
+        assert abs(sols[0].obj - sols[1].obj) <= OBJ_RTOL * max(1.0, abs(ref.obj))
+
+
 @pytest.mark.parametrize("seed", range(40))
 def test_primal_infeasible_certificate(seed: int) -> None:
     prob = random_primal_infeasible(seed)

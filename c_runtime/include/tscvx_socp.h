@@ -16,7 +16,8 @@
  * (quadratic objective as in Clarabel), Nesterov-Todd scaling, Mehrotra predictor-corrector,
  * Ruiz equilibration, static regularization of the quasi-definite KKT system with iterative
  * refinement, best-iterate fallback, primal/dual infeasibility certificates. The KKT system is
- * factored by SuiteSparse AMD + LDL behind a small backend table.
+ * ordered by SuiteSparse AMD and factored behind a small backend table: SuiteSparse LDL
+ * (default, the reference) or our own supernodal LDL' (dense panels).
  *
  * Lifecycle (memory is claimed in exactly one place, from ONE caller-provided arena):
  *
@@ -107,6 +108,9 @@ typedef struct {
     const tscvx_int *q;          /* nsoc cone dimensions (each >= 1), in row order after l */
 } tscvx_data;
 
+/* KKT factorization backends (tscvx_settings.kkt_backend). */
+enum { TSCVX_KKT_SUPERNODAL = 0, TSCVX_KKT_LDL = 1 };
+
 /* ---- settings ---------------------------------------------------------------------------- */
 
 typedef struct {
@@ -125,6 +129,12 @@ typedef struct {
     tscvx_int ruiz_iters;        /* Ruiz equilibration passes, 0..50 (setup only) */
     tscvx_int soc_dense_max;     /* SOCs up to this dimension get a dense KKT block; larger
                                     ones the sparse diagonal + rank-2 expansion (setup only) */
+    tscvx_int kkt_backend;       /* KKT factorization (setup only): TSCVX_KKT_LDL (SuiteSparse
+                                    LDL, the reference; default) or TSCVX_KKT_SUPERNODAL (own
+                                    dense-panel LDL', no library code per iteration; on the
+                                    landing KKT about the same instructions and time, a
+                                    larger arena, and a few more reduced-accuracy endings on
+                                    ill-conditioned random SOCPs) */
 } tscvx_settings;
 
 /* ---- information after a solve ----------------------------------------------------------- */
@@ -183,7 +193,8 @@ tscvx_setup_status tscvx_update_data(tscvx_workspace *ws, const tscvx_float *Px,
                                      const tscvx_float *h);
 
 /* Tolerances, iteration limit (<= setup's), step fraction, regularization and refinement;
- * ruiz_iters and soc_dense_max are fixed at setup (changing them: TSCVX_SETUP_BAD_SETTINGS). */
+ * ruiz_iters, soc_dense_max and kkt_backend are fixed at setup (changing them:
+ * TSCVX_SETUP_BAD_SETTINGS). */
 tscvx_setup_status tscvx_update_settings(tscvx_workspace *ws, const tscvx_settings *settings);
 
 tscvx_solve_status tscvx_solve(tscvx_workspace *ws);

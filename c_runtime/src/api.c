@@ -90,6 +90,7 @@ tscvx_setup_status tscvx_default_settings(tscvx_settings *st) {
     st->refine_iters = 3;
     st->ruiz_iters = 15;
     st->soc_dense_max = 16;
+    st->kkt_backend = TSCVX_KKT_LDL;
     return TSCVX_SETUP_OK;
 }
 
@@ -107,6 +108,8 @@ static tscvx_setup_status check_settings(const tscvx_settings *st) {
     if (st->refine_iters < 0 || st->refine_iters > 20) return TSCVX_SETUP_BAD_SETTINGS;
     if (st->ruiz_iters < 0 || st->ruiz_iters > 50) return TSCVX_SETUP_BAD_SETTINGS;
     if (st->soc_dense_max < 1) return TSCVX_SETUP_BAD_SETTINGS;
+    if (st->kkt_backend != TSCVX_KKT_SUPERNODAL && st->kkt_backend != TSCVX_KKT_LDL)
+        return TSCVX_SETUP_BAD_SETTINGS;
     return TSCVX_SETUP_OK;
 }
 
@@ -229,7 +232,7 @@ static void alloc_persistent(tscvx_workspace *ws, tscvx_arena *a, tscvx_int nnzP
     ALLOC(k->Kp, dim + 1, tscvx_int);
     ALLOC(k->Ki, k->nnz, tscvx_int);
     ALLOC(k->Kx, k->nnz, tscvx_float);
-    ALLOC(k->regsign, dim, signed char);
+    ALLOC(k->rowblk, dim, signed char);
     ALLOC(k->pinv, dim, tscvx_int);
     ALLOC(k->mapP, nnzP, tscvx_int);
     ALLOC(k->mapA, nnzA, tscvx_int);
@@ -237,25 +240,17 @@ static void alloc_persistent(tscvx_workspace *ws, tscvx_arena *a, tscvx_int nnzP
     ALLOC(k->mapDiag, n + p, tscvx_int);
     ALLOC(k->mapCone, k->ncone, tscvx_int);
     ALLOC(k->expanded, nsoc, tscvx_int);
-    ALLOC(k->Lp, dim + 1, tscvx_int);
-    ALLOC(k->Parent, dim, tscvx_int);
-    ALLOC(k->Lnz, dim, tscvx_int);
-    ALLOC(k->Flag, dim, tscvx_int);
 }
 
-/* Claim the factor and the iteration vectors (after the ordering's scratch is released). */
-static void alloc_iterates(tscvx_workspace *ws, tscvx_arena *a) {
+/* Claim the factor (the backend finishes its analysis there) and the iteration vectors,
+ * after the ordering's scratch is released. Returns 0, or -1 if the analysis failed. */
+static int alloc_iterates(tscvx_workspace *ws, tscvx_arena *a) {
     const tscvx_int n = ws->n, p = ws->p, m = ws->m, nsoc = ws->K.nsoc;
     tscvx_kkt *k = &ws->kkt;
     const tscvx_int dim = k->dim;
-    ALLOC(k->Li, (size_t)k->lnz + 1, tscvx_int);
-    ALLOC(k->Lx, (size_t)k->lnz + 1, tscvx_float);
-    ALLOC(k->D, dim, tscvx_float);
-    ALLOC(k->Y, dim, tscvx_float);
-    ALLOC(k->rhs, dim, tscvx_float);
+    if (k->backend->alloc(k, a) != 0) return -1;
     ALLOC(k->sol, dim, tscvx_float);
-    k->Pattern = (tscvx_int *)k->rhs; /* used by the factorization only, rhs by solves only */
-    k->res = k->Y; /* the factor's work vector is free during solves */
+    k->Pattern = (tscvx_int *)k->sol; /* LDL's factorization work; sol is for solves only */
     /* cones and iterates */
     ALLOC(ws->W.w, m, tscvx_float);
     ALLOC(ws->W.eta, nsoc, tscvx_float);
@@ -263,12 +258,13 @@ static void alloc_iterates(tscvx_workspace *ws, tscvx_arena *a) {
                             &ws->bx};
     tscvx_float **pvec[] = {&ws->y, &ws->ry, &ws->y1, &ws->dy, &ws->by};
     tscvx_float **mvec[] = {&ws->z, &ws->s, &ws->lambda, &ws->rz, &ws->z1,
-                            &ws->dz, &ws->ds, &ws->wm, &ws->wm2, &ws->wm3,
+                            &ws->dz, &ws->ds, &ws->wm, &ws->wm2,
                             &ws->bz, &ws->bs};
     for (size_t i = 0; i < sizeof nvec / sizeof nvec[0]; i++) ALLOC(*nvec[i], n, tscvx_float);
     for (size_t i = 0; i < sizeof pvec / sizeof pvec[0]; i++) ALLOC(*pvec[i], p, tscvx_float);
     for (size_t i = 0; i < sizeof mvec / sizeof mvec[0]; i++) ALLOC(*mvec[i], m, tscvx_float);
     ALLOC(ws->log, ws->st.max_iter + 1, tscvx_iter_log);
+    return 0;
 }
 
 static void copy_ints(tscvx_int *dst, const tscvx_int *src, tscvx_int n) {
@@ -333,7 +329,8 @@ static tscvx_setup_status build(const tscvx_data *d, const tscvx_settings *st, t
     ws->st = *st;
     ws->n = d->n, ws->p = d->p, ws->m = d->m;
     ws->K.l = d->l, ws->K.nsoc = d->nsoc, ws->K.m = d->m, ws->K.degree = d->l + d->nsoc;
-    ws->kkt.backend = &tscvx_backend_ldl;
+    ws->kkt.backend = st->kkt_backend == TSCVX_KKT_LDL ? &tscvx_backend_ldl
+                                                       : &tscvx_backend_supernodal;
     ws->kkt.dim = (tscvx_int)dim, ws->kkt.nnz = (tscvx_int)nnzK;
     ws->kkt.nexp = nexp, ws->kkt.ncone = ncone;
     ws->log_cap = st->max_iter + 1;
@@ -365,7 +362,7 @@ static tscvx_setup_status build(const tscvx_data *d, const tscvx_settings *st, t
     if (lnz < 0 || lnz > INT_MAX / 4) return TSCVX_SETUP_TOO_LARGE;
     a->top = mark;
     ws->kkt.lnz = (tscvx_int)lnz;
-    alloc_iterates(ws, a);
+    if (alloc_iterates(ws, a) != 0) return TSCVX_SETUP_TOO_LARGE;
     if (mode == MODE_ANALYSE) {
         *need = a->high + TSCVX_ALIGN;
         return TSCVX_SETUP_OK;
@@ -440,7 +437,7 @@ tscvx_setup_status tscvx_update_settings(tscvx_workspace *ws, const tscvx_settin
     const tscvx_setup_status s = check_settings(st);
     if (s != TSCVX_SETUP_OK) return s;
     if (st->max_iter > ws->log_cap - 1 || st->soc_dense_max != ws->st.soc_dense_max ||
-        st->ruiz_iters != ws->st.ruiz_iters)
+        st->ruiz_iters != ws->st.ruiz_iters || st->kkt_backend != ws->st.kkt_backend)
         return TSCVX_SETUP_BAD_SETTINGS; /* structural: fixed at setup */
     ws->st = *st;
     return TSCVX_SETUP_OK;

@@ -13,9 +13,15 @@
 
 #include "socp_internal.h"
 
-static tscvx_float dot(const tscvx_float *u, const tscvx_float *v, tscvx_int n) {
+/* u'v, two terms per pass into one sum (the cones are small: loop overhead counts) */
+static inline tscvx_float dot(const tscvx_float *u, const tscvx_float *v, tscvx_int n) {
     tscvx_float d = 0.0;
-    for (tscvx_int i = 0; i < n; i++) d += u[i] * v[i];
+    tscvx_int i = 0;
+    for (; i + 2 <= n; i += 2) {
+        d += u[i] * v[i];
+        d += u[i + 1] * v[i + 1];
+    }
+    if (i < n) d += u[i] * v[i];
     return d;
 }
 
@@ -39,16 +45,21 @@ void tscvx_cone_prod(const tscvx_cones *K, const tscvx_float *u, const tscvx_flo
     }
 }
 
-/* u o w = v:  w0 = (u0 v0 - u1'v1)/det u,  w1 = (v1 - w0 u1)/u0 */
+/* u o w = v:  w0 = (u0 v0 - u1'v1)/det u,  w1 = (v1 - w0 u1)/u0  (one SOC; out may be v) */
+static inline void soc_div(tscvx_int q, const tscvx_float *u, const tscvx_float *v,
+                           tscvx_float *out) {
+    const tscvx_float u0 = u[0];
+    const tscvx_float w0 = (u0 * v[0] - dot(u + 1, v + 1, q - 1)) / soc_det(u, q);
+    for (tscvx_int j = 1; j < q; j++) out[j] = (v[j] - w0 * u[j]) / u0;
+    out[0] = w0;
+}
+
 void tscvx_cone_div(const tscvx_cones *K, const tscvx_float *u, const tscvx_float *v,
                     tscvx_float *out) {
     for (tscvx_int i = 0; i < K->l; i++) out[i] = v[i] / u[i];
     for (tscvx_int k = 0; k < K->nsoc; k++) {
-        const tscvx_int o = K->off[k], q = K->q[k];
-        const tscvx_float u0 = u[o];
-        const tscvx_float w0 = (u0 * v[o] - dot(u + o + 1, v + o + 1, q - 1)) / soc_det(u + o, q);
-        for (tscvx_int j = 1; j < q; j++) out[o + j] = (v[o + j] - w0 * u[o + j]) / u0;
-        out[o] = w0;
+        const tscvx_int o = K->off[k];
+        soc_div(K->q[k], u + o, v + o, out + o);
     }
 }
 
@@ -87,19 +98,53 @@ int tscvx_nt_scaling(const tscvx_cones *K, const tscvx_float *s, const tscvx_flo
     return 0;
 }
 
+/* out = W v (or W^{-1} v) on one SOC (out != v): eta Wbar v, Wbar^{-1} = J Wbar J */
+static inline void soc_apply(tscvx_int q, const tscvx_float *w, tscvx_float eta, int inverse,
+                             const tscvx_float *v, tscvx_float *out) {
+    const tscvx_float sgn = inverse ? -1.0 : 1.0;
+    const tscvx_float scale = inverse ? 1.0 / eta : eta;
+    const tscvx_float w1v1 = dot(w + 1, v + 1, q - 1);
+    const tscvx_float v0 = v[0];
+    const tscvx_float coef = sgn * v0 + w1v1 / (1.0 + w[0]);
+    for (tscvx_int j = 1; j < q; j++) out[j] = scale * (v[j] + coef * w[j]);
+    out[0] = scale * (w[0] * v0 + sgn * w1v1);
+}
+
 void tscvx_nt_apply(const tscvx_cones *K, const tscvx_nt *W, int inverse, const tscvx_float *v,
                     tscvx_float *out) {
-    for (tscvx_int i = 0; i < K->l; i++) out[i] = inverse ? v[i] / W->w[i] : v[i] * W->w[i];
+    if (inverse)
+        for (tscvx_int i = 0; i < K->l; i++) out[i] = v[i] / W->w[i];
+    else
+        for (tscvx_int i = 0; i < K->l; i++) out[i] = v[i] * W->w[i];
+    for (tscvx_int k = 0; k < K->nsoc; k++) {
+        const tscvx_int o = K->off[k];
+        soc_apply(K->q[k], W->w + o, W->eta[k], inverse, v + o, out + o);
+    }
+}
+
+void tscvx_nt_apply2(const tscvx_cones *K, const tscvx_nt *W, const tscvx_float *v,
+                     tscvx_float *work, tscvx_float *out) {
+    for (tscvx_int i = 0; i < K->l; i++) {
+        const tscvx_float t = v[i] * W->w[i];
+        out[i] = t * W->w[i];
+    }
     for (tscvx_int k = 0; k < K->nsoc; k++) {
         const tscvx_int o = K->off[k], q = K->q[k];
-        const tscvx_float *w = W->w + o;
-        const tscvx_float sgn = inverse ? -1.0 : 1.0; /* Wbar^{-1} = J Wbar J */
-        const tscvx_float scale = inverse ? 1.0 / W->eta[k] : W->eta[k];
-        const tscvx_float w1v1 = dot(w + 1, v + o + 1, q - 1);
-        const tscvx_float v0 = v[o];
-        const tscvx_float coef = sgn * v0 + w1v1 / (1.0 + w[0]);
-        for (tscvx_int j = 1; j < q; j++) out[o + j] = scale * (v[o + j] + coef * w[j]);
-        out[o] = scale * (w[0] * v0 + sgn * w1v1);
+        soc_apply(q, W->w + o, W->eta[k], 0, v + o, work + o);
+        soc_apply(q, W->w + o, W->eta[k], 0, work + o, out + o);
+    }
+}
+
+void tscvx_nt_div_apply(const tscvx_cones *K, const tscvx_nt *W, const tscvx_float *u,
+                        const tscvx_float *v, tscvx_float *work, tscvx_float *out) {
+    for (tscvx_int i = 0; i < K->l; i++) {
+        const tscvx_float t = v[i] / u[i];
+        out[i] = t * W->w[i];
+    }
+    for (tscvx_int k = 0; k < K->nsoc; k++) {
+        const tscvx_int o = K->off[k], q = K->q[k];
+        soc_div(q, u + o, v + o, work + o);
+        soc_apply(q, W->w + o, W->eta[k], 0, work + o, out + o);
     }
 }
 

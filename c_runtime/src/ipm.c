@@ -24,9 +24,15 @@
 
 /* ---- small dense/sparse kernels ---------------------------------------------------------- */
 
-static tscvx_float vdot(const tscvx_float *u, const tscvx_float *v, tscvx_int n) {
+/* u'v, two terms per pass into one sum (the same rounding as one term per pass) */
+static inline tscvx_float vdot(const tscvx_float *u, const tscvx_float *v, tscvx_int n) {
     tscvx_float d = 0.0;
-    for (tscvx_int i = 0; i < n; i++) d += u[i] * v[i];
+    tscvx_int i = 0;
+    for (; i + 2 <= n; i += 2) {
+        d += u[i] * v[i];
+        d += u[i + 1] * v[i + 1];
+    }
+    if (i < n) d += u[i] * v[i];
     return d;
 }
 
@@ -44,18 +50,20 @@ static void vcopy(tscvx_float *dst, const tscvx_float *src, tscvx_int n) {
     for (tscvx_int i = 0; i < n; i++) dst[i] = src[i];
 }
 
-/* y += M x (M mapped: values in the KKT matrix) */
-static void spmv(const tscvx_csc *M, const tscvx_float *x, tscvx_float *y) {
-    for (tscvx_int j = 0; j < M->ncol; j++)
-        for (tscvx_int k = M->p[j]; k < M->p[j + 1]; k++) y[M->i[k]] += CSC_VAL(M, k) * x[j];
-}
-
-/* y += M' x (M mapped) */
-static void spmv_t(const tscvx_csc *M, const tscvx_float *x, tscvx_float *y) {
+/* Both products of a mapped M (values in the KKT matrix) in one pass over its entries:
+ *   yt += M' u  and  y += M x. */
+static void spmv_both(const tscvx_csc *M, const tscvx_float *u, tscvx_float *yt,
+                      const tscvx_float *x, tscvx_float *y) {
     for (tscvx_int j = 0; j < M->ncol; j++) {
+        const tscvx_float xj = x[j];
         tscvx_float acc = 0.0;
-        for (tscvx_int k = M->p[j]; k < M->p[j + 1]; k++) acc += CSC_VAL(M, k) * x[M->i[k]];
-        y[j] += acc;
+        for (tscvx_int k = M->p[j]; k < M->p[j + 1]; k++) {
+            const tscvx_int i = M->i[k];
+            const tscvx_float v = CSC_VAL(M, k);
+            acc += v * u[i];
+            y[i] += v * xj;
+        }
+        yt[j] += acc;
     }
 }
 
@@ -82,12 +90,10 @@ static void residuals(tscvx_workspace *ws) {
     const tscvx_float tau = ws->tau;
     spmv_sym(&ws->P, ws->x, ws->Px);
     for (tscvx_int j = 0; j < n; j++) ws->rx[j] = ws->Px[j] + ws->c[j] * tau;
-    spmv_t(&ws->A, ws->y, ws->rx);
-    spmv_t(&ws->G, ws->z, ws->rx);
     for (tscvx_int i = 0; i < p; i++) ws->ry[i] = -ws->b[i] * tau;
-    spmv(&ws->A, ws->x, ws->ry);
     for (tscvx_int i = 0; i < m; i++) ws->rz[i] = ws->s[i] - ws->h[i] * tau;
-    spmv(&ws->G, ws->x, ws->rz);
+    spmv_both(&ws->A, ws->y, ws->rx, ws->x, ws->ry); /* rx += A'y, ry += A x */
+    spmv_both(&ws->G, ws->z, ws->rx, ws->x, ws->rz); /* rx += G'z, rz += G x */
     const tscvx_float xPx = vdot(ws->x, ws->Px, n);
     ws->rtau = ws->kappa + vdot(ws->c, ws->x, n) + vdot(ws->b, ws->y, p) +
                vdot(ws->h, ws->z, m) + xPx / tau;
@@ -217,18 +223,18 @@ static int constant_solve(tscvx_workspace *ws) {
 }
 
 /* Newton direction for linear targets lin*(rx, ry, rz, rtau), complementarity target dsv
- * (m; may be wm2, it is consumed first) and dk. Result in dx, dy, dz, ds, dtau, dkappa. */
+ * (m; may be wm2, it is consumed first) and dk, with up to `refine` refinement steps.
+ * Result in dx, dy, dz, ds, dtau, dkappa. */
 static int direction(tscvx_workspace *ws, tscvx_float lin, const tscvx_float *dsv,
-                     tscvx_float dk) {
+                     tscvx_float dk, tscvx_int refine) {
     const tscvx_int n = ws->n, p = ws->p, m = ws->m;
-    tscvx_float *wlds = ws->wm3; /* W (lambda \ ds) */
-    tscvx_cone_div(&ws->K, ws->lambda, dsv, ws->wm2);
-    tscvx_nt_apply(&ws->K, &ws->W, 0, ws->wm2, wlds);
+    tscvx_float *wlds = ws->ds; /* W (lambda \ ds), until ds is written at the end */
+    tscvx_nt_div_apply(&ws->K, &ws->W, ws->lambda, dsv, ws->wm2, wlds);
     for (tscvx_int j = 0; j < n; j++) ws->wn[j] = -lin * ws->rx[j];
     for (tscvx_int i = 0; i < p; i++) ws->dy[i] = -lin * ws->ry[i];
     for (tscvx_int i = 0; i < m; i++) ws->wm[i] = -lin * ws->rz[i] + wlds[i];
     if (tscvx_kkt_solve(&ws->kkt, n, p, m, ws->wn, ws->dy, ws->wm, ws->dx, ws->dy, ws->dz,
-                        ws->refine_now) < 0)
+                        refine) < 0)
         return -1;
     /* tau row: dtau (-kappa/tau + xi'x1 + b'y1 + h'z1 - x'Px/tau^2)
      *          = -lin rtau + dk/tau - xi'x2 - b'y2 - h'z2,   xi = c + 2 P x/tau */
@@ -241,9 +247,8 @@ static int direction(tscvx_workspace *ws, tscvx_float lin, const tscvx_float *ds
     for (tscvx_int i = 0; i < p; i++) ws->dy[i] += ws->dtau * ws->y1[i];
     for (tscvx_int i = 0; i < m; i++) ws->dz[i] += ws->dtau * ws->z1[i];
     /* ds = -W (lambda \ ds) - W'W dz */
-    tscvx_nt_apply(&ws->K, &ws->W, 0, ws->dz, ws->wm);
-    tscvx_nt_apply(&ws->K, &ws->W, 0, ws->wm, ws->wm2);
-    for (tscvx_int i = 0; i < m; i++) ws->ds[i] = -wlds[i] - ws->wm2[i];
+    tscvx_nt_apply2(&ws->K, &ws->W, ws->dz, ws->wm, ws->wm2);
+    for (tscvx_int i = 0; i < m; i++) ws->ds[i] = -wlds[i] - ws->wm2[i]; /* in place */
     ws->dkappa = -(dk + ws->kappa * ws->dtau) / ws->tau;
     return isfinite(ws->dtau) && isfinite(ws->dkappa) ? 0 : -1;
 }
@@ -325,10 +330,13 @@ static tscvx_solve_status fallback(tscvx_workspace *ws, tscvx_solve_status why, 
 }
 
 /* Mehrotra predictor: affine direction (ds = lambda o lambda, dk = tau kappa, full residual
- * targets); returns -1 on failure, else writes the centering sigma = (1 - alpha_aff)^3. */
+ * targets); returns -1 on failure, else writes the centering sigma = (1 - alpha_aff)^3.
+ * The affine direction only sets sigma and the second-order term: no refinement (with the
+ * sparse SOC expansion, whose solves need it, as many steps as the other solves). */
 static int predictor(tscvx_workspace *ws, tscvx_float *sigma) {
     tscvx_cone_prod(&ws->K, ws->lambda, ws->lambda, ws->wm2);
-    if (direction(ws, 1.0, ws->wm2, ws->tau * ws->kappa) != 0) return -1;
+    const tscvx_int refine = ws->kkt.nexp > 0 ? ws->refine_now : 0;
+    if (direction(ws, 1.0, ws->wm2, ws->tau * ws->kappa, refine) != 0) return -1;
     *sigma = pow(1.0 - max_step(ws, 1.0), 3.0);
     return 0;
 }
@@ -338,12 +346,12 @@ static int predictor(tscvx_workspace *ws, tscvx_float *sigma) {
 static int corrector(tscvx_workspace *ws, tscvx_float sigma, tscvx_float mu) {
     tscvx_nt_apply(&ws->K, &ws->W, 1, ws->ds, ws->wm);
     tscvx_nt_apply(&ws->K, &ws->W, 0, ws->dz, ws->wm2);
-    tscvx_cone_prod(&ws->K, ws->wm, ws->wm2, ws->wm3);
+    tscvx_cone_prod(&ws->K, ws->wm, ws->wm2, ws->ds); /* ds_a is spent: its space is work */
     tscvx_cone_prod(&ws->K, ws->lambda, ws->lambda, ws->wm2);
-    for (tscvx_int i = 0; i < ws->m; i++) ws->wm2[i] += ws->wm3[i];
+    for (tscvx_int i = 0; i < ws->m; i++) ws->wm2[i] += ws->ds[i];
     tscvx_cone_add_identity(&ws->K, ws->wm2, -sigma * mu);
     const tscvx_float dk = ws->tau * ws->kappa + ws->dtau * ws->dkappa - sigma * mu;
-    return direction(ws, 1.0 - sigma, ws->wm2, dk);
+    return direction(ws, 1.0 - sigma, ws->wm2, dk, ws->refine_now);
 }
 
 tscvx_solve_status tscvx_ipm(tscvx_workspace *ws) {

@@ -24,18 +24,29 @@
 
 /* ---- SuiteSparse LDL backend ------------------------------------------------------------- */
 
-static long ldl_backend_symbolic(tscvx_kkt *k) {
+static long ldl_backend_symbolic(tscvx_kkt *k, tscvx_int *tmp) {
+    tscvx_int *Lp = tmp, *Parent = Lp + k->dim + 1, *Lnz = Parent + k->dim, *Flag = Lnz + k->dim;
+    ldl_symbolic(k->dim, k->Kp, k->Ki, Lp, Parent, Lnz, Flag, NULL, NULL);
+    return (long)Lp[k->dim];
+}
+
+static int ldl_backend_alloc(tscvx_kkt *k, tscvx_arena *a) {
+    const size_t dim = (size_t)k->dim;
+    k->Lp = (tscvx_int *)tscvx_arena_alloc(a, dim + 1, sizeof(tscvx_int));
+    k->Parent = (tscvx_int *)tscvx_arena_alloc(a, dim, sizeof(tscvx_int));
+    k->Lnz = (tscvx_int *)tscvx_arena_alloc(a, dim, sizeof(tscvx_int));
+    k->Flag = (tscvx_int *)tscvx_arena_alloc(a, dim, sizeof(tscvx_int));
+    k->Li = (tscvx_int *)tscvx_arena_alloc(a, (size_t)k->lnz + 1, sizeof(tscvx_int));
+    k->Lx = (tscvx_float *)tscvx_arena_alloc(a, (size_t)k->lnz + 1, sizeof(tscvx_float));
+    k->D = (tscvx_float *)tscvx_arena_alloc(a, dim, sizeof(tscvx_float));
+    k->Y = (tscvx_float *)tscvx_arena_alloc(a, dim, sizeof(tscvx_float));
+    k->res = k->Y; /* the factor's work vector is free during solves */
+    if (a->base == NULL || a->overflow) return 0;
     ldl_symbolic(k->dim, k->Kp, k->Ki, k->Lp, k->Parent, k->Lnz, k->Flag, NULL, NULL);
-    return (long)k->Lp[k->dim];
+    return k->Lp[k->dim] == k->lnz ? 0 : -1;
 }
 
 static int ldl_backend_numeric(tscvx_kkt *k) {
-    tscvx_float kmax = 0.0; /* |K|_max for the refinement's rounding floor */
-    for (tscvx_int i = 0; i < k->nnz; i++) {
-        const tscvx_float v = fabs(k->Kx[i]);
-        kmax = v > kmax ? v : kmax;
-    }
-    k->kmax = kmax;
     if (ldl_numeric(k->dim, k->Kp, k->Ki, k->Kx, k->Lp, k->Parent, k->Lnz, k->Li, k->Lx, k->D,
                     k->Y, k->Pattern, k->Flag, NULL, NULL) != k->dim)
         return -1;
@@ -55,7 +66,8 @@ static void ldl_backend_solve(tscvx_kkt *k, tscvx_float *x) {
 }
 
 const tscvx_backend tscvx_backend_ldl = {"suitesparse-ldl", ldl_backend_symbolic,
-                                         ldl_backend_numeric, ldl_backend_solve};
+                                         ldl_backend_alloc, ldl_backend_numeric,
+                                         ldl_backend_solve};
 
 /* ---- pattern ----------------------------------------------------------------------------- */
 
@@ -138,7 +150,9 @@ long tscvx_kkt_build(tscvx_workspace *ws, tscvx_int *tmp) {
         const tscvx_int i = Last[k];
         if (i < 0 || i >= dim || kk->pinv[i] != -1) return -1;
         kk->pinv[i] = k;
-        kk->regsign[k] = (signed char)(i < ws->n ? 1 : (i < ws->n + ws->p + ws->m ? -1 : 0));
+        kk->rowblk[k] = (signed char)(i < ws->n ? KKT_ROW_X
+                                      : i < ws->n + ws->p ? KKT_ROW_Y
+                                      : i < ws->n + ws->p + ws->m ? KKT_ROW_Z : KKT_ROW_EXP);
     }
 
     /* permuted upper triangle: entry (i, j) goes to column max(pinv i, pinv j) */
@@ -174,7 +188,7 @@ long tscvx_kkt_build(tscvx_workspace *ws, tscvx_int *tmp) {
     for (tscvx_int k = 0, e = 0; k < ws->K.nsoc; k++)
         kk->expanded[k] = is_expanded(ws->K.q[k], ws->st.soc_dense_max) ? e++ : -1;
     kk->npos = ws->n + kk->nexp;
-    return kk->backend->symbolic(kk);
+    return kk->backend->symbolic(kk, tmp); /* all of tmp is free again */
 }
 
 /* ---- values ------------------------------------------------------------------------------ */
@@ -190,6 +204,13 @@ void tscvx_kkt_data_values(tscvx_workspace *ws, tscvx_float delta) {
     for (tscvx_int j = 0; j < n; j++) kk->Kx[kk->mapDiag[j]] += delta;
     for (tscvx_int i = 0; i < p; i++) kk->Kx[kk->mapDiag[n + i]] = -delta;
     kk->delta = delta; /* removed again by iterative refinement (reg_of) */
+    /* |entry|_max of the data part, for the refinement's rounding floor */
+    tscvx_float kmax = delta;
+    for (tscvx_int j = 0; j < n; j++) kmax = fmax(kmax, fabs(kk->Kx[kk->mapDiag[j]]));
+    for (tscvx_int k = 0; k < ws->P.nnz; k++) kmax = fmax(kmax, fabs(kk->Kx[kk->mapP[k]]));
+    for (tscvx_int k = 0; k < ws->A.nnz; k++) kmax = fmax(kmax, fabs(kk->Kx[kk->mapA[k]]));
+    for (tscvx_int k = 0; k < ws->G.nnz; k++) kmax = fmax(kmax, fabs(kk->Kx[kk->mapG[k]]));
+    kk->kmax_data = kmax;
 }
 
 void tscvx_kkt_cone_values(tscvx_kkt *kk, const tscvx_cones *K, const tscvx_nt *W,
@@ -197,11 +218,21 @@ void tscvx_kkt_cone_values(tscvx_kkt *kk, const tscvx_cones *K, const tscvx_nt *
     const tscvx_int *map = kk->mapCone;
     tscvx_float *Kx = kk->Kx;
     tscvx_int t = 0;
-    for (tscvx_int i = 0; i < K->l; i++) Kx[map[t++]] = -W->w[i] * W->w[i] - delta;
+    tscvx_float cmax = 0.0; /* largest |W'W| + d: a diagonal entry of each cone block */
+    for (tscvx_int i = 0; i < K->l; i++) {
+        const tscvx_float v = W->w[i] * W->w[i] + delta;
+        Kx[map[t++]] = -v;
+        cmax = v > cmax ? v : cmax;
+    }
     for (tscvx_int k = 0; k < K->nsoc; k++) {
         const tscvx_int q = K->q[k];
         const tscvx_float *w = W->w + K->off[k];
         const tscvx_float eta = W->eta[k], eta2 = eta * eta;
+        /* largest |entry|: dense block eta^2 (2 wbar0^2 - 1) + d, its head (|wbar1|^2 =
+         * wbar0^2 - 1); expansion max(eta^2 + d, sqrt2 eta wbar0) (wbar0 >= 1) */
+        const tscvx_float big = kk->expanded[k] < 0 ? eta2 * (2.0 * w[0] * w[0] - 1.0) + delta
+                                                    : fmax(eta2 + delta, sqrt(2.0) * eta * w[0]);
+        cmax = big > cmax ? big : cmax;
         if (kk->expanded[k] < 0) {
             /* -(W'W) = -eta^2 (2 wbar wbar' - J) */
             for (tscvx_int b = 0; b < q; b++)
@@ -218,6 +249,8 @@ void tscvx_kkt_cone_values(tscvx_kkt *kk, const tscvx_cones *K, const tscvx_nt *
             Kx[map[t++]] = 1.0;
         }
     }
+    kk->kmax = fmax(kk->kmax_data, cmax);
+    if (kk->nexp > 0) kk->kmax = fmax(kk->kmax, 1.0); /* the expansion pivots -1, +1 */
 }
 
 /* ---- solve with iterative refinement ----------------------------------------------------- */
@@ -229,54 +262,83 @@ void tscvx_kkt_cone_values(tscvx_kkt *kk, const tscvx_cones *K, const tscvx_nt *
 #define REFINE_FLOOR 1e-15
 #define REFINE_RATIO 0.5
 
-/* y = (K - reg) x for the stored upper triangle (permuted coordinates) */
-static void kkt_matvec_unreg(const tscvx_kkt *kk, const tscvx_float *x, tscvx_float *y) {
-    for (tscvx_int i = 0; i < kk->dim; i++) y[i] = -kk->regsign[i] * kk->delta * x[i];
+/* res = rhs - (K - reg) x for the stored upper triangle (permuted coordinates), the right-hand
+ * side gathered from its three parts (src, len; zero on the expansion rows); returns |res|_inf
+ * and writes |x|_inf. */
+static tscvx_float kkt_residual(const tscvx_kkt *kk, const tscvx_float *x,
+                                const tscvx_float *const src[3], const tscvx_int len[3],
+                                tscvx_float *res, tscvx_float *xnorm) {
+    const tscvx_float d = kk->delta;
+    const tscvx_float unreg[4] = {-d, d, d, 0.0}; /* -(regularization), by KKT_ROW_* */
+    const tscvx_int *Kp = kk->Kp, *Ki = kk->Ki;
+    const tscvx_float *Kx = kk->Kx;
+    const signed char *rowblk = kk->rowblk;
+    for (tscvx_int i = 0; i < kk->dim; i++) res[i] = unreg[rowblk[i]] * x[i];
+    tscvx_float xn = 0.0;
     for (tscvx_int j = 0; j < kk->dim; j++) {
         const tscvx_float xj = x[j];
         tscvx_float acc = 0.0;
-        for (tscvx_int k = kk->Kp[j]; k < kk->Kp[j + 1]; k++) {
-            const tscvx_int i = kk->Ki[k];
-            const tscvx_float v = kk->Kx[k];
+        for (tscvx_int k = Kp[j]; k < Kp[j + 1]; k++) {
+            const tscvx_int i = Ki[k];
+            const tscvx_float v = Kx[k];
             if (i == j) {
                 acc += v * xj;
             } else {
-                y[i] += v * xj;
+                res[i] += v * xj;
                 acc += v * x[i];
             }
         }
-        y[j] += acc;
+        res[j] += acc;
+        xn = fabs(xj) > xn ? fabs(xj) : xn;
     }
+    *xnorm = xn;
+    tscvx_float rn = 0.0;
+    const tscvx_int *pv = kk->pinv;
+    for (int part = 0; part < 3; part++) {
+        const tscvx_float *r = src[part];
+        for (tscvx_int i = 0; i < len[part]; i++) {
+            const tscvx_int t = pv[i];
+            res[t] = r[i] - res[t];
+            rn = fabs(res[t]) > rn ? fabs(res[t]) : rn;
+        }
+        pv += len[part];
+    }
+    for (tscvx_int i = len[0] + len[1] + len[2]; i < kk->dim; i++) {
+        const tscvx_int t = kk->pinv[i];
+        res[t] = -res[t];
+        rn = fabs(res[t]) > rn ? fabs(res[t]) : rn;
+    }
+    return rn;
 }
 
 int tscvx_kkt_solve(tscvx_kkt *kk, tscvx_int n, tscvx_int p, tscvx_int m,
                     const tscvx_float *rx, const tscvx_float *ry, const tscvx_float *rz,
                     tscvx_float *dx, tscvx_float *dy, tscvx_float *dz, tscvx_int refine_iters) {
     const tscvx_int *pinv = kk->pinv;
-    tscvx_float *rhs = kk->rhs, *sol = kk->sol, *res = kk->res;
-    for (tscvx_int i = 0; i < n; i++) rhs[pinv[i]] = rx[i];
-    for (tscvx_int i = 0; i < p; i++) rhs[pinv[n + i]] = ry[i];
-    for (tscvx_int i = 0; i < m; i++) rhs[pinv[n + p + i]] = rz[i];
-    for (tscvx_int i = n + p + m; i < kk->dim; i++) rhs[pinv[i]] = 0.0;
+    tscvx_float *sol = kk->sol, *res = kk->res;
     tscvx_float bnorm = 0.0;
-    for (tscvx_int i = 0; i < kk->dim; i++) {
-        sol[i] = rhs[i];
-        if (fabs(rhs[i]) > bnorm) bnorm = fabs(rhs[i]);
+    const tscvx_float *const src[3] = {rx, ry, rz}; /* read again by the refinement (the
+                                                        outputs are written at the end) */
+    const tscvx_int len[3] = {n, p, m};
+    const tscvx_int *pv = pinv;
+    for (int part = 0; part < 3; part++) { /* permute into sol */
+        const tscvx_float *r = src[part];
+        for (tscvx_int i = 0; i < len[part]; i++) {
+            const tscvx_float v = r[i];
+            sol[pv[i]] = v;
+            bnorm = fabs(v) > bnorm ? fabs(v) : bnorm;
+        }
+        pv += len[part];
     }
+    for (tscvx_int i = n + p + m; i < kk->dim; i++) sol[pinv[i]] = 0.0;
     kk->backend->solve(kk, sol);
     int steps = 0;
     tscvx_float last = INFINITY;
     for (tscvx_int it = 0; it < refine_iters; it++) {
-        kkt_matvec_unreg(kk, sol, res);
-        tscvx_float rnorm = 0.0;
-        for (tscvx_int i = 0; i < kk->dim; i++) {
-            res[i] = rhs[i] - res[i];
-            if (fabs(res[i]) > rnorm) rnorm = fabs(res[i]);
-        }
+        tscvx_float xnorm;
+        const tscvx_float rnorm = kkt_residual(kk, sol, src, len, res, &xnorm);
         if (!isfinite(rnorm)) return -1;
         /* stop when accurate, or when refinement no longer pays */
-        tscvx_float xnorm = 0.0;
-        for (tscvx_int i = 0; i < kk->dim; i++) xnorm = fabs(sol[i]) > xnorm ? fabs(sol[i]) : xnorm;
         if (rnorm <= REFINE_TOL * (1.0 + bnorm) || rnorm <= REFINE_FLOOR * kk->kmax * xnorm ||
             rnorm > REFINE_RATIO * last)
             break;

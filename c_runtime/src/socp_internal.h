@@ -48,6 +48,12 @@ int tscvx_nt_scaling(const tscvx_cones *K, const tscvx_float *s, const tscvx_flo
 /* out = W v, or W^{-1} v when inverse != 0 */
 void tscvx_nt_apply(const tscvx_cones *K, const tscvx_nt *W, int inverse, const tscvx_float *v,
                     tscvx_float *out);
+/* out = W (W v), one pass over the cones; work (m) receives W v only on the SOC rows */
+void tscvx_nt_apply2(const tscvx_cones *K, const tscvx_nt *W, const tscvx_float *v,
+                     tscvx_float *work, tscvx_float *out);
+/* out = W (u \ v), one pass; work (m, may be v) receives u \ v only on the SOC rows */
+void tscvx_nt_div_apply(const tscvx_cones *K, const tscvx_nt *W, const tscvx_float *u,
+                        const tscvx_float *v, tscvx_float *work, tscvx_float *out);
 /* Largest alpha <= alpha_max with u + alpha du in K (u in int K). */
 tscvx_float tscvx_cone_max_step(const tscvx_cones *K, const tscvx_float *u,
                                 const tscvx_float *du, tscvx_float alpha_max);
@@ -66,12 +72,22 @@ void tscvx_cone_add_identity(const tscvx_cones *K, tscvx_float *u, tscvx_float t
  */
 typedef struct tscvx_kkt tscvx_kkt;
 
-/* Backend seam: the only door to the factorization library. */
+/* Row blocks of the KKT system; the static regularization is +d on x, -d on y and z, none on
+ * the expansion rows. */
+enum { KKT_ROW_X = 0, KKT_ROW_Y = 1, KKT_ROW_Z = 2, KKT_ROW_EXP = 3 };
+
+/* Backend seam: the only door to the factorization. Setup calls symbolic (sizes), then
+ * alloc (claims the factor memory and finishes the analysis); each IPM iteration numeric,
+ * then solve. */
 typedef struct {
     const char *name;
-    /* symbolic analysis of kkt->Kp/Ki, writes factor sizes; returns nnz(L) or -1 */
-    long (*symbolic)(tscvx_kkt *kkt);
-    /* numeric factorization of kkt->Kx; returns 0 or -1 (zero pivot) */
+    /* analysis of kkt->Kp/Ki in `tmp` (>= 5 dim + 2 free ints, clobbered): writes the factor
+     * sizes into kkt; returns nnz(L) or -1 */
+    long (*symbolic)(tscvx_kkt *kkt, tscvx_int *tmp);
+    /* claims the factor arrays from `a` (only counts while a->base is NULL or the arena
+     * overflowed; else also finishes the analysis, temporary memory released); 0 or -1 */
+    int (*alloc)(tscvx_kkt *kkt, tscvx_arena *a);
+    /* numeric factorization of kkt->Kx with the inertia check; returns 0 or -1 */
     int (*numeric)(tscvx_kkt *kkt);
     /* x := K^{-1} x in permuted coordinates */
     void (*solve)(tscvx_kkt *kkt, tscvx_float *x);
@@ -85,7 +101,7 @@ struct tscvx_kkt {
     tscvx_int *Kp;        /* dim+1 column pointers (permuted upper triangle) */
     tscvx_int *Ki;        /* nnz row indices */
     tscvx_float *Kx;      /* nnz values */
-    signed char *regsign; /* dim (permuted): sign of the static regularization (+x, -y/z, 0) */
+    signed char *rowblk;  /* dim (permuted): block of each row, KKT_ROW_X/Y/Z/EXP */
     tscvx_int *pinv;      /* dim: inverse of perm */
     tscvx_int *mapP;      /* nnz(P): slot of each P entry */
     tscvx_int *mapA;      /* nnz(A): slot of each A entry */
@@ -94,18 +110,36 @@ struct tscvx_kkt {
     tscvx_int *mapCone;   /* ncone: slots of the cone block, in the order of kkt_cone_values */
     tscvx_int ncone;      /* number of cone-block entries */
     tscvx_int *expanded;  /* nsoc: index of the expansion (0..nexp-1), or -1 for dense */
-    /* LDL' factors and work arrays (dim or nnz(L)) */
-    tscvx_int *Lp, *Parent, *Lnz, *Flag, *Pattern, *Li;
-    tscvx_float *Lx, *D, *Y;
     tscvx_int lnz;        /* nnz(L) */
     tscvx_int npos;       /* expected positive pivots: n + nexp (inertia check) */
     tscvx_float delta;    /* static regularization in the stored values */
-    tscvx_float kmax;     /* largest |entry| of the factored matrix */
-    /* refinement work (dim each, permuted); res shares memory with the factor's Y */
-    tscvx_float *rhs, *sol, *res;
+    tscvx_float kmax;     /* bound on the largest |entry| of the factored matrix (>= 1) */
+    tscvx_float kmax_data; /* largest |entry| of the data part (P + d I, A, G, -d I) */
+    tscvx_float *D;       /* dim: the pivots */
+    /* SuiteSparse LDL backend: LDL' factors and work arrays (dim or nnz(L)) */
+    tscvx_int *Lp, *Parent, *Lnz, *Flag, *Li;
+    tscvx_int *Pattern;   /* dim: shares memory with sol (factorization vs. solves) */
+    tscvx_float *Lx, *Y;
+    /* supernodal backend (supernodal.c) */
+    tscvx_int nsuper;     /* supernodes */
+    tscvx_int nsrow;      /* entries of the row lists */
+    tscvx_int nslx;       /* doubles of the panels */
+    tscvx_int wmax, rmax; /* widest panel, longest row list */
+    tscvx_int *sfirst;    /* nsuper+1: first column of each supernode */
+    tscvx_int *srowp;     /* nsuper+1: start of each row list in srows */
+    tscvx_int *srows;     /* nsrow: rows below each diagonal block, ascending */
+    tscvx_int *sxp;       /* nsuper+1: start of each panel in SLx */
+    tscvx_int *col2sup;   /* dim: supernode of each column */
+    tscvx_int *kmap;      /* nnz: panel slot of each KKT entry */
+    tscvx_int *srel;      /* rmax: work, rows of a panel within an ancestor's panel */
+    tscvx_float *SLx;     /* nslx: panels, column-major h x w, L below the diagonal, D on it */
+    tscvx_float *swork;   /* wmax: work */
+    /* solve and refinement work (dim each, permuted); res is the backend's */
+    tscvx_float *sol, *res;
 };
 
 extern const tscvx_backend tscvx_backend_ldl;
+extern const tscvx_backend tscvx_backend_supernodal;
 
 /* Solve K [dx; dy; dz] = [rx; ry; rz] with iterative refinement; vectors in original order.
  * Returns the number of refinement steps, or -1 when the residual stays non-finite. */
@@ -113,7 +147,7 @@ int tscvx_kkt_solve(tscvx_kkt *kkt, tscvx_int n, tscvx_int p, tscvx_int m,
                     const tscvx_float *rx, const tscvx_float *ry, const tscvx_float *rz,
                     tscvx_float *dx, tscvx_float *dy, tscvx_float *dz, tscvx_int refine_iters);
 
-/* Write the cone block -(W'W) - d I (and expansions) into the KKT values. */
+/* Write the cone block -(W'W) - d I (and expansions) into the KKT values; sets kmax. */
 void tscvx_kkt_cone_values(tscvx_kkt *kkt, const tscvx_cones *K, const tscvx_nt *W,
                            tscvx_float delta);
 
@@ -154,7 +188,7 @@ struct tscvx_workspace {
     tscvx_float tau_den; /* denominator of the tau row (fixed per factorization) */
     tscvx_float delta;   /* current static regularization */
     tscvx_int refine_now; /* refinement steps allowed in this iteration */
-    tscvx_float *wm, *wm2, *wm3; /* m: work vectors in the cone space */
+    tscvx_float *wm, *wm2;       /* m: work vectors in the cone space */
     tscvx_float *wn;             /* n: work vector */
     /* best iterate so far */
     tscvx_float *bx, *by, *bz, *bs, btau, bkappa, bmerit;

@@ -3,6 +3,7 @@
 /* Benchmark driver: loads a problem dumped by guidance.bench_socp (binary, little endian),
  * sets it up in one malloc'ed arena and solves it `reps` times. Used with callgrind:
  *   valgrind --tool=callgrind --toggle-collect=tscvx_solve build/ctest/bench_driver FILE 1
+ * (optional third argument: kkt_backend, 0 supernodal, 1 SuiteSparse LDL)
  * File: int32 n p m l nsoc nnzP nnzA nnzG (nnzP = -1: no P), then int32 q[nsoc],
  * [int32 Pp[n+1] Pi[nnzP] f64 Px[nnzP]], f64 c[n], int32 Ap[n+1] Ai[nnzA] f64 Ax[nnzA] b[p],
  * int32 Gp[n+1] Gi[nnzG] f64 Gx[nnzG] h[m]. */
@@ -23,7 +24,7 @@ static void *rd(FILE *f, size_t count, size_t size) {
 
 int main(int argc, char **argv) {
     if (argc < 2) {
-        fprintf(stderr, "usage: bench_driver FILE [reps]\n");
+        fprintf(stderr, "usage: bench_driver FILE [reps [kkt_backend]]\n");
         return 2;
     }
     FILE *f = fopen(argv[1], "rb");
@@ -51,6 +52,7 @@ int main(int argc, char **argv) {
     const int reps = argc > 2 ? atoi(argv[2]) : 1;
     tscvx_settings st;
     tscvx_default_settings(&st);
+    if (argc > 3) st.kkt_backend = atoi(argv[3]);
     size_t nscratch = 0, narena = 0;
     if (tscvx_scratch_size(&d, &st, &nscratch) != TSCVX_SETUP_OK) return 3;
     void *scratch = malloc(nscratch);

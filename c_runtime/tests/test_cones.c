@@ -81,6 +81,16 @@ static void test_nt_scaling(void) {
         tscvx_nt_apply(&K, &W, 1, t1, t2);
         tscvx_nt_apply(&K, &W, 0, t2, s);
         CHECK(maxdiff(s, t1, M) < 1e-9, "W W^-1 != I: %g", maxdiff(s, t1, M));
+        /* the fused passes give exactly the two-pass results */
+        tscvx_float t3[M], t4[M], t5[M];
+        tscvx_nt_apply(&K, &W, 0, t1, t2);
+        tscvx_nt_apply(&K, &W, 0, t2, t3);
+        tscvx_nt_apply2(&K, &W, t1, t4, t5);
+        CHECK(maxdiff(t3, t5, M) == 0.0, "nt_apply2 != W W v: %g", maxdiff(t3, t5, M));
+        tscvx_cone_div(&K, lam, t1, t2);
+        tscvx_nt_apply(&K, &W, 0, t2, t3);
+        tscvx_nt_div_apply(&K, &W, lam, t1, t4, t5);
+        CHECK(maxdiff(t3, t5, M) == 0.0, "nt_div_apply != W (lam \\ v): %g", maxdiff(t3, t5, M));
         /* det wbar = 1 on each SOC */
         for (int k = 0; k < NSOC; k++) {
             double nrm = 0.0;

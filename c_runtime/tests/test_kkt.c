@@ -1,6 +1,7 @@
-/* KKT system: pattern + maps + AMD/LDL factor and refined solve against a dense reference
- * (Gaussian elimination with partial pivoting on the unregularized KKT matrix), for dense
- * SOC blocks and for the sparse (diagonal + rank-2) expansion. */
+/* KKT system: pattern + maps + factor (supernodal and SuiteSparse LDL backends) and refined
+ * solve against a dense reference (Gaussian elimination with partial pivoting on the
+ * unregularized KKT matrix), for dense SOC blocks and for the sparse (diagonal + rank-2)
+ * expansion. */
 #include <string.h>
 
 #include "ctest_util.h"
@@ -67,7 +68,7 @@ static void random_csc(int nrow, int ncol, double density, int upper, tscvx_int 
     Mp[ncol] = nz;
 }
 
-static void run(int dense_max, int with_P) {
+static void run(int dense_max, int with_P, int backend) {
     tscvx_int Pp[N + 1], Pi[N * N], Ap[N + 1], Ai[N * P_], Gp[N + 1], Gi[N * M];
     tscvx_float Px[N * N], Ax[N * P_], Gx[N * M], c[N], b[P_], h[M];
     random_csc(N, N, 0.3, 1, Pp, Pi, Px);
@@ -81,6 +82,7 @@ static void run(int dense_max, int with_P) {
     tscvx_settings st;
     tscvx_default_settings(&st);
     st.soc_dense_max = dense_max;
+    st.kkt_backend = backend;
     static unsigned char arena[1 << 20];
     tscvx_workspace *ws = NULL;
     CHECK(tscvx_setup(&ws, arena, sizeof arena, &d, &st) == TSCVX_SETUP_OK, "setup");
@@ -125,15 +127,16 @@ static void run(int dense_max, int with_P) {
     for (int i = 0; i < P_; i++) err = fmax(err, fabs(dy[i] - ref[N + i]));
     for (int i = 0; i < M; i++) err = fmax(err, fabs(dz[i] - ref[N + P_ + i]));
     for (int i = 0; i < DIM; i++) scale = fmax(scale, fabs(ref[i]));
-    CHECK(err < 1e-8 * scale, "dense_max %d P %d: |x - x_ref| = %g (scale %g)", dense_max,
-          with_P, err, scale);
+    CHECK(err < 1e-8 * scale, "backend %d dense_max %d P %d: |x - x_ref| = %g (scale %g)",
+          backend, dense_max, with_P, err, scale);
 }
 
 int main(void) {
-    for (int rep = 0; rep < 20; rep++) {
-        run(16, rep % 2);
-        run(3, rep % 2);
-        run(1, rep % 2);
-    }
+    for (int rep = 0; rep < 20; rep++) /* both KKT backends */
+        for (int backend = TSCVX_KKT_SUPERNODAL; backend <= TSCVX_KKT_LDL; backend++) {
+            run(16, rep % 2, backend);
+            run(3, rep % 2, backend);
+            run(1, rep % 2, backend);
+        }
     return ct_report("test_kkt");
 }
