@@ -181,10 +181,10 @@ def write_card(models: Path) -> Path:
     add("|---|---|---|---|---|---|---|")
     for kind, s in sorted(metrics["shipped"].items()):
         o = s["onnxruntime"]
-        c = f"{measured[kind]:,}" if kind in measured else "(C build missing)"
+        cg = f"{measured[kind]:,}" if kind in measured else "(C build missing)"
         add(
             f"| {kind} | {o['time_ms']:.4f} | {o['time_ms_std']:.4f} | {o['peak_mb']:.2f} | "
-            f"{s['macs']:,} | {INSTR_PER_MAC * s['macs']:,.0f} | {c} |"
+            f"{s['macs']:,} | {INSTR_PER_MAC * s['macs']:,.0f} | {cg} |"
         )
     add("")
     add(
