@@ -390,8 +390,41 @@ def flight_net(models_dir: Path | str, kind: str):
     return _NETS[key]
 
 
-def _nets(models_dir: Path | str | None, masks: bool) -> tuple:
+_TRAINED: dict[tuple, dict] = {}
+
+
+def check_trained_params(models_dir: Path | str, kind: str, params: Params) -> None:
+    """For an ONNX source, the check of guidance.nn.infer: every problem parameter that is not
+    a network input must be the one the model was trained for (a .tnn blob does not record
+    them; `make lib` writes it from the same ONNX file)."""
+    import json
+
+    from guidance.nn.infer import META_KEY, _params_diff
+
+    path = _net_source(Path(models_dir), kind)
+    if path.suffix != ".onnx":
+        return
+    stat = path.stat()
+    key = (str(path.resolve()), stat.st_mtime_ns, stat.st_size)
+    if key not in _TRAINED:
+        import onnx
+
+        props = {p.key: p.value for p in onnx.load(str(path), load_external_data=False)
+                 .metadata_props}  # fmt: skip
+        _TRAINED[key] = json.loads(props.get(META_KEY, "{}")).get("params", {})
+    diff = _params_diff(_TRAINED[key], params)
+    if diff:
+        raise FlightNetsError(
+            f"model {path}: trained for other problem parameters: " + "; ".join(diff)
+        )
+
+
+def _nets(models_dir: Path | str | None, masks: bool, params: Params | None = None) -> tuple:
     d = Path(models_dir) if models_dir is not None else BUILD_MODELS_DIR
+    kinds = NET_KINDS if masks else NET_KINDS[:1]
+    if params is not None:
+        for kind in kinds:
+            check_trained_params(d, kind, params)
     return flight_net(d, "solution"), (flight_net(d, "constraint") if masks else None)
 
 
@@ -413,7 +446,7 @@ def solve_tscvx_c(
     N = scenario.params.N
     if not 3 <= N <= 400:
         raise ScenarioError("N", f"must lie in [3, 400], got {N}")
-    sol, con = nets if nets is not None else _nets(models_dir, masks)
+    sol, con = nets if nets is not None else _nets(models_dir, masks, scenario.params)
     ws = workspace(scenario, settings, **socp)
     cs = c_scenario(scenario)
     opt = _TscvxOptions()
@@ -445,7 +478,7 @@ def tscvx_guess_c(
     scenario: Scenario, models_dir: Path | str | None = None, net=None
 ) -> tuple[np.ndarray, np.ndarray, float]:
     """The projected warm start computed on board (pdg_tscvx_guess)."""
-    sol = net if net is not None else _nets(models_dir, False)[0]
+    sol = net if net is not None else _nets(models_dir, False, scenario.params)[0]
     ws = workspace(scenario)
     N = scenario.params.N
     x, u, tf = np.zeros((N, NX)), np.zeros((N, NU)), ct.c_double(0.0)
