@@ -156,7 +156,7 @@ def test_same_solve_as_python_orchestration_with_the_c_networks(name: str, nets)
 @pytest.mark.parametrize("masks", [False, True], ids=["warm-start", "algorithm-2"])
 @pytest.mark.parametrize("name", STRICT)
 def test_c_tscvx_matches_python_tscvx(runs, name: str, masks: bool) -> None:
-    scn, guess, ref, c = runs[name, masks]
+    _, _, ref, c = runs[name, masks]
     assert c.status == ref.status, (c.reason, ref.reason)
     assert abs(c.iterations - ref.iterations) <= 1
     assert abs(c.m_f - ref.m_f) / ref.m_f <= 1e-4
