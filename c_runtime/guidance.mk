@@ -41,7 +41,7 @@ $(BUILD)/libtscvx_gnc.so: $(GNC_OBJS) $(CRT_OBJS)
 $(BUILD)/pdg_example: c_runtime/examples/pdg_example.c c_runtime/include/tscvx_guidance.h c_runtime/include/tscvx_nn.h $(BUILD)/libtscvx_gnc.a $(BUILD)/libtscvx.a
 	$(CC) -std=c99 -Wall -Wextra -Werror -O2 -Ic_runtime/include $< -o $@ $(GNC_LINK)
 
-$(BUILD)/pdg_budget_driver: c_runtime/examples/pdg_budget_driver.c c_runtime/include/tscvx_guidance.h $(BUILD)/libtscvx_gnc.a $(BUILD)/libtscvx.a
+$(BUILD)/pdg_budget_driver: c_runtime/examples/pdg_budget_driver.c c_runtime/include/tscvx_guidance.h c_runtime/include/tscvx_nn.h $(BUILD)/libtscvx_gnc.a $(BUILD)/libtscvx.a
 	$(CC) -std=c99 -Wall -Wextra -Werror -O2 -g -Ic_runtime/include $< -o $@ $(GNC_LINK)
 
 $(BUILD)/ctest/%: c_runtime/guidance/tests/%.c c_runtime/include/tscvx_guidance.h $(BUILD)/libtscvx_gnc.a $(BUILD)/libtscvx.a
@@ -60,6 +60,12 @@ ctest-gnc: lib $(addprefix $(BUILD)/ctest/,$(GNC_TESTS)) $(BUILD)/pdg_budget_dri
 	@echo "== no heap allocation inside pdg_solve (malloc interposition, native run)"
 	@$(BUILD)/pdg_budget_driver | tee $(BUILD)/ctest/pdg_budget_driver.out | grep -q '^heap_allocations_in_solve 0$$' \
 	  || { cat $(BUILD)/ctest/pdg_budget_driver.out; echo "heap allocation inside pdg_solve"; exit 1; }
+	@echo "== no heap allocation inside pdg_solve_tscvx (both networks, native run)"
+	@$(BUILD)/pdg_budget_driver --tscvx $(BUILD)/models/solution.tnn --masks $(BUILD)/models/constraint.tnn \
+	  > $(BUILD)/ctest/pdg_budget_driver_tscvx.out; \
+	  grep -q '^heap_allocations_in_solve 0$$' $(BUILD)/ctest/pdg_budget_driver_tscvx.out \
+	  && grep -q '^mode tscvx_masks$$' $(BUILD)/ctest/pdg_budget_driver_tscvx.out \
+	  || { cat $(BUILD)/ctest/pdg_budget_driver_tscvx.out; echo "heap allocation inside pdg_solve_tscvx"; exit 1; }
 
 budget-gnc: setup lib $(BUILD)/pdg_budget_driver
 	$(PY) -m guidance.budget
