@@ -16,7 +16,7 @@ GNC_OBJS   := $(patsubst c_runtime/guidance/%.c,$(GNC_OBJDIR)/%.o,$(GNC_SRCS)) $
 GNC_CFLAGS := -std=c99 -Wall -Wextra -Werror -O2 -fPIC -Ic_runtime/include -Ic_runtime/guidance -I$(GEN_DIR)
 # static link line of a flight application: guidance, SOCP runtime, SuiteSparse, libm
 GNC_LINK   := $(BUILD)/libtscvx_gnc.a $(BUILD)/libtscvx.a -lamd -lldl -lsuitesparseconfig -lm
-GNC_TESTS  := test_guidance
+GNC_TESTS  := test_guidance test_tscvx
 
 $(GEN_DIR)/tscvx_model.c $(GEN_DIR)/tscvx_model.h &: codegen/generate.py guidance/model.py | $(STAMP)
 	$(PY) codegen/generate.py $(GEN_DIR)
