@@ -10,12 +10,13 @@ GEN_DIR    := $(BUILD)/generated
 GNC_OBJDIR := $(BUILD)/obj/gnc
 GNC_SRCS   := $(wildcard c_runtime/guidance/*.c)
 GNC_HDRS   := $(wildcard c_runtime/guidance/*.h) c_runtime/include/tscvx_guidance.h \
-              c_runtime/include/tscvx_socp.h c_runtime/include/tscvx_types.h
+              c_runtime/include/tscvx_socp.h c_runtime/include/tscvx_types.h \
+              c_runtime/include/tscvx_nn.h
 GNC_OBJS   := $(patsubst c_runtime/guidance/%.c,$(GNC_OBJDIR)/%.o,$(GNC_SRCS)) $(GNC_OBJDIR)/tscvx_model.o $(NN_OBJS)
 GNC_CFLAGS := -std=c99 -Wall -Wextra -Werror -O2 -fPIC -Ic_runtime/include -Ic_runtime/guidance -I$(GEN_DIR)
 # static link line of a flight application: guidance, SOCP runtime, SuiteSparse, libm
 GNC_LINK   := $(BUILD)/libtscvx_gnc.a $(BUILD)/libtscvx.a -lamd -lldl -lsuitesparseconfig -lm
-GNC_TESTS  := test_guidance
+GNC_TESTS  := test_guidance test_tscvx
 
 $(GEN_DIR)/tscvx_model.c $(GEN_DIR)/tscvx_model.h &: codegen/generate.py guidance/model.py | $(STAMP)
 	$(PY) codegen/generate.py $(GEN_DIR)
@@ -37,10 +38,10 @@ $(BUILD)/libtscvx_gnc.a: $(GNC_OBJS)
 $(BUILD)/libtscvx_gnc.so: $(GNC_OBJS) $(CRT_OBJS)
 	$(CC) -shared -o $@ $(GNC_OBJS) $(CRT_OBJS) -lamd -lldl -lsuitesparseconfig -lm
 
-$(BUILD)/pdg_example: c_runtime/examples/pdg_example.c c_runtime/include/tscvx_guidance.h $(BUILD)/libtscvx_gnc.a $(BUILD)/libtscvx.a
+$(BUILD)/pdg_example: c_runtime/examples/pdg_example.c c_runtime/include/tscvx_guidance.h c_runtime/include/tscvx_nn.h $(BUILD)/libtscvx_gnc.a $(BUILD)/libtscvx.a
 	$(CC) -std=c99 -Wall -Wextra -Werror -O2 -Ic_runtime/include $< -o $@ $(GNC_LINK)
 
-$(BUILD)/pdg_budget_driver: c_runtime/examples/pdg_budget_driver.c c_runtime/include/tscvx_guidance.h $(BUILD)/libtscvx_gnc.a $(BUILD)/libtscvx.a
+$(BUILD)/pdg_budget_driver: c_runtime/examples/pdg_budget_driver.c c_runtime/include/tscvx_guidance.h c_runtime/include/tscvx_nn.h $(BUILD)/libtscvx_gnc.a $(BUILD)/libtscvx.a
 	$(CC) -std=c99 -Wall -Wextra -Werror -O2 -g -Ic_runtime/include $< -o $@ $(GNC_LINK)
 
 $(BUILD)/ctest/%: c_runtime/guidance/tests/%.c c_runtime/include/tscvx_guidance.h $(BUILD)/libtscvx_gnc.a $(BUILD)/libtscvx.a
@@ -59,6 +60,12 @@ ctest-gnc: lib $(addprefix $(BUILD)/ctest/,$(GNC_TESTS)) $(BUILD)/pdg_budget_dri
 	@echo "== no heap allocation inside pdg_solve (malloc interposition, native run)"
 	@$(BUILD)/pdg_budget_driver | tee $(BUILD)/ctest/pdg_budget_driver.out | grep -q '^heap_allocations_in_solve 0$$' \
 	  || { cat $(BUILD)/ctest/pdg_budget_driver.out; echo "heap allocation inside pdg_solve"; exit 1; }
+	@echo "== no heap allocation inside pdg_solve_tscvx (both networks, native run)"
+	@$(BUILD)/pdg_budget_driver --tscvx $(BUILD)/models/solution.tnn --masks $(BUILD)/models/constraint.tnn \
+	  > $(BUILD)/ctest/pdg_budget_driver_tscvx.out; \
+	  grep -q '^heap_allocations_in_solve 0$$' $(BUILD)/ctest/pdg_budget_driver_tscvx.out \
+	  && grep -q '^mode tscvx_masks$$' $(BUILD)/ctest/pdg_budget_driver_tscvx.out \
+	  || { cat $(BUILD)/ctest/pdg_budget_driver_tscvx.out; echo "heap allocation inside pdg_solve_tscvx"; exit 1; }
 
 budget-gnc: setup lib $(BUILD)/pdg_budget_driver
 	$(PY) -m guidance.budget

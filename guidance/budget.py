@@ -15,6 +15,14 @@ scenario, workspace set up before the measured call, then one ``pdg_solve``), an
 
 The driver also counts heap allocations inside the call (malloc interposition): it must be 0.
 
+T-SCvx rows: the same driver with ``--tscvx build/models/solution.tnn [--masks
+build/models/constraint.tnn]`` measures one complete on-board T-SCvx call (``pdg_solve_tscvx``:
+solution-network inference, projection of the prediction, SCvx from the reduced radius 0.01,
+and with masks one constraint-network inference per iteration), counted with
+``--toggle-collect=pdg_solve_tscvx``, network inference included; its memory adds the weight
+blobs (read in place) and the network arenas. The comparison table puts SCvx, T-SCvx (warm
+start) and T-SCvx (Algorithm 2, masks) side by side in the same columns.
+
 Network rows: ``build/nn_budget_driver`` (c_runtime/nn/tests/nn_budget_driver.c) runs one
 ``tscvx_nn_run`` of each shipped network (build/models/*.tnn, the default scenario's theta,
 k = 1), counted with ``--toggle-collect=tscvx_nn_run``; budget 5 M host instructions per
@@ -55,6 +63,14 @@ NN_INSTRUCTION_BUDGET = 5_000_000
 NN_CONSTRAINT_CALLS = 20  # T-SCvx: one mask per SCvx iteration, iter_max = 20 (Table 1)
 
 
+VARIANTS = {  # name -> (driver arguments, function counted by callgrind)
+    "SCvx": ([], "pdg_solve"),
+    "T-SCvx warm start": (["--tscvx", "{solution}"], "pdg_solve_tscvx"),
+    "T-SCvx (Algorithm 2)": (["--tscvx", "{solution}", "--masks", "{constraint}"],
+                             "pdg_solve_tscvx"),
+}  # fmt: skip
+
+
 @dataclass
 class Budget:
     status: str
@@ -72,11 +88,19 @@ class Budget:
     stack_high_water: int
     heap_allocations_in_solve: int
     host_wall_s: float
+    variant: str = "SCvx"
+    nn_weights_bytes: int = 0  # weight blobs of the networks the call runs (read in place)
+    nn_arena_bytes: int = 0  # their arenas
 
     @property
     def memory_bytes(self) -> int:
         return (
-            self.code_bytes + self.const_data_bytes + self.arena_high_water + self.stack_high_water
+            self.code_bytes
+            + self.const_data_bytes
+            + self.arena_high_water
+            + self.stack_high_water
+            + self.nn_weights_bytes
+            + self.nn_arena_bytes
         )
 
     @property
@@ -122,9 +146,20 @@ def build(quiet: bool = True) -> None:
     subprocess.run(cmd, check=True, capture_output=quiet)
 
 
-def _run_driver(prefix: list[str] | None = None, cwd: str | None = None) -> dict[str, str]:
+def _variant_args(variant: str) -> tuple[list[str], str]:
+    if variant not in VARIANTS:
+        raise ValueError(f"unknown variant {variant!r} (one of {', '.join(VARIANTS)})")
+    args, function = VARIANTS[variant]
+    paths = {k: str(v) for k, v in NN_MODELS.items()}
+    return [a.format(**paths) for a in args], function
+
+
+def _run_driver(
+    prefix: list[str] | None = None, cwd: str | None = None, variant: str = "SCvx"
+) -> dict[str, str]:
+    args, _ = _variant_args(variant)
     out = subprocess.run(
-        (prefix or []) + [str(DRIVER), "--repeat", "1" if prefix else "3"],
+        (prefix or []) + [str(DRIVER), "--repeat", "1" if prefix else "3", *args],
         capture_output=True,
         text=True,
         cwd=cwd,
@@ -139,16 +174,19 @@ def _run_driver(prefix: list[str] | None = None, cwd: str | None = None) -> dict
     return kv
 
 
-def count_instructions() -> tuple[int, dict[str, int]]:
-    """Instructions inside pdg_solve (callgrind), with the SOCP / discretization split."""
+def count_instructions(variant: str = "SCvx") -> tuple[int, dict[str, int]]:
+    """Instructions inside the guidance call (callgrind): pdg_solve, or pdg_solve_tscvx for
+    the T-SCvx variants, with the SOCP / discretization / network-inference split."""
     if shutil.which("valgrind") is None:
         raise RuntimeError("valgrind not found (Debian package valgrind)")
+    _, function = _variant_args(variant)
     with tempfile.TemporaryDirectory() as tmp:
         out_file = Path(tmp) / "callgrind.out"
         _run_driver(
             ["valgrind", "--tool=callgrind", f"--callgrind-out-file={out_file}",
-             "--toggle-collect=pdg_solve"],
+             f"--toggle-collect={function}"],
             cwd=tmp,
+            variant=variant,
         )  # fmt: skip
         text = out_file.read_text()
         m = re.search(r"^(?:summary|totals):\s*(\d+)", text, re.MULTILINE)
@@ -158,10 +196,11 @@ def count_instructions() -> tuple[int, dict[str, int]]:
         parts: dict[str, int] = {}
         if shutil.which("callgrind_annotate"):
             ann = subprocess.run(
-                ["callgrind_annotate", "--inclusive=yes", str(out_file)],
+                ["callgrind_annotate", "--inclusive=yes", "--threshold=100", str(out_file)],
                 capture_output=True, text=True, check=False,
             ).stdout  # fmt: skip
-            for name, key in (("tscvx_solve", "socp_solve"), ("discretize", "discretization")):
+            for name, key in (("tscvx_solve", "socp_solve"), ("discretize", "discretization"),
+                              ("tscvx_nn_run", "network_inference")):  # fmt: skip
                 mm = re.search(rf"^\s*([\d,]+)\s.*:{name}\s", ann, re.MULTILINE)
                 if mm:
                     parts[key] = int(mm.group(1).replace(",", ""))
@@ -234,11 +273,12 @@ def code_size() -> tuple[int, int]:
     return text, data
 
 
-def measure(do_build: bool = True) -> Budget:
+def measure(do_build: bool = True, variant: str = "SCvx") -> Budget:
+    """One complete guidance call of ``variant`` (a key of VARIANTS)."""
     if do_build:
         build()
-    native = _run_driver()
-    instr, parts = count_instructions()
+    native = _run_driver(variant=variant)
+    instr, parts = count_instructions(variant)
     text, data = code_size()
     return Budget(
         status=native["status"],
@@ -256,7 +296,51 @@ def measure(do_build: bool = True) -> Budget:
         stack_high_water=int(native["stack_high_water"]),
         heap_allocations_in_solve=int(native["heap_allocations_in_solve"]),
         host_wall_s=float(native["wall_s_min"]),
+        variant=variant,
+        nn_weights_bytes=int(native.get("nn_weights_bytes", 0)),
+        nn_arena_bytes=int(native.get("nn_arena_bytes", 0)),
     )
+
+
+def measure_variants(do_build: bool = True) -> list[Budget]:
+    """SCvx, T-SCvx (warm start) and T-SCvx (Algorithm 2): one complete call each."""
+    if do_build:
+        build()
+    return [measure(do_build=False, variant=v) for v in VARIANTS]
+
+
+def report_variants(rows: list[Budget]) -> str:
+    """The complete guidance calls side by side, network inference included."""
+    lines = [
+        "One complete guidance call, default scenario: SCvx against T-SCvx on board "
+        "(pdg_solve_tscvx, network inference included)",
+        f"  {'call':22s} {'status':>7s} {'iter.':>5s} {'subpr.':>6s} {'IPM':>5s} "
+        f"{'host instr.':>12s} {'of which NN':>11s} {'RAD750 s':>9s} {'memory':>10s} "
+        f"{'of which NN':>11s} {'heap':>5s} {'m_f':>9s}",
+    ]
+    for b in rows:
+        nn = b.instructions_by_part.get("network_inference", 0)
+        nn_mem = b.nn_weights_bytes + b.nn_arena_bytes
+        lines.append(
+            f"  {b.variant:22s} {b.status:>7s} {b.iterations:5d} {b.subproblems:6d} "
+            f"{b.socp_iterations:5d} {b.instructions / 1e6:10.1f} M {nn / 1e6:9.2f} M "
+            f"{b.rad750_s:9.2f} {b.memory_bytes / 2**20:7.2f} MB {nn_mem / 2**20:8.2f} MB "
+            f"{b.heap_allocations_in_solve:5d} {b.m_f:9.6f}"
+        )
+    if rows and rows[0].variant == "SCvx":
+        base = rows[0]
+        for b in rows[1:]:
+            lines.append(
+                f"  {b.variant}: {b.instructions / base.instructions:.2f}x the instructions of "
+                f"SCvx, {b.subproblems - base.subproblems:+d} subproblems, "
+                f"{b.socp_iterations - base.socp_iterations:+d} IPM iterations"
+            )
+    lines.append(
+        "  memory: code + static data + guidance arena high-water + stack high-water "
+        "+ network weights (read in place) + network arenas; budget "
+        f"{_mb(MEMORY_BUDGET_B).strip()} and {TIME_BUDGET_S:.0f} s RAD750"
+    )
+    return "\n".join(lines)
 
 
 def _mb(b: float) -> str:
@@ -265,7 +349,12 @@ def _mb(b: float) -> str:
 
 def report(b: Budget) -> str:
     lines = [
-        "RAD750 budget, default scenario, one complete guidance call (pdg_solve)",
+        "RAD750 budget, default scenario, one complete guidance call "
+        + (
+            "(pdg_solve)"
+            if b.variant == "SCvx"
+            else f"(pdg_solve_tscvx, {b.variant}, network inference included)"
+        ),
         f"  solve: {b.status}, {b.iterations} iterations, {b.subproblems} subproblems, "
         f"{b.socp_iterations} IPM iterations, m_f = {b.m_f:.9f}",
         "  model: RAD750 s = 1.3 x instructions / (0.5 x 200e6); budget 1 s "
@@ -286,9 +375,17 @@ def report(b: Budget) -> str:
         f"   (arena {b.arena_bytes} B)",
         f"  {'stack high-water (painted stack)':44s} {_mb(b.stack_high_water):>16s}"
         f"   ({b.stack_high_water} B)",
+        *(
+            [
+                f"  {'network weights (blobs read in place)':44s} {_mb(b.nn_weights_bytes):>16s}",
+                f"  {'network arenas':44s} {_mb(b.nn_arena_bytes):>16s}",
+            ]
+            if b.nn_weights_bytes
+            else []
+        ),
         f"  {'memory total':44s} {_mb(b.memory_bytes):>16s} {_mb(MEMORY_BUDGET_B):>14s}  "
         f"{'yes' if b.within_memory() else 'NO'}",
-        f"  {'heap allocations inside pdg_solve':44s} {b.heap_allocations_in_solve:16d} "
+        f"  {'heap allocations inside the call':44s} {b.heap_allocations_in_solve:16d} "
         f"{0:14d}  {'yes' if b.heap_allocations_in_solve == 0 else 'NO'}",
         f"  {'host wall time (not the model)':44s} {b.host_wall_s * 1e3:14.1f} ms",
     ]
@@ -336,6 +433,9 @@ def main(argv: list[str] | None = None) -> int:
         "--check-noalloc", action="store_true",
         help="only run the driver natively and fail unless pdg_solve made no heap allocation",
     )  # fmt: skip
+    if argv is None:  # `guidance budget` calls main() with the CLI's argv: drop the command
+        argv = sys.argv[1:]
+        argv = argv[1:] if argv[:1] == ["budget"] else argv
     args = ap.parse_args(argv)
     if not args.no_build:
         build()
@@ -344,7 +444,8 @@ def main(argv: list[str] | None = None) -> int:
         n = int(kv["heap_allocations_in_solve"])
         print(f"heap allocations inside pdg_solve: {n} (status {kv['status']})")
         return 0 if n == 0 else 1
-    b = measure(do_build=False)
+    calls = measure_variants(do_build=False)
+    b = calls[0]
     nets = measure_networks(do_build=False)
     if args.json:
         d = asdict(b)
@@ -354,9 +455,18 @@ def main(argv: list[str] | None = None) -> int:
             {**asdict(n), "memory_bytes": n.memory_bytes, "within_budget": n.within_budget()}
             for n in nets
         ]
+        d["calls"] = [
+            {**asdict(c), "memory_bytes": c.memory_bytes, "within_time": c.within_time(),
+             "within_memory": c.within_memory()}
+            for c in calls
+        ]  # fmt: skip
         print(json.dumps(d, indent=2))
     else:
         print(report(b))
+        print()
+        print(report_variants(calls))
+        print()
+        print(report(calls[-1]))
         print()
         print(report_networks(nets, b))
     return 0

@@ -8,6 +8,15 @@ settings) and reused.
     from guidance.cguidance import solve_c
     res = solve_c(scenario)                       # SCvx
     res = solve_c(scenario, masks=list_of_masks)  # T-SCvx masks (7N entries each)
+
+``solve_tscvx_c`` is the complete on-board T-SCvx call (pdg_solve_tscvx): the networks run in
+the C library too (guidance.nn.flight weight blobs, not onnxruntime), the solution network's
+prediction is projected onto the boundary conditions and convex path constraints in C (the
+same projection as guidance.guess.project_guess), SCvx starts from the reduced radius 0.01 and,
+with ``masks=True``, the constraint network gives the mask of every iteration.
+
+    res = solve_tscvx_c(scenario)               # warm start + masks (paper Algorithm 2)
+    res = solve_tscvx_c(scenario, masks=False)  # warm start only
 """
 
 from __future__ import annotations
@@ -88,6 +97,16 @@ class _Result(ct.Structure):
     ]  # fmt: skip
 
 
+class _TscvxOptions(ct.Structure):
+    _fields_ = [("solution", ct.c_void_p), ("constraint", ct.c_void_p), ("eta_init", _d),
+                ("clock_s", ct.CFUNCTYPE(ct.c_double))]  # fmt: skip
+
+
+class _TscvxReport(ct.Structure):
+    _fields_ = [("warm_started", _i), ("masks_predicted", _i), ("mask_failures", _i),
+                ("eta_init", _d)]  # fmt: skip
+
+
 class _LogRow(ct.Structure):
     _fields_ = [
         ("k", _i), ("J", _d), ("dJ", _d), ("dL", _d), ("rho", _d), ("eta", _d),
@@ -122,6 +141,12 @@ def library() -> ct.CDLL:
     lib.pdg_debug_assemble.argtypes = [ct.c_void_p, ct.POINTER(_Scenario), _dp, _dp, _d, _d,
                                        _dp, _dp, _dp, _dp, _dp] + [ct.POINTER(_i)] * 4  # fmt: skip
     lib.pdg_debug_guess.argtypes = [ct.c_void_p, ct.POINTER(_Scenario), _dp, _dp, _dp]
+    lib.pdg_solve_tscvx.argtypes = [ct.c_void_p, ct.POINTER(_Scenario),
+                                    ct.POINTER(_TscvxOptions), ct.POINTER(_Result),
+                                    ct.POINTER(_TscvxReport)]  # fmt: skip
+    lib.pdg_tscvx_guess.argtypes = [ct.c_void_p, ct.POINTER(_Scenario), ct.c_void_p, _dp, _dp,
+                                    _dp, ct.c_char_p]  # fmt: skip
+    lib.pdg_theta_of.argtypes = [ct.POINTER(_Scenario), _dp]
     return lib
 
 
@@ -269,6 +294,15 @@ def solve_c(
     t_start = time.perf_counter()  # the guidance call only (set-up is a one-time init)
     status = lib.pdg_solve(ws.ws, ct.byref(cs), ct.byref(opt), ct.byref(res))
     solve_time = time.perf_counter() - t_start
+    return _collect(ws, status, res, x, u, solve_time)
+
+
+def _collect(
+    ws: Workspace, status: int, res: _Result, x: np.ndarray, u: np.ndarray, solve_time: float
+) -> SCvxResult:
+    """The SCvxResult of a finished C call (log and masks read from the workspace)."""
+    lib = ws.lib
+    N = ws.N
     message = res.message.decode()
     if status == 4:  # PDG_INVALID_INPUT
         field = message.split("'")[1] if message.startswith("scenario field '") else "<input>"
@@ -314,6 +348,154 @@ def solve_c(
         max_defect=float(res.max_defect),
         max_violation=float(res.max_violation),
     )
+
+
+# ---- T-SCvx on board (pdg_solve_tscvx) -----------------------------------------------------
+
+BUILD_MODELS_DIR = LIB_PATH.parent / "models"
+NET_KINDS = ("solution", "constraint")
+
+
+class FlightNetsError(ValueError):
+    """The C library refused the networks for this problem; the message says why."""
+
+
+def _net_source(models_dir: Path, kind: str) -> Path:
+    """``{kind}.tnn`` in the folder, else ``{kind}.onnx`` (converted to the flight blob)."""
+    for ext in ("tnn", "onnx"):
+        path = Path(models_dir) / f"{kind}.{ext}"
+        if path.is_file():
+            return path
+    raise FlightNetsError(f"no {kind}.tnn or {kind}.onnx in {models_dir} (run `make lib`)")
+
+
+_NETS: dict[tuple, object] = {}
+
+
+def flight_net(models_dir: Path | str, kind: str):
+    """One network of ``models_dir`` loaded in the C library (guidance.nn.flight.FlightNet),
+    cached by file and modification time. An ONNX file is converted to the flight blob
+    (guidance.nn.flight.tnn_bytes: the bytes `make lib` writes to build/models)."""
+    from guidance.nn.flight import FlightNet, FlightNetError, tnn_bytes
+
+    path = _net_source(Path(models_dir), kind)
+    stat = path.stat()
+    key = (str(path.resolve()), stat.st_mtime_ns, stat.st_size)
+    if key not in _NETS:
+        try:
+            blob = tnn_bytes(path) if path.suffix == ".onnx" else path.read_bytes()
+            _NETS[key] = FlightNet(blob)
+        except FlightNetError as exc:
+            raise FlightNetsError(f"model {path}: refused by the C library: {exc}") from exc
+    return _NETS[key]
+
+
+_TRAINED: dict[tuple, dict] = {}
+
+
+def check_trained_params(models_dir: Path | str, kind: str, params: Params) -> None:
+    """For an ONNX source, the check of guidance.nn.infer: every problem parameter that is not
+    a network input must be the one the model was trained for (a .tnn blob does not record
+    them; `make lib` writes it from the same ONNX file)."""
+    import json
+
+    from guidance.nn.infer import META_KEY, _params_diff
+
+    path = _net_source(Path(models_dir), kind)
+    if path.suffix != ".onnx":
+        return
+    stat = path.stat()
+    key = (str(path.resolve()), stat.st_mtime_ns, stat.st_size)
+    if key not in _TRAINED:
+        import onnx
+
+        props = {p.key: p.value for p in onnx.load(str(path), load_external_data=False)
+                 .metadata_props}  # fmt: skip
+        _TRAINED[key] = json.loads(props.get(META_KEY, "{}")).get("params", {})
+    diff = _params_diff(_TRAINED[key], params)
+    if diff:
+        raise FlightNetsError(
+            f"model {path}: trained for other problem parameters: " + "; ".join(diff)
+        )
+
+
+def _nets(models_dir: Path | str | None, masks: bool, params: Params | None = None) -> tuple:
+    d = Path(models_dir) if models_dir is not None else BUILD_MODELS_DIR
+    kinds = NET_KINDS if masks else NET_KINDS[:1]
+    if params is not None:
+        for kind in kinds:
+            check_trained_params(d, kind, params)
+    return flight_net(d, "solution"), (flight_net(d, "constraint") if masks else None)
+
+
+def solve_tscvx_c(
+    scenario: Scenario,
+    settings: SCvxSettings | None = None,
+    models_dir: Path | str | None = None,
+    masks: bool = True,
+    eta_init: float = 0.01,
+    nets: tuple | None = None,
+    **socp: float | int,
+) -> SCvxResult:
+    """The complete on-board T-SCvx call (pdg_solve_tscvx): both networks, the projection of
+    the prediction and the SCvx loop all in C. ``models_dir`` holds {solution,constraint}.tnn
+    or .onnx (default build/models); ``nets`` = (solution, constraint or None) FlightNets
+    instead. ``masks=False``: warm start only. Networks of the wrong kind or size raise
+    FlightNetsError with the C library's message; bad scenarios raise ScenarioError."""
+    lib = library()
+    N = scenario.params.N
+    if not 3 <= N <= 400:
+        raise ScenarioError("N", f"must lie in [3, 400], got {N}")
+    sol, con = nets if nets is not None else _nets(models_dir, masks, scenario.params)
+    ws = workspace(scenario, settings, **socp)
+    cs = c_scenario(scenario)
+    opt = _TscvxOptions()
+    opt.solution = sol._net if sol is not None else None
+    opt.constraint = con._net if (con is not None and masks) else None
+    opt.eta_init = float(eta_init)
+    opt.clock_s = _CLOCK
+    x, u = np.zeros((N, NX)), np.zeros((N, NU))
+    res = _Result()
+    res.x, res.u = _dptr(x), _dptr(u)
+    rep = _TscvxReport()
+    t_start = time.perf_counter()  # the whole guidance call, network inference included
+    status = lib.pdg_solve_tscvx(ws.ws, ct.byref(cs), ct.byref(opt), ct.byref(res),
+                                 ct.byref(rep))  # fmt: skip
+    solve_time = time.perf_counter() - t_start
+    if status == 4 and res.message.startswith(b"nets: "):
+        raise FlightNetsError(res.message.decode())
+    out = _collect(ws, status, res, x, u, solve_time)
+    out.tscvx_report = {  # type: ignore[attr-defined]
+        "warm_started": bool(rep.warm_started),
+        "masks_predicted": int(rep.masks_predicted),
+        "mask_failures": int(rep.mask_failures),
+        "eta_init": float(rep.eta_init),
+    }
+    return out
+
+
+def tscvx_guess_c(
+    scenario: Scenario, models_dir: Path | str | None = None, net=None
+) -> tuple[np.ndarray, np.ndarray, float]:
+    """The projected warm start computed on board (pdg_tscvx_guess)."""
+    sol = net if net is not None else _nets(models_dir, False, scenario.params)[0]
+    ws = workspace(scenario)
+    N = scenario.params.N
+    x, u, tf = np.zeros((N, NX)), np.zeros((N, NU)), ct.c_double(0.0)
+    msg = ct.create_string_buffer(MESSAGE_LEN)
+    st = library().pdg_tscvx_guess(ws.ws, ct.byref(c_scenario(scenario)), sol._net, _dptr(x),
+                                   _dptr(u), ct.byref(tf), msg)  # fmt: skip
+    if st != 0:
+        text = msg.value.decode()
+        raise (FlightNetsError if text.startswith("nets: ") else ValueError)(text)
+    return x, u, tf.value
+
+
+def theta_c(scenario: Scenario) -> np.ndarray:
+    """pdg_theta_of (for tests against guidance.dataset.theta_of)."""
+    out = np.zeros(16)
+    library().pdg_theta_of(ct.byref(c_scenario(scenario)), _dptr(out))
+    return out
 
 
 def c_guess(scenario: Scenario) -> tuple[np.ndarray, np.ndarray, float]:

@@ -42,8 +42,18 @@ def run_solve(
 
     clarabel  the Python SCvx with Clarabel (ground reference)
     c-socp    the Python SCvx with the flight C SOCP runtime for the subproblems
-    c         the whole solve in the flight C library
+    c         the whole solve in the flight C library (for tscvx the networks too:
+              guidance.cguidance.solve_tscvx_c, not onnxruntime)
     """
+    if method == "tscvx" and backend == "c":
+        # the complete on-board call: networks, projection and SCvx all in the C library
+        from guidance.cguidance import solve_tscvx_c
+
+        result = solve_tscvx_c(scenario, settings, models_dir=models_dir)
+        if log:
+            for line in format_log(result.history):
+                log(line)
+        return result
     guess = mask_fn = None
     if method == "tscvx":
         from guidance.dataset import theta_of

@@ -41,8 +41,8 @@ pytestmark = pytest.mark.skipif(
 # iteration (accept/reject near rho0, stopping at step <= 5e-3) amplifies those differences.
 # The Python reference itself shows the same drift when it swaps Clarabel for the C SOCP
 # (backend "c": crossing 9e-4, north 1.5e-5). Which scenarios drift changes with the last bits
-# of the conic solver's arithmetic (the runtime of 22 Nov 04:00 moved "high" in and "spinning"
-# and "light" out); five of the eleven meet 1e-6 with either.
+# of either conic solver's arithmetic (on 22 Nov, Clarabel's refinement tolerance moved "high"
+# in; the new C SOCP arithmetic moved "spinning" and "light" out); five of eleven meet 1e-6.
 KNOWN_DRIFT = {
     "north",
     "high",
@@ -178,6 +178,9 @@ def test_tight_constraint_masks_match_reference(pairs, name: str) -> None:
     """Labelling (slack / multiplier rule of guidance/constraints.py) on the same path
     (scenarios where the C and Python iterations stay in step; see KNOWN_DRIFT)."""
     c, ref = pairs[name]
+    if c.masks.shape != ref.masks.shape and name in KNOWN_DRIFT:
+        pytest.xfail(f"not the same path (KNOWN_DRIFT): {c.iterations} vs {ref.iterations} "
+                     "iterations")  # fmt: skip
     assert c.masks.shape == ref.masks.shape
     per_iteration = (c.masks != ref.masks).sum(axis=1)
     assert per_iteration.max() <= 3, per_iteration  # of 7N = 350 bits

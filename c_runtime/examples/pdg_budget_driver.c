@@ -1,15 +1,20 @@
 /*
  * pdg_budget_driver.c -- one complete guidance call, for the RAD750 budget (guidance/budget.py).
  *
- *   pdg_budget_driver [--repeat R]
+ *   pdg_budget_driver [--repeat R] [--tscvx SOLUTION.tnn [--masks CONSTRAINT.tnn]]
  *
  * Sets up the workspace for the default scenario (outside the measured call), then calls
- * pdg_solve once (R times for wall-clock timing). Instructions are counted by running this
- * program under `valgrind --tool=callgrind --toggle-collect=pdg_solve`. It prints
+ * pdg_solve once (R times for wall-clock timing); with --tscvx the measured call is the
+ * complete on-board T-SCvx call pdg_solve_tscvx (solution-network inference, projection, SCvx
+ * from the reduced radius, and with --masks a constraint-network inference per subproblem
+ * iteration), the networks set up in their own arenas before it. Instructions are counted by
+ * running this program under `valgrind --tool=callgrind --toggle-collect=pdg_solve` (or
+ * pdg_solve_tscvx). It prints
  * `key value` lines: status, iterations, m_f, arena bytes, arena high-water, the stack
  * high-water of pdg_solve (measured by painting the stack below the caller's frame with a
  * pattern and finding the deepest overwritten byte), heap allocations made inside pdg_solve
- * (malloc interposition) and the wall time per call.
+ * (malloc interposition), the wall time per call and, for T-SCvx, the weight bytes (blobs
+ * read in place) and network arena bytes.
  */
 #define _GNU_SOURCE
 #include <stdint.h>
@@ -19,6 +24,7 @@
 #include <time.h>
 
 #include "tscvx_guidance.h"
+#include "tscvx_nn.h"
 
 /* ---- heap allocations inside the measured call (glibc interposition) --------------------- */
 extern void *__libc_malloc(size_t);
@@ -77,11 +83,49 @@ static double now_s(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
+static pdg_tscvx_options tscvx_opt;
+static pdg_tscvx_report tscvx_rep;
+static int use_tscvx = 0;
+
 static __attribute__((noinline)) pdg_status measured_call(pdg_workspace *ws,
                                                           const pdg_scenario *scn,
                                                           pdg_result *res)
 {
-    return pdg_solve(ws, scn, NULL, res);
+    return use_tscvx ? pdg_solve_tscvx(ws, scn, &tscvx_opt, res, &tscvx_rep)
+                     : pdg_solve(ws, scn, NULL, res);
+}
+
+/* Blob (malloc: 8-byte aligned) and network in its own arena; 0 = ok. */
+static int load_net(const char *path, void **blob, size_t *len, void **arena, size_t *bytes,
+                    tscvx_nn **net)
+{
+    FILE *f = fopen(path, "rb");
+    long n;
+    tscvx_nn_status st;
+    if (!f || fseek(f, 0, SEEK_END) != 0 || (n = ftell(f)) <= 0 || fseek(f, 0, SEEK_SET)) {
+        fprintf(stderr, "%s: cannot read\n", path);
+        if (f) fclose(f);
+        return 1;
+    }
+    *len = (size_t)n;
+    *blob = malloc(*len);
+    if (!*blob || fread(*blob, 1, *len, f) != *len) {
+        fprintf(stderr, "%s: cannot read\n", path);
+        fclose(f);
+        return 1;
+    }
+    fclose(f);
+    st = tscvx_nn_arena_size(*blob, *len, 0u, bytes);
+    if (st == TSCVX_NN_OK) {
+        *arena = malloc(*bytes);
+        st = *arena ? tscvx_nn_init(net, *arena, *bytes, *blob, *len, 0u)
+                    : TSCVX_NN_ARENA_TOO_SMALL;
+    }
+    if (st != TSCVX_NN_OK) {
+        fprintf(stderr, "%s: %s\n", path, tscvx_nn_status_message(st));
+        return 1;
+    }
+    return 0;
 }
 
 int main(int argc, char **argv)
@@ -97,13 +141,34 @@ int main(int argc, char **argv)
     int repeat = 1, i, tries;
     double t0, wall;
     pdg_status status;
+    const char *net_path[2] = {NULL, NULL};
+    void *blob[2] = {NULL, NULL}, *net_arena[2] = {NULL, NULL};
+    size_t blob_len[2] = {0, 0}, net_bytes[2] = {0, 0};
+    tscvx_nn *net[2] = {NULL, NULL};
 
     for (i = 1; i + 1 < argc; ++i) {
         if (strcmp(argv[i], "--repeat") == 0) {
             repeat = atoi(argv[i + 1]);
             repeat = repeat < 1 ? 1 : (repeat > 1000 ? 1000 : repeat);
+        } else if (strcmp(argv[i], "--tscvx") == 0) {
+            net_path[0] = argv[i + 1];
+        } else if (strcmp(argv[i], "--masks") == 0) {
+            net_path[1] = argv[i + 1];
         }
     }
+    if (net_path[1] && !net_path[0]) {
+        fprintf(stderr, "--masks needs --tscvx\n");
+        return 1;
+    }
+    for (i = 0; i < 2; ++i) {
+        if (net_path[i] && load_net(net_path[i], &blob[i], &blob_len[i], &net_arena[i],
+                                    &net_bytes[i], &net[i])) {
+            return 1;
+        }
+    }
+    use_tscvx = net_path[0] != NULL;
+    tscvx_opt.solution = net[0];
+    tscvx_opt.constraint = net[1];
     pdg_default_settings(&st);
     pdg_default_scenario(&scn);
     for (tries = 0; tries < 4 && s == PDG_SETUP_SCRATCH_TOO_SMALL; ++tries) {
@@ -137,7 +202,11 @@ int main(int argc, char **argv)
         measured_call(ws, &scn, &res);
         wall = (now_s() - t0) < wall ? (now_s() - t0) : wall;
     }
+    printf("mode %s\n", !use_tscvx ? "scvx" : (net[1] ? "tscvx_masks" : "tscvx"));
     printf("status %s\n", pdg_status_name(status));
+    if (status != PDG_SOLVED) {
+        printf("message %s\n", res.message);
+    }
     printf("iterations %d\n", res.iterations);
     printf("subproblems %d\n", res.subproblems_solved);
     printf("socp_iterations %d\n", res.socp_iterations);
@@ -147,6 +216,16 @@ int main(int argc, char **argv)
     printf("stack_high_water %zu\n", stack);
     printf("heap_allocations_in_solve %ld\n", n_alloc);
     printf("wall_s_min %.6f\n", wall);
+    printf("nn_weights_bytes %zu\n", blob_len[0] + blob_len[1]);
+    printf("nn_arena_bytes %zu\n", net_bytes[0] + net_bytes[1]);
+    if (use_tscvx) {
+        printf("masks_predicted %d\n", tscvx_rep.masks_predicted);
+        printf("mask_failures %d\n", tscvx_rep.mask_failures);
+    }
     free(arena);
+    for (i = 0; i < 2; ++i) {
+        free(net_arena[i]);
+        free(blob[i]);
+    }
     return status == PDG_SOLVED ? 0 : 3;
 }

@@ -1,15 +1,21 @@
 /*
  * pdg_example.c -- the flight guidance library used from plain C, without Python.
  *
+ *   pdg_example                                   SCvx (pdg_solve)
+ *   pdg_example SOLUTION.tnn [CONSTRAINT.tnn]      T-SCvx on board (pdg_solve_tscvx): the
+ *                                                 solution network's warm start, and with the
+ *                                                 second file the constraint network's masks
+ *
  * Solves the default landing scenario of DESIGN.md and prints the iteration log, the
- * summary and the trajectory (one line per node). Links only the static libraries and
- * their Debian dependencies:
+ * summary and the trajectory (one line per node). The weight files are build/models/{solution,constraint}.tnn
+ * (`make lib`). Links only the static libraries and their Debian dependencies:
  *
  *   cc -std=c99 -Ic_runtime/include pdg_example.c build/libtscvx_gnc.a build/libtscvx.a \
  *      -lamd -lldl -lsuitesparseconfig -lm
  *
- * All memory comes from one arena obtained once before the solve (malloc here stands for
- * the flight computer's statically reserved SRAM block); the library never allocates.
+ * All memory comes from arenas obtained once before the solve (malloc here stands for the
+ * flight computer's statically reserved SRAM blocks: the guidance arena, one per network, and
+ * the weight blobs read in place); the library never allocates.
  */
 #define _POSIX_C_SOURCE 199309L
 #include <math.h>
@@ -18,6 +24,42 @@
 #include <time.h>
 
 #include "tscvx_guidance.h"
+#include "tscvx_nn.h"
+
+/* Reads a weight file into `*blob` (malloc is 8-byte aligned, as in-place weights need) and
+ * builds the network in its own arena `*arena` sized by tscvx_nn_arena_size. 0 = ok. */
+static int load_net(const char *path, void **blob, void **arena, tscvx_nn **net)
+{
+    FILE *f = fopen(path, "rb");
+    long len;
+    size_t bytes = 0;
+    tscvx_nn_status st;
+    *blob = *arena = NULL;
+    if (!f || fseek(f, 0, SEEK_END) != 0 || (len = ftell(f)) <= 0 || fseek(f, 0, SEEK_SET)) {
+        fprintf(stderr, "%s: cannot read\n", path);
+        if (f) fclose(f);
+        return 1;
+    }
+    *blob = malloc((size_t)len);
+    if (!*blob || fread(*blob, 1, (size_t)len, f) != (size_t)len) {
+        fprintf(stderr, "%s: cannot read\n", path);
+        fclose(f);
+        return 1;
+    }
+    fclose(f);
+    st = tscvx_nn_arena_size(*blob, (size_t)len, 0u, &bytes);
+    if (st == TSCVX_NN_OK) {
+        *arena = malloc(bytes);
+        st = *arena ? tscvx_nn_init(net, *arena, bytes, *blob, (size_t)len, 0u)
+                    : TSCVX_NN_ARENA_TOO_SMALL;
+    }
+    if (st != TSCVX_NN_OK) {
+        fprintf(stderr, "%s: %s\n", path, tscvx_nn_status_message(st));
+        return 1;
+    }
+    printf("network %s: %ld bytes of weights, arena %zu bytes\n", path, len, bytes);
+    return 0;
+}
 
 static double now_s(void)
 {
@@ -26,8 +68,13 @@ static double now_s(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-int main(void)
+int main(int argc, char **argv)
 {
+    pdg_tscvx_options topt = {0};
+    pdg_tscvx_report rep;
+    void *blobs[2] = {NULL, NULL}, *net_arenas[2] = {NULL, NULL};
+    tscvx_nn *nets[2] = {NULL, NULL};
+    const int tscvx = argc > 1;
     pdg_settings st;
     pdg_scenario scn;
     pdg_options opt = {0};
@@ -71,14 +118,33 @@ int main(void)
         free(arena);
         return 1;
     }
+    /* 3b. T-SCvx: the networks, each in its own arena */
+    for (i = 1; i < argc && i <= 2; ++i) {
+        if (load_net(argv[i], &blobs[i - 1], &net_arenas[i - 1], &nets[i - 1])) {
+            return 1;
+        }
+    }
     /* 4. solve */
     res.x = x;
     res.u = u;
     opt.clock_s = now_s;
+    topt.solution = nets[0];
+    topt.constraint = nets[1];
+    topt.clock_s = now_s;
     {
         const double t0 = now_s();
-        pdg_solve(ws, &scn, &opt, &res);
-        printf("solve time %.1f ms\n", 1e3 * (now_s() - t0));
+        if (tscvx) {
+            pdg_solve_tscvx(ws, &scn, &topt, &res, &rep);
+        } else {
+            pdg_solve(ws, &scn, &opt, &res);
+        }
+        printf("%s time %.1f ms\n", tscvx ? "T-SCvx (networks included)" : "SCvx",
+               1e3 * (now_s() - t0));
+    }
+    if (tscvx) {
+        printf("T-SCvx: warm start %s, initial radius %g, %d network masks, %d refused\n",
+               rep.warm_started ? "yes" : "no", rep.eta_init, rep.masks_predicted,
+               rep.mask_failures);
     }
     printf("  k        J         dJ         dL        rho    radius   |vc|_1  tight  sub[ms]  "
            "step\n");
@@ -108,5 +174,9 @@ int main(void)
                sqrt(uk[0] * uk[0] + uk[1] * uk[1] + uk[2] * uk[2]));
     }
     free(arena);
+    for (i = 0; i < 2; ++i) {
+        free(net_arenas[i]);
+        free(blobs[i]);
+    }
     return res.status == PDG_SOLVED ? 0 : 3;
 }

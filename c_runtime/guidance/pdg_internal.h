@@ -87,6 +87,7 @@ struct pdg_workspace {
     double *x, *u, *xn, *un, *hval; /* physical iterate, candidate, path constraint values */
     unsigned char *mask, *prev_mask, *forced, *tight, *keep;
     double *gwork;                  /* guess work space */
+    double *nn_out, *nn_logits;     /* T-SCvx: solution-network output, constraint logits */
     /* record of the last solve */
     pdg_log_row *log;
     int n_log;
@@ -94,6 +95,12 @@ struct pdg_workspace {
     int n_masks_out;
     size_t arena_bytes, arena_high;
 };
+
+/* pdg_scvx.c */
+int pdg_check_workspace_scenario(const pdg_workspace *ws, const pdg_scenario *s, char *msg);
+/* pdg_solve from the trust radius eta_init (> 0) instead of the settings' */
+pdg_status pdg_solve_from(pdg_workspace *ws, const pdg_scenario *scenario,
+                          const pdg_options *opt, pdg_result *res, double eta_init);
 
 /* pdg_scenario.c */
 int pdg_check_scenario(const pdg_scenario *s, char *msg);

@@ -263,6 +263,8 @@ static void claim_arrays(pdg_workspace *t, arena *a)
     t->un = (double *)take(a, N * NU, sizeof(double));
     t->hval = (double *)take(a, N * NC, sizeof(double));
     t->gwork = (double *)take(a, N * PDG_GUESS_WORK_PER_NODE, sizeof(double));
+    t->nn_out = (double *)take(a, N * (NX + NU) + 1, sizeof(double));
+    t->nn_logits = (double *)take(a, N * NC, sizeof(double));
     t->mask = (unsigned char *)take(a, N * NC, 1);
     t->prev_mask = (unsigned char *)take(a, N * NC, 1);
     t->forced = (unsigned char *)take(a, N * NC, 1);
@@ -616,7 +618,7 @@ static void prepare_scenario(pdg_workspace *ws, const pdg_scenario *s, double t_
     ws->scales[4] = ws->scales[5] = ws->scales[6] = ws->sc.Su;
 }
 
-static int check_workspace_scenario(const pdg_workspace *ws, const pdg_scenario *s, char *msg)
+int pdg_check_workspace_scenario(const pdg_workspace *ws, const pdg_scenario *s, char *msg)
 {
     if (pdg_check_scenario(s, msg)) {
         return 1;
@@ -739,7 +741,7 @@ static pdg_status start(pdg_workspace *ws, const pdg_scenario *scn, const pdg_op
         snprintf(res->message, PDG_MESSAGE_LEN, "result arrays x and u must be given");
         return PDG_INVALID_INPUT;
     }
-    if (check_workspace_scenario(ws, scn, res->message)) {
+    if (pdg_check_workspace_scenario(ws, scn, res->message)) {
         return PDG_INVALID_INPUT;
     }
     if (opt->masks && opt->n_masks < 1) {
@@ -850,6 +852,12 @@ static void failed_row(pdg_log_row *r, double J)
 pdg_status pdg_solve(pdg_workspace *ws, const pdg_scenario *scenario, const pdg_options *opt,
                      pdg_result *res)
 {
+    return pdg_solve_from(ws, scenario, opt, res, ws && ws->ready ? ws->st.eta_init : 1.0);
+}
+
+pdg_status pdg_solve_from(pdg_workspace *ws, const pdg_scenario *scenario,
+                          const pdg_options *opt, pdg_result *res, double eta_init)
+{
     static const pdg_options no_options = {NULL, NULL, 0.0, NULL, 0, NULL, NULL, NULL};
     const pdg_settings *st;
     int k = 0, it, have_masks, prev_has_mask = 0, stalled = 0;
@@ -877,7 +885,7 @@ pdg_status pdg_solve(pdg_workspace *ws, const pdg_scenario *scenario, const pdg_
     }
     status = PDG_MAX_ITERATIONS;
     have_masks = opt->masks != NULL || opt->mask_fn != NULL;
-    eta = st->eta_init;
+    eta = eta_init;
 
     /* k counts successions (accepted steps); a rejection retries the same k (Algorithm 1) */
     for (it = 0; it < st->max_subproblems && k < st->iter_max; ++it) {
@@ -1045,7 +1053,7 @@ int pdg_debug_guess(pdg_workspace *ws, const pdg_scenario *s, double *x, double 
     if (!ws || !ws->ready || !x || !u || !t_f) {
         return PDG_INVALID_INPUT;
     }
-    if (check_workspace_scenario(ws, s, msg)) {
+    if (pdg_check_workspace_scenario(ws, s, msg)) {
         return PDG_INVALID_INPUT;
     }
     pdg_initial_guess(s, x, u, t_f, ws->gwork);
@@ -1062,7 +1070,7 @@ int pdg_debug_assemble(pdg_workspace *ws, const pdg_scenario *s, const double *x
     if (!ws || !ws->ready || !x || !u) {
         return PDG_INVALID_INPUT;
     }
-    if (check_workspace_scenario(ws, s, msg)) {
+    if (pdg_check_workspace_scenario(ws, s, msg)) {
         return PDG_INVALID_INPUT;
     }
     prepare_scenario(ws, s, t_f);

@@ -221,6 +221,68 @@ pdg_setup_status pdg_get_mask(const pdg_workspace *ws, int k, unsigned char *mas
 size_t pdg_arena_high_water(const pdg_workspace *ws);
 void pdg_problem_size(const pdg_workspace *ws, int *n, int *p, int *m, int *nnz_A, int *nnz_G);
 
+/* ---- T-SCvx on board (paper Algorithm 2, pdg_tscvx.c) ---------------------------------------
+ *
+ * One complete flight guidance call: scenario vector theta (16 numbers, the order of
+ * guidance/dataset.py theta_of: r0 (3), v0 (3), q0 (4, scalar first), w0 (3, rad / U_T), m0,
+ * glideslope_deg, tilt_max_deg) -> solution network -> warm start (x, u, t_f) projected onto
+ * the boundary conditions and every convex path constraint (the same projection as the
+ * built-in guess and as guidance/guess.py project_guess, which the Python `--method tscvx`
+ * uses) -> SCvx from the reduced trust radius (PDG_TSCVX_ETA_INIT) -> optionally, at every
+ * subproblem of iteration k = 1, 2, ..., the constraint network's tight mask (input theta
+ * and k, tscvx_nn_tight_mask). The penalty and the final check are on the FULL constraint set
+ * as in pdg_solve.
+ *
+ * The networks are built by the caller with tscvx_nn_init in their own arenas (sized by
+ * tscvx_nn_arena_size); the call's own buffers (network output, logits) are in the guidance
+ * arena (pdg_workspace_size counts them). No allocation. Every input is checked before
+ * anything runs: a network of the wrong kind, or whose sizes / N do not fit the workspace,
+ * returns PDG_INVALID_INPUT with "nets: ..." in result.message.
+ *
+ * Masks are optional (constraint = NULL) because in this runtime they do not pay: the KKT
+ * pattern is fixed (a masked-out cone keeps its place), so a mask saves no factorization work
+ * and its wrong guesses cost rejected steps, while the warm start saves about a quarter of the
+ * subproblems (`guidance bench --backend c --tscvx-landings 12`).
+ */
+#define PDG_TSCVX_ETA_INIT 0.01 /* Table 1: eta_reduced,init (guidance/tscvx.py) */
+#define PDG_THETA_LEN 16
+
+struct tscvx_nn; /* tscvx_nn.h */
+
+typedef struct {
+    struct tscvx_nn *solution;   /* solution network: theta (16) -> x (N x 14), u (N x 3), t_f.
+                                    NULL: the built-in guess and the settings' eta_init */
+    struct tscvx_nn *constraint; /* constraint network: theta + k (17) -> 7N logits.
+                                    NULL: no masks (every subproblem is the full one) */
+    double eta_init;             /* initial trust radius with the warm start; 0 (or a value
+                                    outside [eta_lb, eta_ub]): PDG_TSCVX_ETA_INIT */
+    double (*clock_s)(void);     /* optional clock for the log's subproblem times */
+} pdg_tscvx_options;
+
+/* What the networks did in the last pdg_solve_tscvx (may be NULL in the call). */
+typedef struct {
+    int warm_started;      /* 1: the solution network's projected prediction was the guess */
+    int masks_predicted;   /* subproblems that used a constraint-network mask */
+    int mask_failures;     /* mask inferences refused by the network (non-finite output):
+                              those subproblems were the full one */
+    double eta_init;       /* trust radius the solve started from */
+} pdg_tscvx_report;
+
+/* theta of a scenario (PDG_THETA_LEN numbers, guidance/dataset.py theta_of). */
+void pdg_theta_of(const pdg_scenario *scenario, double *theta);
+
+/* The projected warm start of the solution network for `scenario` into x (N x 14), u (N x 3),
+ * t_f: for tests and ground tools (pdg_solve_tscvx does the same internally). Returns 0 or a
+ * pdg_status (PDG_INVALID_INPUT with the message in `message`, PDG_MESSAGE_LEN bytes). */
+int pdg_tscvx_guess(pdg_workspace *ws, const pdg_scenario *scenario, struct tscvx_nn *solution,
+                    double *x, double *u, double *t_f, char *message);
+
+/* T-SCvx: the complete guidance call described above (both networks NULL: plain SCvx, as
+ * pdg_solve). result as pdg_solve; `report` may be NULL. */
+pdg_status pdg_solve_tscvx(pdg_workspace *ws, const pdg_scenario *scenario,
+                           const pdg_tscvx_options *options, pdg_result *result,
+                           pdg_tscvx_report *report);
+
 /* For tests: assembles the subproblem about the physical iterate (x, u, t_f) of `scenario`
  * with trust radius eta (scaling, guess-independent: Ss = t_f) and copies its data out:
  * c (n), A values (nnz_A, the CSC order of Ap/Ai), b (p), G values, h (m), and the pattern

@@ -1,0 +1,213 @@
+/* T-SCvx on board (paper Algorithm 2): the solution network's warm start, projected onto the
+ * boundary conditions and the convex path constraints, SCvx from the reduced trust radius and,
+ * optionally, the constraint network's tight masks at every iteration. The Python counterpart
+ * is guidance/tscvx.py solve_tscvx (and guidance/cli.py run_solve for --method tscvx): the
+ * same theta, the same projection (guidance/guess.py project_guess = pdg_project_guess), the
+ * same radius and the same mask rule (probability >= the network's threshold). */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "pdg_internal.h"
+#include "tscvx_nn.h"
+
+#define THETA PDG_THETA_LEN
+
+void pdg_theta_of(const pdg_scenario *s, double *theta)
+{
+    int i;
+    if (!s || !theta) {
+        return;
+    }
+    for (i = 0; i < 3; ++i) {
+        theta[i] = s->r0[i];
+        theta[3 + i] = s->v0[i];
+        theta[10 + i] = s->w0[i];
+    }
+    for (i = 0; i < 4; ++i) {
+        theta[6 + i] = s->q0[i];
+    }
+    theta[13] = s->m0;
+    theta[14] = s->params.glideslope_deg;
+    theta[15] = s->params.tilt_max_deg;
+}
+
+/* Refuses a network that is not of `kind` or does not fit N; 0 = fits. */
+static int check_net(tscvx_nn *net, int kind, int N, char *msg)
+{
+    const char *name = kind == TSCVX_NN_KIND_SOLUTION ? "solution" : "constraint";
+    const int d_in = kind == TSCVX_NN_KIND_SOLUTION ? THETA : THETA + 1;
+    const long d_out = kind == TSCVX_NN_KIND_SOLUTION ? (long)N * (NX + NU) + 1 : (long)N * NC;
+    tscvx_nn_info info;
+    const tscvx_nn_status st = tscvx_nn_get_info(net, &info);
+    if (st != TSCVX_NN_OK) {
+        snprintf(msg, PDG_MESSAGE_LEN, "nets: the %s network: %s", name,
+                 tscvx_nn_status_message(st));
+        return 1;
+    }
+    if (info.kind != kind) {
+        snprintf(msg, PDG_MESSAGE_LEN, "nets: the %s network given is a %s network", name,
+                 info.kind == TSCVX_NN_KIND_SOLUTION     ? "solution"
+                 : info.kind == TSCVX_NN_KIND_CONSTRAINT ? "constraint"
+                                                         : "unknown");
+        return 1;
+    }
+    if (info.d_in != d_in) {
+        snprintf(msg, PDG_MESSAGE_LEN,
+                 "nets: the %s network takes %d inputs, the guidance call gives %d (%s)", name,
+                 info.d_in, d_in, d_in == THETA ? "theta" : "theta and the iteration k");
+        return 1;
+    }
+    if (info.N != N || (long)info.d_out != d_out) {
+        snprintf(msg, PDG_MESSAGE_LEN,
+                 "nets: the %s network was trained for N = %d (%d outputs), the workspace "
+                 "has N = %d (%ld outputs)",
+                 name, info.N, info.d_out, N, d_out);
+        return 1;
+    }
+    return 0;
+}
+
+/* Solution network -> ws->nn_out (x, u, t_f, contiguous) -> projection in place. */
+static int predict_guess(pdg_workspace *ws, const pdg_scenario *s, tscvx_nn *net,
+                         const double *theta, char *msg)
+{
+    const int N = ws->N, n_out = N * (NX + NU) + 1;
+    double *x = ws->nn_out, *u = ws->nn_out + (size_t)N * NX, *t_f = ws->nn_out + n_out - 1;
+    const tscvx_nn_status st = tscvx_nn_run(net, theta, THETA, ws->nn_out, n_out);
+    if (st != TSCVX_NN_OK) {
+        snprintf(msg, PDG_MESSAGE_LEN, "solution network: %s", tscvx_nn_status_message(st));
+        return 1;
+    }
+    pdg_project_guess(s, x, u, t_f);
+    return 0;
+}
+
+int pdg_tscvx_guess(pdg_workspace *ws, const pdg_scenario *s, tscvx_nn *solution, double *x,
+                    double *u, double *t_f, char *message)
+{
+    char local[PDG_MESSAGE_LEN];
+    char *msg = message ? message : local;
+    double theta[THETA];
+    msg[0] = '\0';
+    if (!ws || !ws->ready || !s || !solution || !x || !u || !t_f) {
+        snprintf(msg, PDG_MESSAGE_LEN, "a required pointer is NULL or the workspace not set up");
+        return PDG_INVALID_INPUT;
+    }
+    if (pdg_check_workspace_scenario(ws, s, msg) ||
+        check_net(solution, TSCVX_NN_KIND_SOLUTION, ws->N, msg)) {
+        return PDG_INVALID_INPUT;
+    }
+    pdg_theta_of(s, theta);
+    if (predict_guess(ws, s, solution, theta, msg)) {
+        return PDG_SOLVER_ERROR;
+    }
+    memcpy(x, ws->nn_out, sizeof(double) * (size_t)ws->N * NX);
+    memcpy(u, ws->nn_out + (size_t)ws->N * NX, sizeof(double) * (size_t)ws->N * NU);
+    *t_f = ws->nn_out[ws->N * (NX + NU)];
+    return 0;
+}
+
+/* The mask callback of pdg_solve: constraint network at (theta, k). A rejected step retries
+ * the same k, whose logits are kept (the network is deterministic: no second inference). */
+typedef struct {
+    tscvx_nn *net;
+    double input[THETA + 1];
+    double *logits; /* 7N, in the guidance arena */
+    int last_k;     /* k of the logits (0: none) */
+    int predicted, failures;
+} mask_ctx;
+
+static int network_mask(void *ctx, int k, unsigned char *mask, int n)
+{
+    mask_ctx *c = (mask_ctx *)ctx;
+    if (k != c->last_k) {
+        c->input[THETA] = (double)k;
+        c->last_k = 0;
+        if (tscvx_nn_run(c->net, c->input, THETA + 1, c->logits, n) != TSCVX_NN_OK) {
+            c->failures++;
+            return 0; /* the full subproblem: always safe */
+        }
+        c->last_k = k;
+    }
+    if (tscvx_nn_tight_mask(c->net, c->logits, n, mask) != TSCVX_NN_OK) {
+        c->failures++;
+        return 0;
+    }
+    c->predicted++;
+    return 1;
+}
+
+pdg_status pdg_solve_tscvx(pdg_workspace *ws, const pdg_scenario *s,
+                           const pdg_tscvx_options *o, pdg_result *res, pdg_tscvx_report *rep)
+{
+    pdg_options opt;
+    mask_ctx mc;
+    double eta;
+    pdg_status status;
+    int N;
+
+    if (rep) {
+        memset(rep, 0, sizeof *rep);
+    }
+    if (!res) {
+        return PDG_INVALID_INPUT;
+    }
+    res->status = PDG_INVALID_INPUT;
+    res->message[0] = '\0';
+    res->iterations = res->subproblems_solved = res->socp_iterations = 0;
+    res->t_f = res->max_defect = res->max_violation = NAN;
+    if (!ws || !ws->ready) {
+        snprintf(res->message, PDG_MESSAGE_LEN, "workspace not set up (call pdg_setup)");
+        return PDG_INVALID_INPUT;
+    }
+    if (!o) {
+        snprintf(res->message, PDG_MESSAGE_LEN, "nets: the T-SCvx options must be given");
+        return PDG_INVALID_INPUT;
+    }
+    if (!res->x || !res->u) {
+        snprintf(res->message, PDG_MESSAGE_LEN, "result arrays x and u must be given");
+        return PDG_INVALID_INPUT;
+    }
+    N = ws->N;
+    /* every input checked before any inference */
+    if (pdg_check_workspace_scenario(ws, s, res->message) ||
+        (o->solution && check_net(o->solution, TSCVX_NN_KIND_SOLUTION, N, res->message)) ||
+        (o->constraint && check_net(o->constraint, TSCVX_NN_KIND_CONSTRAINT, N, res->message))) {
+        return PDG_INVALID_INPUT;
+    }
+    if (isnan(o->eta_init) || o->eta_init < 0.0) {
+        snprintf(res->message, PDG_MESSAGE_LEN, "eta_init: must be 0 (default) or positive");
+        return PDG_INVALID_INPUT;
+    }
+    memset(&opt, 0, sizeof opt);
+    opt.clock_s = o->clock_s;
+    memset(&mc, 0, sizeof mc);
+    pdg_theta_of(s, mc.input);
+    eta = ws->st.eta_init;
+    if (o->solution) {
+        if (predict_guess(ws, s, o->solution, mc.input, res->message)) {
+            res->status = PDG_SOLVER_ERROR;
+            return PDG_SOLVER_ERROR;
+        }
+        opt.guess_x = ws->nn_out;
+        opt.guess_u = ws->nn_out + (size_t)N * NX;
+        opt.guess_t_f = ws->nn_out[N * (NX + NU)];
+        eta = o->eta_init >= ws->st.eta_lb && o->eta_init <= ws->st.eta_ub ? o->eta_init
+                                                                            : PDG_TSCVX_ETA_INIT;
+    }
+    if (o->constraint) {
+        mc.net = o->constraint;
+        mc.logits = ws->nn_logits;
+        opt.mask_fn = network_mask;
+        opt.mask_ctx = &mc;
+    }
+    status = pdg_solve_from(ws, s, &opt, res, eta);
+    if (rep) {
+        rep->warm_started = o->solution != NULL;
+        rep->masks_predicted = mc.predicted;
+        rep->mask_failures = mc.failures;
+        rep->eta_init = eta;
+    }
+    return status;
+}

@@ -1,0 +1,215 @@
+/*
+ * test_tscvx.c -- the on-board T-SCvx call (pdg_solve_tscvx) under valgrind:
+ *
+ *   test_tscvx [SOLUTION.tnn CONSTRAINT.tnn]      (default: the two files of build/models)
+ *
+ * every input refused with a clear message (NULLs, networks of the wrong kind, networks for
+ * another N, bad scenario, bad eta_init) before any inference; theta in the dataset's order;
+ * the projected warm start meets the boundary conditions; T-SCvx with and without masks
+ * solves the default landing from the reduced radius; without networks it is pdg_solve.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "tscvx_guidance.h"
+#include "tscvx_nn.h"
+
+static int failures = 0;
+#define CHECK(c)                                                                              \
+    do {                                                                                      \
+        if (!(c)) {                                                                           \
+            fprintf(stderr, "%s:%d: CHECK failed: %s\n", __FILE__, __LINE__, #c);             \
+            failures++;                                                                       \
+        }                                                                                     \
+    } while (0)
+
+static double x[PDG_N_MAX * PDG_NSTATE], u[PDG_N_MAX * PDG_NCTRL];
+
+static void *read_file(const char *path, size_t *len)
+{
+    FILE *f = fopen(path, "rb");
+    long n;
+    void *buf;
+    if (!f || fseek(f, 0, SEEK_END) != 0 || (n = ftell(f)) <= 0 || fseek(f, 0, SEEK_SET)) {
+        if (f) fclose(f);
+        return NULL;
+    }
+    buf = malloc((size_t)n);
+    if (buf && fread(buf, 1, (size_t)n, f) != (size_t)n) {
+        free(buf);
+        buf = NULL;
+    }
+    fclose(f);
+    *len = (size_t)n;
+    return buf;
+}
+
+static tscvx_nn *make_net(void *blob, size_t len, void **arena)
+{
+    size_t bytes = 0;
+    tscvx_nn *net = NULL;
+    if (tscvx_nn_arena_size(blob, len, 0u, &bytes) != TSCVX_NN_OK) return NULL;
+    *arena = malloc(bytes);
+    if (!*arena || tscvx_nn_init(&net, *arena, bytes, blob, len, 0u) != TSCVX_NN_OK) return NULL;
+    return net;
+}
+
+static pdg_workspace *make_ws(int N, void **arena)
+{
+    pdg_settings st;
+    pdg_workspace *ws = NULL;
+    size_t need = 0;
+    pdg_setup_status s = PDG_SETUP_SCRATCH_TOO_SMALL;
+    int tries;
+    void *scratch = NULL;
+    pdg_default_settings(&st);
+    for (tries = 0; tries < 4 && s == PDG_SETUP_SCRATCH_TOO_SMALL; ++tries) {
+        free(scratch);
+        scratch = need ? malloc(need) : NULL;
+        s = pdg_workspace_size(N, 1, &st, scratch, need, &need);
+    }
+    free(scratch);
+    if (s != PDG_SETUP_OK || !(*arena = malloc(need))) return NULL;
+    return pdg_setup(&ws, *arena, need, N, 1, &st) == PDG_SETUP_OK ? ws : NULL;
+}
+
+static void expect_refused(pdg_workspace *ws, const pdg_scenario *s, tscvx_nn *sol,
+                           tscvx_nn *con, const char *text)
+{
+    pdg_tscvx_options o = {0};
+    pdg_tscvx_report rep;
+    pdg_result r;
+    r.x = x;
+    r.u = u;
+    o.solution = sol;
+    o.constraint = con;
+    CHECK(pdg_solve_tscvx(ws, s, &o, &r, &rep) == PDG_INVALID_INPUT);
+    CHECK(r.status == PDG_INVALID_INPUT && r.subproblems_solved == 0);
+    if (!strstr(r.message, text)) {
+        fprintf(stderr, "message '%s' lacks '%s'\n", r.message, text);
+        failures++;
+    }
+}
+
+int main(int argc, char **argv)
+{
+    const char *paths[2] = {"build/models/solution.tnn", "build/models/constraint.tnn"};
+    void *blob[2] = {NULL, NULL}, *net_arena[2] = {NULL, NULL}, *arena = NULL, *arena30 = NULL;
+    size_t len[2] = {0, 0};
+    tscvx_nn *sol, *con;
+    pdg_workspace *ws, *ws30;
+    pdg_scenario s, bad, s30;
+    pdg_tscvx_options o = {0};
+    pdg_tscvx_report rep;
+    pdg_result r, r0;
+    double theta[PDG_THETA_LEN], tf, m_scvx;
+    static double gx[PDG_N_MAX * PDG_NSTATE], gu[PDG_N_MAX * PDG_NCTRL];
+    char msg[PDG_MESSAGE_LEN];
+    int i, N, iters_scvx;
+
+    if (argc == 3) {
+        paths[0] = argv[1];
+        paths[1] = argv[2];
+    }
+    for (i = 0; i < 2; ++i) {
+        blob[i] = read_file(paths[i], &len[i]);
+        if (!blob[i]) {
+            fprintf(stderr, "cannot read %s (make lib)\n", paths[i]);
+            return 1;
+        }
+    }
+    sol = make_net(blob[0], len[0], &net_arena[0]);
+    con = make_net(blob[1], len[1], &net_arena[1]);
+    pdg_default_scenario(&s);
+    N = s.params.N;
+    ws = make_ws(N, &arena);
+    CHECK(sol && con && ws);
+    if (!sol || !con || !ws) return 1;
+
+    /* theta: r0, v0, q0, w0, m0, glideslope_deg, tilt_max_deg */
+    pdg_theta_of(&s, theta);
+    CHECK(theta[0] == s.r0[0] && theta[5] == s.v0[2] && theta[6] == s.q0[0]);
+    CHECK(theta[12] == s.w0[2] && theta[13] == s.m0);
+    CHECK(theta[14] == s.params.glideslope_deg && theta[15] == s.params.tilt_max_deg);
+
+    /* bad input: nothing solved, a message naming what is wrong */
+    o.solution = sol;
+    r.x = x;
+    r.u = u;
+    CHECK(pdg_solve_tscvx(ws, &s, &o, NULL, NULL) == PDG_INVALID_INPUT);
+    CHECK(pdg_solve_tscvx(NULL, &s, &o, &r, NULL) == PDG_INVALID_INPUT);
+    CHECK(pdg_solve_tscvx(ws, &s, NULL, &r, NULL) == PDG_INVALID_INPUT);
+    CHECK(strstr(r.message, "options") != NULL);
+    expect_refused(ws, &s, con, NULL, "solution network given is a constraint network");
+    expect_refused(ws, &s, sol, sol, "constraint network given is a solution network");
+    bad = s;
+    bad.m0 = 1.0;
+    expect_refused(ws, &bad, sol, con, "scenario field 'm0'");
+    bad = s;
+    bad.q0[0] = NAN;
+    expect_refused(ws, &bad, sol, con, "scenario field 'q0'");
+    o.eta_init = -1.0;
+    CHECK(pdg_solve_tscvx(ws, &s, &o, &r, NULL) == PDG_INVALID_INPUT);
+    CHECK(strstr(r.message, "eta_init") != NULL);
+    o.eta_init = 0.0;
+    /* networks trained for N = 50 against a workspace for N = 30 */
+    s30 = s;
+    s30.params.N = 30;
+    ws30 = make_ws(30, &arena30);
+    CHECK(ws30 != NULL);
+    if (ws30) {
+        expect_refused(ws30, &s30, sol, NULL, "trained for N = 50");
+        expect_refused(ws30, &s30, NULL, con, "N = 30");
+        CHECK(pdg_tscvx_guess(ws30, &s30, sol, gx, gu, &tf, msg) == PDG_INVALID_INPUT);
+        CHECK(strstr(msg, "N = 30") != NULL);
+    }
+
+    /* the projected warm start meets the boundary conditions */
+    CHECK(pdg_tscvx_guess(ws, &s, sol, gx, gu, &tf, msg) == 0);
+    CHECK(tf > 0.0 && fabs(gx[0] - s.r0[0]) < 1e-15 && gx[13] == s.m0);
+    for (i = 0; i < 3; ++i) {
+        CHECK(gx[PDG_NSTATE * (N - 1) + i] == s.params.r_f[i]);
+        CHECK(gx[PDG_NSTATE * (N - 1) + 3 + i] == s.params.v_f[i]);
+    }
+
+    /* plain SCvx, then T-SCvx without and with masks */
+    r0.x = x;
+    r0.u = u;
+    CHECK(pdg_solve(ws, &s, NULL, &r0) == PDG_SOLVED);
+    m_scvx = x[PDG_NSTATE * (N - 1) + 13];
+    iters_scvx = r0.iterations;
+    o.solution = NULL;
+    o.constraint = NULL;
+    CHECK(pdg_solve_tscvx(ws, &s, &o, &r, &rep) == PDG_SOLVED); /* no networks: pdg_solve */
+    CHECK(r.iterations == iters_scvx && x[PDG_NSTATE * (N - 1) + 13] == m_scvx);
+    CHECK(!rep.warm_started && rep.masks_predicted == 0);
+    o.solution = sol;
+    CHECK(pdg_solve_tscvx(ws, &s, &o, &r, &rep) == PDG_SOLVED);
+    CHECK(rep.warm_started && rep.eta_init == PDG_TSCVX_ETA_INIT && rep.masks_predicted == 0);
+    {
+        pdg_log_row row;
+        CHECK(pdg_get_log(ws, 0, &row) == PDG_SETUP_OK && row.eta == PDG_TSCVX_ETA_INIT);
+    }
+    o.constraint = con;
+    CHECK(pdg_solve_tscvx(ws, &s, &o, &r, &rep) == PDG_SOLVED);
+    CHECK(rep.masks_predicted == r.subproblems_solved && rep.mask_failures == 0);
+    CHECK(r.max_violation <= 1e-6 && r.max_defect <= 1e-3);
+    printf("T-SCvx: %d iterations, %d subproblems, m_f %.6f (SCvx %d iterations, m_f %.6f)\n",
+           r.iterations, r.subproblems_solved, x[PDG_NSTATE * (N - 1) + 13], iters_scvx,
+           m_scvx);
+
+    free(arena);
+    free(arena30);
+    for (i = 0; i < 2; ++i) {
+        free(net_arena[i]);
+        free(blob[i]);
+    }
+    if (failures) {
+        fprintf(stderr, "%d check(s) failed\n", failures);
+        return 1;
+    }
+    printf("test_tscvx: all checks passed\n");
+    return 0;
+}
