@@ -51,13 +51,16 @@ test: setup lib ctest lint pytest
 
 # ---- user-facing jobs ----------------------------------------------------------------------
 # The default landing three ways: the ground reference, the flight library, and T-SCvx with
-# the shipped networks (warm start + tight-constraint masks) in the flight library.
+# the shipped networks (warm start + tight-constraint masks) in the flight library; then the
+# plain C example program, without and with the networks.
 demo: setup lib
 	@mkdir -p out
 	$(GUIDANCE) solve --method scvx --backend clarabel --out out/scvx.npz --plot out/scvx.png
 	$(GUIDANCE) solve --method scvx --backend c --out out/scvx_c.npz --plot out/scvx_c.png
 	$(GUIDANCE) solve --method tscvx --backend c --out out/tscvx_c.npz --plot out/tscvx_c.png
 	./$(BUILD)/pdg_example > out/pdg_example.txt && tail -n 3 out/pdg_example.txt
+	./$(BUILD)/pdg_example $(BUILD)/models/solution.tnn $(BUILD)/models/constraint.tnn \
+	  > out/pdg_example_tscvx.txt && tail -n 3 out/pdg_example_tscvx.txt
 
 bench: setup lib
 	$(GUIDANCE) bench --backend clarabel c-socp c --tscvx-landings 24
