@@ -855,6 +855,22 @@ pdg_status pdg_solve(pdg_workspace *ws, const pdg_scenario *scenario, const pdg_
     return pdg_solve_from(ws, scenario, opt, res, ws && ws->ready ? ws->st.eta_init : 1.0);
 }
 
+int pdg_result_begin(const pdg_workspace *ws, pdg_result *res)
+{
+    if (!res) {
+        return -1;
+    }
+    res->status = PDG_INVALID_INPUT;
+    res->message[0] = '\0';
+    res->iterations = res->subproblems_solved = res->socp_iterations = 0;
+    res->t_f = res->max_defect = res->max_violation = NAN;
+    if (!ws || !ws->ready) {
+        snprintf(res->message, PDG_MESSAGE_LEN, "workspace not set up (call pdg_setup)");
+        return -1;
+    }
+    return 0;
+}
+
 pdg_status pdg_solve_from(pdg_workspace *ws, const pdg_scenario *scenario,
                           const pdg_options *opt, pdg_result *res, double eta_init)
 {
@@ -864,15 +880,7 @@ pdg_status pdg_solve_from(pdg_workspace *ws, const pdg_scenario *scenario,
     double J = NAN, defect = NAN, viol = NAN, eta, vc = INFINITY;
     pdg_status status;
 
-    if (!res) {
-        return PDG_INVALID_INPUT;
-    }
-    res->status = PDG_INVALID_INPUT;
-    res->message[0] = '\0';
-    res->iterations = res->subproblems_solved = res->socp_iterations = 0;
-    res->t_f = res->max_defect = res->max_violation = NAN;
-    if (!ws || !ws->ready) {
-        snprintf(res->message, PDG_MESSAGE_LEN, "workspace not set up (call pdg_setup)");
+    if (pdg_result_begin(ws, res) != 0) {
         return PDG_INVALID_INPUT;
     }
     ws->n_log = ws->n_masks_out = 0;

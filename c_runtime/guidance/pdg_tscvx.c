@@ -150,15 +150,7 @@ pdg_status pdg_solve_tscvx(pdg_workspace *ws, const pdg_scenario *s,
     if (rep) {
         memset(rep, 0, sizeof *rep);
     }
-    if (!res) {
-        return PDG_INVALID_INPUT;
-    }
-    res->status = PDG_INVALID_INPUT;
-    res->message[0] = '\0';
-    res->iterations = res->subproblems_solved = res->socp_iterations = 0;
-    res->t_f = res->max_defect = res->max_violation = NAN;
-    if (!ws || !ws->ready) {
-        snprintf(res->message, PDG_MESSAGE_LEN, "workspace not set up (call pdg_setup)");
+    if (pdg_result_begin(ws, res) != 0) {
         return PDG_INVALID_INPUT;
     }
     if (!o) {
