@@ -24,8 +24,8 @@ $(BUILD)/models/%.tnn: models/%.onnx guidance/nn/flight.py | $(STAMP)
 	$(PY) -m guidance.nn.flight $< $@
 	@touch $@  # the writer keeps an identical file untouched
 
-$(BUILD)/nn_budget_driver: c_runtime/nn/tests/nn_budget_driver.c c_runtime/include/tscvx_nn.h $(BUILD)/libtscvx_gnc.a
-	$(CC) -std=c99 -Wall -Wextra -Werror -O2 -g -Ic_runtime/include $< -o $@ $(BUILD)/libtscvx_gnc.a -lm
+$(BUILD)/nn_budget_driver: c_runtime/nn/tests/nn_budget_driver.c c_runtime/examples/measure.h c_runtime/include/tscvx_nn.h $(BUILD)/libtscvx_gnc.a
+	$(CC) -std=c99 -Wall -Wextra -Werror -O2 -g -Ic_runtime/include -Ic_runtime/examples $< -o $@ $(BUILD)/libtscvx_gnc.a -lm
 
 $(BUILD)/ctest/test_nn: c_runtime/nn/tests/test_nn.c $(NN_HDRS) $(BUILD)/libtscvx_gnc.a
 	@mkdir -p $(BUILD)/ctest

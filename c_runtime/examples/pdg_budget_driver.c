@@ -26,62 +26,7 @@
 #include "tscvx_guidance.h"
 #include "tscvx_nn.h"
 
-/* ---- heap allocations inside the measured call (glibc interposition) --------------------- */
-extern void *__libc_malloc(size_t);
-extern void *__libc_calloc(size_t, size_t);
-extern void *__libc_realloc(void *, size_t);
-static volatile int counting = 0;
-static volatile long n_alloc = 0;
-void *malloc(size_t n)
-{
-    if (counting) n_alloc++;
-    return __libc_malloc(n);
-}
-void *calloc(size_t a, size_t b)
-{
-    if (counting) n_alloc++;
-    return __libc_calloc(a, b);
-}
-void *realloc(void *p, size_t n)
-{
-    if (counting) n_alloc++;
-    return __libc_realloc(p, n);
-}
-
-/* ---- stack painting ---------------------------------------------------------------------- */
-#define PAINT_BYTES (4u << 20) /* 4 MB below the caller's frame (default stack limit 8 MB) */
-#define PAINT 0xA5u
-
-static __attribute__((noinline)) void paint_stack(void)
-{
-    unsigned char buf[PAINT_BYTES];
-    unsigned char *p = buf;
-    __asm__ volatile("" : "+r"(p) : : "memory"); /* the compiler cannot drop the writes */
-    memset(p, PAINT, PAINT_BYTES);
-    __asm__ volatile("" : : "r"(p) : "memory");
-}
-
-/* Bytes used below this frame's buffer top: the deepest non-pattern byte. */
-static __attribute__((noinline)) size_t painted_depth(void)
-{
-    unsigned char buf[PAINT_BYTES];
-    const volatile unsigned char *p = buf;
-    size_t i;
-    __asm__ volatile("" : "+r"(p) : : "memory"); /* contents unknown to the compiler */
-    for (i = 0; i < PAINT_BYTES; ++i) { /* p[0] is the deepest address */
-        if (p[i] != PAINT) {
-            return PAINT_BYTES - i;
-        }
-    }
-    return 0;
-}
-
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
+#include "measure.h"
 
 static pdg_tscvx_options tscvx_opt;
 static pdg_tscvx_report tscvx_rep;

@@ -22,61 +22,7 @@
 
 #include "tscvx_nn.h"
 
-/* ---- heap allocations inside the measured call (glibc interposition) --------------------- */
-extern void *__libc_malloc(size_t);
-extern void *__libc_calloc(size_t, size_t);
-extern void *__libc_realloc(void *, size_t);
-static volatile int counting = 0;
-static volatile long n_alloc = 0;
-void *malloc(size_t n)
-{
-    if (counting) n_alloc++;
-    return __libc_malloc(n);
-}
-void *calloc(size_t a, size_t b)
-{
-    if (counting) n_alloc++;
-    return __libc_calloc(a, b);
-}
-void *realloc(void *p, size_t n)
-{
-    if (counting) n_alloc++;
-    return __libc_realloc(p, n);
-}
-
-/* ---- stack painting ---------------------------------------------------------------------- */
-#define PAINT_BYTES (1u << 20)
-#define PAINT 0xA5u
-
-static __attribute__((noinline)) void paint_stack(void)
-{
-    unsigned char buf[PAINT_BYTES];
-    unsigned char *p = buf;
-    __asm__ volatile("" : "+r"(p) : : "memory");
-    memset(p, PAINT, PAINT_BYTES);
-    __asm__ volatile("" : : "r"(p) : "memory");
-}
-
-static __attribute__((noinline)) size_t painted_depth(void)
-{
-    unsigned char buf[PAINT_BYTES];
-    const volatile unsigned char *p = buf;
-    size_t i;
-    __asm__ volatile("" : "+r"(p) : : "memory");
-    for (i = 0; i < PAINT_BYTES; ++i) {
-        if (p[i] != PAINT) {
-            return PAINT_BYTES - i;
-        }
-    }
-    return 0;
-}
-
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
+#include "measure.h"
 
 static __attribute__((noinline)) tscvx_nn_status measured_call(tscvx_nn *net, const double *x,
                                                                int n_in, double *y, int n_out)
