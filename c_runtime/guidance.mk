@@ -38,10 +38,10 @@ $(BUILD)/libtscvx_gnc.a: $(GNC_OBJS)
 $(BUILD)/libtscvx_gnc.so: $(GNC_OBJS) $(CRT_OBJS)
 	$(CC) -shared -o $@ $(GNC_OBJS) $(CRT_OBJS) -lamd -lldl -lsuitesparseconfig -lm
 
-$(BUILD)/pdg_example: c_runtime/examples/pdg_example.c c_runtime/include/tscvx_guidance.h c_runtime/include/tscvx_nn.h $(BUILD)/libtscvx_gnc.a $(BUILD)/libtscvx.a
+$(BUILD)/pdg_example: c_runtime/examples/pdg_example.c c_runtime/examples/host_io.h c_runtime/include/tscvx_guidance.h c_runtime/include/tscvx_nn.h $(BUILD)/libtscvx_gnc.a $(BUILD)/libtscvx.a
 	$(CC) -std=c99 -Wall -Wextra -Werror -O2 -Ic_runtime/include $< -o $@ $(GNC_LINK)
 
-$(BUILD)/pdg_budget_driver: c_runtime/examples/pdg_budget_driver.c c_runtime/examples/measure.h c_runtime/include/tscvx_guidance.h c_runtime/include/tscvx_nn.h $(BUILD)/libtscvx_gnc.a $(BUILD)/libtscvx.a
+$(BUILD)/pdg_budget_driver: c_runtime/examples/pdg_budget_driver.c c_runtime/examples/measure.h c_runtime/examples/host_io.h c_runtime/include/tscvx_guidance.h c_runtime/include/tscvx_nn.h $(BUILD)/libtscvx_gnc.a $(BUILD)/libtscvx.a
 	$(CC) -std=c99 -Wall -Wextra -Werror -O2 -g -Ic_runtime/include $< -o $@ $(GNC_LINK)
 
 $(BUILD)/ctest/%: c_runtime/guidance/tests/%.c c_runtime/include/tscvx_guidance.h $(BUILD)/libtscvx_gnc.a $(BUILD)/libtscvx.a

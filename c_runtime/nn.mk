@@ -24,12 +24,12 @@ $(BUILD)/models/%.tnn: models/%.onnx guidance/nn/flight.py | $(STAMP)
 	$(PY) -m guidance.nn.flight $< $@
 	@touch $@  # the writer keeps an identical file untouched
 
-$(BUILD)/nn_budget_driver: c_runtime/nn/tests/nn_budget_driver.c c_runtime/examples/measure.h c_runtime/include/tscvx_nn.h $(BUILD)/libtscvx_gnc.a
+$(BUILD)/nn_budget_driver: c_runtime/nn/tests/nn_budget_driver.c c_runtime/examples/measure.h c_runtime/examples/host_io.h c_runtime/include/tscvx_nn.h $(BUILD)/libtscvx_gnc.a
 	$(CC) -std=c99 -Wall -Wextra -Werror -O2 -g -Ic_runtime/include -Ic_runtime/examples $< -o $@ $(BUILD)/libtscvx_gnc.a -lm
 
-$(BUILD)/ctest/test_nn: c_runtime/nn/tests/test_nn.c $(NN_HDRS) $(BUILD)/libtscvx_gnc.a
+$(BUILD)/ctest/test_nn: c_runtime/nn/tests/test_nn.c c_runtime/examples/host_io.h $(NN_HDRS) $(BUILD)/libtscvx_gnc.a
 	@mkdir -p $(BUILD)/ctest
-	$(CC) -std=c99 -Wall -Wextra -Werror -O1 -g -Ic_runtime/include -Ic_runtime/nn $< -o $@ $(BUILD)/libtscvx_gnc.a -lm
+	$(CC) -std=c99 -Wall -Wextra -Werror -O1 -g -Ic_runtime/include -Ic_runtime/nn -Ic_runtime/examples $< -o $@ $(BUILD)/libtscvx_gnc.a -lm
 
 nn-models: $(NN_MODELS)
 lib: nn-models

@@ -26,6 +26,7 @@
 #include "tscvx_guidance.h"
 #include "tscvx_nn.h"
 
+#include "host_io.h"
 #include "measure.h"
 
 static pdg_tscvx_options tscvx_opt;
@@ -38,39 +39,6 @@ static __attribute__((noinline)) pdg_status measured_call(pdg_workspace *ws,
 {
     return use_tscvx ? pdg_solve_tscvx(ws, scn, &tscvx_opt, res, &tscvx_rep)
                      : pdg_solve(ws, scn, NULL, res);
-}
-
-/* Blob (malloc: 8-byte aligned) and network in its own arena; 0 = ok. */
-static int load_net(const char *path, void **blob, size_t *len, void **arena, size_t *bytes,
-                    tscvx_nn **net)
-{
-    FILE *f = fopen(path, "rb");
-    long n;
-    tscvx_nn_status st;
-    if (!f || fseek(f, 0, SEEK_END) != 0 || (n = ftell(f)) <= 0 || fseek(f, 0, SEEK_SET)) {
-        fprintf(stderr, "%s: cannot read\n", path);
-        if (f) fclose(f);
-        return 1;
-    }
-    *len = (size_t)n;
-    *blob = malloc(*len);
-    if (!*blob || fread(*blob, 1, *len, f) != *len) {
-        fprintf(stderr, "%s: cannot read\n", path);
-        fclose(f);
-        return 1;
-    }
-    fclose(f);
-    st = tscvx_nn_arena_size(*blob, *len, 0u, bytes);
-    if (st == TSCVX_NN_OK) {
-        *arena = malloc(*bytes);
-        st = *arena ? tscvx_nn_init(net, *arena, *bytes, *blob, *len, 0u)
-                    : TSCVX_NN_ARENA_TOO_SMALL;
-    }
-    if (st != TSCVX_NN_OK) {
-        fprintf(stderr, "%s: %s\n", path, tscvx_nn_status_message(st));
-        return 1;
-    }
-    return 0;
 }
 
 int main(int argc, char **argv)
@@ -87,7 +55,8 @@ int main(int argc, char **argv)
     double t0, wall;
     pdg_status status;
     const char *net_path[2] = {NULL, NULL};
-    void *blob[2] = {NULL, NULL}, *net_arena[2] = {NULL, NULL};
+    unsigned char *blob[2] = {NULL, NULL};
+    void *net_arena[2] = {NULL, NULL};
     size_t blob_len[2] = {0, 0}, net_bytes[2] = {0, 0};
     tscvx_nn *net[2] = {NULL, NULL};
 

@@ -23,43 +23,9 @@
 #include <stdlib.h>
 #include <time.h>
 
+#include "host_io.h"
 #include "tscvx_guidance.h"
 #include "tscvx_nn.h"
-
-/* Reads a weight file into `*blob` (malloc is 8-byte aligned, as in-place weights need) and
- * builds the network in its own arena `*arena` sized by tscvx_nn_arena_size. 0 = ok. */
-static int load_net(const char *path, void **blob, void **arena, tscvx_nn **net)
-{
-    FILE *f = fopen(path, "rb");
-    long len;
-    size_t bytes = 0;
-    tscvx_nn_status st;
-    *blob = *arena = NULL;
-    if (!f || fseek(f, 0, SEEK_END) != 0 || (len = ftell(f)) <= 0 || fseek(f, 0, SEEK_SET)) {
-        fprintf(stderr, "%s: cannot read\n", path);
-        if (f) fclose(f);
-        return 1;
-    }
-    *blob = malloc((size_t)len);
-    if (!*blob || fread(*blob, 1, (size_t)len, f) != (size_t)len) {
-        fprintf(stderr, "%s: cannot read\n", path);
-        fclose(f);
-        return 1;
-    }
-    fclose(f);
-    st = tscvx_nn_arena_size(*blob, (size_t)len, 0u, &bytes);
-    if (st == TSCVX_NN_OK) {
-        *arena = malloc(bytes);
-        st = *arena ? tscvx_nn_init(net, *arena, bytes, *blob, (size_t)len, 0u)
-                    : TSCVX_NN_ARENA_TOO_SMALL;
-    }
-    if (st != TSCVX_NN_OK) {
-        fprintf(stderr, "%s: %s\n", path, tscvx_nn_status_message(st));
-        return 1;
-    }
-    printf("network %s: %ld bytes of weights, arena %zu bytes\n", path, len, bytes);
-    return 0;
-}
 
 static double now_s(void)
 {
@@ -72,7 +38,9 @@ int main(int argc, char **argv)
 {
     pdg_tscvx_options topt = {0};
     pdg_tscvx_report rep;
-    void *blobs[2] = {NULL, NULL}, *net_arenas[2] = {NULL, NULL};
+    unsigned char *blobs[2] = {NULL, NULL};
+    void *net_arenas[2] = {NULL, NULL};
+    size_t blob_len[2] = {0, 0}, net_bytes[2] = {0, 0};
     tscvx_nn *nets[2] = {NULL, NULL};
     const int tscvx = argc > 1;
     pdg_settings st;
@@ -120,9 +88,12 @@ int main(int argc, char **argv)
     }
     /* 3b. T-SCvx: the networks, each in its own arena */
     for (i = 1; i < argc && i <= 2; ++i) {
-        if (load_net(argv[i], &blobs[i - 1], &net_arenas[i - 1], &nets[i - 1])) {
+        if (load_net(argv[i], &blobs[i - 1], &blob_len[i - 1], &net_arenas[i - 1],
+                     &net_bytes[i - 1], &nets[i - 1])) {
             return 1;
         }
+        printf("network %s: %zu bytes of weights, arena %zu bytes\n", argv[i], blob_len[i - 1],
+               net_bytes[i - 1]);
     }
     /* 4. solve */
     res.x = x;

@@ -22,31 +22,13 @@
 
 #include "tscvx_nn.h"
 
+#include "host_io.h"
 #include "measure.h"
 
 static __attribute__((noinline)) tscvx_nn_status measured_call(tscvx_nn *net, const double *x,
                                                                int n_in, double *y, int n_out)
 {
     return tscvx_nn_run(net, x, n_in, y, n_out);
-}
-
-static unsigned char *read_file(const char *path, size_t *len)
-{
-    FILE *f = fopen(path, "rb");
-    unsigned char *buf = NULL;
-    long n;
-    if (!f) return NULL;
-    if (fseek(f, 0, SEEK_END) == 0 && (n = ftell(f)) > 0 && fseek(f, 0, SEEK_SET) == 0
-        && (buf = malloc((size_t)n)) != NULL) {
-        if (fread(buf, 1, (size_t)n, f) != (size_t)n) {
-            free(buf);
-            buf = NULL;
-        } else {
-            *len = (size_t)n;
-        }
-    }
-    fclose(f);
-    return buf;
 }
 
 int main(int argc, char **argv)

@@ -18,6 +18,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "host_io.h"
 #include "nn_internal.h"
 #include "tscvx_nn.h"
 
@@ -104,25 +105,6 @@ static tscvx_nn_status try_init(const unsigned char *blob, size_t len, unsigned 
     st = tscvx_nn_init(&net, arena, need, blob, len, flags);
     free(arena);
     return st;
-}
-
-static unsigned char *read_file(const char *path, size_t *len)
-{
-    FILE *f = fopen(path, "rb");
-    unsigned char *buf = NULL;
-    long n;
-    if (!f) return NULL;
-    if (fseek(f, 0, SEEK_END) == 0 && (n = ftell(f)) > 0 && fseek(f, 0, SEEK_SET) == 0
-        && (buf = malloc((size_t)n)) != NULL) {
-        if (fread(buf, 1, (size_t)n, f) != (size_t)n) {
-            free(buf);
-            buf = NULL;
-        } else {
-            *len = (size_t)n;
-        }
-    }
-    fclose(f);
-    return buf;
 }
 
 /* ---- synthetic networks and a naive reference -------------------------------------------- */
