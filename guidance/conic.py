@@ -123,21 +123,26 @@ def _clarabel_solution(sol: object, elapsed: float) -> ConicSolution:
     )
 
 
-def solve_clarabel(
-    prob: ConicProblem, *, tol: float = 1e-9, max_iter: int = 200, verbose: bool = False
-) -> ConicSolution:
-    """Solve with Clarabel (the ground reference). Time counts Clarabel's own solve only."""
+def clarabel_solver(prob: ConicProblem, settings: object) -> object:
+    """A Clarabel solver set up for ``prob`` (set-up only: the caller times ``solve()``)."""
     import clarabel
 
     P = prob.P if prob.P is not None else sp.csc_matrix((prob.n, prob.n))
-    solver = clarabel.DefaultSolver(
+    return clarabel.DefaultSolver(
         sp.csc_matrix(P),
         prob.q,
         sp.csc_matrix(prob.A),
         prob.b,
         clarabel_cones(prob.cones),
-        _clarabel_settings(tol, max_iter, verbose),
+        settings,
     )
+
+
+def solve_clarabel(
+    prob: ConicProblem, *, tol: float = 1e-9, max_iter: int = 200, verbose: bool = False
+) -> ConicSolution:
+    """Solve with Clarabel (the ground reference). Time counts Clarabel's own solve only."""
+    solver = clarabel_solver(prob, _clarabel_settings(tol, max_iter, verbose))
     t0 = time.perf_counter()
     sol = solver.solve()
     return _clarabel_solution(sol, time.perf_counter() - t0)
@@ -155,19 +160,11 @@ class ClarabelSession:
         self._solver: object | None = None
 
     def solve(self, prob: ConicProblem) -> ConicSolution:
-        import clarabel
-
         if prob.P is not None:
             return solve_clarabel(prob, tol=self.tol, max_iter=self.max_iter)
         if self._solver is None:
-            self._solver = clarabel.DefaultSolver(
-                sp.csc_matrix((prob.n, prob.n)),
-                prob.q,
-                prob.A,
-                prob.b,
-                clarabel_cones(prob.cones),
-                _clarabel_settings(self.tol, self.max_iter, False),
-            )
+            settings = _clarabel_settings(self.tol, self.max_iter, False)
+            self._solver = clarabel_solver(prob, settings)
         else:
             self._solver.update(q=prob.q, A=prob.A.data, b=prob.b)  # type: ignore[attr-defined]
         t0 = time.perf_counter()
