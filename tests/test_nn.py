@@ -194,18 +194,24 @@ def test_shipped_models_load_and_answer() -> None:
     )
 
 
-def test_consistent_guess_meets_the_boundary_conditions() -> None:
+def test_projected_guess_meets_boundary_conditions_and_convex_constraints() -> None:
+    """A noisy prediction (as the solution network gives) made into a valid reference."""
     from guidance.catalog import SCENARIOS
-    from guidance.nn.infer import consistent_guess
+    from guidance.constraints import path_constraint_values
+    from guidance.guess import project_guess
     from guidance.scvx import initial_guess
 
     s = SCENARIOS["tilted"]
     x, u, t_f = initial_guess(s)
     rng = np.random.default_rng(0)
-    noisy = x + 0.05 * rng.standard_normal(x.shape)
-    gx, _, gt = consistent_guess(noisy, u, t_f, s)
+    noisy_x = x + 0.3 * rng.standard_normal(x.shape)
+    noisy_u = u + 2.0 * rng.standard_normal(u.shape)
+    gx, gu, gt = project_guess(s, noisy_x, noisy_u, t_f)
     np.testing.assert_allclose(gx[0], s.x0, atol=1e-12)
     np.testing.assert_allclose(gx[-1, 0:6], [0, 0, 0, -0.1, 0, 0], atol=1e-12)
     np.testing.assert_allclose(gx[-1, 8:13], 0.0, atol=1e-12)  # upright, at rest
     np.testing.assert_allclose(np.linalg.norm(gx[:, 6:10], axis=1), 1.0, atol=1e-12)
-    assert np.all(gx[:, 13] >= s.params.m_dry) and gt == t_f
+    h = path_constraint_values(gx, gu, s.params)  # (N, 7), <= 0 where met
+    assert h[:, :6].max() <= 1e-9  # every convex path constraint
+    assert h[:, 6].max() <= 1e-9  # and the lower thrust bound
+    assert gt == t_f

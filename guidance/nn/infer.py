@@ -3,7 +3,7 @@ that does not fit the problem (input/output size, trained parameters, normalizat
 
     cm = load_model("models/constraint.onnx", "constraint", scenario.params)
     sm = load_model("models/solution.onnx", "solution", scenario.params)
-    guess = sm.warm_start(scenario)  # prediction with the boundary conditions made exact
+    guess = sm.warm_start(scenario)  # prediction made a valid reference (guess.project_guess)
     SCvxSolver(scenario, SCvxSettings(eta_init=0.01)).solve(
         guess=guess, masks=cm.mask_fn(theta_of(scenario)))
 """
@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from guidance.dataset import N_THETA, THETA_NAMES
-from guidance.params import IM, IQ, IR, IV, IW, NC, NU, NX, Params, Scenario
+from guidance.params import NC, NU, NX, Params, Scenario
 
 META_KEY = "tscvx"
 META_FORMAT = "tscvx-onnx"
@@ -179,44 +179,12 @@ class SolutionModel(OnnxModel):
         return x, u, float(y[-1])
 
     def warm_start(self, scenario: Scenario) -> tuple[np.ndarray, np.ndarray, float]:
-        """The ``guess`` for ``SCvxSolver.solve``: prediction + exact boundary conditions."""
+        """The ``guess`` for ``SCvxSolver.solve``: the prediction with the boundary conditions
+        and the convex path constraints made exact (``guess.project_guess``, as on board)."""
         from guidance.dataset import theta_of
+        from guidance.guess import project_guess
 
-        return consistent_guess(*self.solution(theta_of(scenario)), scenario)
-
-
-def consistent_guess(
-    x: np.ndarray, u: np.ndarray, t_f: float, scenario: Scenario
-) -> tuple[np.ndarray, np.ndarray, float]:
-    """A predicted trajectory made to meet the boundary conditions exactly.
-
-    The network's x(0) is only close to x0, and the subproblem's boundary conditions are hard:
-    with the small reduced trust radius (0.01) a guess off by more than the radius makes the
-    first subproblem infeasible. The offsets at both ends are removed with weights that fade
-    linearly along the trajectory, quaternions are renormalized, the mass is kept in
-    [m_dry, m0] and t_f positive.
-    """
-    p = scenario.params
-    x = np.array(x, dtype=float)
-    N = len(x)
-    w0 = np.linspace(1.0, 0.0, N)[:, None]
-    start = scenario.x0 - x[0]
-    x += w0 * start
-    target = x[-1].copy()
-    target[IR], target[IV], target[IW] = p.r_f, p.v_f, p.omega_f
-    if p.final_roll_free:
-        q = target[IQ].copy()
-        q[2:4] = 0.0
-        target[IQ] = q / max(np.linalg.norm(q), 1e-9)
-    else:
-        target[IQ] = p.q_f
-    end = target - x[-1]
-    end[IM] = 0.0  # the final mass is free
-    x += (1.0 - w0) * end
-    x[:, IQ] /= np.maximum(np.linalg.norm(x[:, IQ], axis=1, keepdims=True), 1e-9)
-    x[:, IM] = np.clip(x[:, IM], p.m_dry, scenario.initial.m0)
-    x[0] = scenario.x0
-    return x, np.array(u, dtype=float), float(max(t_f, 1e-3))
+        return project_guess(scenario, *self.solution(theta_of(scenario)))
 
 
 def load_model(path: str | Path, kind: str, params: Params | None = None) -> OnnxModel:
