@@ -13,6 +13,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "host_io.h"
 #include "tscvx_guidance.h"
 #include "tscvx_nn.h"
 
@@ -26,35 +27,6 @@ static int failures = 0;
     } while (0)
 
 static double x[PDG_N_MAX * PDG_NSTATE], u[PDG_N_MAX * PDG_NCTRL];
-
-static void *read_file(const char *path, size_t *len)
-{
-    FILE *f = fopen(path, "rb");
-    long n;
-    void *buf;
-    if (!f || fseek(f, 0, SEEK_END) != 0 || (n = ftell(f)) <= 0 || fseek(f, 0, SEEK_SET)) {
-        if (f) fclose(f);
-        return NULL;
-    }
-    buf = malloc((size_t)n);
-    if (buf && fread(buf, 1, (size_t)n, f) != (size_t)n) {
-        free(buf);
-        buf = NULL;
-    }
-    fclose(f);
-    *len = (size_t)n;
-    return buf;
-}
-
-static tscvx_nn *make_net(void *blob, size_t len, void **arena)
-{
-    size_t bytes = 0;
-    tscvx_nn *net = NULL;
-    if (tscvx_nn_arena_size(blob, len, 0u, &bytes) != TSCVX_NN_OK) return NULL;
-    *arena = malloc(bytes);
-    if (!*arena || tscvx_nn_init(&net, *arena, bytes, blob, len, 0u) != TSCVX_NN_OK) return NULL;
-    return net;
-}
 
 static pdg_workspace *make_ws(int N, void **arena)
 {
@@ -96,9 +68,11 @@ static void expect_refused(pdg_workspace *ws, const pdg_scenario *s, tscvx_nn *s
 int main(int argc, char **argv)
 {
     const char *paths[2] = {"build/models/solution.tnn", "build/models/constraint.tnn"};
-    void *blob[2] = {NULL, NULL}, *net_arena[2] = {NULL, NULL}, *arena = NULL, *arena30 = NULL;
+    unsigned char *blob[2] = {NULL, NULL};
+    void *net_arena[2] = {NULL, NULL}, *arena = NULL, *arena30 = NULL;
+    size_t net_bytes[2] = {0, 0};
     size_t len[2] = {0, 0};
-    tscvx_nn *sol, *con;
+    tscvx_nn *nets[2] = {NULL, NULL}, *sol, *con;
     pdg_workspace *ws, *ws30;
     pdg_scenario s, bad, s30;
     pdg_tscvx_options o = {0};
@@ -114,14 +88,13 @@ int main(int argc, char **argv)
         paths[1] = argv[2];
     }
     for (i = 0; i < 2; ++i) {
-        blob[i] = read_file(paths[i], &len[i]);
-        if (!blob[i]) {
-            fprintf(stderr, "cannot read %s (make lib)\n", paths[i]);
+        if (load_net(paths[i], &blob[i], &len[i], &net_arena[i], &net_bytes[i], &nets[i])) {
+            fprintf(stderr, "(make lib builds the network files)\n");
             return 1;
         }
     }
-    sol = make_net(blob[0], len[0], &net_arena[0]);
-    con = make_net(blob[1], len[1], &net_arena[1]);
+    sol = nets[0];
+    con = nets[1];
     pdg_default_scenario(&s);
     N = s.params.N;
     ws = make_ws(N, &arena);
