@@ -36,7 +36,10 @@ REDUCED = SCvxSettings().replace(eta_init=0.01)
 STRICT = ["default", "overhead", "high", "tilted", "steep_cone", "sample2", "sample3", "sample4"]
 # (landing, masks) where the C and Python T-SCvx drift apart although they start from guesses
 # 1e-6 apart (float64 C networks vs float32 onnxruntime): SCvx amplifies the difference, as in
-# test_cguidance.KNOWN_DRIFT. Measured with the models and SOCP runtime of 22 Nov 04:05.
+# test_cguidance.KNOWN_DRIFT. Measured with the models and SOCP runtime of 22 Nov 04:05
+# (tilted, Algorithm 2: iterations 10 vs 12, m_f rel 1.8e-4). With the constraint net of
+# 22 Nov 06:40 (one epoch per fold) every STRICT case meets the strict figure, tilted /
+# Algorithm 2 closest to it (iterations 10 vs 11, m_f rel 7.1e-5): it stays listed.
 KNOWN_DRIFT = {("tilted", True)}
 DRIFT_REL_MF = 2e-3  # what every landing must meet regardless
 

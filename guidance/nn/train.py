@@ -15,6 +15,10 @@
   iteration; a spurious one only a little speed) on a calibration split: 10 % of the
   train+validation base landings kept out of the folds. (By the end of the sequential K-fold
   every validation row has been trained on, and a threshold chosen there is overconfident.)
+  One threshold for all bits: thresholds per constraint type, per (type, iteration) or per
+  (type, 5-node block) chosen on the calibration split for the same overall recall were no
+  better on the test split (+0.01 precision at most, for a lower recall), and per-bit ones
+  overfit the calibration split (test recall 0.989 for a 0.99 target).
 - Solution network: MSE on standardized (x, u, t_f), with t_f weighted as N outputs in the
   training loss (one output among 17N + 1 would otherwise be ignored, and a warm start with a
   wrong t_f is a poor one); the reported MSE is the plain mean over all outputs.
