@@ -188,13 +188,13 @@ def cmd_train(args: argparse.Namespace) -> int:
                 "feasible_fraction": ds.header["feasible_fraction"],
             }
             res.save(out / f"{kind}-{size}.pt")
-            est = INSTR_PER_MAC * res.metrics["macs"]
+            est = est_instructions(res.metrics["macs"])
             entry = {
                 "kind": kind,
                 "size": size,
                 "arch": res.arch.to_dict(),
                 "est_instructions": est,
-                "fits_budget": est <= INSTR_BUDGET,
+                "fits_budget": fits_budget(res.metrics["macs"]),
                 "final_val_loss": res.metrics["history"][-1]["val"],
                 "heldout_val_loss": _fold1_val(res.metrics["history"]),
                 **{k: v for k, v in res.metrics.items() if k not in ("history", "test_bases")},
@@ -220,12 +220,22 @@ def _fold1_val(history: list[dict]) -> float:
     return [h["val"] for h in history if h["fold"] == 1][-1]
 
 
+def est_instructions(macs: int) -> float:
+    """Planning estimate of host instructions per inference (today's INSTR_PER_MAC: reports
+    written under an older factor are re-estimated, not read back)."""
+    return INSTR_PER_MAC * macs
+
+
+def fits_budget(macs: int) -> bool:
+    return est_instructions(macs) <= INSTR_BUDGET
+
+
 def best_checkpoints(train_dir: Path) -> dict[str, str]:
     """Per kind, the flight-fitting checkpoint with the lowest held-out (fold 1) val loss."""
     report = sweep_report(train_dir)
     best: dict[str, tuple[float, str]] = {}
     for name, r in report.items():
-        if not r["fits_budget"]:
+        if not fits_budget(r["macs"]):
             continue
         if r["kind"] not in best or r["heldout_val_loss"] < best[r["kind"]][0]:
             best[r["kind"]] = (r["heldout_val_loss"], name)

@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from guidance.cli_learning import INSTR_BUDGET, INSTR_PER_MAC
+from guidance.cli_learning import INSTR_BUDGET, INSTR_PER_MAC, est_instructions, fits_budget
 
 
 def measure_onnx(path: Path, kind: str, inputs: np.ndarray) -> dict[str, float]:
@@ -185,7 +185,7 @@ def write_card(models: Path) -> Path:
         cg = f"{measured[kind]:,}" if kind in measured else "(C build missing)"
         add(
             f"| {kind} | {o['time_ms']:.4f} | {o['time_ms_std']:.4f} | {o['peak_mb']:.2f} | "
-            f"{s['macs']:,} | {INSTR_PER_MAC * s['macs']:,.0f} | {cg} |"
+            f"{s['macs']:,} | {est_instructions(s['macs']):,.0f} | {cg} |"
         )
     add("")
     add(
@@ -214,7 +214,7 @@ def write_card(models: Path) -> Path:
             tm = f"MSE {_f(r.get('test_mse'))}, OOD {_f(r.get('ood_mse'))}"
         add(
             f"| {name} (`{_arch(r['arch'])}`) | {r['n_params']:,} | {r['macs']:,} | "
-            f"{r['est_instructions']:,.0f} | {'yes' if r['fits_budget'] else 'no'} | "
+            f"{est_instructions(r['macs']):,.0f} | {'yes' if fits_budget(r['macs']) else 'no'} | "
             f"{r['heldout_val_loss']:.4f} | {r['final_val_loss']:.4f} | {tm} | "
             f"{r['train_seconds']:.0f}"
             f"{' (capped)' if r.get('stopped_early') else ''} |"
@@ -273,7 +273,7 @@ def write_card(models: Path) -> Path:
             f"{k} {v / 1e6:.2f} M" for k, v in sorted(measured.items())
         )
     else:
-        fits = all(INSTR_PER_MAC * v["macs"] <= INSTR_BUDGET for v in metrics["shipped"].values())
+        fits = all(fits_budget(v["macs"]) for v in metrics["shipped"].values())
         how = "planning estimate only: the C build was missing when this card was written"
     add(
         f"- <= {INSTR_BUDGET / 1e6:g} million host instructions per inference: "
