@@ -89,7 +89,7 @@ static int st_numeric(tscvx_kkt *k) {
     for (tscvx_int j = 0; j < dim; j++) Y[j] = 0.0, Next[j] = Lp[j];
     tscvx_int npos = 0;
     for (tscvx_int r = 0; r < dim; r++) {
-        for (tscvx_int t = Kp[r]; t < Kp[r + 1]; t++) Y[Ki[t]] += Kx[t];
+        for (tscvx_int t = Kp[r]; t < Kp[r + 1]; t++) Y[Ki[t]] = Kx[t]; /* Y was 0 there */
         tscvx_float d = Y[r];
         Y[r] = 0.0;
         for (tscvx_int t = Rp[r]; t < Rp[r + 1]; t++) {
