@@ -59,8 +59,9 @@ static int st_alloc(tscvx_kkt *k, tscvx_arena *a) {
         Flag[r] = r;
         for (tscvx_int t = k->Kp[r]; t < k->Kp[r + 1]; t++) {
             tscvx_int len = 0;
-            for (tscvx_int j = k->Ki[t]; Flag[j] != r; j = Parent[j]) {
+            for (tscvx_int j = k->Ki[t];; j = Parent[j]) { /* <= r + 1 steps: r is flagged */
                 if (j < 0 || j > r || len >= top) return -1; /* not an elimination tree */
+                if (Flag[j] == r) break;
                 Pattern[len++] = j;
                 Flag[j] = r;
             }
