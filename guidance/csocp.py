@@ -18,7 +18,7 @@ dual_infeasible (x, s hold the certificate, q'x = -1), max_iterations, numerical
 invalid_input (``info["message"]`` says why). ``solve(prob, log=True)`` adds the iteration log
 (``info["log"]``: iter, pcost, dcost, gap, pres, dres, mu, step per iteration). Settings are
 the fields of ``tscvx_settings`` (e.g. ``max_iter``, ``tol_feas``, ``soc_dense_max``,
-``kkt_backend``: ``KKT_SUPERNODAL`` or ``KKT_LDL``).
+``kkt_backend``: ``KKT_STATIC`` or ``KKT_LDL``).
 """
 
 from __future__ import annotations
@@ -87,8 +87,9 @@ _SETTING_FIELDS = [
     ("kkt_backend", c_int),
 ]
 
-# tscvx_settings.kkt_backend: the runtime's own supernodal LDL' or SuiteSparse LDL (default).
-KKT_SUPERNODAL, KKT_LDL = 0, 1
+# tscvx_settings.kkt_backend: the runtime's static-pattern LDL' (default; the same factor as
+# SuiteSparse LDL without its per-factorization symbolic work) or SuiteSparse LDL itself.
+KKT_LDL, KKT_STATIC = 1, 2
 
 
 class _Settings(ct.Structure):

@@ -16,8 +16,9 @@
  * (quadratic objective as in Clarabel), Nesterov-Todd scaling, Mehrotra predictor-corrector,
  * Ruiz equilibration, static regularization of the quasi-definite KKT system with iterative
  * refinement, best-iterate fallback, primal/dual infeasibility certificates. The KKT system is
- * ordered by SuiteSparse AMD and factored behind a small backend table: SuiteSparse LDL
- * (default, the reference) or our own supernodal LDL' (dense panels).
+ * ordered by SuiteSparse AMD and factored behind a small backend table: our static-pattern
+ * LDL' (default: SuiteSparse LDL's arithmetic with the symbolic work done once at setup) or
+ * SuiteSparse LDL itself (the reference).
  *
  * Lifecycle (memory is claimed in exactly one place, from ONE caller-provided arena):
  *
@@ -109,7 +110,7 @@ typedef struct {
 } tscvx_data;
 
 /* KKT factorization backends (tscvx_settings.kkt_backend). */
-enum { TSCVX_KKT_SUPERNODAL = 0, TSCVX_KKT_LDL = 1 };
+enum { TSCVX_KKT_LDL = 1, TSCVX_KKT_STATIC = 2 };
 
 /* ---- settings ---------------------------------------------------------------------------- */
 
@@ -129,12 +130,12 @@ typedef struct {
     tscvx_int ruiz_iters;        /* Ruiz equilibration passes, 0..50 (setup only) */
     tscvx_int soc_dense_max;     /* SOCs up to this dimension get a dense KKT block; larger
                                     ones the sparse diagonal + rank-2 expansion (setup only) */
-    tscvx_int kkt_backend;       /* KKT factorization (setup only): TSCVX_KKT_LDL (SuiteSparse
-                                    LDL, the reference; default) or TSCVX_KKT_SUPERNODAL (own
-                                    dense-panel LDL', no library code per iteration; on the
-                                    landing KKT about the same instructions and time, a
-                                    larger arena, and a few more reduced-accuracy endings on
-                                    ill-conditioned random SOCPs) */
+    tscvx_int kkt_backend;       /* KKT factorization (setup only): TSCVX_KKT_STATIC (default:
+                                    row patterns of L recorded at setup, then the same
+                                    operations as SuiteSparse LDL -- the same factor, no
+                                    elimination-tree walks per factorization; nnz(L) + dim
+                                    more ints of arena) or TSCVX_KKT_LDL (SuiteSparse LDL,
+                                    the reference) */
 } tscvx_settings;
 
 /* ---- information after a solve ----------------------------------------------------------- */

@@ -90,7 +90,7 @@ tscvx_setup_status tscvx_default_settings(tscvx_settings *st) {
     st->refine_iters = 3;
     st->ruiz_iters = 15;
     st->soc_dense_max = 16;
-    st->kkt_backend = TSCVX_KKT_LDL;
+    st->kkt_backend = TSCVX_KKT_STATIC;
     return TSCVX_SETUP_OK;
 }
 
@@ -108,7 +108,7 @@ static tscvx_setup_status check_settings(const tscvx_settings *st) {
     if (st->refine_iters < 0 || st->refine_iters > 20) return TSCVX_SETUP_BAD_SETTINGS;
     if (st->ruiz_iters < 0 || st->ruiz_iters > 50) return TSCVX_SETUP_BAD_SETTINGS;
     if (st->soc_dense_max < 1) return TSCVX_SETUP_BAD_SETTINGS;
-    if (st->kkt_backend != TSCVX_KKT_SUPERNODAL && st->kkt_backend != TSCVX_KKT_LDL)
+    if (st->kkt_backend != TSCVX_KKT_STATIC && st->kkt_backend != TSCVX_KKT_LDL)
         return TSCVX_SETUP_BAD_SETTINGS;
     return TSCVX_SETUP_OK;
 }
@@ -330,7 +330,7 @@ static tscvx_setup_status build(const tscvx_data *d, const tscvx_settings *st, t
     ws->n = d->n, ws->p = d->p, ws->m = d->m;
     ws->K.l = d->l, ws->K.nsoc = d->nsoc, ws->K.m = d->m, ws->K.degree = d->l + d->nsoc;
     ws->kkt.backend = st->kkt_backend == TSCVX_KKT_LDL ? &tscvx_backend_ldl
-                                                       : &tscvx_backend_supernodal;
+                                                       : &tscvx_backend_static;
     ws->kkt.dim = (tscvx_int)dim, ws->kkt.nnz = (tscvx_int)nnzK;
     ws->kkt.nexp = nexp, ws->kkt.ncone = ncone;
     ws->log_cap = st->max_iter + 1;

@@ -118,28 +118,18 @@ struct tscvx_kkt {
     tscvx_float *D;       /* dim: the pivots */
     /* SuiteSparse LDL backend: LDL' factors and work arrays (dim or nnz(L)) */
     tscvx_int *Lp, *Parent, *Lnz, *Flag, *Li;
-    tscvx_int *Pattern;   /* dim: shares memory with sol (factorization vs. solves) */
+    tscvx_int *Pattern;   /* dim: shares memory with sol (factorization vs. solves); the
+                             static backend's column fill pointers */
     tscvx_float *Lx, *Y;
-    /* supernodal backend (supernodal.c) */
-    tscvx_int nsuper;     /* supernodes */
-    tscvx_int nsrow;      /* entries of the row lists */
-    tscvx_int nslx;       /* doubles of the panels */
-    tscvx_int wmax, rmax; /* widest panel, longest row list */
-    tscvx_int *sfirst;    /* nsuper+1: first column of each supernode */
-    tscvx_int *srowp;     /* nsuper+1: start of each row list in srows */
-    tscvx_int *srows;     /* nsrow: rows below each diagonal block, ascending */
-    tscvx_int *sxp;       /* nsuper+1: start of each panel in SLx */
-    tscvx_int *col2sup;   /* dim: supernode of each column */
-    tscvx_int *kmap;      /* nnz: panel slot of each KKT entry */
-    tscvx_int *srel;      /* rmax: work, rows of a panel within an ancestor's panel */
-    tscvx_float *SLx;     /* nslx: panels, column-major h x w, L below the diagonal, D on it */
-    tscvx_float *swork;   /* wmax: work */
+    /* static-pattern LDL' backend (ldlstatic.c): LDL's Lp, Li, Lx, D, Y and the pattern of
+     * each row of L in ldl_numeric's order (Rp dim+1, Rj nnz(L)) */
+    tscvx_int *Rp, *Rj;
     /* solve and refinement work (dim each, permuted); res is the backend's */
     tscvx_float *sol, *res;
 };
 
 extern const tscvx_backend tscvx_backend_ldl;
-extern const tscvx_backend tscvx_backend_supernodal;
+extern const tscvx_backend tscvx_backend_static;
 
 /* Solve K [dx; dy; dz] = [rx; ry; rz] with iterative refinement; vectors in original order.
  * Returns the number of refinement steps, or -1 when the residual stays non-finite. */

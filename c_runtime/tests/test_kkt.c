@@ -1,4 +1,4 @@
-/* KKT system: pattern + maps + factor (supernodal and SuiteSparse LDL backends) and refined
+/* KKT system: pattern + maps + factor (static-pattern and SuiteSparse LDL backends) and refined
  * solve against a dense reference (Gaussian elimination with partial pivoting on the
  * unregularized KKT matrix), for dense SOC blocks and for the sparse (diagonal + rank-2)
  * expansion. */
@@ -131,12 +131,111 @@ static void run(int dense_max, int with_P, int backend) {
           backend, dense_max, with_P, err, scale);
 }
 
+/* ---- the static-pattern backend alone, on random quasi-definite matrices ---------------- */
+
+#define QD_MAX 60
+
+/* Random quasi-definite K = [H B'; B -C] (H, C diagonally dominant, positive diagonals),
+ * symmetrically permuted at random; upper triangle CSC into kk (dim, nnz, Kp, Ki, Kx) and the
+ * dense matrix into Kd. Returns the number of positive pivots the LDL' must have. */
+static tscvx_int random_qd(tscvx_kkt *kk, int dim, double density, double *Kd) {
+    int npos = 1 + (int)(ct_rand() * (dim - 1)), perm[QD_MAX];
+    for (int i = 0; i < dim; i++) perm[i] = i;
+    for (int i = dim - 1; i > 0; i--) { /* Fisher-Yates */
+        const int j = (int)(ct_rand() * (i + 1)), t = perm[i];
+        perm[i] = perm[j], perm[j] = t;
+    }
+    memset(Kd, 0, sizeof(double) * dim * dim);
+    for (int j = 0; j < dim; j++)
+        for (int i = 0; i < j; i++)
+            if (ct_rand() < density) {
+                const double v = ct_randn();
+                Kd[perm[j] * dim + perm[i]] = Kd[perm[i] * dim + perm[j]] = v;
+            }
+    for (int i = 0; i < dim; i++) { /* dominant diagonal: + on the first npos, - after */
+        double s = 1.0 + ct_rand();
+        for (int j = 0; j < dim; j++) s += fabs(Kd[perm[j] * dim + perm[i]]);
+        Kd[perm[i] * dim + perm[i]] = i < npos ? s : -s;
+    }
+    tscvx_int nz = 0;
+    for (int j = 0; j < dim; j++) {
+        kk->Kp[j] = nz;
+        for (int i = 0; i <= j; i++)
+            if (Kd[j * dim + i] != 0.0 || i == j) kk->Ki[nz] = i, kk->Kx[nz++] = Kd[j * dim + i];
+    }
+    kk->Kp[dim] = nz;
+    kk->dim = dim, kk->nnz = nz;
+    return npos;
+}
+
+/* Symbolic + alloc + numeric of backend b on kk (memory from `arena`); 0 or -1. */
+static int factor_with(tscvx_kkt *kk, const tscvx_backend *b, unsigned char *arena,
+                       size_t bytes, tscvx_int *tmp, tscvx_float *sol) {
+    kk->backend = b;
+    const long lnz = b->symbolic(kk, tmp);
+    if (lnz < 0) return -1;
+    kk->lnz = (tscvx_int)lnz;
+    tscvx_arena a = {arena, bytes, 0, 0, 0};
+    if (b->alloc(kk, &a) != 0 || a.overflow) return -1;
+    kk->sol = sol, kk->Pattern = (tscvx_int *)sol;
+    return b->numeric(kk);
+}
+
+static void run_static_vs_ldl(int dim, double density) {
+    static double Kd[QD_MAX * QD_MAX];
+    static tscvx_int Kp[QD_MAX + 1], Ki[QD_MAX * QD_MAX], tmp[5 * QD_MAX + 2];
+    static tscvx_float Kx[QD_MAX * QD_MAX], sol_s[QD_MAX], sol_l[QD_MAX];
+    static unsigned char mem_s[1 << 16], mem_l[1 << 16];
+    tscvx_kkt ks, kl;
+    memset(&ks, 0, sizeof ks);
+    ks.Kp = Kp, ks.Ki = Ki, ks.Kx = Kx;
+    ks.npos = random_qd(&ks, dim, density, Kd);
+    kl = ks;
+    CHECK(factor_with(&kl, &tscvx_backend_ldl, mem_l, sizeof mem_l, tmp, sol_l) == 0, "ldl");
+    CHECK(factor_with(&ks, &tscvx_backend_static, mem_s, sizeof mem_s, tmp, sol_s) == 0,
+          "static dim %d", dim);
+    CHECK(ks.lnz == kl.lnz, "nnz(L) %d vs %d", (int)ks.lnz, (int)kl.lnz);
+    /* the same operations in the same order: bitwise the same factor */
+    int same = 1;
+    for (int i = 0; i < dim; i++) same &= ks.D[i] == kl.D[i];
+    for (int j = 0; j <= dim; j++) same &= ks.Lp[j] == kl.Lp[j];
+    for (tscvx_int p = 0; p < ks.lnz; p++) same &= ks.Li[p] == kl.Li[p] && ks.Lx[p] == kl.Lx[p];
+    CHECK(same, "static factor differs from SuiteSparse LDL (dim %d)", dim);
+    /* solves: bitwise LDL's, and K x = b to rounding against the dense matrix */
+    double b[QD_MAX], xs[QD_MAX], xl[QD_MAX];
+    for (int i = 0; i < dim; i++) b[i] = xs[i] = xl[i] = ct_randn();
+    ks.backend->solve(&ks, xs);
+    kl.backend->solve(&kl, xl);
+    double rmax = 0.0, kmax = 0.0, xmax = 0.0;
+    for (int i = 0; i < dim; i++) {
+        double r = b[i];
+        for (int j = 0; j < dim; j++) r -= Kd[j * dim + i] * xs[j], kmax = fmax(kmax, fabs(Kd[j * dim + i]));
+        rmax = fmax(rmax, fabs(r)), xmax = fmax(xmax, fabs(xs[i]));
+        same &= xs[i] == xl[i];
+    }
+    CHECK(same, "static solve differs from SuiteSparse LDL (dim %d)", dim);
+    CHECK(rmax <= 1e-12 * kmax * xmax * dim, "residual %g (|K| %g |x| %g)", rmax, kmax, xmax);
+    /* the solves use the work vector: a second factorization must not see that */
+    for (int i = 0; i < dim; i++) ks.Y[i] = 1e300, sol_s[i] = 0.0;
+    CHECK(ks.backend->numeric(&ks) == 0, "refactor");
+    for (int i = 0; i < dim; i++) same &= ks.D[i] == kl.D[i];
+    CHECK(same, "refactorization differs (dim %d)", dim);
+    /* wrong inertia and a zero pivot are failures */
+    ks.npos = kl.npos + 1;
+    CHECK(ks.backend->numeric(&ks) == -1, "inertia not checked");
+    ks.npos = kl.npos;
+    for (tscvx_int t = Kp[0]; t < Kp[1]; t++) Kx[t] = 0.0; /* K(0,0) = 0 */
+    CHECK(ks.backend->numeric(&ks) == -1, "zero pivot not caught");
+}
+
 int main(void) {
     for (int rep = 0; rep < 20; rep++) /* both KKT backends */
-        for (int backend = TSCVX_KKT_SUPERNODAL; backend <= TSCVX_KKT_LDL; backend++) {
+        for (int backend = TSCVX_KKT_LDL; backend <= TSCVX_KKT_STATIC; backend++) {
             run(16, rep % 2, backend);
             run(3, rep % 2, backend);
             run(1, rep % 2, backend);
         }
+    for (int rep = 0; rep < 200; rep++) /* dims 1..60, sparse to dense */
+        run_static_vs_ldl(1 + rep % QD_MAX, rep < 100 ? 0.08 : 0.3);
     return ct_report("test_kkt");
 }
