@@ -13,19 +13,7 @@
 
 #include "socp_internal.h"
 
-/* u'v, two terms per pass into one sum (the cones are small: loop overhead counts) */
-static inline tscvx_float dot(const tscvx_float *u, const tscvx_float *v, tscvx_int n) {
-    tscvx_float d = 0.0;
-    tscvx_int i = 0;
-    for (; i + 2 <= n; i += 2) {
-        d += u[i] * v[i];
-        d += u[i + 1] * v[i + 1];
-    }
-    if (i < n) d += u[i] * v[i];
-    return d;
-}
-
-static tscvx_float norm2(const tscvx_float *u, tscvx_int n) { return sqrt(dot(u, u, n)); }
+static tscvx_float norm2(const tscvx_float *u, tscvx_int n) { return sqrt(tscvx_dot(u, u, n)); }
 
 /* det u = u0^2 - |u1|^2, written as (u0 - |u1|)(u0 + |u1|) against cancellation */
 static tscvx_float soc_det(const tscvx_float *u, tscvx_int q) {
@@ -39,7 +27,7 @@ void tscvx_cone_prod(const tscvx_cones *K, const tscvx_float *u, const tscvx_flo
     for (tscvx_int k = 0; k < K->nsoc; k++) {
         const tscvx_int o = K->off[k], q = K->q[k];
         const tscvx_float u0 = u[o], v0 = v[o];
-        const tscvx_float uv = dot(u + o, v + o, q);
+        const tscvx_float uv = tscvx_dot(u + o, v + o, q);
         for (tscvx_int j = 1; j < q; j++) out[o + j] = u0 * v[o + j] + v0 * u[o + j];
         out[o] = uv;
     }
@@ -49,7 +37,7 @@ void tscvx_cone_prod(const tscvx_cones *K, const tscvx_float *u, const tscvx_flo
 static inline void soc_div(tscvx_int q, const tscvx_float *u, const tscvx_float *v,
                            tscvx_float *out) {
     const tscvx_float u0 = u[0];
-    const tscvx_float w0 = (u0 * v[0] - dot(u + 1, v + 1, q - 1)) / soc_det(u, q);
+    const tscvx_float w0 = (u0 * v[0] - tscvx_dot(u + 1, v + 1, q - 1)) / soc_det(u, q);
     for (tscvx_int j = 1; j < q; j++) out[j] = (v[j] - w0 * u[j]) / u0;
     out[0] = w0;
 }
@@ -83,7 +71,7 @@ int tscvx_nt_scaling(const tscvx_cones *K, const tscvx_float *s, const tscvx_flo
         if (!(wdet > 0.0)) return -1;
         const tscvx_float wn = sqrt(wdet), gamma = 0.5 * wn;
         for (tscvx_int j = 1; j < q; j++) w[j] /= wn;
-        w[0] = sqrt(1.0 + dot(w + 1, w + 1, q - 1)); /* det wbar = 1 exactly */
+        w[0] = sqrt(1.0 + tscvx_dot(w + 1, w + 1, q - 1)); /* det wbar = 1 exactly */
         W->eta[k] = sqrt(sn / zn);
         /* lambda = W z without cancellation (CVXOPT cone notes):
          *  lambda0 = gamma,  lambda1 = (c1 s1 + c2 z1)/(sbar0 + zbar0 + 2 gamma),
@@ -103,7 +91,7 @@ static inline void soc_apply(tscvx_int q, const tscvx_float *w, tscvx_float eta,
                              const tscvx_float *v, tscvx_float *out) {
     const tscvx_float sgn = inverse ? -1.0 : 1.0;
     const tscvx_float scale = inverse ? 1.0 / eta : eta;
-    const tscvx_float w1v1 = dot(w + 1, v + 1, q - 1);
+    const tscvx_float w1v1 = tscvx_dot(w + 1, v + 1, q - 1);
     const tscvx_float v0 = v[0];
     const tscvx_float coef = sgn * v0 + w1v1 / (1.0 + w[0]);
     for (tscvx_int j = 1; j < q; j++) out[j] = scale * (v[j] + coef * w[j]);
@@ -160,7 +148,7 @@ tscvx_float tscvx_cone_max_step(const tscvx_cones *K, const tscvx_float *u,
         const tscvx_float dn = norm2(du + o + 1, q - 1);
         if (du[o] >= dn) continue; /* direction inside the cone */
         const tscvx_float A = (du[o] - dn) * (du[o] + dn);
-        const tscvx_float B = u[o] * du[o] - dot(u + o + 1, du + o + 1, q - 1);
+        const tscvx_float B = u[o] * du[o] - tscvx_dot(u + o + 1, du + o + 1, q - 1);
         const tscvx_float C = soc_det(u + o, q);
         if (!(C > 0.0)) return 0.0;
         tscvx_float disc = B * B - A * C;

@@ -24,18 +24,6 @@
 
 /* ---- small dense/sparse kernels ---------------------------------------------------------- */
 
-/* u'v, two terms per pass into one sum (the same rounding as one term per pass) */
-static inline tscvx_float vdot(const tscvx_float *u, const tscvx_float *v, tscvx_int n) {
-    tscvx_float d = 0.0;
-    tscvx_int i = 0;
-    for (; i + 2 <= n; i += 2) {
-        d += u[i] * v[i];
-        d += u[i + 1] * v[i + 1];
-    }
-    if (i < n) d += u[i] * v[i];
-    return d;
-}
-
 /* |u ./ s|_inf (undo a diagonal scaling) */
 static tscvx_float vnorm_inf_div(const tscvx_float *u, const tscvx_float *s, tscvx_int n) {
     tscvx_float r = 0.0;
@@ -94,9 +82,9 @@ static void residuals(tscvx_workspace *ws) {
     for (tscvx_int i = 0; i < m; i++) ws->rz[i] = ws->s[i] - ws->h[i] * tau;
     spmv_both(&ws->A, ws->y, ws->rx, ws->x, ws->ry); /* rx += A'y, ry += A x */
     spmv_both(&ws->G, ws->z, ws->rx, ws->x, ws->rz); /* rx += G'z, rz += G x */
-    const tscvx_float xPx = vdot(ws->x, ws->Px, n);
-    ws->rtau = ws->kappa + vdot(ws->c, ws->x, n) + vdot(ws->b, ws->y, p) +
-               vdot(ws->h, ws->z, m) + xPx / tau;
+    const tscvx_float xPx = tscvx_dot(ws->x, ws->Px, n);
+    ws->rtau = ws->kappa + tscvx_dot(ws->c, ws->x, n) + tscvx_dot(ws->b, ws->y, p) +
+               tscvx_dot(ws->h, ws->z, m) + xPx / tau;
 }
 
 /* Residuals and objectives of (x, y, z, s)/tau in the ORIGINAL units (undo Ruiz and cs). */
@@ -104,16 +92,16 @@ static measures measure(tscvx_workspace *ws) {
     const tscvx_int n = ws->n, p = ws->p, m = ws->m;
     const tscvx_float tau = ws->tau, cs = ws->cs;
     measures r;
-    const tscvx_float xPx = vdot(ws->x, ws->Px, n) / (tau * tau);
-    r.pcost = (0.5 * xPx + vdot(ws->c, ws->x, n) / tau) / cs;
-    r.dcost = (-0.5 * xPx - (vdot(ws->b, ws->y, p) + vdot(ws->h, ws->z, m)) / tau) / cs;
+    const tscvx_float xPx = tscvx_dot(ws->x, ws->Px, n) / (tau * tau);
+    r.pcost = (0.5 * xPx + tscvx_dot(ws->c, ws->x, n) / tau) / cs;
+    r.dcost = (-0.5 * xPx - (tscvx_dot(ws->b, ws->y, p) + tscvx_dot(ws->h, ws->z, m)) / tau) / cs;
     r.gap_abs = fabs(r.pcost - r.dcost);
     r.gap_rel = r.gap_abs / fmax(1.0, fmin(fabs(r.pcost), fabs(r.dcost)));
     const tscvx_float pa = vnorm_inf_div(ws->ry, ws->EA, p) / tau / (1.0 + ws->norm_b);
     const tscvx_float pg = vnorm_inf_div(ws->rz, ws->EG, m) / tau / (1.0 + ws->norm_h);
     r.pres = fmax(pa, pg);
     r.dres = vnorm_inf_div(ws->rx, ws->D, n) / cs / tau / (1.0 + ws->norm_c);
-    r.mu = (vdot(ws->s, ws->z, m) + tau * ws->kappa) / (ws->K.degree + 1);
+    r.mu = (tscvx_dot(ws->s, ws->z, m) + tau * ws->kappa) / (ws->K.degree + 1);
     return r;
 }
 
@@ -128,7 +116,7 @@ static int converged(const tscvx_workspace *ws, const measures *r, int reduced) 
 /* Primal infeasibility: |A'y + G'z| <= tol (-(b'y + h'z)), original units, kappa > tau. */
 static int primal_infeasible(tscvx_workspace *ws) {
     const tscvx_int n = ws->n;
-    const tscvx_float rho = -(vdot(ws->b, ws->y, ws->p) + vdot(ws->h, ws->z, ws->m)) / ws->cs;
+    const tscvx_float rho = -(tscvx_dot(ws->b, ws->y, ws->p) + tscvx_dot(ws->h, ws->z, ws->m)) / ws->cs;
     if (!(rho > 0.0) || !(ws->kappa > ws->tau)) return 0;
     tscvx_float *aty = ws->wn; /* A'y + G'z = rx - Px - c tau (scaled) */
     for (tscvx_int j = 0; j < n; j++) aty[j] = ws->rx[j] - ws->Px[j] - ws->c[j] * ws->tau;
@@ -139,7 +127,7 @@ static int primal_infeasible(tscvx_workspace *ws) {
  * (x in the null space of a P perturbed by tol |P|), original units, kappa > tau. */
 static int dual_infeasible(tscvx_workspace *ws) {
     const tscvx_int n = ws->n, p = ws->p, m = ws->m;
-    const tscvx_float rho = -vdot(ws->c, ws->x, n) / ws->cs;
+    const tscvx_float rho = -tscvx_dot(ws->c, ws->x, n) / ws->cs;
     if (!(rho > 0.0) || !(ws->kappa > ws->tau)) return 0;
     const tscvx_float tol = ws->st.tol_infeas * rho;
     tscvx_float r = 0.0, xnorm = 0.0;
@@ -163,9 +151,9 @@ void tscvx_unscale_solution(const tscvx_workspace *ws, tscvx_float *x, tscvx_flo
     tscvx_float px = 1.0 / ws->tau, pd = 1.0 / (ws->tau * ws->cs);
     if (ws->info.status == TSCVX_PRIMAL_INFEASIBLE) {
         px = NAN;
-        pd = -1.0 / (vdot(ws->b, ws->y, p) + vdot(ws->h, ws->z, m));
+        pd = -1.0 / (tscvx_dot(ws->b, ws->y, p) + tscvx_dot(ws->h, ws->z, m));
     } else if (ws->info.status == TSCVX_DUAL_INFEASIBLE) {
-        px = -ws->cs / vdot(ws->c, ws->x, n);
+        px = -ws->cs / tscvx_dot(ws->c, ws->x, n);
         pd = NAN;
     }
     for (tscvx_int j = 0; x && j < n; j++) x[j] = ws->D[j] * ws->x[j] * px;
@@ -215,7 +203,7 @@ static int constant_solve(tscvx_workspace *ws) {
     if (tscvx_kkt_solve(&ws->kkt, n, ws->p, m, ws->wn, ws->b, ws->h, ws->x1, ws->y1, ws->z1,
                         ws->refine_now) < 0)
         return -1;
-    tscvx_float den = -ws->kappa / tau + vdot(ws->b, ws->y1, ws->p) + vdot(ws->h, ws->z1, m);
+    tscvx_float den = -ws->kappa / tau + tscvx_dot(ws->b, ws->y1, ws->p) + tscvx_dot(ws->h, ws->z1, m);
     for (tscvx_int j = 0; j < n; j++)
         den += (ws->c[j] + 2.0 * ws->Px[j] / tau) * ws->x1[j] - ws->x[j] * ws->Px[j] / (tau * tau);
     ws->tau_den = den;
@@ -241,7 +229,7 @@ static int direction(tscvx_workspace *ws, tscvx_float lin, const tscvx_float *ds
     tscvx_float num = -lin * ws->rtau + dk / ws->tau;
     for (tscvx_int j = 0; j < n; j++)
         num -= (ws->c[j] + 2.0 * ws->Px[j] / ws->tau) * ws->dx[j];
-    num -= vdot(ws->b, ws->dy, p) + vdot(ws->h, ws->dz, m);
+    num -= tscvx_dot(ws->b, ws->dy, p) + tscvx_dot(ws->h, ws->dz, m);
     ws->dtau = num / ws->tau_den;
     for (tscvx_int j = 0; j < n; j++) ws->dx[j] += ws->dtau * ws->x1[j];
     for (tscvx_int i = 0; i < p; i++) ws->dy[i] += ws->dtau * ws->y1[i];
