@@ -44,7 +44,7 @@ $(BUILD)/pdg_example: c_runtime/examples/pdg_example.c c_runtime/examples/host_i
 $(BUILD)/pdg_budget_driver: c_runtime/examples/pdg_budget_driver.c c_runtime/examples/measure.h c_runtime/examples/host_io.h c_runtime/include/tscvx_guidance.h c_runtime/include/tscvx_nn.h $(BUILD)/libtscvx_gnc.a $(BUILD)/libtscvx.a
 	$(CC) -std=c99 -Wall -Wextra -Werror -O2 -g -Ic_runtime/include $< -o $@ $(GNC_LINK)
 
-$(BUILD)/ctest/%: c_runtime/guidance/tests/%.c c_runtime/include/tscvx_guidance.h c_runtime/examples/host_io.h $(BUILD)/libtscvx_gnc.a $(BUILD)/libtscvx.a
+$(BUILD)/ctest/%: c_runtime/guidance/tests/%.c c_runtime/guidance/tests/gnc_test.h c_runtime/include/tscvx_guidance.h c_runtime/examples/host_io.h $(BUILD)/libtscvx_gnc.a $(BUILD)/libtscvx.a
 	@mkdir -p $(BUILD)/ctest
 	$(CC) -std=c99 -Wall -Wextra -Werror -O1 -g -Ic_runtime/include -Ic_runtime/examples $< -o $@ $(GNC_LINK)
 

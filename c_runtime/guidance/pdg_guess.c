@@ -354,15 +354,7 @@ void pdg_project_guess(const pdg_scenario *sc, double *x, double *u, double *t_f
     double xf[NX];
     int k, i;
     pdg_x_final_target(p, xf);
-    for (i = 0; i < 3; ++i) {
-        x[i] = sc->r0[i];
-        x[3 + i] = sc->v0[i];
-        x[10 + i] = sc->w0[i];
-    }
-    for (i = 0; i < 4; ++i) {
-        x[6 + i] = sc->q0[i];
-    }
-    x[IM] = sc->m0;
+    pdg_initial_state(sc, x);
     {
         double *xl = x + NX * (N - 1);
         for (i = 0; i < 6; ++i) {

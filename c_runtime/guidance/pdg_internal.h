@@ -112,6 +112,8 @@ double pdg_cos_gimbal(const pdg_params *p);
 double pdg_tilt_q_max(const pdg_params *p);
 double pdg_omega_max(const pdg_params *p);
 void pdg_x_final_target(const pdg_params *p, double *xf);
+/* x0 (NX) of a scenario in the state order of DESIGN.md */
+void pdg_initial_state(const pdg_scenario *s, double *x0);
 void pdg_dcm_bi(const double *q, double C[3][3]);
 
 /* pdg_guess.c: needs 40 N doubles of work */

@@ -102,6 +102,20 @@ void pdg_param_vector(const pdg_params *p, double *pv)
     pv[12] = p->aero_coeff;
 }
 
+void pdg_initial_state(const pdg_scenario *s, double *x0)
+{
+    int i;
+    for (i = 0; i < 3; ++i) {
+        x0[i] = s->r0[i];
+        x0[3 + i] = s->v0[i];
+        x0[10 + i] = s->w0[i];
+    }
+    for (i = 0; i < 4; ++i) {
+        x0[6 + i] = s->q0[i];
+    }
+    x0[13] = s->m0;
+}
+
 void pdg_x_final_target(const pdg_params *p, double *xf)
 {
     int i;

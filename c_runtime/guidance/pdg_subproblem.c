@@ -191,14 +191,16 @@ void pdg_emit(pdg_emitter *e, const pdg_layout *L, int roll_free, const pdg_valu
     }
     row += NX * nI;
     /* ---- boundary conditions */
-    for (i = 0; i < NX; ++i) {
-        put(e, row + i, XI(0, i), 1.0);
+    {
+        double x0[NX];
         if (vals) {
-            const double x0[NX] = {v->scn->r0[0], v->scn->r0[1], v->scn->r0[2], v->scn->v0[0],
-                                   v->scn->v0[1], v->scn->v0[2], v->scn->q0[0], v->scn->q0[1],
-                                   v->scn->q0[2], v->scn->q0[3], v->scn->w0[0], v->scn->w0[1],
-                                   v->scn->w0[2], v->scn->m0};
-            rhs(e, v, row + i, (x0[i] - sc->cx[i]) / sc->Sx[i]);
+            pdg_initial_state(v->scn, x0);
+        }
+        for (i = 0; i < NX; ++i) {
+            put(e, row + i, XI(0, i), 1.0);
+            if (vals) {
+                rhs(e, v, row + i, (x0[i] - sc->cx[i]) / sc->Sx[i]);
+            }
         }
     }
     row += NX;

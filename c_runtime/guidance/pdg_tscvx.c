@@ -15,19 +15,10 @@
 
 void pdg_theta_of(const pdg_scenario *s, double *theta)
 {
-    int i;
     if (!s || !theta) {
         return;
     }
-    for (i = 0; i < 3; ++i) {
-        theta[i] = s->r0[i];
-        theta[3 + i] = s->v0[i];
-        theta[10 + i] = s->w0[i];
-    }
-    for (i = 0; i < 4; ++i) {
-        theta[6 + i] = s->q0[i];
-    }
-    theta[13] = s->m0;
+    pdg_initial_state(s, theta); /* theta starts with x0 (guidance.dataset.theta_of) */
     theta[14] = s->params.glideslope_deg;
     theta[15] = s->params.tilt_max_deg;
 }

@@ -13,33 +13,16 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "gnc_test.h"
 #include "tscvx_guidance.h"
-
-static int failures = 0;
-#define CHECK(cond)                                                                  \
-    do {                                                                             \
-        if (!(cond)) {                                                               \
-            fprintf(stderr, "%s:%d: CHECK failed: %s\n", __FILE__, __LINE__, #cond); \
-            failures++;                                                              \
-        }                                                                            \
-    } while (0)
-
-static double x[PDG_N_MAX * PDG_NSTATE], u[PDG_N_MAX * PDG_NCTRL];
 
 static pdg_workspace *make_ws(int N, int roll_free, const pdg_settings *st, void **arena,
                               size_t *bytes)
 {
     size_t need = 0;
-    void *scratch = NULL;
     pdg_workspace *ws = NULL;
-    pdg_setup_status s = PDG_SETUP_SCRATCH_TOO_SMALL;
     int tries;
-    for (tries = 0; tries < 4 && s == PDG_SETUP_SCRATCH_TOO_SMALL; ++tries) {
-        free(scratch);
-        scratch = need ? malloc(need) : NULL;
-        s = pdg_workspace_size(N, roll_free, st, scratch, need, &need);
-    }
-    free(scratch);
+    const pdg_setup_status s = arena_size(N, roll_free, st, &need, &tries);
     CHECK(s == PDG_SETUP_OK);
     CHECK(tries <= 3);
     if (s != PDG_SETUP_OK) {

@@ -13,37 +13,21 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "gnc_test.h"
 #include "host_io.h"
 #include "tscvx_guidance.h"
 #include "tscvx_nn.h"
-
-static int failures = 0;
-#define CHECK(c)                                                                              \
-    do {                                                                                      \
-        if (!(c)) {                                                                           \
-            fprintf(stderr, "%s:%d: CHECK failed: %s\n", __FILE__, __LINE__, #c);             \
-            failures++;                                                                       \
-        }                                                                                     \
-    } while (0)
-
-static double x[PDG_N_MAX * PDG_NSTATE], u[PDG_N_MAX * PDG_NCTRL];
 
 static pdg_workspace *make_ws(int N, void **arena)
 {
     pdg_settings st;
     pdg_workspace *ws = NULL;
     size_t need = 0;
-    pdg_setup_status s = PDG_SETUP_SCRATCH_TOO_SMALL;
     int tries;
-    void *scratch = NULL;
     pdg_default_settings(&st);
-    for (tries = 0; tries < 4 && s == PDG_SETUP_SCRATCH_TOO_SMALL; ++tries) {
-        free(scratch);
-        scratch = need ? malloc(need) : NULL;
-        s = pdg_workspace_size(N, 1, &st, scratch, need, &need);
+    if (arena_size(N, 1, &st, &need, &tries) != PDG_SETUP_OK || !(*arena = malloc(need))) {
+        return NULL;
     }
-    free(scratch);
-    if (s != PDG_SETUP_OK || !(*arena = malloc(need))) return NULL;
     return pdg_setup(&ws, *arena, need, N, 1, &st) == PDG_SETUP_OK ? ws : NULL;
 }
 

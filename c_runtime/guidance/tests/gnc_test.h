@@ -1,0 +1,40 @@
+/*
+ * gnc_test.h -- what the C guidance tests share: the CHECK counter, trajectory buffers and
+ * the arena sizing loop (scratch for pdg_workspace_size grows until it suffices).
+ */
+#ifndef TSCVX_GNC_TEST_H
+#define TSCVX_GNC_TEST_H
+
+#include <stdio.h>
+#include <stdlib.h>
+
+#include "tscvx_guidance.h"
+
+static int failures = 0;
+#define CHECK(cond)                                                                  \
+    do {                                                                             \
+        if (!(cond)) {                                                               \
+            fprintf(stderr, "%s:%d: CHECK failed: %s\n", __FILE__, __LINE__, #cond); \
+            failures++;                                                              \
+        }                                                                            \
+    } while (0)
+
+static double x[PDG_N_MAX * PDG_NSTATE], u[PDG_N_MAX * PDG_NCTRL];
+
+/* Arena bytes for (N, roll_free, settings) in *need; *tries counts the sizing calls. */
+static inline pdg_setup_status arena_size(int N, int roll_free, const pdg_settings *st,
+                                          size_t *need, int *tries)
+{
+    void *scratch = NULL;
+    pdg_setup_status s = PDG_SETUP_SCRATCH_TOO_SMALL;
+    *need = 0;
+    for (*tries = 0; *tries < 4 && s == PDG_SETUP_SCRATCH_TOO_SMALL; ++*tries) {
+        free(scratch);
+        scratch = *need ? malloc(*need) : NULL;
+        s = pdg_workspace_size(N, roll_free, st, scratch, *need, need);
+    }
+    free(scratch);
+    return s;
+}
+
+#endif
