@@ -9,7 +9,8 @@ STAMP  := $(VENV)/.installed
 # `python -m` from the checkout's root runs this checkout's package, wherever the venv's
 # editable install points (several worktrees may share one venv).
 GUIDANCE := $(PY) -m guidance
-APT_PACKAGES := libeigen3-dev libsuitesparse-dev valgrind
+# gcc and python3-venv: a bare Debian image has neither a compiler nor `python3 -m venv`.
+APT_PACKAGES := libeigen3-dev libsuitesparse-dev valgrind gcc python3-venv
 BUILD  := build
 
 .PHONY: all setup apt lib gnc ctest pytest test lint demo bench budget models clean
