@@ -18,7 +18,8 @@ dual_infeasible (x, s hold the certificate, q'x = -1), max_iterations, numerical
 invalid_input (``info["message"]`` says why). ``solve(prob, log=True)`` adds the iteration log
 (``info["log"]``: iter, pcost, dcost, gap, pres, dres, mu, step per iteration). Settings are
 the fields of ``tscvx_settings`` (e.g. ``max_iter``, ``tol_feas``, ``soc_dense_max``,
-``kkt_backend``: ``KKT_STATIC`` or ``KKT_LDL``).
+``kkt_backend``: ``KKT_AUTO`` (default), ``KKT_BANDED``, ``KKT_STATIC`` or ``KKT_LDL``;
+``info["kkt_backend"]`` names the method that ran).
 """
 
 from __future__ import annotations
@@ -87,9 +88,12 @@ _SETTING_FIELDS = [
     ("kkt_backend", c_int),
 ]
 
-# tscvx_settings.kkt_backend: the runtime's static-pattern LDL' (default; the same factor as
+# tscvx_settings.kkt_backend: AUTO (default) takes the banded method when the problem has stage
+# structure (each cone couples a few variables, the equalities neighbouring stages), else the
+# sparse LDL' of the whole KKT matrix: the runtime's static-pattern LDL' (the same factor as
 # SuiteSparse LDL without its per-factorization symbolic work) or SuiteSparse LDL itself.
-KKT_LDL, KKT_STATIC = 1, 2
+KKT_AUTO, KKT_LDL, KKT_STATIC, KKT_BANDED = 0, 1, 2, 3
+KKT_NAMES = {KKT_LDL: "ldl", KKT_STATIC: "static", KKT_BANDED: "banded"}
 
 
 class _Settings(ct.Structure):
@@ -107,6 +111,7 @@ class _Info(ct.Structure):
         ("pres", c_double),
         ("dres", c_double),
         ("mu", c_double),
+        ("kkt_backend", c_int),
         ("kkt_dim", c_int),
         ("kkt_nnz", c_int),
         ("factor_nnz", c_int),

@@ -15,10 +15,17 @@
  * Algorithm: primal-dual interior-point method on the homogeneous self-dual embedding
  * (quadratic objective as in Clarabel), Nesterov-Todd scaling, Mehrotra predictor-corrector,
  * Ruiz equilibration, static regularization of the quasi-definite KKT system with iterative
- * refinement, best-iterate fallback, primal/dual infeasibility certificates. The KKT system is
- * ordered by SuiteSparse AMD and factored behind a small backend table: our static-pattern
- * LDL' (default: SuiteSparse LDL's arithmetic with the symbolic work done once at setup) or
- * SuiteSparse LDL itself (the reference).
+ * refinement, best-iterate fallback, primal/dual infeasibility certificates. Two ways to solve
+ * the Newton systems (tscvx_settings.kkt_backend):
+ *   - banded, for stage-structured problems (optimal control: each cone and P entry couples a
+ *     few variables, the equalities couple neighbouring stages): the cone rows and then the
+ *     variable groups are eliminated exactly (small dense Cholesky factors), and the remaining
+ *     system in the equality multipliers is factored in a reverse Cuthill-McKee order by a
+ *     profile Cholesky; variables coupled to very many equalities (a free final time) are
+ *     bordered. Chosen by default when setup finds the structure;
+ *   - sparse: the whole quasi-definite KKT matrix, ordered by SuiteSparse AMD and factored by
+ *     our static-pattern LDL' (SuiteSparse LDL's arithmetic with the symbolic work done once at
+ *     setup) or SuiteSparse LDL itself (the reference).
  *
  * Lifecycle (memory is claimed in exactly one place, from ONE caller-provided arena):
  *
@@ -67,6 +74,7 @@ typedef enum {
     TSCVX_SETUP_TOO_LARGE,       /* sizes overflow the index type */
     TSCVX_SETUP_NOT_READY,       /* workspace not set up or invalidated by a failed update */
     TSCVX_SETUP_BAD_INDEX,       /* iteration-log index out of range */
+    TSCVX_SETUP_NOT_BANDED,      /* kkt_backend TSCVX_KKT_BANDED, but no banded structure */
     TSCVX_SETUP_NSTATUS
 } tscvx_setup_status;
 
@@ -109,8 +117,9 @@ typedef struct {
     const tscvx_int *q;          /* nsoc cone dimensions (each >= 1), in row order after l */
 } tscvx_data;
 
-/* KKT factorization backends (tscvx_settings.kkt_backend). */
-enum { TSCVX_KKT_LDL = 1, TSCVX_KKT_STATIC = 2 };
+/* KKT methods (tscvx_settings.kkt_backend): AUTO = banded when setup finds the structure,
+ * else STATIC; LDL and STATIC are the sparse method's two factorizations. */
+enum { TSCVX_KKT_AUTO = 0, TSCVX_KKT_LDL = 1, TSCVX_KKT_STATIC = 2, TSCVX_KKT_BANDED = 3 };
 
 /* ---- settings ---------------------------------------------------------------------------- */
 
@@ -130,12 +139,13 @@ typedef struct {
     tscvx_int ruiz_iters;        /* Ruiz equilibration passes, 0..50 (setup only) */
     tscvx_int soc_dense_max;     /* SOCs up to this dimension get a dense KKT block; larger
                                     ones the sparse diagonal + rank-2 expansion (setup only) */
-    tscvx_int kkt_backend;       /* KKT factorization (setup only): TSCVX_KKT_STATIC (default:
-                                    row patterns of L recorded at setup, then the same
-                                    operations as SuiteSparse LDL -- the same factor, no
-                                    elimination-tree walks per factorization; nnz(L) + dim
-                                    more ints of arena) or TSCVX_KKT_LDL (SuiteSparse LDL,
-                                    the reference) */
+    tscvx_int kkt_backend;       /* KKT method (setup only): TSCVX_KKT_AUTO (default: banded
+                                    if the problem has the structure, else static),
+                                    TSCVX_KKT_BANDED (setup fails with NOT_BANDED without the
+                                    structure), TSCVX_KKT_STATIC (sparse LDL' with the row
+                                    patterns of L recorded at setup: SuiteSparse LDL's
+                                    operations without elimination-tree walks) or
+                                    TSCVX_KKT_LDL (SuiteSparse LDL, the reference) */
 } tscvx_settings;
 
 /* ---- information after a solve ----------------------------------------------------------- */
@@ -150,9 +160,11 @@ typedef struct {
     tscvx_float pres;            /* max(|Ax-b|_inf/(1+|b|_inf), |Gx+s-h|_inf/(1+|h|_inf)) */
     tscvx_float dres;            /* |Px + c + A'y + G'z|_inf / (1 + |c|_inf) */
     tscvx_float mu;              /* complementarity (s'z + tau kappa) / (degree + 1) */
-    tscvx_int kkt_dim;           /* dimension of the KKT system */
-    tscvx_int kkt_nnz;           /* nonzeros of its upper triangle */
-    tscvx_int factor_nnz;        /* nonzeros of L */
+    tscvx_int kkt_backend;       /* the method in use: TSCVX_KKT_BANDED, _STATIC or _LDL */
+    tscvx_int kkt_dim;           /* dimension of the factored matrix (sparse: the KKT matrix;
+                                    banded: Y, one row per equality) */
+    tscvx_int kkt_nnz;           /* its stored entries (upper triangle; banded: profile) */
+    tscvx_int factor_nnz;        /* entries of its factor (banded: profile + group blocks) */
     tscvx_int factorizations;    /* numeric factorizations in the last solve */
     size_t arena_used;           /* bytes of the arena held by the workspace */
     size_t arena_high_water;     /* most bytes of the arena ever touched (setup scratch incl.) */

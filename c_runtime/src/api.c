@@ -22,6 +22,9 @@ static const char *const setup_messages[TSCVX_SETUP_NSTATUS] = {
     "problem too large for the index type",
     "workspace not ready (setup or a data update failed)",
     "iteration-log index out of range",
+    "the problem has no structure for the banded KKT method (variable groups larger than 32, "
+    "more than 8 border variables, a variable in no cone and not on P's diagonal, an equality "
+    "row of border variables only, or too wide a profile)",
 };
 
 static const char *const solve_messages[TSCVX_NSTATUS] = {
@@ -90,7 +93,7 @@ tscvx_setup_status tscvx_default_settings(tscvx_settings *st) {
     st->refine_iters = 3;
     st->ruiz_iters = 15;
     st->soc_dense_max = 16;
-    st->kkt_backend = TSCVX_KKT_STATIC;
+    st->kkt_backend = TSCVX_KKT_AUTO;
     return TSCVX_SETUP_OK;
 }
 
@@ -108,7 +111,7 @@ static tscvx_setup_status check_settings(const tscvx_settings *st) {
     if (st->refine_iters < 0 || st->refine_iters > 20) return TSCVX_SETUP_BAD_SETTINGS;
     if (st->ruiz_iters < 0 || st->ruiz_iters > 50) return TSCVX_SETUP_BAD_SETTINGS;
     if (st->soc_dense_max < 1) return TSCVX_SETUP_BAD_SETTINGS;
-    if (st->kkt_backend != TSCVX_KKT_STATIC && st->kkt_backend != TSCVX_KKT_LDL)
+    if (st->kkt_backend < TSCVX_KKT_AUTO || st->kkt_backend > TSCVX_KKT_BANDED)
         return TSCVX_SETUP_BAD_SETTINGS;
     return TSCVX_SETUP_OK;
 }
@@ -205,61 +208,64 @@ enum { MODE_COUNT, MODE_ANALYSE, MODE_SETUP };
 
 #define ALLOC(ptr, count, type) ((ptr) = (type *)tscvx_arena_alloc(a, (size_t)(count), sizeof(type)))
 
-/* Claim every persistent array except the factor's Li/Lx. */
-static void alloc_persistent(tscvx_workspace *ws, tscvx_arena *a, tscvx_int nnzP,
-                             tscvx_int nnzA, tscvx_int nnzG) {
+/* Claim the problem data: cones, P, A, G, c, b, h and the equilibration. */
+static void alloc_data(tscvx_workspace *ws, tscvx_arena *a, tscvx_int nnzP, tscvx_int nnzA,
+                       tscvx_int nnzG) {
     const tscvx_int n = ws->n, p = ws->p, m = ws->m, nsoc = ws->K.nsoc;
-    tscvx_kkt *k = &ws->kkt;
-    const tscvx_int dim = k->dim;
     tscvx_int *q, *off;
     ALLOC(q, nsoc, tscvx_int);
     ALLOC(off, nsoc, tscvx_int);
     ws->K.q = q, ws->K.off = off;
-    ALLOC(ws->P.p, n + 1, tscvx_int);
-    ALLOC(ws->P.i, nnzP, tscvx_int);
-    ALLOC(ws->P.x, nnzP, tscvx_float);
-    ALLOC(ws->A.p, n + 1, tscvx_int);
-    ALLOC(ws->A.i, nnzA, tscvx_int);
-    ALLOC(ws->G.p, n + 1, tscvx_int);
-    ALLOC(ws->G.i, nnzG, tscvx_int);
+    tscvx_csc *M[3] = {&ws->P, &ws->A, &ws->G};
+    const tscvx_int nnz[3] = {nnzP, nnzA, nnzG};
+    for (int k = 0; k < 3; k++) {
+        ALLOC(M[k]->p, n + 1, tscvx_int);
+        ALLOC(M[k]->i, nnz[k], tscvx_int);
+        ALLOC(M[k]->x, nnz[k], tscvx_float);
+    }
     ALLOC(ws->c, n, tscvx_float);
     ALLOC(ws->b, p, tscvx_float);
     ALLOC(ws->h, m, tscvx_float);
     ALLOC(ws->D, n, tscvx_float);
     ALLOC(ws->EA, p, tscvx_float);
     ALLOC(ws->EG, m, tscvx_float);
-    /* KKT */
+}
+
+/* Claim the sparse method's KKT pattern and maps (its factor comes later). */
+static void alloc_kkt(tscvx_workspace *ws, tscvx_arena *a) {
+    tscvx_kkt *k = &ws->kkt;
+    const tscvx_int dim = k->dim;
     ALLOC(k->Kp, dim + 1, tscvx_int);
     ALLOC(k->Ki, k->nnz, tscvx_int);
     ALLOC(k->Kx, k->nnz, tscvx_float);
     ALLOC(k->rowblk, dim, signed char);
     ALLOC(k->pinv, dim, tscvx_int);
-    ALLOC(k->mapP, nnzP, tscvx_int);
-    ALLOC(k->mapA, nnzA, tscvx_int);
-    ALLOC(k->mapG, nnzG, tscvx_int);
-    ALLOC(k->mapDiag, n + p, tscvx_int);
+    ALLOC(k->mapP, ws->P.nnz, tscvx_int);
+    ALLOC(k->mapA, ws->A.nnz, tscvx_int);
+    ALLOC(k->mapG, ws->G.nnz, tscvx_int);
+    ALLOC(k->mapDiag, ws->n + ws->p, tscvx_int);
     ALLOC(k->mapCone, k->ncone, tscvx_int);
-    ALLOC(k->expanded, nsoc, tscvx_int);
+    ALLOC(k->expanded, ws->K.nsoc, tscvx_int);
 }
 
-/* Claim the factor (the backend finishes its analysis there) and the iteration vectors,
- * after the ordering's scratch is released. Returns 0, or -1 if the analysis failed. */
+/* Claim the iteration vectors (and, for the sparse method, the factor: the backend finishes
+ * its analysis there). Returns 0, or -1 if the analysis failed. */
 static int alloc_iterates(tscvx_workspace *ws, tscvx_arena *a) {
     const tscvx_int n = ws->n, p = ws->p, m = ws->m, nsoc = ws->K.nsoc;
-    tscvx_kkt *k = &ws->kkt;
-    const tscvx_int dim = k->dim;
-    if (k->backend->alloc(k, a) != 0) return -1;
-    ALLOC(k->sol, dim, tscvx_float);
-    k->Pattern = (tscvx_int *)k->sol; /* LDL's factorization work; sol is for solves only */
-    /* cones and iterates */
+    if (ws->method == &tscvx_method_sparse) {
+        tscvx_kkt *k = &ws->kkt;
+        if (k->backend->alloc(k, a) != 0) return -1;
+        ALLOC(k->sol, k->dim, tscvx_float);
+        k->Pattern = (tscvx_int *)k->sol; /* LDL's factorization work; sol is for solves only */
+    }
     ALLOC(ws->W.w, m, tscvx_float);
     ALLOC(ws->W.eta, nsoc, tscvx_float);
-    tscvx_float **nvec[] = {&ws->x, &ws->rx, &ws->Px, &ws->x1, &ws->dx, &ws->wn,
+    tscvx_float **nvec[] = {&ws->x, &ws->rx, &ws->Px, &ws->x1, &ws->dx, &ws->cx, &ws->wn,
                             &ws->bx};
-    tscvx_float **pvec[] = {&ws->y, &ws->ry, &ws->y1, &ws->dy, &ws->by};
-    tscvx_float **mvec[] = {&ws->z, &ws->s, &ws->lambda, &ws->rz, &ws->z1,
-                            &ws->dz, &ws->ds, &ws->wm, &ws->wm2,
-                            &ws->bz, &ws->bs};
+    tscvx_float **pvec[] = {&ws->y, &ws->ry, &ws->y1, &ws->dy, &ws->cy, &ws->wp, &ws->by};
+    tscvx_float **mvec[] = {&ws->z, &ws->s, &ws->lambda, &ws->rz, &ws->z1, &ws->wz1,
+                            &ws->dz, &ws->wdz, &ws->cz, &ws->cwz, &ws->e, &ws->ds,
+                            &ws->wm, &ws->wm2, &ws->bz, &ws->bs};
     for (size_t i = 0; i < sizeof nvec / sizeof nvec[0]; i++) ALLOC(*nvec[i], n, tscvx_float);
     for (size_t i = 0; i < sizeof pvec / sizeof pvec[0]; i++) ALLOC(*pvec[i], p, tscvx_float);
     for (size_t i = 0; i < sizeof mvec / sizeof mvec[0]; i++) ALLOC(*mvec[i], m, tscvx_float);
@@ -281,14 +287,7 @@ static void copy_csc(tscvx_csc *M, const tscvx_int *Mp, const tscvx_int *Mi,
     M->nrow = nrow, M->ncol = ncol, M->nnz = nnz_of(Mp, ncol);
     for (tscvx_int j = 0; j <= ncol; j++) M->p[j] = Mp ? Mp[j] : 0;
     if (M->nnz > 0) copy_ints(M->i, Mi, M->nnz);
-    if (M->nnz > 0 && Mx != NULL) copy_floats(M->x, Mx, M->nnz);
-}
-
-/* A and G keep their values in the KKT matrix, at their map slots */
-static void map_values(tscvx_csc *M, tscvx_float *Kx, const tscvx_int *map,
-                       const tscvx_float *Mx) {
-    M->x = Kx, M->xmap = map;
-    for (tscvx_int k = 0; k < M->nnz; k++) CSC_VAL(M, k) = Mx[k];
+    if (M->nnz > 0) copy_floats(M->x, Mx, M->nnz);
 }
 
 static tscvx_float norm_inf(const tscvx_float *v, tscvx_int n) {
@@ -306,14 +305,33 @@ static void data_norms(tscvx_workspace *ws, const tscvx_float *Px, const tscvx_f
     if (h) ws->norm_h = norm_inf(h, ws->m);
 }
 
+/* The sparse method's set-up from the arena top: pattern and maps, then the ordering and
+ * symbolic factorization in temporary memory (released). Counting mode claims only.
+ * Returns 0, or -1 when the analysis failed. */
+static int setup_sparse(tscvx_workspace *ws, tscvx_arena *a) {
+    ws->method = &tscvx_method_sparse;
+    alloc_kkt(ws, a);
+    const size_t mark = a->top;
+    const size_t tmp_ints = tscvx_kkt_temp_ints(ws->kkt.dim, ws->kkt.nnz);
+    tscvx_int *tmp = (tscvx_int *)tscvx_arena_alloc(a, tmp_ints, sizeof(tscvx_int));
+    if (a->base == NULL || a->overflow) return 0;
+    const long lnz = tscvx_kkt_build(ws, tmp);
+    if (lnz < 0 || lnz > INT_MAX / 4) return -1;
+    a->top = mark;
+    ws->kkt.lnz = (tscvx_int)lnz;
+    return 0;
+}
+
 /* The one set-up path. MODE_COUNT only counts bytes (scratch size); MODE_ANALYSE runs up to
- * the symbolic factorization and reports the arena size; MODE_SETUP builds the workspace. */
+ * the symbolic analysis and reports the arena size; MODE_SETUP builds the workspace. */
 static tscvx_setup_status build(const tscvx_data *d, const tscvx_settings *st, tscvx_arena *a,
                                 int mode, tscvx_workspace **out, size_t *need) {
     if (d == NULL || st == NULL) return TSCVX_SETUP_NULL_ARGUMENT;
     tscvx_setup_status status = check_settings(st);
     if (status == TSCVX_SETUP_OK) status = check_data(d);
     if (status != TSCVX_SETUP_OK) return status;
+    const tscvx_setup_status short_memory =
+        mode == MODE_SETUP ? TSCVX_SETUP_ARENA_TOO_SMALL : TSCVX_SETUP_SCRATCH_TOO_SMALL;
 
     tscvx_int nexp, ncone;
     const long long nnzK = count_kkt_nnz(d, st->soc_dense_max, &nexp, &ncone);
@@ -323,8 +341,7 @@ static tscvx_setup_status build(const tscvx_data *d, const tscvx_settings *st, t
     tscvx_workspace local;
     tscvx_workspace *ws = (tscvx_workspace *)tscvx_arena_alloc(a, 1, sizeof(tscvx_workspace));
     if (mode == MODE_COUNT) ws = &local;
-    if (ws == NULL) return mode == MODE_SETUP ? TSCVX_SETUP_ARENA_TOO_SMALL
-                                              : TSCVX_SETUP_SCRATCH_TOO_SMALL;
+    if (ws == NULL) return short_memory;
     memset(ws, 0, sizeof *ws);
     ws->st = *st;
     ws->n = d->n, ws->p = d->p, ws->m = d->m;
@@ -336,32 +353,42 @@ static tscvx_setup_status build(const tscvx_data *d, const tscvx_settings *st, t
     ws->log_cap = st->max_iter + 1;
     const tscvx_int nnzP = nnz_of(d->Pp, d->n), nnzA = nnz_of(d->Ap, d->n);
     const tscvx_int nnzG = nnz_of(d->Gp, d->n);
-    alloc_persistent(ws, a, nnzP, nnzA, nnzG);
+    alloc_data(ws, a, nnzP, nnzA, nnzG);
+    ws->P.nnz = nnzP, ws->A.nnz = nnzA, ws->G.nnz = nnzG;
+    if (a->overflow && mode != MODE_COUNT) return short_memory;
+    if (mode != MODE_COUNT) { /* copy the data and cones into the arena */
+        tscvx_int *q = (tscvx_int *)ws->K.q, *off = (tscvx_int *)ws->K.off;
+        for (tscvx_int k = 0, o = d->l; k < d->nsoc; k++) q[k] = d->q[k], off[k] = o, o += d->q[k];
+        copy_csc(&ws->P, d->Pp, d->Pi, d->Px, d->n, d->n);
+        copy_csc(&ws->A, d->Ap, d->Ai, d->Ax, d->p, d->n);
+        copy_csc(&ws->G, d->Gp, d->Gi, d->Gx, d->m, d->n);
+        copy_floats(ws->c, d->c, d->n);
+        if (d->p > 0) copy_floats(ws->b, d->b, d->p);
+        if (d->m > 0) copy_floats(ws->h, d->h, d->m);
+    }
+
+    /* the KKT method: banded when asked for (or, by default, when the problem has the
+     * structure), else the sparse LDL' of the whole KKT matrix */
     const size_t mark = a->top;
-    const size_t tmp_ints = tscvx_kkt_temp_ints(ws->kkt.dim, ws->kkt.nnz);
-    tscvx_int *tmp = (tscvx_int *)tscvx_arena_alloc(a, tmp_ints, sizeof(tscvx_int));
+    const int try_banded = st->kkt_backend == TSCVX_KKT_AUTO || st->kkt_backend == TSCVX_KKT_BANDED;
+    int banded = 0;
+    if (try_banded) {
+        banded = tscvx_banded_analyse(ws, a); /* counting mode: claims, says 1 */
+        if (banded < 0) return short_memory;
+        if (!banded && st->kkt_backend == TSCVX_KKT_BANDED) return TSCVX_SETUP_NOT_BANDED;
+        ws->method = &tscvx_method_banded;
+    }
     if (mode == MODE_COUNT) {
+        if (st->kkt_backend != TSCVX_KKT_BANDED) { /* the sparse method may be needed too */
+            a->top = mark;
+            if (setup_sparse(ws, a) != 0) return TSCVX_SETUP_TOO_LARGE;
+        }
         *need = a->high + TSCVX_ALIGN; /* + worst-case alignment of the caller's pointer */
         return TSCVX_SETUP_OK;
     }
-    if (a->overflow) return mode == MODE_SETUP ? TSCVX_SETUP_ARENA_TOO_SMALL
-                                               : TSCVX_SETUP_SCRATCH_TOO_SMALL;
-
-    /* copy the data and cones into the arena */
-    tscvx_int *q = (tscvx_int *)ws->K.q, *off = (tscvx_int *)ws->K.off;
-    for (tscvx_int k = 0, o = d->l; k < d->nsoc; k++) q[k] = d->q[k], off[k] = o, o += d->q[k];
-    copy_csc(&ws->P, d->Pp, d->Pi, d->Px, d->n, d->n);
-    copy_csc(&ws->A, d->Ap, d->Ai, NULL, d->p, d->n);
-    copy_csc(&ws->G, d->Gp, d->Gi, NULL, d->m, d->n);
-    copy_floats(ws->c, d->c, d->n);
-    if (d->p > 0) copy_floats(ws->b, d->b, d->p);
-    if (d->m > 0) copy_floats(ws->h, d->h, d->m);
-
-    /* ordering, pattern, maps and symbolic factorization (temporary memory released after) */
-    const long lnz = tscvx_kkt_build(ws, tmp);
-    if (lnz < 0 || lnz > INT_MAX / 4) return TSCVX_SETUP_TOO_LARGE;
-    a->top = mark;
-    ws->kkt.lnz = (tscvx_int)lnz;
+    if (!banded && setup_sparse(ws, a) != 0) return TSCVX_SETUP_TOO_LARGE;
+    if (a->overflow && (mode == MODE_SETUP || ws->method == &tscvx_method_sparse))
+        return short_memory; /* the analysis itself did not fit */
     if (alloc_iterates(ws, a) != 0) return TSCVX_SETUP_TOO_LARGE;
     if (mode == MODE_ANALYSE) {
         *need = a->high + TSCVX_ALIGN;
@@ -369,15 +396,22 @@ static tscvx_setup_status build(const tscvx_data *d, const tscvx_settings *st, t
     }
     if (a->overflow) return TSCVX_SETUP_ARENA_TOO_SMALL;
 
-    for (tscvx_int k = 0; k < ws->kkt.nnz; k++) ws->kkt.Kx[k] = 0.0;
-    map_values(&ws->A, ws->kkt.Kx, ws->kkt.mapA, d->Ax);
-    map_values(&ws->G, ws->kkt.Kx, ws->kkt.mapG, d->Gx);
     data_norms(ws, d->Pp ? d->Px : NULL, d->c, d->b, d->h);
     tscvx_equilibrate(ws);
     ws->arena_used = a->top, ws->arena_high = a->high;
     ws->info.status = TSCVX_UNSOLVED;
-    ws->info.kkt_dim = ws->kkt.dim, ws->info.kkt_nnz = ws->kkt.nnz;
-    ws->info.factor_nnz = ws->kkt.lnz;
+    ws->info.kkt_backend = ws->method->id == TSCVX_KKT_BANDED ? TSCVX_KKT_BANDED
+                                                              : ws->kkt.backend == &tscvx_backend_ldl
+                                                                    ? TSCVX_KKT_LDL
+                                                                    : TSCVX_KKT_STATIC;
+    if (banded) { /* the factored matrices: Y (p x p profile) and the groups' blocks */
+        ws->info.kkt_dim = ws->p;
+        ws->info.kkt_nnz = (tscvx_int)ws->bd.nY;
+        ws->info.factor_nnz = (tscvx_int)(ws->bd.nY + ws->bd.nH);
+    } else {
+        ws->info.kkt_dim = ws->kkt.dim, ws->info.kkt_nnz = ws->kkt.nnz;
+        ws->info.factor_nnz = ws->kkt.lnz;
+    }
     ws->info.arena_used = ws->arena_used, ws->info.arena_high_water = ws->arena_high;
     ws->ready = 1;
     *out = ws;

@@ -3,7 +3,7 @@
  * by repeated division of each row/column by the square root of its infinity norm, followed
  * by a cost scaling cs (Clarabel's rule): Ps = cs D P D, cs = 1/max(mean |P col|, |D c|_inf).
  * EG is made constant on each SOC so that the scaling maps the cone onto itself.
- * Works in place: on entry P, A, G (values in the KKT matrix), c, b, h hold the caller's numbers. The scaling is
+ * Works in place: on entry P, A, G, c, b, h hold the caller's numbers. The scaling is
  * computed once at setup; data updates reuse it (tscvx_scale_update).
  */
 #include <math.h>
@@ -34,12 +34,12 @@ void tscvx_equilibrate(tscvx_workspace *ws) {
                 if (v > cn[P->i[k]]) cn[P->i[k]] = v; /* symmetric part */
             }
             for (tscvx_int k = A->p[j]; k < A->p[j + 1]; k++) {
-                const tscvx_float v = fabs(CSC_VAL(A, k));
+                const tscvx_float v = fabs(A->x[k]);
                 if (v > cn[j]) cn[j] = v;
                 if (v > rnA[A->i[k]]) rnA[A->i[k]] = v;
             }
             for (tscvx_int k = G->p[j]; k < G->p[j + 1]; k++) {
-                const tscvx_float v = fabs(CSC_VAL(G, k));
+                const tscvx_float v = fabs(G->x[k]);
                 if (v > cn[j]) cn[j] = v;
                 if (v > rnG[G->i[k]]) rnG[G->i[k]] = v;
             }
@@ -66,8 +66,8 @@ void tscvx_equilibrate(tscvx_workspace *ws) {
         if (worst < 1e-3) break; /* already balanced */
         for (tscvx_int j = 0; j < n; j++) {
             for (tscvx_int k = P->p[j]; k < P->p[j + 1]; k++) P->x[k] *= cn[P->i[k]] * cn[j];
-            for (tscvx_int k = A->p[j]; k < A->p[j + 1]; k++) CSC_VAL(A, k) *= rnA[A->i[k]] * cn[j];
-            for (tscvx_int k = G->p[j]; k < G->p[j + 1]; k++) CSC_VAL(G, k) *= rnG[G->i[k]] * cn[j];
+            for (tscvx_int k = A->p[j]; k < A->p[j + 1]; k++) A->x[k] *= rnA[A->i[k]] * cn[j];
+            for (tscvx_int k = G->p[j]; k < G->p[j + 1]; k++) G->x[k] *= rnG[G->i[k]] * cn[j];
             ws->D[j] *= cn[j];
         }
         for (tscvx_int i = 0; i < p; i++) ws->EA[i] *= rnA[i];
@@ -106,10 +106,10 @@ void tscvx_scale_update(tscvx_workspace *ws, const tscvx_float *Px, const tscvx_
                 ws->P.x[k] = ws->cs * D[ws->P.i[k]] * D[j] * Px[k];
         if (Ax)
             for (tscvx_int k = ws->A.p[j]; k < ws->A.p[j + 1]; k++)
-                CSC_VAL(&ws->A, k) = ws->EA[ws->A.i[k]] * D[j] * Ax[k];
+                ws->A.x[k] = ws->EA[ws->A.i[k]] * D[j] * Ax[k];
         if (Gx)
             for (tscvx_int k = ws->G.p[j]; k < ws->G.p[j + 1]; k++)
-                CSC_VAL(&ws->G, k) = ws->EG[ws->G.i[k]] * D[j] * Gx[k];
+                ws->G.x[k] = ws->EG[ws->G.i[k]] * D[j] * Gx[k];
         if (c) ws->c[j] = ws->cs * D[j] * c[j];
     }
     if (b)

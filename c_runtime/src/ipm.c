@@ -12,7 +12,7 @@
  * predictor-corrector) of
  *   K (x2, y2, z2) = (-dx, -dy, -dz + W (lambda \ ds)),
  *   dtau from the tau row, (dx, dy, dz) = (x2, y2, z2) + dtau (x1, y1, z1),
- *   ds = -W (lambda \ ds) - W'W dz,  dkappa = -(dk + kappa dtau)/tau,
+ *   ds = -W (lambda \ ds + W dz),  dkappa = -(dk + kappa dtau)/tau,
  * with the affine targets (d = r, ds = lambda o lambda, dk = tau kappa) and the combined ones
  * (d = (1-sigma) r, ds = lambda o lambda + (W^{-1} ds_a) o (W dz_a) - sigma mu e,
  *  dk = tau kappa + dtau_a dkappa_a - sigma mu), sigma = (1 - alpha_a)^3.
@@ -38,16 +38,15 @@ static void vcopy(tscvx_float *dst, const tscvx_float *src, tscvx_int n) {
     for (tscvx_int i = 0; i < n; i++) dst[i] = src[i];
 }
 
-/* Both products of a mapped M (values in the KKT matrix) in one pass over its entries:
- *   yt += M' u  and  y += M x. */
-static void spmv_both(const tscvx_csc *M, const tscvx_float *u, tscvx_float *yt,
-                      const tscvx_float *x, tscvx_float *y) {
+/* Both products of M in one pass over its entries: yt += M' u  and  y += M x. */
+void tscvx_spmv_both(const tscvx_csc *M, const tscvx_float *u, tscvx_float *yt,
+                     const tscvx_float *x, tscvx_float *y) {
     for (tscvx_int j = 0; j < M->ncol; j++) {
         const tscvx_float xj = x[j];
         tscvx_float acc = 0.0;
         for (tscvx_int k = M->p[j]; k < M->p[j + 1]; k++) {
             const tscvx_int i = M->i[k];
-            const tscvx_float v = CSC_VAL(M, k);
+            const tscvx_float v = M->x[k];
             acc += v * u[i];
             y[i] += v * xj;
         }
@@ -56,7 +55,7 @@ static void spmv_both(const tscvx_csc *M, const tscvx_float *u, tscvx_float *yt,
 }
 
 /* y = P x, P symmetric given by its upper triangle */
-static void spmv_sym(const tscvx_csc *P, const tscvx_float *x, tscvx_float *y) {
+void tscvx_spmv_sym(const tscvx_csc *P, const tscvx_float *x, tscvx_float *y) {
     for (tscvx_int j = 0; j < P->ncol; j++) y[j] = 0.0;
     for (tscvx_int j = 0; j < P->ncol; j++)
         for (tscvx_int k = P->p[j]; k < P->p[j + 1]; k++) {
@@ -76,12 +75,12 @@ typedef struct {
 static void residuals(tscvx_workspace *ws) {
     const tscvx_int n = ws->n, p = ws->p, m = ws->m;
     const tscvx_float tau = ws->tau;
-    spmv_sym(&ws->P, ws->x, ws->Px);
+    tscvx_spmv_sym(&ws->P, ws->x, ws->Px);
     for (tscvx_int j = 0; j < n; j++) ws->rx[j] = ws->Px[j] + ws->c[j] * tau;
     for (tscvx_int i = 0; i < p; i++) ws->ry[i] = -ws->b[i] * tau;
     for (tscvx_int i = 0; i < m; i++) ws->rz[i] = ws->s[i] - ws->h[i] * tau;
-    spmv_both(&ws->A, ws->y, ws->rx, ws->x, ws->ry); /* rx += A'y, ry += A x */
-    spmv_both(&ws->G, ws->z, ws->rx, ws->x, ws->rz); /* rx += G'z, rz += G x */
+    tscvx_spmv_both(&ws->A, ws->y, ws->rx, ws->x, ws->ry); /* rx += A'y, ry += A x */
+    tscvx_spmv_both(&ws->G, ws->z, ws->rx, ws->x, ws->rz); /* rx += G'z, rz += G x */
     const tscvx_float xPx = tscvx_dot(ws->x, ws->Px, n);
     ws->rtau = ws->kappa + tscvx_dot(ws->c, ws->x, n) + tscvx_dot(ws->b, ws->y, p) +
                tscvx_dot(ws->h, ws->z, m) + xPx / tau;
@@ -180,14 +179,13 @@ static void restore_best(tscvx_workspace *ws) {
 
 /* ---- factorization and Newton directions ------------------------------------------------- */
 
-/* Write the NT blocks and factor; on a bad pivot raise the regularization (bounded). */
+/* Factor with the current NT scaling; on a bad pivot raise the regularization (bounded). */
 static int factor(tscvx_workspace *ws) {
     for (int attempt = 0; attempt < 4; attempt++) {
-        tscvx_kkt_cone_values(&ws->kkt, &ws->K, &ws->W, ws->delta);
         ws->info.factorizations++;
-        if (ws->kkt.backend->numeric(&ws->kkt) == 0) return 0;
+        if (ws->method->factor(ws) == 0) return 0;
         ws->delta *= 100.0;
-        tscvx_kkt_data_values(ws, ws->delta);
+        ws->method->load(ws);
     }
     return -1;
 }
@@ -200,8 +198,8 @@ static int constant_solve(tscvx_workspace *ws) {
     const tscvx_int n = ws->n, m = ws->m;
     const tscvx_float tau = ws->tau;
     for (tscvx_int j = 0; j < n; j++) ws->wn[j] = -ws->c[j];
-    if (tscvx_kkt_solve(&ws->kkt, n, ws->p, m, ws->wn, ws->b, ws->h, ws->x1, ws->y1, ws->z1,
-                        ws->refine_now) < 0)
+    if (ws->method->solve(ws, ws->wn, ws->b, ws->h, ws->x1, ws->y1, ws->z1, ws->wz1,
+                          ws->refine_now) < 0)
         return -1;
     tscvx_float den = -ws->kappa / tau + tscvx_dot(ws->b, ws->y1, ws->p) + tscvx_dot(ws->h, ws->z1, m);
     for (tscvx_int j = 0; j < n; j++)
@@ -210,33 +208,77 @@ static int constant_solve(tscvx_workspace *ws) {
     return isfinite(den) && den != 0.0 ? 0 : -1;
 }
 
+/* (dx, dy, dz, wdz) := the solve for (x2, y2, z2) plus dtau (x1, y1, z1) with dtau from the
+ * tau row, dtau (-kappa/tau + xi'x1 + b'y1 + h'z1 - x'Px/tau^2) = num0 - xi'x2 - b'y2 - h'z2,
+ * xi = c + 2 P x/tau. Returns dtau. */
+static tscvx_float add_tau_part(tscvx_workspace *ws, tscvx_float num0, tscvx_float *dx,
+                                tscvx_float *dy, tscvx_float *dz, tscvx_float *wdz) {
+    const tscvx_int n = ws->n, p = ws->p, m = ws->m;
+    tscvx_float num = num0;
+    for (tscvx_int j = 0; j < n; j++) num -= (ws->c[j] + 2.0 * ws->Px[j] / ws->tau) * dx[j];
+    num -= tscvx_dot(ws->b, dy, p) + tscvx_dot(ws->h, dz, m);
+    const tscvx_float dtau = num / ws->tau_den;
+    for (tscvx_int j = 0; j < n; j++) dx[j] += dtau * ws->x1[j];
+    for (tscvx_int i = 0; i < p; i++) dy[i] += dtau * ws->y1[i];
+    for (tscvx_int i = 0; i < m; i++) dz[i] += dtau * ws->z1[i], wdz[i] += dtau * ws->wz1[i];
+    return dtau;
+}
+
+/* Error of the direction in the primal row, e = G dx + ds - h dtau + lin rz, into ws->e;
+ * returns max |e_i / EG_i| (original units). */
+static tscvx_float primal_row_error(tscvx_workspace *ws, tscvx_float lin) {
+    const tscvx_int n = ws->n, m = ws->m;
+    tscvx_float *e = ws->e, emax = 0.0;
+    for (tscvx_int i = 0; i < m; i++) e[i] = ws->ds[i] - ws->h[i] * ws->dtau + lin * ws->rz[i];
+    for (tscvx_int j = 0; j < n; j++) {
+        const tscvx_float dxj = ws->dx[j];
+        for (tscvx_int k = ws->G.p[j]; k < ws->G.p[j + 1]; k++) e[ws->G.i[k]] += ws->G.x[k] * dxj;
+    }
+    for (tscvx_int i = 0; i < m; i++) emax = fmax(emax, fabs(e[i] / ws->EG[i]));
+    return emax;
+}
+
 /* Newton direction for linear targets lin*(rx, ry, rz, rtau), complementarity target dsv
  * (m; may be wm2, it is consumed first) and dk, with up to `refine` refinement steps.
- * Result in dx, dy, dz, ds, dtau, dkappa. */
+ * Result in dx, dy, dz, ds, dtau, dkappa (and wdz = W dz). */
 static int direction(tscvx_workspace *ws, tscvx_float lin, const tscvx_float *dsv,
                      tscvx_float dk, tscvx_int refine) {
     const tscvx_int n = ws->n, p = ws->p, m = ws->m;
     tscvx_float *wlds = ws->ds; /* W (lambda \ ds), until ds is written at the end */
     tscvx_nt_div_apply(&ws->K, &ws->W, ws->lambda, dsv, ws->wm2, wlds);
     for (tscvx_int j = 0; j < n; j++) ws->wn[j] = -lin * ws->rx[j];
-    for (tscvx_int i = 0; i < p; i++) ws->dy[i] = -lin * ws->ry[i];
+    for (tscvx_int i = 0; i < p; i++) ws->wp[i] = -lin * ws->ry[i];
     for (tscvx_int i = 0; i < m; i++) ws->wm[i] = -lin * ws->rz[i] + wlds[i];
-    if (tscvx_kkt_solve(&ws->kkt, n, p, m, ws->wn, ws->dy, ws->wm, ws->dx, ws->dy, ws->dz,
-                        refine) < 0)
+    if (ws->method->solve(ws, ws->wn, ws->wp, ws->wm, ws->dx, ws->dy, ws->dz, ws->wdz, refine) < 0)
         return -1;
-    /* tau row: dtau (-kappa/tau + xi'x1 + b'y1 + h'z1 - x'Px/tau^2)
-     *          = -lin rtau + dk/tau - xi'x2 - b'y2 - h'z2,   xi = c + 2 P x/tau */
-    tscvx_float num = -lin * ws->rtau + dk / ws->tau;
-    for (tscvx_int j = 0; j < n; j++)
-        num -= (ws->c[j] + 2.0 * ws->Px[j] / ws->tau) * ws->dx[j];
-    num -= tscvx_dot(ws->b, ws->dy, p) + tscvx_dot(ws->h, ws->dz, m);
-    ws->dtau = num / ws->tau_den;
-    for (tscvx_int j = 0; j < n; j++) ws->dx[j] += ws->dtau * ws->x1[j];
-    for (tscvx_int i = 0; i < p; i++) ws->dy[i] += ws->dtau * ws->y1[i];
-    for (tscvx_int i = 0; i < m; i++) ws->dz[i] += ws->dtau * ws->z1[i];
-    /* ds = -W (lambda \ ds) - W'W dz */
-    tscvx_nt_apply2(&ws->K, &ws->W, ws->dz, ws->wm, ws->wm2);
+    ws->dtau = add_tau_part(ws, -lin * ws->rtau + dk / ws->tau, ws->dx, ws->dy, ws->dz, ws->wdz);
+    /* ds = -W (lambda \ ds) - W (W dz), with W dz from the KKT solve (one application of W) */
+    tscvx_nt_apply(&ws->K, &ws->W, 0, ws->wdz, ws->wm2);
     for (tscvx_int i = 0; i < m; i++) ws->ds[i] = -wlds[i] - ws->wm2[i]; /* in place */
+    /* Refinement of the direction. Near the end the NT scaling of an SOC gets so
+     * ill-conditioned that W (W dz) no longer matches the W'W the KKT solve used, and the
+     * primal row G dx + ds - h dtau = -lin rz picks up the difference (the orthant rows are
+     * exact). Where that error would show in the primal residual, one more solve with the
+     * same factor removes it, the complementarity row staying exact: K (cx, cy, cz) =
+     * (0, 0, -e), ctau from the tau row, cs = -W (W cz), ckappa = -kappa ctau / tau. */
+    const tscvx_float tol = 0.1 * ws->st.tol_feas * (1.0 + ws->norm_h) * ws->tau;
+    if (refine > 0 && primal_row_error(ws, lin) > tol) {
+        for (tscvx_int j = 0; j < n; j++) ws->wn[j] = 0.0;
+        for (tscvx_int i = 0; i < p; i++) ws->wp[i] = 0.0;
+        for (tscvx_int i = 0; i < m; i++) ws->wm[i] = -ws->e[i];
+        if (ws->method->solve(ws, ws->wn, ws->wp, ws->wm, ws->cx, ws->cy, ws->cz, ws->cwz,
+                              refine) < 0)
+            return -1;
+        const tscvx_float ctau = add_tau_part(ws, 0.0, ws->cx, ws->cy, ws->cz, ws->cwz);
+        tscvx_nt_apply(&ws->K, &ws->W, 0, ws->cwz, ws->wm2);
+        for (tscvx_int j = 0; j < n; j++) ws->dx[j] += ws->cx[j];
+        for (tscvx_int i = 0; i < p; i++) ws->dy[i] += ws->cy[i];
+        for (tscvx_int i = 0; i < m; i++) {
+            ws->dz[i] += ws->cz[i], ws->wdz[i] += ws->cwz[i];
+            ws->ds[i] -= ws->wm2[i];
+        }
+        ws->dtau += ctau;
+    }
     ws->dkappa = -(dk + ws->kappa * ws->dtau) / ws->tau;
     return isfinite(ws->dtau) && isfinite(ws->dkappa) ? 0 : -1;
 }
@@ -271,16 +313,16 @@ static int initialize(tscvx_workspace *ws) {
     if (factor(ws) != 0) return -1;
     /* primal: K (x, y, -s) = (0, b, h): min |Gx - h| s.t. Ax = b, s = h - Gx */
     for (tscvx_int j = 0; j < n; j++) ws->wn[j] = 0.0;
-    if (tscvx_kkt_solve(&ws->kkt, n, p, m, ws->wn, ws->b, ws->h, ws->x, ws->y, ws->s,
-                        ws->st.refine_iters) < 0)
+    if (ws->method->solve(ws, ws->wn, ws->b, ws->h, ws->x, ws->y, ws->s, ws->wdz,
+                          ws->st.refine_iters) < 0)
         return -1;
     for (tscvx_int i = 0; i < m; i++) ws->s[i] = -ws->s[i];
     /* dual: K (x', y, z) = (-c, 0, 0) */
     for (tscvx_int j = 0; j < n; j++) ws->wn[j] = -ws->c[j];
-    for (tscvx_int i = 0; i < p; i++) ws->dy[i] = 0.0;
+    for (tscvx_int i = 0; i < p; i++) ws->wp[i] = 0.0;
     for (tscvx_int i = 0; i < m; i++) ws->wm[i] = 0.0;
-    if (tscvx_kkt_solve(&ws->kkt, n, p, m, ws->wn, ws->dy, ws->wm, ws->dx, ws->y, ws->z,
-                        ws->st.refine_iters) < 0)
+    if (ws->method->solve(ws, ws->wn, ws->wp, ws->wm, ws->dx, ws->y, ws->z, ws->wdz,
+                          ws->st.refine_iters) < 0)
         return -1;
     /* shift into the interior: u += (1 + t) e when the smallest eigenvalue -t > -1 */
     const tscvx_float ts = tscvx_cone_shift_needed(&ws->K, ws->s);
@@ -333,8 +375,7 @@ static int predictor(tscvx_workspace *ws, tscvx_float *sigma) {
  * dk = tau kappa + dtau_a dkappa_a - sigma mu, residual targets scaled by (1 - sigma). */
 static int corrector(tscvx_workspace *ws, tscvx_float sigma, tscvx_float mu) {
     tscvx_nt_apply(&ws->K, &ws->W, 1, ws->ds, ws->wm);
-    tscvx_nt_apply(&ws->K, &ws->W, 0, ws->dz, ws->wm2);
-    tscvx_cone_prod(&ws->K, ws->wm, ws->wm2, ws->ds); /* ds_a is spent: its space is work */
+    tscvx_cone_prod(&ws->K, ws->wm, ws->wdz, ws->ds); /* ds_a is spent: its space is work */
     tscvx_cone_prod(&ws->K, ws->lambda, ws->lambda, ws->wm2);
     for (tscvx_int i = 0; i < ws->m; i++) ws->wm2[i] += ws->ds[i];
     tscvx_cone_add_identity(&ws->K, ws->wm2, -sigma * mu);
@@ -351,7 +392,7 @@ tscvx_solve_status tscvx_ipm(tscvx_workspace *ws) {
     ws->best_iter = -1;
     ws->info.factorizations = 0;
     ws->refine_now = ws->st.refine_iters;
-    tscvx_kkt_data_values(ws, ws->delta);
+    ws->method->load(ws);
     if (initialize(ws) != 0) {
         finish_info(ws, TSCVX_NUMERICAL_ERROR, 0, &r);
         return TSCVX_NUMERICAL_ERROR;

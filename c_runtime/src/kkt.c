@@ -196,20 +196,21 @@ long tscvx_kkt_build(tscvx_workspace *ws, tscvx_int *tmp) {
 void tscvx_kkt_data_values(tscvx_workspace *ws, tscvx_float delta) {
     tscvx_kkt *kk = &ws->kkt;
     const tscvx_int n = ws->n, p = ws->p;
-    /* A and G live in Kx already (written at setup/update); the cone block is written per
-     * factorization. Here: P + d I and -d I. */
+    /* the data part: P + d I, A, -d I, G; the cone block is written per factorization */
     for (tscvx_int k = 0; k < ws->P.nnz; k++) kk->Kx[kk->mapP[k]] = 0.0;
     for (tscvx_int j = 0; j < n; j++) kk->Kx[kk->mapDiag[j]] = 0.0;
     for (tscvx_int k = 0; k < ws->P.nnz; k++) kk->Kx[kk->mapP[k]] += ws->P.x[k];
     for (tscvx_int j = 0; j < n; j++) kk->Kx[kk->mapDiag[j]] += delta;
     for (tscvx_int i = 0; i < p; i++) kk->Kx[kk->mapDiag[n + i]] = -delta;
+    for (tscvx_int k = 0; k < ws->A.nnz; k++) kk->Kx[kk->mapA[k]] = ws->A.x[k];
+    for (tscvx_int k = 0; k < ws->G.nnz; k++) kk->Kx[kk->mapG[k]] = ws->G.x[k];
     kk->delta = delta; /* removed again by iterative refinement (reg_of) */
     /* |entry|_max of the data part, for the refinement's rounding floor */
     tscvx_float kmax = delta;
     for (tscvx_int j = 0; j < n; j++) kmax = fmax(kmax, fabs(kk->Kx[kk->mapDiag[j]]));
     for (tscvx_int k = 0; k < ws->P.nnz; k++) kmax = fmax(kmax, fabs(kk->Kx[kk->mapP[k]]));
-    for (tscvx_int k = 0; k < ws->A.nnz; k++) kmax = fmax(kmax, fabs(kk->Kx[kk->mapA[k]]));
-    for (tscvx_int k = 0; k < ws->G.nnz; k++) kmax = fmax(kmax, fabs(kk->Kx[kk->mapG[k]]));
+    for (tscvx_int k = 0; k < ws->A.nnz; k++) kmax = fmax(kmax, fabs(ws->A.x[k]));
+    for (tscvx_int k = 0; k < ws->G.nnz; k++) kmax = fmax(kmax, fabs(ws->G.x[k]));
     kk->kmax_data = kmax;
 }
 
@@ -254,13 +255,6 @@ void tscvx_kkt_cone_values(tscvx_kkt *kk, const tscvx_cones *K, const tscvx_nt *
 }
 
 /* ---- solve with iterative refinement ----------------------------------------------------- */
-
-/* Refinement stops at |r| <= REFINE_TOL (1 + |rhs|), at the rounding floor
- * |r| <= REFINE_FLOOR |K| |x| (backward stable: nothing left to gain), or when a step gains
- * less than 2x. */
-#define REFINE_TOL 1e-10
-#define REFINE_FLOOR 1e-15
-#define REFINE_RATIO 0.5
 
 /* res = rhs - (K - reg) x for the stored upper triangle (permuted coordinates), the right-hand
  * side gathered from its three parts (src, len; zero on the expansion rows); returns |res|_inf
@@ -339,8 +333,8 @@ int tscvx_kkt_solve(tscvx_kkt *kk, tscvx_int n, tscvx_int p, tscvx_int m,
         const tscvx_float rnorm = kkt_residual(kk, sol, src, len, res, &xnorm);
         if (!isfinite(rnorm)) return -1;
         /* stop when accurate, or when refinement no longer pays */
-        if (rnorm <= REFINE_TOL * (1.0 + bnorm) || rnorm <= REFINE_FLOOR * kk->kmax * xnorm ||
-            rnorm > REFINE_RATIO * last)
+        if (rnorm <= TSCVX_REFINE_TOL * (1.0 + bnorm) ||
+            rnorm <= TSCVX_REFINE_FLOOR * kk->kmax * xnorm || rnorm > TSCVX_REFINE_RATIO * last)
             break;
         last = rnorm;
         kk->backend->solve(kk, res);
@@ -352,3 +346,24 @@ int tscvx_kkt_solve(tscvx_kkt *kk, tscvx_int n, tscvx_int p, tscvx_int m,
     for (tscvx_int i = 0; i < m; i++) dz[i] = sol[pinv[n + p + i]];
     return steps;
 }
+
+/* ---- the sparse KKT method --------------------------------------------------------------- */
+
+static void sparse_load(tscvx_workspace *ws) { tscvx_kkt_data_values(ws, ws->delta); }
+
+static int sparse_factor(tscvx_workspace *ws) {
+    tscvx_kkt_cone_values(&ws->kkt, &ws->K, &ws->W, ws->delta);
+    return ws->kkt.backend->numeric(&ws->kkt);
+}
+
+static int sparse_solve(tscvx_workspace *ws, const tscvx_float *rx, const tscvx_float *ry,
+                        const tscvx_float *rz, tscvx_float *dx, tscvx_float *dy, tscvx_float *dz,
+                        tscvx_float *wdz, tscvx_int refine) {
+    const int steps = tscvx_kkt_solve(&ws->kkt, ws->n, ws->p, ws->m, rx, ry, rz, dx, dy, dz,
+                                      refine);
+    tscvx_nt_apply(&ws->K, &ws->W, 0, dz, wdz);
+    return steps;
+}
+
+const tscvx_kkt_method tscvx_method_sparse = {"sparse-ldl", TSCVX_KKT_STATIC, sparse_load,
+                                              sparse_factor, sparse_solve};

@@ -19,6 +19,14 @@ typedef struct {
 /* 16-byte aligned block of `count * size` bytes; NULL on overflow or in counting mode. */
 void *tscvx_arena_alloc(tscvx_arena *a, size_t count, size_t size);
 
+/* A CSC matrix in the arena (values x[k] of entry k). */
+typedef struct {
+    tscvx_int nrow, ncol, nnz;
+    tscvx_int *p; /* ncol+1 */
+    tscvx_int *i; /* nnz */
+    tscvx_float *x; /* nnz */
+} tscvx_csc;
+
 /* ---- cones: K = R_+^l x Q^{q_1} x ... ---------------------------------------------------- */
 
 typedef struct {
@@ -141,19 +149,116 @@ int tscvx_kkt_solve(tscvx_kkt *kkt, tscvx_int n, tscvx_int p, tscvx_int m,
 void tscvx_kkt_cone_values(tscvx_kkt *kkt, const tscvx_cones *K, const tscvx_nt *W,
                            tscvx_float delta);
 
-/* ---- workspace --------------------------------------------------------------------------- */
+/* ---- banded KKT method (banded.c) ----------------------------------------------------------
+ *
+ * For problems with stage structure (optimal control: every cone and every P entry couples a
+ * few variables of one stage, the equalities couple neighbouring stages): the KKT system
+ *   [P + d I   A'    G'  ] [dx]   [rx]
+ *   [A        -d I   0   ] [dy] = [ry]
+ *   [G         0   -W'W  ] [dz]   [rz]
+ * is reduced in three exact steps, each a small dense computation:
+ *   1. cone rows, NT-scaled (CVXOPT's condensed solver): W dz = W^-1 (G dx - rz),
+ *      H = P + d I + (W^-1 G)'(W^-1 G). H is block diagonal over the variable groups
+ *      (connected components of "shares a cone or a P entry");
+ *   2. groups:     dx_g = H_g^-1 (rx_g + G_g' W^-2 rz - A_g' dy)  (Cholesky H_g = L_g L_g');
+ *   3. equalities: Y dy = ...,  Y = d I + sum_g A_g H_g^-1 A_g' = d I + sum_g C_g' C_g,
+ *      C_g = L_g^-1 A_g', factored by a profile (envelope) Cholesky in a reverse Cuthill-McKee
+ *      order of the equality rows: the stages' block-tridiagonal pattern, with dense kernels.
+ * Groups coupled to very many rows (a free final time, say) would fill Y; they are the border,
+ * eliminated last through the Schur complement S = H_B + A_B' Y^-1 A_B (nb x nb, dense).
+ * Setup decides whether a problem has this structure (TSCVX_KKT_AUTO falls back to the sparse
+ * LDL' method otherwise). */
 
-/* A CSC matrix in the arena. Values are x[k], or x[xmap[k]] when xmap is set: A and G keep
- * their (scaled) values only in the KKT matrix, so x = Kx and xmap = the KKT map. */
+#define TSCVX_BANDED_GROUP_MAX 32   /* largest variable group (dense H_g block) */
+#define TSCVX_BANDED_BORDER_MAX 8   /* most border variables */
+#define TSCVX_BANDED_ENV_AVG 64     /* envelope of Y at most this many entries per row on average */
+
 typedef struct {
-    tscvx_int nrow, ncol, nnz;
-    tscvx_int *p;          /* ncol+1 */
-    tscvx_int *i;          /* nnz */
-    tscvx_float *x;        /* nnz values, or the KKT values */
-    const tscvx_int *xmap; /* nnz: slot of entry k in x, or NULL */
-} tscvx_csc;
+    /* variable groups */
+    tscvx_int ngroup;
+    tscvx_int *gp;       /* ngroup+1: group g holds gvar[gp[g] .. gp[g+1]) */
+    tscvx_int *gvar;     /* n: the variables, by group, ascending within a group */
+    tscvx_int *loc;      /* n: position of each variable within its group */
+    signed char *border; /* ngroup: 1 for a border group */
+    tscvx_int *hp;       /* ngroup+1: offset of group g's s_g x s_g blocks in H and PF */
+    tscvx_float *H;      /* L_g, the factor of H_g = L_g L_g' (column-major lower) */
+    tscvx_int *mapP;     /* nnz(P): slot of each P entry in a group block (lower part) */
+    signed char *hasP;   /* ngroup: the group has P entries */
+    tscvx_float *PF;     /* P_gg's factor (column-major lower), when P is present */
+    tscvx_int *gcp, *gcone; /* ngroup+1, l+nsoc: the cones of group g: gcone[gcp[g] ..] */
+    /* G by rows: row i's entries are Gr_k[Grp[i] .. Grp[i+1]) (index into G.x) with the
+     * column's position within its group Gr_loc[.]; cgroup: the group of each cone (orthant
+     * rows first, then the SOCs), -1 for a cone without entries */
+    tscvx_int *Grp, *Gr_k, *Gr_loc, *cgroup;
+    /* equality rows of each non-border group: rrow[rp[g] .. rp[g+1]), band positions,
+     * ascending; posA[k]: position of A entry k's row in its group's list (-1: border) */
+    tscvx_int *rp, *rrow, *posA;
+    tscvx_int *cp;       /* ngroup+1: offset of C_g' (|R_g| x s_g, row-major) */
+    tscvx_float *CT;     /* C_g' = (L_g^-1 A_g')' */
+    /* Y in profile form, band order: row i holds columns yfirst[i] .. i at Y[yp[i] ..] */
+    tscvx_int *perm;     /* p: band position -> equality row */
+    tscvx_int *iperm;    /* p: equality row -> band position */
+    tscvx_int *yfirst;   /* p */
+    tscvx_int *yp;       /* p+1 */
+    tscvx_float *Y;      /* yp[p]: Y, then its Cholesky factor */
+    /* border */
+    tscvx_int nb;                          /* border variables */
+    tscvx_int bvar[TSCVX_BANDED_BORDER_MAX];   /* the border variables, group by group */
+    tscvx_int bgroup[TSCVX_BANDED_BORDER_MAX]; /* the group of each */
+    tscvx_float *V;      /* p x nb, column-major, band order: Y^-1 A_B */
+    tscvx_float S[TSCVX_BANDED_BORDER_MAX * TSCVX_BANDED_BORDER_MAX]; /* H_B + A_B' V, factored */
+    tscvx_float *Bw;     /* work: W_k^-1 G_k of one SOC (q x s_g) */
+    /* sizes of the value arrays (set by the analysis) */
+    size_t nH, nCT, nY;
+    tscvx_float kmax_data; /* largest |entry| of P, A, G and d */
+    tscvx_float kmax;    /* ... and of W (the scaled cone rows; refinement floor) */
+    /* work: xg (n, group order), yb (p, band order), t (m) = W^-1 rz, wz (m); refinement:
+     * residuals (n, p, m) and corrections (n, p, m, m: W ez) */
+    tscvx_float *xg, *yb, *t, *wz, *res_x, *res_y, *res_z, *ex, *ey, *ez, *ewz;
+} tscvx_banded;
 
-#define CSC_VAL(M, k) ((M)->x[(M)->xmap[k]]) /* value of entry k of a mapped matrix */
+/* Analysis at setup: claims the banded method's memory from `a` (temporary memory above it,
+ * released). Returns 1 if the problem has the structure (memory claimed; with a->base NULL
+ * or an overflowed arena only counted), 0 if not (nothing kept), -1 on an internal error.
+ * `ws` holds the data (patterns, values) and cones. */
+int tscvx_banded_analyse(tscvx_workspace *ws, tscvx_arena *a);
+
+/* ---- the KKT method seam ----------------------------------------------------------------- */
+
+/* How the IPM solves its Newton systems: the sparse quasi-definite LDL' of the whole KKT
+ * matrix (kkt.c, behind the factorization backend above) or the banded reduction. */
+typedef struct {
+    const char *name;
+    tscvx_int id;                         /* TSCVX_KKT_STATIC, _LDL or _BANDED */
+    /* the data or ws->delta changed */
+    void (*load)(tscvx_workspace *ws);
+    /* the NT scaling ws->W changed: factor with regularization ws->delta; 0 or -1 */
+    int (*factor)(tscvx_workspace *ws);
+    /* solve the unregularized system for (rx, ry, rz) (original order) by the factored one
+     * with up to `refine` refinement steps, into (dx, dy, dz) and wdz = W dz (the IPM's ds
+     * needs W dz; computed as the method can best); outputs may not alias inputs; returns
+     * the steps taken or -1 when the residual is not finite */
+    int (*solve)(tscvx_workspace *ws, const tscvx_float *rx, const tscvx_float *ry,
+                 const tscvx_float *rz, tscvx_float *dx, tscvx_float *dy, tscvx_float *dz,
+                 tscvx_float *wdz, tscvx_int refine);
+} tscvx_kkt_method;
+
+extern const tscvx_kkt_method tscvx_method_sparse;
+extern const tscvx_kkt_method tscvx_method_banded;
+
+/* Iterative refinement stops at |r| <= REFINE_TOL (1 + |rhs|), at the rounding floor
+ * |r| <= REFINE_FLOOR |K| |x| (backward stable: nothing left to gain), or when a step gains
+ * less than 2x. */
+#define TSCVX_REFINE_TOL 1e-10
+#define TSCVX_REFINE_FLOOR 1e-15
+#define TSCVX_REFINE_RATIO 0.5
+
+/* Sparse products (ipm.c): yt += M' u and y += M x in one pass; y = P x (P upper part). */
+void tscvx_spmv_both(const tscvx_csc *M, const tscvx_float *u, tscvx_float *yt,
+                     const tscvx_float *x, tscvx_float *y);
+void tscvx_spmv_sym(const tscvx_csc *P, const tscvx_float *x, tscvx_float *y);
+
+/* ---- workspace --------------------------------------------------------------------------- */
 
 struct tscvx_workspace {
     tscvx_settings st;
@@ -165,7 +270,9 @@ struct tscvx_workspace {
     tscvx_float *D, *EA, *EG; /* n, p, m: Ruiz scalings (EG constant on each SOC) */
     tscvx_float cs;           /* cost scaling */
     tscvx_float norm_b, norm_h, norm_c, norm_P; /* inf-norms of the original b, h, c, P */
-    tscvx_kkt kkt;
+    const tscvx_kkt_method *method; /* how the Newton systems are solved */
+    tscvx_kkt kkt;                  /* the sparse method's KKT matrix and factor */
+    tscvx_banded bd;                /* the banded method */
     tscvx_nt W;
     /* iterates (scaled space, homogeneous): x n, y p, z m, s m, tau, kappa */
     tscvx_float *x, *y, *z, *s, tau, kappa;
@@ -173,13 +280,17 @@ struct tscvx_workspace {
     /* residuals: rx n, ry p, rz m, rtau; Px n */
     tscvx_float *rx, *ry, *rz, rtau, *Px;
     /* Newton directions: constant part (x1, y1, z1), varying part (x2, y2, z2), step */
-    tscvx_float *x1, *y1, *z1;
+    tscvx_float *x1, *y1, *z1, *wz1; /* wz1 = W z1 */
     tscvx_float *dx, *dy, *dz, *ds, dtau, dkappa; /* (x2, y2, z2) are solved into (dx, dy, dz) */
+    tscvx_float *wdz;    /* m: W dz */
+    tscvx_float *e;      /* m: the direction's error in the primal row */
+    tscvx_float *cx, *cy, *cz, *cwz; /* correction of the direction (n, p, m, m: W cz) */
     tscvx_float tau_den; /* denominator of the tau row (fixed per factorization) */
     tscvx_float delta;   /* current static regularization */
     tscvx_int refine_now; /* refinement steps allowed in this iteration */
     tscvx_float *wm, *wm2;       /* m: work vectors in the cone space */
     tscvx_float *wn;             /* n: work vector */
+    tscvx_float *wp;             /* p: work vector (right-hand sides of the y rows) */
     /* best iterate so far */
     tscvx_float *bx, *by, *bz, *bs, btau, bkappa, bmerit;
     tscvx_int best_iter;

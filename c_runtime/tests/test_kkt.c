@@ -1,7 +1,8 @@
-/* KKT system: pattern + maps + factor (static-pattern and SuiteSparse LDL backends) and refined
- * solve against a dense reference (Gaussian elimination with partial pivoting on the
- * unregularized KKT matrix), for dense SOC blocks and for the sparse (diagonal + rank-2)
- * expansion. */
+/* KKT methods against a dense reference (Gaussian elimination with partial pivoting on the
+ * unregularized KKT matrix): the sparse method (static-pattern and SuiteSparse LDL backends,
+ * dense SOC blocks and the sparse diagonal + rank-2 expansion) and the banded method, on small
+ * random problems and on a stage-structured one with a bordered global variable; the static
+ * backend against SuiteSparse LDL bit for bit. */
 #include <string.h>
 
 #include "ctest_util.h"
@@ -12,7 +13,7 @@
 #define L 2
 #define NSOC 2
 #define M 9 /* L + 3 + 4 */
-#define DIM (N + P_ + M)
+#define DMAX 480 /* largest dense reference */
 
 static const tscvx_int q[NSOC] = {3, 4};
 
@@ -20,7 +21,7 @@ static const tscvx_int q[NSOC] = {3, 4};
 static void csc_to_dense(const tscvx_csc *A, double *D, int ld, int r0, int c0, int sym) {
     for (int j = 0; j < A->ncol; j++)
         for (int k = A->p[j]; k < A->p[j + 1]; k++) {
-            const double v = A->xmap ? CSC_VAL(A, k) : A->x[k];
+            const double v = A->x[k];
             D[(c0 + j) * ld + r0 + A->i[k]] += v;
             if (sym && A->i[k] != j) D[(r0 + A->i[k]) * ld + c0 + j] += v;
         }
@@ -68,10 +69,53 @@ static void random_csc(int nrow, int ncol, double density, int upper, tscvx_int 
     Mp[ncol] = nz;
 }
 
+/* Factor ws with its method at the current NT scaling (delta 1e-9) and solve a random
+ * right-hand side with refinement; compare with the dense unregularized solution. */
+static void check_against_dense(tscvx_workspace *ws, int backend, int dense_max, int with_P) {
+    const int n = ws->n, p = ws->p, m = ws->m, dim = n + p + m;
+    static double Kd[DMAX * DMAX];
+    static double rhs[DMAX], ref[DMAX], sol[DMAX];
+    if (dim > DMAX) {
+        CHECK(0, "reference too small for dim %d", dim);
+        return;
+    }
+    ws->delta = 1e-9;
+    ws->method->load(ws);
+    CHECK(ws->method->factor(ws) == 0, "factorization (%s, backend %d, dense_max %d, P %d, n %d)",
+          ws->method->name, backend, dense_max, with_P, n);
+    memset(Kd, 0, sizeof(double) * dim * dim);
+    csc_to_dense(&ws->P, Kd, dim, 0, 0, 1);
+    csc_to_dense(&ws->A, Kd, dim, n, 0, 0);
+    csc_to_dense(&ws->G, Kd, dim, n + p, 0, 0);
+    for (int j = 0; j < n; j++)
+        for (int i = n; i < dim; i++) Kd[i * dim + j] = Kd[j * dim + i];
+    static tscvx_float e[DMAX], t1[DMAX], t2[DMAX];
+    for (int j = 0; j < m; j++) { /* -W'W column j */
+        for (int i = 0; i < m; i++) e[i] = i == j;
+        tscvx_nt_apply(&ws->K, &ws->W, 0, e, t1);
+        tscvx_nt_apply(&ws->K, &ws->W, 0, t1, t2);
+        for (int i = 0; i < m; i++) Kd[(n + p + j) * dim + n + p + i] = -t2[i];
+    }
+    for (int i = 0; i < dim; i++) rhs[i] = ref[i] = ct_randn();
+    CHECK(dense_solve(Kd, ref, dim) == 0, "dense solve");
+    CHECK(ws->method->solve(ws, rhs, rhs + n, rhs + n + p, sol, sol + n, sol + n + p, t1, 5) >= 0,
+          "kkt solve");
+    double err = 0.0, scale = 1.0;
+    for (int i = 0; i < dim; i++) err = fmax(err, fabs(sol[i] - ref[i]));
+    for (int i = 0; i < dim; i++) scale = fmax(scale, fabs(ref[i]));
+    CHECK(err < 1e-8 * scale, "%s (backend %d, dense_max %d, P %d): |x - x_ref| = %g (scale %g)",
+          ws->method->name, backend, dense_max, with_P, err, scale);
+}
+
 static void run(int dense_max, int with_P, int backend) {
     tscvx_int Pp[N + 1], Pi[N * N], Ap[N + 1], Ai[N * P_], Gp[N + 1], Gi[N * M];
     tscvx_float Px[N * N], Ax[N * P_], Gx[N * M], c[N], b[P_], h[M];
     random_csc(N, N, 0.3, 1, Pp, Pi, Px);
+    for (int j = 0; j < N; j++) /* diagonally dominant: P positive definite (a convex QP) */
+        for (int k = Pp[j]; k < Pp[j + 1] - 1; k++) {
+            Px[Pp[Pi[k] + 1] - 1] += fabs(Px[k]);
+            Px[Pp[j + 1] - 1] += fabs(Px[k]);
+        }
     random_csc(P_, N, 0.4, 0, Ap, Ai, Ax);
     random_csc(M, N, 0.4, 0, Gp, Gi, Gx);
     for (int i = 0; i < N; i++) c[i] = ct_randn();
@@ -87,8 +131,11 @@ static void run(int dense_max, int with_P, int backend) {
     tscvx_workspace *ws = NULL;
     CHECK(tscvx_setup(&ws, arena, sizeof arena, &d, &st) == TSCVX_SETUP_OK, "setup");
     if (!ws) return;
-    CHECK(ws->kkt.nexp == (dense_max < 3 ? 2 : (dense_max < 4 ? 1 : 0)), "expansions %d",
-          (int)ws->kkt.nexp);
+    CHECK(ws->method->id == (backend == TSCVX_KKT_BANDED ? TSCVX_KKT_BANDED : TSCVX_KKT_STATIC),
+          "method %s for backend %d", ws->method->name, backend);
+    if (backend != TSCVX_KKT_BANDED)
+        CHECK(ws->kkt.nexp == (dense_max < 3 ? 2 : (dense_max < 4 ? 1 : 0)), "expansions %d",
+              (int)ws->kkt.nexp);
 
     /* random NT scaling point */
     tscvx_float s[M], z[M], lam[M];
@@ -96,39 +143,7 @@ static void run(int dense_max, int with_P, int backend) {
     for (int i = 0; i < L; i++) s[i] = 0.1 + ct_rand(), z[i] = 0.1 + ct_rand();
     s[L] = 3.0, z[L] = 2.5, s[L + 3] = 4.0, z[L + 3] = 3.0;
     CHECK(tscvx_nt_scaling(&ws->K, s, z, &ws->W, lam) == 0, "scaling");
-    const double delta = 1e-9;
-    tscvx_kkt_data_values(ws, delta);
-    tscvx_kkt_cone_values(&ws->kkt, &ws->K, &ws->W, delta);
-    CHECK(ws->kkt.backend->numeric(&ws->kkt) == 0, "factorization");
-
-    /* dense reference (unregularized) */
-    static double Kd[DIM * DIM];
-    memset(Kd, 0, sizeof Kd);
-    csc_to_dense(&ws->P, Kd, DIM, 0, 0, 1);
-    csc_to_dense(&ws->A, Kd, DIM, N, 0, 0);
-    csc_to_dense(&ws->G, Kd, DIM, N + P_, 0, 0);
-    for (int j = 0; j < N; j++)
-        for (int i = N; i < DIM; i++) Kd[i * DIM + j] = Kd[j * DIM + i];
-    for (int j = 0; j < M; j++) { /* -W'W column j */
-        tscvx_float e[M] = {0}, t1[M], t2[M];
-        e[j] = 1.0;
-        tscvx_nt_apply(&ws->K, &ws->W, 0, e, t1);
-        tscvx_nt_apply(&ws->K, &ws->W, 0, t1, t2);
-        for (int i = 0; i < M; i++) Kd[(N + P_ + j) * DIM + N + P_ + i] = -t2[i];
-    }
-    double rhs[DIM], ref[DIM];
-    for (int i = 0; i < DIM; i++) rhs[i] = ref[i] = ct_randn();
-    CHECK(dense_solve(Kd, ref, DIM) == 0, "dense solve");
-    tscvx_float dx[N], dy[P_], dz[M];
-    CHECK(tscvx_kkt_solve(&ws->kkt, N, P_, M, rhs, rhs + N, rhs + N + P_, dx, dy, dz, 5) >= 0,
-          "kkt solve");
-    double err = 0.0, scale = 1.0;
-    for (int i = 0; i < N; i++) err = fmax(err, fabs(dx[i] - ref[i]));
-    for (int i = 0; i < P_; i++) err = fmax(err, fabs(dy[i] - ref[N + i]));
-    for (int i = 0; i < M; i++) err = fmax(err, fabs(dz[i] - ref[N + P_ + i]));
-    for (int i = 0; i < DIM; i++) scale = fmax(scale, fabs(ref[i]));
-    CHECK(err < 1e-8 * scale, "backend %d dense_max %d P %d: |x - x_ref| = %g (scale %g)",
-          backend, dense_max, with_P, err, scale);
+    check_against_dense(ws, backend, dense_max, with_P);
 }
 
 /* ---- the static-pattern backend alone, on random quasi-definite matrices ---------------- */
@@ -228,14 +243,125 @@ static void run_static_vs_ldl(int dim, double density) {
     CHECK(ks.backend->numeric(&ks) == -1, "zero pivot not caught");
 }
 
+/* ---- a stage-structured problem (optimal control) for the banded method ----------------- */
+
+#define T_ 30                    /* stages */
+#define SN (5 * T_ + 1)          /* x_k (3), u_k (2) per stage, then the global sigma */
+#define SP (3 * (T_ - 1) + 3)    /* dynamics, then x_0 = x0 (last: the row order is not banded) */
+#define SM (3 * T_ + 1 + 3 * T_) /* x_k <= 10 (3 per stage), sigma >= 0.1 | |u_k| <= x_k0 + 5 */
+#define SNZ 2048
+
+typedef struct {
+    int nz;
+    tscvx_int r[SNZ], c[SNZ];
+    tscvx_float v[SNZ];
+} triplets;
+
+static void put(triplets *t, int r, int c, double v) { t->r[t->nz] = r, t->c[t->nz] = c, t->v[t->nz++] = v; }
+
+/* CSC (rows ascending in each column) of triplets without duplicates */
+static void to_csc(const triplets *t, int ncol, tscvx_int *Mp, tscvx_int *Mi, tscvx_float *Mx) {
+    for (int j = 0; j <= ncol; j++) Mp[j] = 0;
+    for (int e = 0; e < t->nz; e++) Mp[t->c[e] + 1]++;
+    for (int j = 0; j < ncol; j++) Mp[j + 1] += Mp[j];
+    tscvx_int next[SN + 1];
+    for (int j = 0; j < ncol; j++) next[j] = Mp[j];
+    for (int e = 0; e < t->nz; e++) {
+        int k = next[t->c[e]]++;
+        for (; k > Mp[t->c[e]] && Mi[k - 1] > t->r[e]; k--) Mi[k] = Mi[k - 1], Mx[k] = Mx[k - 1];
+        Mi[k] = t->r[e], Mx[k] = t->v[e];
+    }
+}
+
+/* Stage problem; free_var leaves one state in no cone (no banded structure). */
+static void run_stages(int with_P, int backend, int free_var) {
+    static triplets tA, tG, tP;
+    static tscvx_int Ap[SN + 1], Ai[SNZ], Gp[SN + 1], Gi[SNZ], Pp[SN + 1], Pi[SNZ];
+    static tscvx_float Ax[SNZ], Gx[SNZ], Px[SNZ], c[SN], b[SP], h[SM];
+    static const tscvx_int q3[T_] = {3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3,
+                                     3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3};
+    tA.nz = tG.nz = tP.nz = 0;
+    const int sig = 5 * T_;
+    for (int k = 0; k + 1 < T_; k++) /* x_{k+1} - A_k x_k - B_k u_k - c_k sigma = 0 */
+        for (int i = 0; i < 3; i++) {
+            const int row = 3 * k + i;
+            put(&tA, row, 5 * (k + 1) + i, 1.0);
+            for (int j = 0; j < 3; j++) put(&tA, row, 5 * k + j, -(i == j) - 0.1 * ct_randn());
+            for (int j = 0; j < 2; j++) put(&tA, row, 5 * k + 3 + j, ct_randn());
+            put(&tA, row, sig, ct_randn());
+            b[row] = 0.1 * ct_randn();
+        }
+    for (int i = 0; i < 3; i++) put(&tA, SP - 3 + i, i, 1.0), b[SP - 3 + i] = ct_randn();
+    int row = 0; /* orthant: x_k,i <= 10 (one left out with free_var), sigma >= 0.1 */
+    for (int k = 0; k < T_; k++)
+        for (int i = 0; i < 3; i++) {
+            if (free_var && k == T_ / 2 && i == 2) continue;
+            put(&tG, row, 5 * k + i, 1.0), h[row++] = 10.0;
+        }
+    put(&tG, row, sig, -1.0), h[row++] = -0.1;
+    const tscvx_int l = row;
+    for (int k = 0; k < T_; k++) { /* (x_k0 + 5, u_k) in Q3 */
+        put(&tG, row, 5 * k, -1.0), h[row++] = 5.0;
+        put(&tG, row, 5 * k + 3, -1.0), h[row++] = 0.0;
+        put(&tG, row, 5 * k + 4, -1.0), h[row++] = 0.0;
+    }
+    for (int k = 0; k < T_; k++) {
+        put(&tP, 5 * k + 3, 5 * k + 3, 2.0);
+        put(&tP, 5 * k + 3, 5 * k + 4, 0.5);
+        put(&tP, 5 * k + 4, 5 * k + 4, 1.0);
+    }
+    for (int j = 0; j < SN; j++) c[j] = ct_randn();
+    to_csc(&tA, SN, Ap, Ai, Ax);
+    to_csc(&tG, SN, Gp, Gi, Gx);
+    to_csc(&tP, SN, Pp, Pi, Px);
+    tscvx_data d = {SN, SP, row, with_P ? Pp : NULL, Pi, Px, c, Ap, Ai, Ax, b,
+                    Gp, Gi, Gx, h, l, T_, q3};
+    tscvx_settings st;
+    tscvx_default_settings(&st);
+    st.kkt_backend = backend;
+    static unsigned char arena[1 << 21];
+    tscvx_workspace *ws = NULL;
+    const tscvx_setup_status status = tscvx_setup(&ws, arena, sizeof arena, &d, &st);
+    if (free_var) { /* a variable in no cone: banded refused, AUTO falls back to sparse */
+        if (backend == TSCVX_KKT_BANDED)
+            CHECK(status == TSCVX_SETUP_NOT_BANDED, "free variable: status %d", (int)status);
+        else
+            CHECK(status == TSCVX_SETUP_OK && ws->method->id == TSCVX_KKT_STATIC, "auto fallback");
+        return;
+    }
+    CHECK(status == TSCVX_SETUP_OK, "stage setup %d", (int)status);
+    if (!ws) return;
+    CHECK(ws->method->id == TSCVX_KKT_BANDED, "stage problem not banded (%s)", ws->method->name);
+    CHECK(ws->bd.nb == 1 && ws->bd.bvar[0] == sig, "border: %d variables", (int)ws->bd.nb);
+    CHECK(ws->bd.ngroup == 3 * T_ + 1, "groups %d", (int)ws->bd.ngroup);
+    /* the profile follows the stages: at most two intervals wide */
+    for (int i = 0; i < SP; i++) CHECK(i - ws->bd.yfirst[i] < 9, "row %d profile %d", i, i - (int)ws->bd.yfirst[i]);
+    static tscvx_float s[SM], z[SM], lam[SM];
+    for (int i = 0; i < l; i++) s[i] = 0.01 + ct_rand(), z[i] = 0.01 + 10.0 * ct_rand();
+    for (int k = 0; k < T_; k++) {
+        const int o = l + 3 * k;
+        s[o + 1] = ct_randn(), s[o + 2] = ct_randn(), z[o + 1] = ct_randn(), z[o + 2] = ct_randn();
+        s[o] = hypot(s[o + 1], s[o + 2]) * (1.0 + 0.1 * ct_rand()) + 1e-3;
+        z[o] = hypot(z[o + 1], z[o + 2]) * (1.0 + 3.0 * ct_rand()) + 1e-3;
+    }
+    CHECK(tscvx_nt_scaling(&ws->K, s, z, &ws->W, lam) == 0, "scaling");
+    check_against_dense(ws, backend, 0, with_P);
+}
+
 int main(void) {
-    for (int rep = 0; rep < 20; rep++) /* both KKT backends */
-        for (int backend = TSCVX_KKT_LDL; backend <= TSCVX_KKT_STATIC; backend++) {
+    for (int rep = 0; rep < 20; rep++) /* every KKT method */
+        for (int backend = TSCVX_KKT_LDL; backend <= TSCVX_KKT_BANDED; backend++) {
             run(16, rep % 2, backend);
             run(3, rep % 2, backend);
             run(1, rep % 2, backend);
         }
     for (int rep = 0; rep < 200; rep++) /* dims 1..60, sparse to dense */
         run_static_vs_ldl(1 + rep % QD_MAX, rep < 100 ? 0.08 : 0.3);
+    for (int rep = 0; rep < 6; rep++) {
+        run_stages(rep % 2, TSCVX_KKT_BANDED, 0);
+        run_stages(rep % 2, TSCVX_KKT_AUTO, 0);
+    }
+    run_stages(0, TSCVX_KKT_BANDED, 1);
+    run_stages(0, TSCVX_KKT_AUTO, 1);
     return ct_report("test_kkt");
 }

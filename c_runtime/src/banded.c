@@ -1,0 +1,756 @@
+/* Banded KKT method: the Newton systems of stage-structured problems by three exact, small
+ * dense reductions (cone rows, variable groups, equality rows); see socp_internal.h.
+ *
+ * Setup (tscvx_banded_analyse) finds the variable groups, the border, a reverse Cuthill-McKee
+ * order of the equality rows and the profile of Y = d I + sum_g A_g H_g^-1 A_g'. Each IPM
+ * iteration (banded_factor) forms and factors
+ *   H_g = P_gg + d I + sum_cones (W_c^-1 G_c)'(W_c^-1 G_c) = R_g'R_g   (R_g by Givens rotations
+ *                                   of the stacked rows: W^-1 G's conditioning not squared)
+ *   C_g' = (L_g^-1 A_g')'                                (H_g = L_g L_g')
+ *   Y    = d I + sum_g C_g' C_g                          (profile Cholesky, Y = L_Y L_Y')
+ *   S    = H_B + A_B' Y^-1 A_B                           (border, dense Cholesky)
+ * and each solve (base_solve) runs them backwards; iterative refinement on the unregularized
+ * KKT system removes d (as in the sparse method).
+ */
+#include <limits.h>
+#include <math.h>
+
+#include "socp_internal.h"
+
+#define CLAIM(ptr, count, type) \
+    ((ptr) = (type *)tscvx_arena_alloc(a, (size_t)(count), sizeof(type)))
+
+/* ---- small dense kernels ----------------------------------------------------------------- */
+
+/* Dynamic regularization (as QDLDL and Clarabel): a pivot that kept fewer than ~3 digits of
+ * its diagonal entry (d <= DYN_EPS a_jj: the column is numerically dependent on the earlier
+ * ones, as H_g of an infeasible problem's diverging scaling) is replaced by DYN_DELTA a_jj,
+ * and the refinement removes the difference. A non-finite pivot is a failure. */
+#define DYN_EPS 1e-13
+#define DYN_DELTA 1e-7
+
+static int dyn_pivot(tscvx_float *d, tscvx_float ajj) {
+    if (!isfinite(*d)) return -1;
+    if (!(*d > DYN_EPS * ajj)) *d = DYN_DELTA * ajj;
+    return 0;
+}
+
+/* Cholesky L L' of the s x s column-major matrix whose lower part is in M (in place; entry
+ * (i, k) at M[k s + i]), dynamically regularized. Returns -1 on a non-finite pivot. */
+static int chol(tscvx_float *M, tscvx_int s) {
+    for (tscvx_int j = 0; j < s; j++) {
+        const tscvx_float ajj = M[j * s + j];
+        tscvx_float d = ajj;
+        for (tscvx_int k = 0; k < j; k++) d -= M[k * s + j] * M[k * s + j];
+        if (dyn_pivot(&d, fabs(ajj)) != 0) return -1;
+        d = sqrt(d);
+        M[j * s + j] = d;
+        for (tscvx_int i = j + 1; i < s; i++) {
+            tscvx_float v = M[j * s + i];
+            for (tscvx_int k = 0; k < j; k++) v -= M[k * s + i] * M[k * s + j];
+            M[j * s + i] = v / d;
+        }
+    }
+    return 0;
+}
+
+/* Factor F of a positive semidefinite P_gg = F'F, F = L' (column-major lower in M, in place):
+ * Cholesky that drops a numerically zero pivot's column (the rank-revealing semidefinite
+ * variant; P_gg may be singular, a zero row of P included). */
+static void chol_psd(tscvx_float *M, tscvx_int s) {
+    for (tscvx_int j = 0; j < s; j++) {
+        const tscvx_float ajj = M[j * s + j];
+        tscvx_float d = ajj;
+        for (tscvx_int k = 0; k < j; k++) d -= M[k * s + j] * M[k * s + j];
+        if (!(d > DYN_EPS * fabs(ajj)) || !isfinite(d)) {
+            for (tscvx_int i = j; i < s; i++) M[j * s + i] = 0.0;
+            continue;
+        }
+        d = sqrt(d);
+        M[j * s + j] = d;
+        for (tscvx_int i = j + 1; i < s; i++) {
+            tscvx_float v = M[j * s + i];
+            for (tscvx_int k = 0; k < j; k++) v -= M[k * s + i] * M[k * s + j];
+            M[j * s + i] = v / d;
+        }
+    }
+}
+
+/* x := L^-1 x */
+static void chol_lsolve(const tscvx_float *L, tscvx_int s, tscvx_float *x) {
+    for (tscvx_int i = 0; i < s; i++) {
+        tscvx_float v = x[i];
+        for (tscvx_int k = 0; k < i; k++) v -= L[k * s + i] * x[k];
+        x[i] = v / L[i * s + i];
+    }
+}
+
+/* x := L'^-1 x (column i of L is contiguous: L(k, i) = L[i s + k]) */
+static void chol_ltsolve(const tscvx_float *L, tscvx_int s, tscvx_float *x) {
+    for (tscvx_int i = s - 1; i >= 0; i--) {
+        const tscvx_float *Li = L + (size_t)i * s;
+        const tscvx_float v = x[i] - tscvx_dot(Li + i + 1, x + i + 1, s - i - 1);
+        x[i] = v / Li[i];
+    }
+}
+
+/* ---- profile (envelope) Cholesky of Y ---------------------------------------------------- */
+
+/* Row i of the profile holds columns yfirst[i] .. i; row(i)[j] is entry (i, j). */
+static tscvx_float *prow(const tscvx_banded *bd, tscvx_int i) {
+    return bd->Y + bd->yp[i] - bd->yfirst[i];
+}
+
+/* Y = L L' in place, row by row (each entry one dot product of two contiguous row pieces),
+ * dynamically regularized as chol() */
+static int profile_chol(tscvx_banded *bd, tscvx_int p) {
+    for (tscvx_int i = 0; i < p; i++) {
+        tscvx_float *Li = prow(bd, i);
+        const tscvx_int fi = bd->yfirst[i];
+        for (tscvx_int j = fi; j < i; j++) {
+            const tscvx_float *Lj = prow(bd, j);
+            const tscvx_int f = fi > bd->yfirst[j] ? fi : bd->yfirst[j];
+            Li[j] = (Li[j] - tscvx_dot(Li + f, Lj + f, j - f)) / Lj[j];
+        }
+        tscvx_float d = Li[i] - tscvx_dot(Li + fi, Li + fi, i - fi);
+        if (dyn_pivot(&d, fabs(Li[i])) != 0) return -1;
+        Li[i] = sqrt(d);
+    }
+    return 0;
+}
+
+/* x := Y^-1 x = L'^-1 L^-1 x */
+static void profile_solve(const tscvx_banded *bd, tscvx_int p, tscvx_float *x) {
+    for (tscvx_int i = 0; i < p; i++) {
+        const tscvx_float *Li = prow(bd, i);
+        const tscvx_int f = bd->yfirst[i];
+        x[i] = (x[i] - tscvx_dot(Li + f, x + f, i - f)) / Li[i];
+    }
+    for (tscvx_int i = p - 1; i >= 0; i--) {
+        const tscvx_float *Li = prow(bd, i);
+        const tscvx_float xi = x[i] / Li[i];
+        x[i] = xi;
+        for (tscvx_int k = bd->yfirst[i]; k < i; k++) x[k] -= Li[k] * xi;
+    }
+}
+
+/* ---- analysis ---------------------------------------------------------------------------- */
+
+/* union-find with path halving; the root of a set is its smallest member */
+static tscvx_int uf_root(tscvx_int *parent, tscvx_int i, tscvx_int n) {
+    for (tscvx_int steps = 0; parent[i] != i && steps < n; steps++) {
+        parent[i] = parent[parent[i]];
+        i = parent[i];
+    }
+    return i;
+}
+
+static void uf_union(tscvx_int *parent, tscvx_int i, tscvx_int j, tscvx_int n) {
+    const tscvx_int a = uf_root(parent, i, n), b = uf_root(parent, j, n);
+    if (a < b) parent[b] = a;
+    if (b < a) parent[a] = b;
+}
+
+/* The row graph of Y: rows r and c are adjacent when a non-border group couples both. */
+typedef struct {
+    const tscvx_banded *bd;
+    const tscvx_int *rgp, *rgg; /* row -> its non-border groups */
+} row_graph;
+
+/* Breadth-first search from `root` over rows not yet ordered (its component); `seen` marks
+ * visits with `stamp`. Fills queue[0 .. count); returns the depth, *last = the start of the
+ * deepest level in the queue. */
+static tscvx_int bfs(const row_graph *G, tscvx_int root, tscvx_int stamp, tscvx_int *seen,
+                     tscvx_int *queue, tscvx_int *count, tscvx_int *last) {
+    const tscvx_banded *bd = G->bd;
+    tscvx_int head = 0, tail = 0, depth = 0, level_end = 1;
+    queue[tail++] = root;
+    seen[root] = stamp;
+    *last = 0;
+    while (head < tail) { /* each row enters once */
+        if (head == level_end) depth++, *last = head, level_end = tail;
+        const tscvx_int r = queue[head++];
+        for (tscvx_int t = G->rgp[r]; t < G->rgp[r + 1]; t++) {
+            const tscvx_int g = G->rgg[t];
+            for (tscvx_int u = bd->rp[g]; u < bd->rp[g + 1]; u++) {
+                const tscvx_int c = bd->rrow[u];
+                if (seen[c] != stamp) seen[c] = stamp, queue[tail++] = c;
+            }
+        }
+    }
+    *count = tail;
+    return depth;
+}
+
+/* Reverse Cuthill-McKee order of the rows (perm, iperm), each component from a
+ * pseudo-peripheral row (George and Liu). deg: row degrees; temporaries seen, queue, order. */
+static void rcm(const row_graph *G, tscvx_int p, const tscvx_int *deg, tscvx_int *seen,
+                tscvx_int *queue, tscvx_int *order, tscvx_int *perm, tscvx_int *iperm) {
+    tscvx_int stamp = 0, nord = 0;
+    for (tscvx_int i = 0; i < p; i++) seen[i] = -1, iperm[i] = -1; /* iperm: -1 = unplaced */
+    for (tscvx_int comp = 0; comp < p && nord < p; comp++) {
+        tscvx_int root = -1;
+        for (tscvx_int i = 0; i < p; i++)
+            if (iperm[i] < 0 && (root < 0 || deg[i] < deg[root])) root = i;
+        /* pseudo-peripheral: move to a least-degree row of the deepest level while the depth
+         * grows (a handful of searches) */
+        tscvx_int count, last, depth = bfs(G, root, stamp++, seen, queue, &count, &last);
+        for (int tries = 0; tries < 8; tries++) {
+            tscvx_int best = queue[last];
+            for (tscvx_int u = last + 1; u < count; u++)
+                if (deg[queue[u]] < deg[best]) best = queue[u];
+            tscvx_int c2, l2;
+            const tscvx_int d2 = bfs(G, best, stamp++, seen, queue, &c2, &l2);
+            if (d2 <= depth) break;
+            root = best, depth = d2;
+        }
+        /* Cuthill-McKee: breadth first, the new neighbours of each row by increasing degree */
+        const tscvx_int start = nord;
+        order[nord++] = root;
+        iperm[root] = 0;
+        for (tscvx_int head = start; head < nord; head++) {
+            const tscvx_int r = order[head], first_new = nord;
+            for (tscvx_int t = G->rgp[r]; t < G->rgp[r + 1]; t++) {
+                const tscvx_int g = G->rgg[t];
+                for (tscvx_int u = G->bd->rp[g]; u < G->bd->rp[g + 1]; u++) {
+                    const tscvx_int c = G->bd->rrow[u];
+                    if (iperm[c] < 0) iperm[c] = 0, order[nord++] = c;
+                }
+            }
+            for (tscvx_int u = first_new + 1; u < nord; u++) { /* insertion sort by degree */
+                const tscvx_int c = order[u];
+                tscvx_int v = u;
+                for (; v > first_new && deg[order[v - 1]] > deg[c]; v--) order[v] = order[v - 1];
+                order[v] = c;
+            }
+        }
+    }
+    for (tscvx_int k = 0; k < p; k++) perm[k] = order[p - 1 - k];
+    for (tscvx_int k = 0; k < p; k++) iperm[perm[k]] = k;
+}
+
+/* Sort v[0 .. len) ascending (the short row lists of one group). */
+static void sort_ints(tscvx_int *v, tscvx_int len) {
+    for (tscvx_int u = 1; u < len; u++) {
+        const tscvx_int c = v[u];
+        tscvx_int w = u;
+        for (; w > 0 && v[w - 1] > c; w--) v[w] = v[w - 1];
+        v[w] = c;
+    }
+}
+
+/* Rows coupled to more than this many equality rows make a group a border group. */
+static tscvx_int border_rows(tscvx_int p) { return p / 8 > 32 ? p / 8 : 32; }
+
+int tscvx_banded_analyse(tscvx_workspace *ws, tscvx_arena *a) {
+    tscvx_banded *bd = &ws->bd;
+    const tscvx_int n = ws->n, p = ws->p, m = ws->m, l = ws->K.l, nsoc = ws->K.nsoc;
+    const tscvx_int nnzA = ws->A.nnz, nnzG = ws->G.nnz, nnzP = ws->P.nnz;
+    const size_t entry = a->top;
+    /* persistent arrays of known size */
+    CLAIM(bd->gp, n + 1, tscvx_int);
+    CLAIM(bd->gvar, n, tscvx_int);
+    CLAIM(bd->loc, n, tscvx_int);
+    CLAIM(bd->border, n, signed char);
+    CLAIM(bd->hp, n + 1, tscvx_int);
+    CLAIM(bd->mapP, nnzP, tscvx_int);
+    CLAIM(bd->Grp, m + 1, tscvx_int);
+    CLAIM(bd->Gr_k, nnzG, tscvx_int);
+    CLAIM(bd->Gr_loc, nnzG, tscvx_int);
+    CLAIM(bd->cgroup, l + nsoc, tscvx_int);
+    CLAIM(bd->gcp, n + 1, tscvx_int);
+    CLAIM(bd->gcone, l + nsoc, tscvx_int);
+    CLAIM(bd->hasP, n, signed char);
+    CLAIM(bd->rp, n + 1, tscvx_int);
+    CLAIM(bd->rrow, nnzA, tscvx_int);
+    CLAIM(bd->posA, nnzA, tscvx_int);
+    CLAIM(bd->cp, n + 1, tscvx_int);
+    CLAIM(bd->perm, p, tscvx_int);
+    CLAIM(bd->iperm, p, tscvx_int);
+    CLAIM(bd->yfirst, p, tscvx_int);
+    CLAIM(bd->yp, p + 1, tscvx_int);
+    tscvx_float **vec[] = {&bd->xg, &bd->res_x, &bd->ex, &bd->yb, &bd->res_y, &bd->ey,
+                           &bd->t, &bd->wz, &bd->res_z, &bd->ez, &bd->ewz};
+    const tscvx_int len[] = {n, n, n, p, p, p, m, m, m, m, m};
+    for (size_t i = 0; i < sizeof len / sizeof len[0]; i++) CLAIM(*vec[i], len[i], tscvx_float);
+    const size_t mark = a->top;
+    /* temporaries */
+    tscvx_int *parent, *gid, *Grc, *rgp, *rgg, *deg, *seen, *queue, *order;
+    CLAIM(parent, n, tscvx_int);
+    CLAIM(gid, n, tscvx_int);
+    CLAIM(Grc, nnzG, tscvx_int);
+    CLAIM(rgp, p + 1, tscvx_int);
+    CLAIM(rgg, nnzA, tscvx_int);
+    CLAIM(deg, p, tscvx_int);
+    CLAIM(seen, p, tscvx_int);
+    CLAIM(queue, p, tscvx_int);
+    CLAIM(order, p, tscvx_int);
+    if (a->base == NULL) { /* counting: the value arrays are sized by the analysis itself */
+        a->top = mark;
+        return 1;
+    }
+    if (a->overflow) return -1;
+#define DECLINE()       \
+    do {                \
+        a->top = entry; \
+        return 0;       \
+    } while (0) /* no banded structure: release everything */
+
+    /* 1. G by rows: row i's entries at Grp[i] .. Grp[i+1], ascending columns */
+    tscvx_int *Grp = bd->Grp;
+    for (tscvx_int i = 0; i <= m; i++) Grp[i] = 0;
+    for (tscvx_int k = 0; k < nnzG; k++) Grp[ws->G.i[k] + 1]++;
+    for (tscvx_int i = 0; i < m; i++) Grp[i + 1] += Grp[i];
+    for (tscvx_int j = 0; j < n; j++)
+        for (tscvx_int k = ws->G.p[j]; k < ws->G.p[j + 1]; k++) {
+            const tscvx_int t = Grp[ws->G.i[k]]++;
+            bd->Gr_k[t] = k, Grc[t] = j;
+        }
+    for (tscvx_int i = m; i > 0; i--) Grp[i] = Grp[i - 1];
+    Grp[0] = 0;
+
+    /* 2. variable groups: union over the variables of each cone and each P entry */
+    for (tscvx_int j = 0; j < n; j++) parent[j] = j;
+    for (tscvx_int c = 0; c < l + nsoc; c++) {
+        const tscvx_int r0 = c < l ? c : ws->K.off[c - l];
+        const tscvx_int r1 = c < l ? c + 1 : r0 + ws->K.q[c - l];
+        for (tscvx_int t = Grp[r0]; t < Grp[r1]; t++) uf_union(parent, Grc[Grp[r0]], Grc[t], n);
+    }
+    for (tscvx_int j = 0; j < n; j++)
+        for (tscvx_int k = ws->P.p[j]; k < ws->P.p[j + 1]; k++) uf_union(parent, ws->P.i[k], j, n);
+    tscvx_int ng = 0;
+    for (tscvx_int j = 0; j < n; j++) { /* roots are the smallest members: numbered in order */
+        const tscvx_int r = uf_root(parent, j, n);
+        gid[j] = r == j ? ng++ : gid[r];
+    }
+    bd->ngroup = ng;
+    for (tscvx_int g = 0; g <= ng; g++) bd->gp[g] = 0;
+    for (tscvx_int j = 0; j < n; j++) bd->gp[gid[j] + 1]++;
+    for (tscvx_int g = 0; g < ng; g++) {
+        if (bd->gp[g + 1] > TSCVX_BANDED_GROUP_MAX) DECLINE();
+        bd->gp[g + 1] += bd->gp[g];
+    }
+    for (tscvx_int g = 0; g < ng; g++) parent[g] = bd->gp[g]; /* fill pointers */
+    for (tscvx_int j = 0; j < n; j++) {
+        const tscvx_int t = parent[gid[j]]++;
+        bd->gvar[t] = j, bd->loc[j] = t - bd->gp[gid[j]];
+    }
+    /* every variable in a cone or on P's diagonal, else H_g is only the regularization */
+    for (tscvx_int j = 0; j < n; j++) {
+        int covered = ws->G.p[j + 1] > ws->G.p[j];
+        for (tscvx_int k = ws->P.p[j]; k < ws->P.p[j + 1]; k++) covered |= ws->P.i[k] == j;
+        if (!covered) DECLINE();
+    }
+    for (tscvx_int c = 0; c < l + nsoc; c++) {
+        const tscvx_int r0 = c < l ? c : ws->K.off[c - l];
+        const tscvx_int r1 = c < l ? c + 1 : r0 + ws->K.q[c - l];
+        bd->cgroup[c] = Grp[r1] > Grp[r0] ? gid[Grc[Grp[r0]]] : -1;
+    }
+    for (tscvx_int t = 0; t < nnzG; t++) bd->Gr_loc[t] = bd->loc[Grc[t]];
+    for (tscvx_int g = 0; g <= ng; g++) bd->gcp[g] = 0; /* the cones of each group */
+    for (tscvx_int c = 0; c < l + nsoc; c++)
+        if (bd->cgroup[c] >= 0) bd->gcp[bd->cgroup[c] + 1]++;
+    for (tscvx_int g = 0; g < ng; g++) bd->gcp[g + 1] += bd->gcp[g];
+    for (tscvx_int g = 0; g < ng; g++) parent[g] = bd->gcp[g];
+    for (tscvx_int c = 0; c < l + nsoc; c++)
+        if (bd->cgroup[c] >= 0) bd->gcone[parent[bd->cgroup[c]]++] = c;
+    for (tscvx_int g = 0; g < ng; g++) bd->hasP[g] = 0;
+    for (tscvx_int j = 0; j < n; j++) bd->hasP[gid[j]] |= ws->P.p[j + 1] > ws->P.p[j];
+
+    /* 3. the equality rows of each group; the border */
+    tscvx_int *mark_row = seen;
+    for (tscvx_int i = 0; i < p; i++) mark_row[i] = -1;
+    bd->nb = 0;
+    bd->rp[0] = 0;
+    for (tscvx_int g = 0; g < ng; g++) {
+        tscvx_int cnt = 0;
+        const tscvx_int start = bd->rp[g];
+        for (tscvx_int v = bd->gp[g]; v < bd->gp[g + 1]; v++) {
+            const tscvx_int j = bd->gvar[v];
+            for (tscvx_int k = ws->A.p[j]; k < ws->A.p[j + 1]; k++)
+                if (mark_row[ws->A.i[k]] != g) mark_row[ws->A.i[k]] = g, bd->rrow[start + cnt++] = ws->A.i[k];
+        }
+        bd->border[g] = cnt > border_rows(p);
+        if (bd->border[g]) {
+            for (tscvx_int v = bd->gp[g]; v < bd->gp[g + 1]; v++) {
+                if (bd->nb >= TSCVX_BANDED_BORDER_MAX) DECLINE();
+                bd->bgroup[bd->nb] = g;
+                bd->bvar[bd->nb++] = bd->gvar[v];
+            }
+            cnt = 0;
+        }
+        bd->rp[g + 1] = start + cnt;
+    }
+    /* rows -> groups; a row without a non-border group would leave Y singular */
+    for (tscvx_int i = 0; i <= p; i++) rgp[i] = 0;
+    for (tscvx_int u = 0; u < bd->rp[ng]; u++) rgp[bd->rrow[u] + 1]++;
+    for (tscvx_int i = 0; i < p; i++) {
+        if (rgp[i + 1] == 0) DECLINE();
+        rgp[i + 1] += rgp[i];
+    }
+    for (tscvx_int i = 0; i < p; i++) deg[i] = rgp[i];
+    for (tscvx_int g = 0; g < ng; g++)
+        for (tscvx_int u = bd->rp[g]; u < bd->rp[g + 1]; u++) rgg[deg[bd->rrow[u]]++] = g;
+    const row_graph RG = {bd, rgp, rgg};
+
+    /* 4. row degrees, reverse Cuthill-McKee order, profile of Y */
+    for (tscvx_int i = 0; i < p; i++) seen[i] = -1;
+    for (tscvx_int r = 0; r < p; r++) {
+        tscvx_int d = 0;
+        for (tscvx_int t = rgp[r]; t < rgp[r + 1]; t++)
+            for (tscvx_int u = bd->rp[rgg[t]]; u < bd->rp[rgg[t] + 1]; u++)
+                if (seen[bd->rrow[u]] != r) seen[bd->rrow[u]] = r, d++;
+        deg[r] = d;
+    }
+    rcm(&RG, p, deg, seen, queue, order, bd->perm, bd->iperm);
+    bd->yp[0] = 0;
+    for (tscvx_int b = 0; b < p; b++) {
+        const tscvx_int r = bd->perm[b];
+        tscvx_int f = b;
+        for (tscvx_int t = rgp[r]; t < rgp[r + 1]; t++)
+            for (tscvx_int u = bd->rp[rgg[t]]; u < bd->rp[rgg[t] + 1]; u++) {
+                const tscvx_int c = bd->iperm[bd->rrow[u]];
+                f = c < f ? c : f;
+            }
+        bd->yfirst[b] = f;
+        bd->yp[b + 1] = bd->yp[b] + (b - f + 1);
+        if (bd->yp[b + 1] > INT_MAX / 4) DECLINE();
+    }
+    bd->nY = (size_t)bd->yp[p];
+    if (bd->nY > (size_t)TSCVX_BANDED_ENV_AVG * p && p > 2 * TSCVX_BANDED_ENV_AVG) DECLINE();
+
+    /* 5. group row lists in band positions (ascending); each A entry's place in its list */
+    for (tscvx_int g = 0; g < ng; g++) {
+        tscvx_int *R = bd->rrow + bd->rp[g];
+        const tscvx_int len_g = bd->rp[g + 1] - bd->rp[g];
+        for (tscvx_int u = 0; u < len_g; u++) R[u] = bd->iperm[R[u]];
+        sort_ints(R, len_g);
+        for (tscvx_int u = 0; u < len_g; u++) seen[R[u]] = u;
+        for (tscvx_int v = bd->gp[g]; v < bd->gp[g + 1]; v++) {
+            const tscvx_int j = bd->gvar[v];
+            for (tscvx_int k = ws->A.p[j]; k < ws->A.p[j + 1]; k++)
+                bd->posA[k] = bd->border[g] ? -1 : seen[bd->iperm[ws->A.i[k]]];
+        }
+    }
+
+    /* 6. sizes and slots of the value arrays */
+    bd->hp[0] = bd->cp[0] = 0;
+    size_t nwork = 0;
+    for (tscvx_int g = 0; g < ng; g++) {
+        const tscvx_int s = bd->gp[g + 1] - bd->gp[g];
+        bd->hp[g + 1] = bd->hp[g] + s * s;
+        bd->cp[g + 1] = bd->cp[g] + s * (bd->rp[g + 1] - bd->rp[g]);
+    }
+    for (tscvx_int k = 0; k < nsoc; k++) { /* W_c^-1 G_c of the largest SOC block */
+        const tscvx_int g = bd->cgroup[l + k];
+        const size_t s = g < 0 ? 0 : (size_t)(bd->gp[g + 1] - bd->gp[g]);
+        nwork = s * ws->K.q[k] > nwork ? s * ws->K.q[k] : nwork;
+    }
+    for (tscvx_int j = 0; j < n; j++)
+        for (tscvx_int k = ws->P.p[j]; k < ws->P.p[j + 1]; k++) {
+            const tscvx_int i = ws->P.i[k], s = bd->gp[gid[j] + 1] - bd->gp[gid[j]];
+            const tscvx_int lo = bd->loc[i] < bd->loc[j] ? bd->loc[i] : bd->loc[j];
+            const tscvx_int hi = bd->loc[i] < bd->loc[j] ? bd->loc[j] : bd->loc[i];
+            bd->mapP[k] = bd->hp[gid[j]] + lo * s + hi;
+        }
+    bd->nH = (size_t)bd->hp[ng], bd->nCT = (size_t)bd->cp[ng];
+#undef DECLINE
+
+    /* 7. temporaries released; the value arrays */
+    a->top = mark;
+    CLAIM(bd->H, bd->nH, tscvx_float);
+    CLAIM(bd->PF, nnzP > 0 ? bd->nH : 0, tscvx_float);
+    CLAIM(bd->CT, bd->nCT, tscvx_float);
+    CLAIM(bd->Y, bd->nY, tscvx_float);
+    CLAIM(bd->V, (size_t)p * bd->nb, tscvx_float);
+    CLAIM(bd->Bw, nwork, tscvx_float);
+    return 1;
+}
+
+/* ---- numeric factorization --------------------------------------------------------------- */
+
+/* R := the triangular factor of [R; b] (R upper s x s, row-major, positive diagonal; b a
+ * dense row, clobbered): one Givens rotation per entry of b. */
+static void givens_absorb(tscvx_float *R, tscvx_int s, tscvx_float *b) {
+    for (tscvx_int k = 0; k < s; k++) {
+        if (b[k] == 0.0) continue;
+        tscvx_float *Rk = R + (size_t)k * s;
+        const tscvx_float r = sqrt(Rk[k] * Rk[k] + b[k] * b[k]);
+        const tscvx_float c = Rk[k] / r, sn = b[k] / r;
+        Rk[k] = r;
+        for (tscvx_int i = k + 1; i < s; i++) {
+            const tscvx_float t = Rk[i];
+            Rk[i] = c * t + sn * b[i];
+            b[i] = c * b[i] - sn * t;
+        }
+    }
+}
+
+/* The factor of H_g = P_gg + d I + sum over the group's cones of (W_c^-1 G_c)'(W_c^-1 G_c),
+ * H_g = R_g'R_g, by absorbing the rows of sqrt(d) I, of P_gg's factor and of every W_c^-1 G_c
+ * into R_g (Givens): an orthogonal factorization of the stacked rows, so the conditioning of
+ * W^-1 G is not squared as forming H_g would. R_g (row-major upper) is L_g' and is stored as
+ * L_g (column-major lower): the same array. Returns the largest |entry| of W over the
+ * group's cones (refinement floor). */
+static tscvx_float factor_group(tscvx_workspace *ws, tscvx_int g, tscvx_float d) {
+    tscvx_banded *bd = &ws->bd;
+    const tscvx_cones *K = &ws->K;
+    const tscvx_float *Gx = ws->G.x;
+    const tscvx_int s = bd->gp[g + 1] - bd->gp[g];
+    tscvx_float *R = bd->H + bd->hp[g], b[TSCVX_BANDED_GROUP_MAX], wmax = 0.0;
+    for (tscvx_int t = 0; t < s * s; t++) R[t] = 0.0;
+    for (tscvx_int k = 0; k < s; k++) R[k * s + k] = sqrt(d);
+    if (bd->hasP[g])
+        for (tscvx_int k = 0; k < s; k++) { /* row k of F = L_P' */
+            for (tscvx_int i = 0; i < s; i++) b[i] = i < k ? 0.0 : bd->PF[bd->hp[g] + k * s + i];
+            givens_absorb(R, s, b);
+        }
+    for (tscvx_int t = bd->gcp[g]; t < bd->gcp[g + 1]; t++) {
+        const tscvx_int c = bd->gcone[t];
+        if (c < K->l) { /* orthant row: G_c / w_c */
+            const tscvx_float w = ws->W.w[c];
+            wmax = w > wmax ? w : wmax;
+            for (tscvx_int i = 0; i < s; i++) b[i] = 0.0;
+            for (tscvx_int e = bd->Grp[c]; e < bd->Grp[c + 1]; e++) b[bd->Gr_loc[e]] = Gx[bd->Gr_k[e]] / w;
+            givens_absorb(R, s, b);
+            continue;
+        }
+        /* SOC: B = W^-1 G_c (q x s dense, column by column), its rows absorbed */
+        const tscvx_int k = c - K->l, o = K->off[k], q = K->q[k];
+        const tscvx_float *wb = ws->W.w + o, eta = ws->W.eta[k];
+        const tscvx_float big = eta * (wb[0] + sqrt(tscvx_dot(wb + 1, wb + 1, q - 1)));
+        wmax = big > wmax ? big : wmax;
+        tscvx_float *B = bd->Bw;
+        for (tscvx_int e = 0; e < q * s; e++) B[e] = 0.0;
+        for (tscvx_int r = 0; r < q; r++)
+            for (tscvx_int e = bd->Grp[o + r]; e < bd->Grp[o + r + 1]; e++)
+                B[r * s + bd->Gr_loc[e]] = Gx[bd->Gr_k[e]];
+        /* W^-1 v = (1/eta) (wb0 v0 - wb1'v1, v1 + (-v0 + wb1'v1/(1 + wb0)) wb1) (cones.c) */
+        for (tscvx_int col = 0; col < s; col++) {
+            tscvx_float w1v1 = 0.0;
+            for (tscvx_int r = 1; r < q; r++) w1v1 += wb[r] * B[r * s + col];
+            const tscvx_float v0 = B[col];
+            const tscvx_float coef = -v0 + w1v1 / (1.0 + wb[0]);
+            for (tscvx_int r = 1; r < q; r++) B[r * s + col] = (B[r * s + col] + coef * wb[r]) / eta;
+            B[col] = (wb[0] * v0 - w1v1) / eta;
+        }
+        for (tscvx_int r = 0; r < q; r++) givens_absorb(R, s, B + (size_t)r * s);
+    }
+    return wmax;
+}
+
+/* C_g' = (L_g^-1 A_g')' and Y = d I + sum_g C_g' C_g */
+static void form_Y(tscvx_workspace *ws, tscvx_float d) {
+    tscvx_banded *bd = &ws->bd;
+    for (size_t t = 0; t < bd->nY; t++) bd->Y[t] = 0.0;
+    for (tscvx_int i = 0; i < ws->p; i++) prow(bd, i)[i] = d;
+    for (size_t t = 0; t < bd->nCT; t++) bd->CT[t] = 0.0;
+    for (tscvx_int g = 0; g < bd->ngroup; g++) {
+        if (bd->border[g]) continue;
+        const tscvx_int s = bd->gp[g + 1] - bd->gp[g], R = bd->rp[g + 1] - bd->rp[g];
+        const tscvx_float *Lg = bd->H + bd->hp[g];
+        const tscvx_int *rows = bd->rrow + bd->rp[g];
+        tscvx_float *CT = bd->CT + bd->cp[g];
+        for (tscvx_int v = 0; v < s; v++) {
+            const tscvx_int j = bd->gvar[bd->gp[g] + v];
+            for (tscvx_int k = ws->A.p[j]; k < ws->A.p[j + 1]; k++)
+                CT[bd->posA[k] * s + v] = ws->A.x[k];
+        }
+        for (tscvx_int u = 0; u < R; u++) chol_lsolve(Lg, s, CT + (size_t)u * s);
+        for (tscvx_int u = 0; u < R; u++) {
+            tscvx_float *Yu = prow(bd, rows[u]);
+            const tscvx_float *cu = CT + (size_t)u * s;
+            for (tscvx_int v = 0; v <= u; v++) Yu[rows[v]] += tscvx_dot(cu, CT + (size_t)v * s, s);
+        }
+    }
+}
+
+/* Border: V = Y^-1 A_B, S = H_B + A_B' V (lower part), factored. */
+static int form_border(tscvx_workspace *ws) {
+    tscvx_banded *bd = &ws->bd;
+    const tscvx_int p = ws->p, nb = bd->nb;
+    for (tscvx_int b = 0; b < nb; b++) {
+        tscvx_float *Vb = bd->V + (size_t)b * p;
+        const tscvx_int j = bd->bvar[b];
+        for (tscvx_int i = 0; i < p; i++) Vb[i] = 0.0;
+        for (tscvx_int k = ws->A.p[j]; k < ws->A.p[j + 1]; k++) Vb[bd->iperm[ws->A.i[k]]] = ws->A.x[k];
+        profile_solve(bd, p, Vb);
+    }
+    for (tscvx_int c = 0; c < nb; c++) {
+        const tscvx_int jc = bd->bvar[c], g = bd->bgroup[c];
+        const tscvx_int s = bd->gp[g + 1] - bd->gp[g];
+        const tscvx_float *R = bd->H + bd->hp[g]; /* H_B = R'R, R row-major upper */
+        for (tscvx_int r = c; r < nb; r++) {
+            const tscvx_int jr = bd->bvar[r];
+            tscvx_float v = 0.0;
+            if (bd->bgroup[r] == g) /* same group: loc[jc] <= loc[jr] (listed in group order) */
+                for (tscvx_int k = 0; k <= bd->loc[jc]; k++)
+                    v += R[k * s + bd->loc[jc]] * R[k * s + bd->loc[jr]];
+            for (tscvx_int k = ws->A.p[jr]; k < ws->A.p[jr + 1]; k++)
+                v += ws->A.x[k] * bd->V[(size_t)c * p + bd->iperm[ws->A.i[k]]];
+            bd->S[c * nb + r] = v;
+        }
+    }
+    return chol(bd->S, nb);
+}
+
+/* New data: the factors of the groups' P blocks (P_gg = L_P L_P') and the largest |entry| of
+ * P, A, G. */
+static void banded_load(tscvx_workspace *ws) {
+    tscvx_banded *bd = &ws->bd;
+    for (tscvx_int g = 0; g < bd->ngroup; g++) {
+        if (!bd->hasP[g]) continue;
+        const tscvx_int s = bd->gp[g + 1] - bd->gp[g];
+        tscvx_float *F = bd->PF + bd->hp[g];
+        for (tscvx_int t = 0; t < s * s; t++) F[t] = 0.0;
+    }
+    for (tscvx_int k = 0; k < ws->P.nnz; k++) bd->PF[bd->mapP[k]] += ws->P.x[k];
+    for (tscvx_int g = 0; g < bd->ngroup; g++)
+        if (bd->hasP[g]) chol_psd(bd->PF + bd->hp[g], bd->gp[g + 1] - bd->gp[g]);
+    tscvx_float kmax = ws->delta;
+    for (tscvx_int k = 0; k < ws->P.nnz; k++) kmax = fmax(kmax, fabs(ws->P.x[k]));
+    for (tscvx_int k = 0; k < ws->A.nnz; k++) kmax = fmax(kmax, fabs(ws->A.x[k]));
+    for (tscvx_int k = 0; k < ws->G.nnz; k++) kmax = fmax(kmax, fabs(ws->G.x[k]));
+    ws->bd.kmax_data = kmax;
+}
+
+static int banded_factor(tscvx_workspace *ws) {
+    tscvx_banded *bd = &ws->bd;
+    const tscvx_float d = ws->delta;
+    bd->kmax = bd->kmax_data;
+    for (tscvx_int g = 0; g < bd->ngroup; g++) bd->kmax = fmax(bd->kmax, factor_group(ws, g, d));
+    form_Y(ws, d);
+    if (profile_chol(bd, ws->p) != 0) return -1;
+    return bd->nb > 0 ? form_border(ws) : 0;
+}
+
+/* ---- solves ------------------------------------------------------------------------------ */
+
+/* One solve of the regularized system (no refinement) into (dx, dy, dz) and wdz = W dz;
+ * outputs do not alias inputs. The cone rows in NT-scaled form (CVXOPT's condensed solver):
+ *   wdz = W^-1 (G dx - rz),  dz = W^-1 wdz,  rx~ = rx + G' W^-1 (W^-1 rz). */
+static void base_solve(tscvx_workspace *ws, const tscvx_float *rx, const tscvx_float *ry,
+                       const tscvx_float *rz, tscvx_float *dx, tscvx_float *dy,
+                       tscvx_float *dz, tscvx_float *wdz) {
+    tscvx_banded *bd = &ws->bd;
+    const tscvx_int n = ws->n, p = ws->p, m = ws->m, nb = bd->nb;
+    tscvx_float *xg = bd->xg, *yb = bd->yb, *t = bd->t, *wz = bd->wz;
+    /* cone rows: t = W^-1 rz; rx~ = rx + G' W^-1 t (in dx) */
+    tscvx_nt_apply(&ws->K, &ws->W, 1, rz, t);
+    tscvx_nt_apply(&ws->K, &ws->W, 1, t, wz);
+    for (tscvx_int j = 0; j < n; j++) {
+        tscvx_float v = rx[j];
+        for (tscvx_int k = ws->G.p[j]; k < ws->G.p[j + 1]; k++) v += ws->G.x[k] * wz[ws->G.i[k]];
+        dx[j] = v;
+    }
+    for (tscvx_int v = 0; v < n; v++) xg[v] = dx[bd->gvar[v]];
+    /* groups: w_g = L_g^-1 rx~_g; ry~ = ry - sum_g C_g' w_g (band order) */
+    for (tscvx_int i = 0; i < p; i++) yb[bd->iperm[i]] = ry[i];
+    for (tscvx_int g = 0; g < bd->ngroup; g++) {
+        if (bd->border[g]) continue;
+        const tscvx_int s = bd->gp[g + 1] - bd->gp[g];
+        tscvx_float *w = xg + bd->gp[g];
+        const tscvx_float *CT = bd->CT + bd->cp[g];
+        const tscvx_int *rows = bd->rrow + bd->rp[g];
+        chol_lsolve(bd->H + bd->hp[g], s, w);
+        for (tscvx_int u = 0; u < bd->rp[g + 1] - bd->rp[g]; u++)
+            yb[rows[u]] -= tscvx_dot(CT + (size_t)u * s, w, s);
+    }
+    /* equalities: -Y dy + A_B dx_B = ry~, H_B dx_B + A_B' dy = rx~_B */
+    profile_solve(bd, p, yb); /* yb = Y^-1 ry~ */
+    tscvx_float dxb[TSCVX_BANDED_BORDER_MAX];
+    for (tscvx_int b = 0; b < nb; b++) {
+        const tscvx_int j = bd->bvar[b];
+        tscvx_float v = dx[j];
+        for (tscvx_int k = ws->A.p[j]; k < ws->A.p[j + 1]; k++) v += ws->A.x[k] * yb[bd->iperm[ws->A.i[k]]];
+        dxb[b] = v;
+    }
+    chol_lsolve(bd->S, nb, dxb);
+    chol_ltsolve(bd->S, nb, dxb);
+    for (tscvx_int i = 0; i < p; i++) { /* dy = V dx_B - Y^-1 ry~ */
+        tscvx_float v = -yb[i];
+        for (tscvx_int b = 0; b < nb; b++) v += bd->V[(size_t)b * p + i] * dxb[b];
+        yb[i] = v;
+    }
+    /* groups back: dx_g = L_g'^-1 (w_g - C_g dy) */
+    for (tscvx_int g = 0; g < bd->ngroup; g++) {
+        if (bd->border[g]) continue;
+        const tscvx_int s = bd->gp[g + 1] - bd->gp[g];
+        tscvx_float *w = xg + bd->gp[g];
+        const tscvx_float *CT = bd->CT + bd->cp[g];
+        const tscvx_int *rows = bd->rrow + bd->rp[g];
+        for (tscvx_int u = 0; u < bd->rp[g + 1] - bd->rp[g]; u++) {
+            const tscvx_float yu = yb[rows[u]];
+            const tscvx_float *cu = CT + (size_t)u * s;
+            for (tscvx_int v = 0; v < s; v++) w[v] -= cu[v] * yu;
+        }
+        chol_ltsolve(bd->H + bd->hp[g], s, w);
+    }
+    for (tscvx_int v = 0; v < n; v++) dx[bd->gvar[v]] = xg[v];
+    for (tscvx_int b = 0; b < nb; b++) dx[bd->bvar[b]] = dxb[b];
+    for (tscvx_int i = 0; i < p; i++) dy[i] = yb[bd->iperm[i]];
+    /* cone rows: wdz = W^-1 (G dx) - t, dz = W^-1 wdz */
+    for (tscvx_int i = 0; i < m; i++) wz[i] = 0.0;
+    for (tscvx_int j = 0; j < n; j++)
+        for (tscvx_int k = ws->G.p[j]; k < ws->G.p[j + 1]; k++) wz[ws->G.i[k]] += ws->G.x[k] * dx[j];
+    tscvx_nt_apply(&ws->K, &ws->W, 1, wz, wdz);
+    for (tscvx_int i = 0; i < m; i++) wdz[i] -= t[i];
+    tscvx_nt_apply(&ws->K, &ws->W, 1, wdz, dz);
+}
+
+static tscvx_float vmax_abs(const tscvx_float *v, tscvx_int n, tscvx_float r) {
+    for (tscvx_int i = 0; i < n; i++) r = fabs(v[i]) > r ? fabs(v[i]) : r;
+    return r;
+}
+
+/* Residual of the unregularized KKT system, into res_x, res_y, res_z:
+ *   (rx - P dx - A'dy - G'dz, ry - A dx, rz - G dx + W wdz); returns its inf-norm. */
+static tscvx_float residual(tscvx_workspace *ws, const tscvx_float *rx, const tscvx_float *ry,
+                            const tscvx_float *rz, const tscvx_float *dx,
+                            const tscvx_float *dy, const tscvx_float *dz,
+                            const tscvx_float *wdz) {
+    tscvx_banded *bd = &ws->bd;
+    const tscvx_int n = ws->n, p = ws->p, m = ws->m;
+    tscvx_spmv_sym(&ws->P, dx, bd->res_x);
+    for (tscvx_int i = 0; i < p; i++) bd->res_y[i] = 0.0;
+    tscvx_nt_apply(&ws->K, &ws->W, 0, wdz, bd->res_z);
+    for (tscvx_int i = 0; i < m; i++) bd->res_z[i] = -bd->res_z[i];
+    tscvx_spmv_both(&ws->A, dy, bd->res_x, dx, bd->res_y);
+    tscvx_spmv_both(&ws->G, dz, bd->res_x, dx, bd->res_z);
+    tscvx_float r = 0.0;
+    for (tscvx_int j = 0; j < n; j++) bd->res_x[j] = rx[j] - bd->res_x[j];
+    for (tscvx_int i = 0; i < p; i++) bd->res_y[i] = ry[i] - bd->res_y[i];
+    for (tscvx_int i = 0; i < m; i++) bd->res_z[i] = rz[i] - bd->res_z[i];
+    r = vmax_abs(bd->res_x, n, r);
+    r = vmax_abs(bd->res_y, p, r);
+    return vmax_abs(bd->res_z, m, r);
+}
+
+static int banded_solve(tscvx_workspace *ws, const tscvx_float *rx, const tscvx_float *ry,
+                        const tscvx_float *rz, tscvx_float *dx, tscvx_float *dy, tscvx_float *dz,
+                        tscvx_float *wdz, tscvx_int refine) {
+    tscvx_banded *bd = &ws->bd;
+    const tscvx_int n = ws->n, p = ws->p, m = ws->m;
+    base_solve(ws, rx, ry, rz, dx, dy, dz, wdz);
+    const tscvx_float bnorm = vmax_abs(rz, m, vmax_abs(ry, p, vmax_abs(rx, n, 0.0)));
+    tscvx_float last = INFINITY;
+    int steps = 0;
+    for (tscvx_int it = 0; it < refine; it++) {
+        const tscvx_float rnorm = residual(ws, rx, ry, rz, dx, dy, dz, wdz);
+        if (!isfinite(rnorm)) return -1;
+        const tscvx_float xnorm = vmax_abs(wdz, m, vmax_abs(dy, p, vmax_abs(dx, n, 0.0)));
+        if (rnorm <= TSCVX_REFINE_TOL * (1.0 + bnorm) ||
+            rnorm <= TSCVX_REFINE_FLOOR * bd->kmax * xnorm || rnorm > TSCVX_REFINE_RATIO * last)
+            break;
+        last = rnorm;
+        base_solve(ws, bd->res_x, bd->res_y, bd->res_z, bd->ex, bd->ey, bd->ez, bd->ewz);
+        for (tscvx_int j = 0; j < n; j++) dx[j] += bd->ex[j];
+        for (tscvx_int i = 0; i < p; i++) dy[i] += bd->ey[i];
+        for (tscvx_int i = 0; i < m; i++) dz[i] += bd->ez[i], wdz[i] += bd->ewz[i];
+        steps++;
+    }
+    return steps;
+}
+
+const tscvx_kkt_method tscvx_method_banded = {"banded", TSCVX_KKT_BANDED, banded_load,
+                                              banded_factor, banded_solve};
