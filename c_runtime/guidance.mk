@@ -13,7 +13,7 @@ GNC_HDRS   := $(wildcard c_runtime/guidance/*.h) c_runtime/include/tscvx_guidanc
               c_runtime/include/tscvx_socp.h c_runtime/include/tscvx_types.h \
               c_runtime/include/tscvx_nn.h
 GNC_OBJS   := $(patsubst c_runtime/guidance/%.c,$(GNC_OBJDIR)/%.o,$(GNC_SRCS)) $(GNC_OBJDIR)/tscvx_model.o $(NN_OBJS)
-GNC_CFLAGS := -std=c99 -Wall -Wextra -Werror -O2 -fPIC -Ic_runtime/include -Ic_runtime/guidance -I$(GEN_DIR)
+GNC_CFLAGS := $(FLIGHT_CFLAGS) -fPIC -Ic_runtime/include -Ic_runtime/guidance -I$(GEN_DIR)
 # static link line of a flight application: guidance, SOCP runtime, SuiteSparse, libm
 GNC_LINK   := $(BUILD)/libtscvx_gnc.a $(BUILD)/libtscvx.a -lamd -lldl -lsuitesparseconfig -lm
 GNC_TESTS  := test_guidance test_tscvx

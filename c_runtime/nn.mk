@@ -5,14 +5,13 @@
 #   $(BUILD)/nn_budget_driver                  one tscvx_nn_run, for callgrind (guidance/budget.py)
 #   make ctest-nn                              C tests under valgrind + no-malloc check
 #
-# -fno-tree-vectorize: the instruction count models a scalar FPU (PowerPC 750); the code must
-# not be packed into SSE2 pairs by GCC's -O2 vectorizer (GCC >= 12), which would undercount.
+# Compiled with the flight flags (FLIGHT_CFLAGS, top Makefile: scalar FPU, no vectorizer).
 
 NN_OBJDIR  := $(BUILD)/obj/nn
 NN_SRCS    := $(wildcard c_runtime/nn/*.c)
 NN_HDRS    := $(wildcard c_runtime/nn/*.h) c_runtime/include/tscvx_nn.h
 NN_OBJS    := $(patsubst c_runtime/nn/%.c,$(NN_OBJDIR)/%.o,$(NN_SRCS))
-NN_CFLAGS  := -std=c99 -Wall -Wextra -Werror -O2 -fno-tree-vectorize -fPIC -Ic_runtime/include
+NN_CFLAGS  := $(FLIGHT_CFLAGS) -fPIC -Ic_runtime/include
 NN_MODELS  := $(BUILD)/models/constraint.tnn $(BUILD)/models/solution.tnn
 NN_TESTS   := test_nn
 

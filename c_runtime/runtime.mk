@@ -11,7 +11,7 @@ CRT_HDRS    := $(wildcard $(CRT_DIR)/include/*.h) $(wildcard $(CRT_DIR)/src/*.h)
 CRT_OBJDIR  := $(BUILD)/obj
 CRT_OBJS    := $(patsubst $(CRT_DIR)/src/%.c,$(CRT_OBJDIR)/%.o,$(CRT_SRCS))
 CRT_CC      ?= gcc
-CRT_CFLAGS  := -std=c99 -Wall -Wextra -Werror -O2 -fPIC -I$(CRT_DIR)/include -I/usr/include/suitesparse
+CRT_CFLAGS  := $(FLIGHT_CFLAGS) -fPIC -I$(CRT_DIR)/include -I/usr/include/suitesparse
 CRT_LIBS    := -lamd -lldl -lsuitesparseconfig -lm
 CRT_TESTS   := test_cones test_kkt test_solver
 CRT_TESTBIN := $(addprefix $(BUILD)/ctest/,$(CRT_TESTS))

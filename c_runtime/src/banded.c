@@ -96,41 +96,139 @@ static void chol_ltsolve(const tscvx_float *L, tscvx_int s, tscvx_float *x) {
 
 /* ---- profile (envelope) Cholesky of Y ---------------------------------------------------- */
 
+/* u'v with two partial sums (the profile's rows are 10-30 long: half the dependency chain) */
+static inline tscvx_float dot2(const tscvx_float *restrict u, const tscvx_float *restrict v,
+                               tscvx_int n) {
+    tscvx_float d0 = 0.0, d1 = 0.0;
+    tscvx_int i = 0;
+    for (; i + 4 <= n; i += 4) {
+        d0 += u[i] * v[i] + u[i + 2] * v[i + 2];
+        d1 += u[i + 1] * v[i + 1] + u[i + 3] * v[i + 3];
+    }
+    for (; i < n; i++) d0 += u[i] * v[i];
+    return d0 + d1;
+}
+
 /* Row i of the profile holds columns yfirst[i] .. i; row(i)[j] is entry (i, j). */
 static tscvx_float *prow(const tscvx_banded *bd, tscvx_int i) {
     return bd->Y + bd->yp[i] - bd->yfirst[i];
 }
 
 /* Y = L L' in place, row by row (each entry one dot product of two contiguous row pieces),
- * dynamically regularized as chol() */
+ * dynamically regularized as chol(); Ydinv[i] = 1 / L_ii */
 static int profile_chol(tscvx_banded *bd, tscvx_int p) {
+    tscvx_float *dinv = bd->Ydinv;
     for (tscvx_int i = 0; i < p; i++) {
         tscvx_float *Li = prow(bd, i);
         const tscvx_int fi = bd->yfirst[i];
         for (tscvx_int j = fi; j < i; j++) {
             const tscvx_float *Lj = prow(bd, j);
             const tscvx_int f = fi > bd->yfirst[j] ? fi : bd->yfirst[j];
-            Li[j] = (Li[j] - tscvx_dot(Li + f, Lj + f, j - f)) / Lj[j];
+            Li[j] = (Li[j] - dot2(Li + f, Lj + f, j - f)) * dinv[j];
         }
-        tscvx_float d = Li[i] - tscvx_dot(Li + fi, Li + fi, i - fi);
+        tscvx_float d = Li[i] - dot2(Li + fi, Li + fi, i - fi);
         if (dyn_pivot(&d, fabs(Li[i])) != 0) return -1;
         Li[i] = sqrt(d);
+        dinv[i] = 1.0 / Li[i];
     }
     return 0;
 }
 
 /* x := Y^-1 x = L'^-1 L^-1 x */
 static void profile_solve(const tscvx_banded *bd, tscvx_int p, tscvx_float *x) {
+    const tscvx_float *dinv = bd->Ydinv;
     for (tscvx_int i = 0; i < p; i++) {
         const tscvx_float *Li = prow(bd, i);
         const tscvx_int f = bd->yfirst[i];
-        x[i] = (x[i] - tscvx_dot(Li + f, x + f, i - f)) / Li[i];
+        x[i] = (x[i] - dot2(Li + f, x + f, i - f)) * dinv[i];
     }
     for (tscvx_int i = p - 1; i >= 0; i--) {
-        const tscvx_float *Li = prow(bd, i);
-        const tscvx_float xi = x[i] / Li[i];
+        const tscvx_float *restrict Li = prow(bd, i);
+        tscvx_float *restrict xk = x;
+        const tscvx_float xi = x[i] * dinv[i];
         x[i] = xi;
-        for (tscvx_int k = bd->yfirst[i]; k < i; k++) x[k] -= Li[k] * xi;
+        for (tscvx_int k = bd->yfirst[i]; k < i; k++) xk[k] -= Li[k] * xi;
+    }
+}
+
+/* ---- the groups' small dense kernels ------------------------------------------------------
+ * Each takes the group size s; the callers dispatch s = 1..4 (nearly every group of an
+ * optimal-control problem) to calls with a constant s, whose inner loops (SMALL_LOOP) GCC
+ * unrolls completely. */
+#if defined(__GNUC__) && !defined(__clang__)
+#define SMALL_LOOP _Pragma("GCC unroll 4")
+#else
+#define SMALL_LOOP
+#endif
+
+/* C_g' (R x s, row-major) := (L^-1 C_g')': forward substitution on all R columns of C_g at
+ * once, by columns of L (leading dimension ld; dinv: 1 / diagonal) */
+static inline void group_ct(const tscvx_float *restrict L, tscvx_int ld,
+                            const tscvx_float *restrict dinv, tscvx_int s,
+                            tscvx_float *restrict CT, tscvx_int R) {
+    for (tscvx_int a = 0; a < s; a++) {
+        for (tscvx_int b = 0; b < a; b++) {
+            const tscvx_float lab = L[b * ld + a];
+            for (tscvx_int u = 0; u < R; u++) CT[u * s + a] -= lab * CT[u * s + b];
+        }
+        for (tscvx_int u = 0; u < R; u++) CT[u * s + a] *= dinv[a];
+    }
+}
+
+/* Y[rows, rows] += C_g' C_g (lower part: rows ascending) */
+static inline void group_gram(const tscvx_banded *bd, const tscvx_int *restrict rows,
+                              const tscvx_float *restrict CT, tscvx_int R, tscvx_int s) {
+    for (tscvx_int u = 0; u < R; u++) {
+        tscvx_float *restrict Yu = prow(bd, rows[u]);
+        const tscvx_float *restrict cu = CT + (size_t)u * s;
+        for (tscvx_int v = 0; v <= u; v++) {
+            const tscvx_float *restrict cv = CT + (size_t)v * s;
+            tscvx_float acc = cu[0] * cv[0];
+            SMALL_LOOP
+            for (tscvx_int a = 1; a < s; a++) acc += cu[a] * cv[a];
+            Yu[rows[v]] += acc;
+        }
+    }
+}
+
+/* w := L_g^-1 w (s); yb[rows] -= C_g' w over the last se variables (C_g's others are 0) */
+static inline void group_forward(const tscvx_float *restrict L,
+                                 const tscvx_float *restrict dinv, tscvx_int s, tscvx_int se,
+                                 tscvx_float *restrict w, const tscvx_int *restrict rows,
+                                 const tscvx_float *restrict CT, tscvx_int R,
+                                 tscvx_float *restrict yb) {
+    for (tscvx_int i = 0; i < s; i++) {
+        tscvx_float v = w[i];
+        for (tscvx_int k = 0; k < i; k++) v -= L[k * s + i] * w[k];
+        w[i] = v * dinv[i];
+    }
+    const tscvx_float *we = w + (s - se);
+    for (tscvx_int u = 0; u < R; u++) {
+        const tscvx_float *cu = CT + (size_t)u * se;
+        tscvx_float acc = cu[0] * we[0];
+        SMALL_LOOP
+        for (tscvx_int a = 1; a < se; a++) acc += cu[a] * we[a];
+        yb[rows[u]] -= acc;
+    }
+}
+
+/* w := L_g'^-1 (w - C_g dy[rows]) (C_g over the last se variables) */
+static inline void group_backward(const tscvx_float *restrict L,
+                                  const tscvx_float *restrict dinv, tscvx_int s, tscvx_int se,
+                                  tscvx_float *restrict w, const tscvx_int *restrict rows,
+                                  const tscvx_float *restrict CT, tscvx_int R,
+                                  const tscvx_float *restrict dy) {
+    tscvx_float *we = w + (s - se);
+    for (tscvx_int u = 0; u < R; u++) {
+        const tscvx_float yu = dy[rows[u]];
+        const tscvx_float *cu = CT + (size_t)u * se;
+        SMALL_LOOP
+        for (tscvx_int a = 0; a < se; a++) we[a] -= cu[a] * yu;
+    }
+    for (tscvx_int i = s - 1; i >= 0; i--) {
+        tscvx_float v = w[i];
+        for (tscvx_int k = i + 1; k < s; k++) v -= L[i * s + k] * w[k];
+        w[i] = v * dinv[i];
     }
 }
 
@@ -261,6 +359,8 @@ int tscvx_banded_analyse(tscvx_workspace *ws, tscvx_arena *a) {
     CLAIM(bd->gcp, n + 1, tscvx_int);
     CLAIM(bd->gcone, l + nsoc, tscvx_int);
     CLAIM(bd->hasP, n, signed char);
+    CLAIM(bd->ga0, n, tscvx_int);
+    CLAIM(bd->bp, nsoc + 1, tscvx_int);
     CLAIM(bd->rp, n + 1, tscvx_int);
     CLAIM(bd->rrow, nnzA, tscvx_int);
     CLAIM(bd->posA, nnzA, tscvx_int);
@@ -269,6 +369,8 @@ int tscvx_banded_analyse(tscvx_workspace *ws, tscvx_arena *a) {
     CLAIM(bd->iperm, p, tscvx_int);
     CLAIM(bd->yfirst, p, tscvx_int);
     CLAIM(bd->yp, p + 1, tscvx_int);
+    CLAIM(bd->Ydinv, p, tscvx_float);
+    CLAIM(bd->Hdinv, n, tscvx_float);
     tscvx_float **vec[] = {&bd->xg, &bd->res_x, &bd->ex, &bd->yb, &bd->res_y, &bd->ey,
                            &bd->t, &bd->wz, &bd->res_z, &bd->ez, &bd->ewz};
     const tscvx_int len[] = {n, n, n, p, p, p, m, m, m, m, m};
@@ -330,11 +432,16 @@ int tscvx_banded_analyse(tscvx_workspace *ws, tscvx_arena *a) {
         if (bd->gp[g + 1] > TSCVX_BANDED_GROUP_MAX) DECLINE();
         bd->gp[g + 1] += bd->gp[g];
     }
-    for (tscvx_int g = 0; g < ng; g++) parent[g] = bd->gp[g]; /* fill pointers */
-    for (tscvx_int j = 0; j < n; j++) {
-        const tscvx_int t = parent[gid[j]]++;
-        bd->gvar[t] = j, bd->loc[j] = t - bd->gp[gid[j]];
-    }
+    /* each group's variables without equality entries first (their rows of C_g = L_g^-1 A_g'
+     * are zero: skipped), then the others, ascending within both */
+    for (tscvx_int g = 0; g < ng; g++) parent[g] = bd->gp[g], bd->ga0[g] = 0; /* fill pointers */
+    for (int with_A = 0; with_A < 2; with_A++)
+        for (tscvx_int j = 0; j < n; j++) {
+            if ((ws->A.p[j + 1] > ws->A.p[j]) != with_A) continue;
+            const tscvx_int t = parent[gid[j]]++;
+            bd->gvar[t] = j, bd->loc[j] = t - bd->gp[gid[j]];
+            bd->ga0[gid[j]] += !with_A;
+        }
     /* every variable in a cone or on P's diagonal, else H_g is only the regularization */
     for (tscvx_int j = 0; j < n; j++) {
         int covered = ws->G.p[j + 1] > ws->G.p[j];
@@ -434,17 +541,17 @@ int tscvx_banded_analyse(tscvx_workspace *ws, tscvx_arena *a) {
     }
 
     /* 6. sizes and slots of the value arrays */
-    bd->hp[0] = bd->cp[0] = 0;
-    size_t nwork = 0;
+    bd->hp[0] = bd->cp[0] = bd->bp[0] = 0;
     for (tscvx_int g = 0; g < ng; g++) {
         const tscvx_int s = bd->gp[g + 1] - bd->gp[g];
         bd->hp[g + 1] = bd->hp[g] + s * s;
-        bd->cp[g + 1] = bd->cp[g] + s * (bd->rp[g + 1] - bd->rp[g]);
+        bd->cp[g + 1] = bd->cp[g] + (s - bd->ga0[g]) * (bd->rp[g + 1] - bd->rp[g]);
     }
-    for (tscvx_int k = 0; k < nsoc; k++) { /* W_c^-1 G_c of the largest SOC block */
+    for (tscvx_int k = 0; k < nsoc; k++) { /* the blocks W_k^-1 G_k (q x s_g) */
         const tscvx_int g = bd->cgroup[l + k];
-        const size_t s = g < 0 ? 0 : (size_t)(bd->gp[g + 1] - bd->gp[g]);
-        nwork = s * ws->K.q[k] > nwork ? s * ws->K.q[k] : nwork;
+        const tscvx_int s = g < 0 ? 0 : bd->gp[g + 1] - bd->gp[g];
+        if (bd->bp[k] > INT_MAX / 4 - s * ws->K.q[k]) DECLINE();
+        bd->bp[k + 1] = bd->bp[k] + s * ws->K.q[k];
     }
     for (tscvx_int j = 0; j < n; j++)
         for (tscvx_int k = ws->P.p[j]; k < ws->P.p[j + 1]; k++) {
@@ -463,7 +570,7 @@ int tscvx_banded_analyse(tscvx_workspace *ws, tscvx_arena *a) {
     CLAIM(bd->CT, bd->nCT, tscvx_float);
     CLAIM(bd->Y, bd->nY, tscvx_float);
     CLAIM(bd->V, (size_t)p * bd->nb, tscvx_float);
-    CLAIM(bd->Bw, nwork, tscvx_float);
+    CLAIM(bd->B, bd->bp[nsoc], tscvx_float);
     return 1;
 }
 
@@ -520,7 +627,7 @@ static tscvx_float factor_group(tscvx_workspace *ws, tscvx_int g, tscvx_float d)
         const tscvx_float *wb = ws->W.w + o, eta = ws->W.eta[k];
         const tscvx_float big = eta * (wb[0] + sqrt(tscvx_dot(wb + 1, wb + 1, q - 1)));
         wmax = big > wmax ? big : wmax;
-        tscvx_float *B = bd->Bw;
+        tscvx_float *B = bd->B + bd->bp[k];
         for (tscvx_int e = 0; e < q * s; e++) B[e] = 0.0;
         for (tscvx_int r = 0; r < q; r++)
             for (tscvx_int e = bd->Grp[o + r]; e < bd->Grp[o + r + 1]; e++)
@@ -534,34 +641,50 @@ static tscvx_float factor_group(tscvx_workspace *ws, tscvx_int g, tscvx_float d)
             for (tscvx_int r = 1; r < q; r++) B[r * s + col] = (B[r * s + col] + coef * wb[r]) / eta;
             B[col] = (wb[0] * v0 - w1v1) / eta;
         }
-        for (tscvx_int r = 0; r < q; r++) givens_absorb(R, s, B + (size_t)r * s);
+        for (tscvx_int r = 0; r < q; r++) { /* absorbing clobbers its row: a copy */
+            for (tscvx_int i = 0; i < s; i++) b[i] = B[r * s + i];
+            givens_absorb(R, s, b);
+        }
     }
     return wmax;
 }
 
-/* C_g' = (L_g^-1 A_g')' and Y = d I + sum_g C_g' C_g */
+/* The group kernels with s = 1..4 as constants (see above). */
+#define DISPATCH_S(s, call) \
+    switch (s) {            \
+    case 1: call(1); break; \
+    case 2: call(2); break; \
+    case 3: call(3); break; \
+    case 4: call(4); break; \
+    default: call(s);       \
+    }
+
+/* C_g' = (L_g^-1 A_g')' and Y = d I + sum_g C_g' C_g. Only the last se = s - ga0 variables
+ * of a group have equality entries: C_g's rows above them are zero, and the rest is
+ * L22^-1 A_g' with L22 the trailing block of L_g. */
 static void form_Y(tscvx_workspace *ws, tscvx_float d) {
     tscvx_banded *bd = &ws->bd;
     for (size_t t = 0; t < bd->nY; t++) bd->Y[t] = 0.0;
     for (tscvx_int i = 0; i < ws->p; i++) prow(bd, i)[i] = d;
     for (size_t t = 0; t < bd->nCT; t++) bd->CT[t] = 0.0;
     for (tscvx_int g = 0; g < bd->ngroup; g++) {
-        if (bd->border[g]) continue;
-        const tscvx_int s = bd->gp[g + 1] - bd->gp[g], R = bd->rp[g + 1] - bd->rp[g];
-        const tscvx_float *Lg = bd->H + bd->hp[g];
+        const tscvx_int s = bd->gp[g + 1] - bd->gp[g], a0 = bd->ga0[g], se = s - a0;
+        const tscvx_int R = bd->rp[g + 1] - bd->rp[g];
+        if (bd->border[g] || se == 0 || R == 0) continue;
+        const tscvx_float *L22 = bd->H + bd->hp[g] + a0 * s + a0;
+        const tscvx_float *dinv = bd->Hdinv + bd->gp[g] + a0;
         const tscvx_int *rows = bd->rrow + bd->rp[g];
         tscvx_float *CT = bd->CT + bd->cp[g];
-        for (tscvx_int v = 0; v < s; v++) {
+        for (tscvx_int v = a0; v < s; v++) {
             const tscvx_int j = bd->gvar[bd->gp[g] + v];
             for (tscvx_int k = ws->A.p[j]; k < ws->A.p[j + 1]; k++)
-                CT[bd->posA[k] * s + v] = ws->A.x[k];
+                CT[bd->posA[k] * se + v - a0] = ws->A.x[k];
         }
-        for (tscvx_int u = 0; u < R; u++) chol_lsolve(Lg, s, CT + (size_t)u * s);
-        for (tscvx_int u = 0; u < R; u++) {
-            tscvx_float *Yu = prow(bd, rows[u]);
-            const tscvx_float *cu = CT + (size_t)u * s;
-            for (tscvx_int v = 0; v <= u; v++) Yu[rows[v]] += tscvx_dot(cu, CT + (size_t)v * s, s);
-        }
+#define FORM(S)                          \
+    group_ct(L22, s, dinv, S, CT, R);    \
+    group_gram(bd, rows, CT, R, S)
+        DISPATCH_S(se, FORM)
+#undef FORM
     }
 }
 
@@ -594,6 +717,13 @@ static int form_border(tscvx_workspace *ws) {
     return chol(bd->S, nb);
 }
 
+/* The banded method's static regularization: TSCVX_BANDED_REG_SCALE times the IPM's delta.
+ * Its factors need no regularization for stability (Givens rotations, positive pivots), only
+ * against exact singularity, and a smaller d leaves less for the refinement to remove. */
+static tscvx_float banded_reg(const tscvx_workspace *ws) {
+    return TSCVX_BANDED_REG_SCALE * ws->delta;
+}
+
 /* New data: the factors of the groups' P blocks (P_gg = L_P L_P') and the largest |entry| of
  * P, A, G. */
 static void banded_load(tscvx_workspace *ws) {
@@ -607,7 +737,7 @@ static void banded_load(tscvx_workspace *ws) {
     for (tscvx_int k = 0; k < ws->P.nnz; k++) bd->PF[bd->mapP[k]] += ws->P.x[k];
     for (tscvx_int g = 0; g < bd->ngroup; g++)
         if (bd->hasP[g]) chol_psd(bd->PF + bd->hp[g], bd->gp[g + 1] - bd->gp[g]);
-    tscvx_float kmax = ws->delta;
+    tscvx_float kmax = banded_reg(ws);
     for (tscvx_int k = 0; k < ws->P.nnz; k++) kmax = fmax(kmax, fabs(ws->P.x[k]));
     for (tscvx_int k = 0; k < ws->A.nnz; k++) kmax = fmax(kmax, fabs(ws->A.x[k]));
     for (tscvx_int k = 0; k < ws->G.nnz; k++) kmax = fmax(kmax, fabs(ws->G.x[k]));
@@ -616,9 +746,13 @@ static void banded_load(tscvx_workspace *ws) {
 
 static int banded_factor(tscvx_workspace *ws) {
     tscvx_banded *bd = &ws->bd;
-    const tscvx_float d = ws->delta;
+    const tscvx_float d = banded_reg(ws);
     bd->kmax = bd->kmax_data;
-    for (tscvx_int g = 0; g < bd->ngroup; g++) bd->kmax = fmax(bd->kmax, factor_group(ws, g, d));
+    for (tscvx_int g = 0; g < bd->ngroup; g++) {
+        bd->kmax = fmax(bd->kmax, factor_group(ws, g, d));
+        const tscvx_int s = bd->gp[g + 1] - bd->gp[g];
+        for (tscvx_int a = 0; a < s; a++) bd->Hdinv[bd->gp[g] + a] = 1.0 / bd->H[bd->hp[g] + a * s + a];
+    }
     form_Y(ws, d);
     if (profile_chol(bd, ws->p) != 0) return -1;
     return bd->nb > 0 ? form_border(ws) : 0;
@@ -627,41 +761,61 @@ static int banded_factor(tscvx_workspace *ws) {
 /* ---- solves ------------------------------------------------------------------------------ */
 
 /* One solve of the regularized system (no refinement) into (dx, dy, dz) and wdz = W dz;
- * outputs do not alias inputs. The cone rows in NT-scaled form (CVXOPT's condensed solver):
- *   wdz = W^-1 (G dx - rz),  dz = W^-1 wdz,  rx~ = rx + G' W^-1 (W^-1 rz). */
+ * outputs do not alias inputs. The cone rows NT-scaled (CVXOPT's condensed solver), with
+ * Gt = W^-1 G (orthant rows G_i / w_i, SOC blocks kept from the factorization):
+ *   t = W^-1 rz,  rx~ = rx + Gt't,  ...,  wdz = Gt dx - t,  dz = W^-1 wdz.
+ * The variables are handled in group order (xg) throughout. */
 static void base_solve(tscvx_workspace *ws, const tscvx_float *rx, const tscvx_float *ry,
                        const tscvx_float *rz, tscvx_float *dx, tscvx_float *dy,
                        tscvx_float *dz, tscvx_float *wdz) {
     tscvx_banded *bd = &ws->bd;
-    const tscvx_int n = ws->n, p = ws->p, m = ws->m, nb = bd->nb;
-    tscvx_float *xg = bd->xg, *yb = bd->yb, *t = bd->t, *wz = bd->wz;
-    /* cone rows: t = W^-1 rz; rx~ = rx + G' W^-1 t (in dx) */
-    tscvx_nt_apply(&ws->K, &ws->W, 1, rz, t);
-    tscvx_nt_apply(&ws->K, &ws->W, 1, t, wz);
-    for (tscvx_int j = 0; j < n; j++) {
-        tscvx_float v = rx[j];
-        for (tscvx_int k = ws->G.p[j]; k < ws->G.p[j + 1]; k++) v += ws->G.x[k] * wz[ws->G.i[k]];
-        dx[j] = v;
+    const tscvx_cones *K = &ws->K;
+    const tscvx_float *Gx = ws->G.x, *w = ws->W.w;
+    const tscvx_int n = ws->n, p = ws->p, nb = bd->nb;
+    tscvx_float *xg = bd->xg, *yb = bd->yb, *t = bd->t;
+    /* cone rows: t = W^-1 rz; rx~ = rx + Gt't */
+    tscvx_nt_apply(K, &ws->W, 1, rz, t);
+    for (tscvx_int v = 0; v < n; v++) xg[v] = rx[bd->gvar[v]];
+    for (tscvx_int i = 0; i < K->l; i++) {
+        const tscvx_int g = bd->cgroup[i];
+        if (g < 0) continue;
+        tscvx_float *xgg = xg + bd->gp[g];
+        const tscvx_float ti = t[i] / w[i];
+        for (tscvx_int e = bd->Grp[i]; e < bd->Grp[i + 1]; e++) xgg[bd->Gr_loc[e]] += Gx[bd->Gr_k[e]] * ti;
     }
-    for (tscvx_int v = 0; v < n; v++) xg[v] = dx[bd->gvar[v]];
+    for (tscvx_int k = 0; k < K->nsoc; k++) {
+        const tscvx_int g = bd->cgroup[K->l + k];
+        if (g < 0) continue;
+        const tscvx_int s = bd->gp[g + 1] - bd->gp[g], q = K->q[k];
+        const tscvx_float *B = bd->B + bd->bp[k], *tk = t + K->off[k];
+        tscvx_float *xgg = xg + bd->gp[g];
+        for (tscvx_int r = 0; r < q; r++)
+            for (tscvx_int a = 0; a < s; a++) xgg[a] += B[r * s + a] * tk[r];
+    }
     /* groups: w_g = L_g^-1 rx~_g; ry~ = ry - sum_g C_g' w_g (band order) */
     for (tscvx_int i = 0; i < p; i++) yb[bd->iperm[i]] = ry[i];
     for (tscvx_int g = 0; g < bd->ngroup; g++) {
         if (bd->border[g]) continue;
-        const tscvx_int s = bd->gp[g + 1] - bd->gp[g];
-        tscvx_float *w = xg + bd->gp[g];
+        const tscvx_int s = bd->gp[g + 1] - bd->gp[g], se = s - bd->ga0[g];
+        const tscvx_int R = bd->rp[g + 1] - bd->rp[g];
+        const tscvx_float *L = bd->H + bd->hp[g], *dinv = bd->Hdinv + bd->gp[g];
         const tscvx_float *CT = bd->CT + bd->cp[g];
         const tscvx_int *rows = bd->rrow + bd->rp[g];
-        chol_lsolve(bd->H + bd->hp[g], s, w);
-        for (tscvx_int u = 0; u < bd->rp[g + 1] - bd->rp[g]; u++)
-            yb[rows[u]] -= tscvx_dot(CT + (size_t)u * s, w, s);
+        tscvx_float *wg = xg + bd->gp[g];
+#define FORWARD(S) group_forward(L, dinv, s, S, wg, rows, CT, R, yb)
+        if (R > 0) {
+            DISPATCH_S(se, FORWARD)
+        } else {
+            group_forward(L, dinv, s, 0, wg, rows, CT, 0, yb);
+        }
+#undef FORWARD
     }
     /* equalities: -Y dy + A_B dx_B = ry~, H_B dx_B + A_B' dy = rx~_B */
     profile_solve(bd, p, yb); /* yb = Y^-1 ry~ */
     tscvx_float dxb[TSCVX_BANDED_BORDER_MAX];
     for (tscvx_int b = 0; b < nb; b++) {
         const tscvx_int j = bd->bvar[b];
-        tscvx_float v = dx[j];
+        tscvx_float v = xg[bd->gp[bd->bgroup[b]] + bd->loc[j]];
         for (tscvx_int k = ws->A.p[j]; k < ws->A.p[j + 1]; k++) v += ws->A.x[k] * yb[bd->iperm[ws->A.i[k]]];
         dxb[b] = v;
     }
@@ -675,31 +829,47 @@ static void base_solve(tscvx_workspace *ws, const tscvx_float *rx, const tscvx_f
     /* groups back: dx_g = L_g'^-1 (w_g - C_g dy) */
     for (tscvx_int g = 0; g < bd->ngroup; g++) {
         if (bd->border[g]) continue;
-        const tscvx_int s = bd->gp[g + 1] - bd->gp[g];
-        tscvx_float *w = xg + bd->gp[g];
+        const tscvx_int s = bd->gp[g + 1] - bd->gp[g], se = s - bd->ga0[g];
+        const tscvx_int R = bd->rp[g + 1] - bd->rp[g];
+        const tscvx_float *L = bd->H + bd->hp[g], *dinv = bd->Hdinv + bd->gp[g];
         const tscvx_float *CT = bd->CT + bd->cp[g];
         const tscvx_int *rows = bd->rrow + bd->rp[g];
-        for (tscvx_int u = 0; u < bd->rp[g + 1] - bd->rp[g]; u++) {
-            const tscvx_float yu = yb[rows[u]];
-            const tscvx_float *cu = CT + (size_t)u * s;
-            for (tscvx_int v = 0; v < s; v++) w[v] -= cu[v] * yu;
-        }
-        chol_ltsolve(bd->H + bd->hp[g], s, w);
+        tscvx_float *wg = xg + bd->gp[g];
+#define BACKWARD(S) group_backward(L, dinv, s, S, wg, rows, CT, R, yb)
+        DISPATCH_S(se, BACKWARD)
+#undef BACKWARD
     }
+    for (tscvx_int b = 0; b < nb; b++) xg[bd->gp[bd->bgroup[b]] + bd->loc[bd->bvar[b]]] = dxb[b];
+    /* cone rows: wdz = Gt dx - t, dz = W^-1 wdz */
+    for (tscvx_int i = 0; i < K->l; i++) {
+        const tscvx_int g = bd->cgroup[i];
+        tscvx_float v = 0.0;
+        if (g >= 0) {
+            const tscvx_float *xgg = xg + bd->gp[g];
+            for (tscvx_int e = bd->Grp[i]; e < bd->Grp[i + 1]; e++) v += Gx[bd->Gr_k[e]] * xgg[bd->Gr_loc[e]];
+        }
+        wdz[i] = v / w[i] - t[i];
+    }
+    for (tscvx_int k = 0; k < K->nsoc; k++) {
+        const tscvx_int g = bd->cgroup[K->l + k], o = K->off[k], q = K->q[k];
+        if (g < 0) {
+            for (tscvx_int r = 0; r < q; r++) wdz[o + r] = -t[o + r];
+            continue;
+        }
+        const tscvx_int s = bd->gp[g + 1] - bd->gp[g];
+        const tscvx_float *B = bd->B + bd->bp[k], *xgg = xg + bd->gp[g];
+        for (tscvx_int r = 0; r < q; r++) wdz[o + r] = tscvx_dot(B + (size_t)r * s, xgg, s) - t[o + r];
+    }
+    tscvx_nt_apply(K, &ws->W, 1, wdz, dz);
     for (tscvx_int v = 0; v < n; v++) dx[bd->gvar[v]] = xg[v];
-    for (tscvx_int b = 0; b < nb; b++) dx[bd->bvar[b]] = dxb[b];
     for (tscvx_int i = 0; i < p; i++) dy[i] = yb[bd->iperm[i]];
-    /* cone rows: wdz = W^-1 (G dx) - t, dz = W^-1 wdz */
-    for (tscvx_int i = 0; i < m; i++) wz[i] = 0.0;
-    for (tscvx_int j = 0; j < n; j++)
-        for (tscvx_int k = ws->G.p[j]; k < ws->G.p[j + 1]; k++) wz[ws->G.i[k]] += ws->G.x[k] * dx[j];
-    tscvx_nt_apply(&ws->K, &ws->W, 1, wz, wdz);
-    for (tscvx_int i = 0; i < m; i++) wdz[i] -= t[i];
-    tscvx_nt_apply(&ws->K, &ws->W, 1, wdz, dz);
 }
 
 static tscvx_float vmax_abs(const tscvx_float *v, tscvx_int n, tscvx_float r) {
-    for (tscvx_int i = 0; i < n; i++) r = fabs(v[i]) > r ? fabs(v[i]) : r;
+    for (tscvx_int i = 0; i < n; i++) {
+        const tscvx_float a = fabs(v[i]);
+        r = a > r ? a : r;
+    }
     return r;
 }
 
@@ -726,21 +896,38 @@ static tscvx_float residual(tscvx_workspace *ws, const tscvx_float *rx, const ts
     return vmax_abs(bd->res_z, m, r);
 }
 
+/* |ry - A dx|_inf: the equality rows' residual. A base solve meets the x rows up to d and
+ * rounding by construction (dx_g from H_g's factor, dz from wdz), and the z rows too (wdz =
+ * Gt dx - t, dz = W^-1 wdz); what the method's normal equations (Y) leave behind is here. */
+static tscvx_float equality_residual(tscvx_workspace *ws, const tscvx_float *ry,
+                                     const tscvx_float *dx) {
+    tscvx_float *r = ws->bd.res_y;
+    for (tscvx_int i = 0; i < ws->p; i++) r[i] = -ry[i];
+    for (tscvx_int j = 0; j < ws->n; j++)
+        for (tscvx_int k = ws->A.p[j]; k < ws->A.p[j + 1]; k++) r[ws->A.i[k]] += ws->A.x[k] * dx[j];
+    return vmax_abs(r, ws->p, 0.0);
+}
+
 static int banded_solve(tscvx_workspace *ws, const tscvx_float *rx, const tscvx_float *ry,
                         const tscvx_float *rz, tscvx_float *dx, tscvx_float *dy, tscvx_float *dz,
                         tscvx_float *wdz, tscvx_int refine) {
     tscvx_banded *bd = &ws->bd;
     const tscvx_int n = ws->n, p = ws->p, m = ws->m;
     base_solve(ws, rx, ry, rz, dx, dy, dz, wdz);
+    if (refine <= 0) return 0;
     const tscvx_float bnorm = vmax_abs(rz, m, vmax_abs(ry, p, vmax_abs(rx, n, 0.0)));
+    const tscvx_float tol = TSCVX_REFINE_TOL * (1.0 + bnorm);
+    const tscvx_float ynorm = equality_residual(ws, ry, dx);
+    if (!isfinite(ynorm)) return -1;
+    if (ynorm <= tol) return 0; /* nothing for the refinement to gain */
     tscvx_float last = INFINITY;
     int steps = 0;
     for (tscvx_int it = 0; it < refine; it++) {
         const tscvx_float rnorm = residual(ws, rx, ry, rz, dx, dy, dz, wdz);
         if (!isfinite(rnorm)) return -1;
         const tscvx_float xnorm = vmax_abs(wdz, m, vmax_abs(dy, p, vmax_abs(dx, n, 0.0)));
-        if (rnorm <= TSCVX_REFINE_TOL * (1.0 + bnorm) ||
-            rnorm <= TSCVX_REFINE_FLOOR * bd->kmax * xnorm || rnorm > TSCVX_REFINE_RATIO * last)
+        if (rnorm <= tol || rnorm <= TSCVX_REFINE_FLOOR * bd->kmax * xnorm ||
+            rnorm > TSCVX_REFINE_RATIO * last)
             break;
         last = rnorm;
         base_solve(ws, bd->res_x, bd->res_y, bd->res_z, bd->ex, bd->ey, bd->ez, bd->ewz);

@@ -172,6 +172,7 @@ void tscvx_kkt_cone_values(tscvx_kkt *kkt, const tscvx_cones *K, const tscvx_nt 
 #define TSCVX_BANDED_GROUP_MAX 32   /* largest variable group (dense H_g block) */
 #define TSCVX_BANDED_BORDER_MAX 8   /* most border variables */
 #define TSCVX_BANDED_ENV_AVG 64     /* envelope of Y at most this many entries per row on average */
+#define TSCVX_BANDED_REG_SCALE 1e-4 /* its static regularization, relative to the IPM's delta */
 
 typedef struct {
     /* variable groups */
@@ -201,13 +202,17 @@ typedef struct {
     tscvx_int *yfirst;   /* p */
     tscvx_int *yp;       /* p+1 */
     tscvx_float *Y;      /* yp[p]: Y, then its Cholesky factor */
+    tscvx_float *Ydinv;  /* p: 1 / diagonal of Y's factor */
+    tscvx_float *Hdinv;  /* n: 1 / diagonal of each L_g, in group order */
     /* border */
     tscvx_int nb;                          /* border variables */
     tscvx_int bvar[TSCVX_BANDED_BORDER_MAX];   /* the border variables, group by group */
     tscvx_int bgroup[TSCVX_BANDED_BORDER_MAX]; /* the group of each */
     tscvx_float *V;      /* p x nb, column-major, band order: Y^-1 A_B */
     tscvx_float S[TSCVX_BANDED_BORDER_MAX * TSCVX_BANDED_BORDER_MAX]; /* H_B + A_B' V, factored */
-    tscvx_float *Bw;     /* work: W_k^-1 G_k of one SOC (q x s_g) */
+    tscvx_int *bp;       /* nsoc+1: offset of SOC k's block W_k^-1 G_k (q x s_g, row-major) */
+    tscvx_float *B;      /* those blocks, from the last factorization */
+    tscvx_int *ga0;      /* ngroup: the group's first variables without equality entries */
     /* sizes of the value arrays (set by the analysis) */
     size_t nH, nCT, nY;
     tscvx_float kmax_data; /* largest |entry| of P, A, G and d */
