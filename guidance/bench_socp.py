@@ -4,7 +4,8 @@ Problem sets: (a) the convex subproblems of the reference SCvx on the default la
 N = 50), (b) the 3-DoF lossless-convexification powered-descent SOCP of Acikmese & Blackmore
 (N = 50, generated here), (c) seeded random SOCPs. For each solver the table gives the median
 time of the solver's own solve call (set-up excluded), the median IPM iteration count and, for
-this runtime, the arena bytes. ``--callgrind`` adds instruction counts per solve (valgrind).
+this runtime, the arena bytes; where this runtime takes its banded KKT method, the same runtime
+with its sparse LDL' method too. ``--callgrind`` adds instruction counts per solve (valgrind).
 
     python -m guidance.bench_socp [--quick] [--callgrind]
 """
@@ -28,6 +29,7 @@ import scipy.sparse as sp
 from guidance.conic import ConicProblem, clarabel_solver
 
 ROOT = Path(__file__).resolve().parents[1]
+KKT_SPARSE = 2  # tscvx_settings.kkt_backend: the sparse static-pattern LDL' (csocp.KKT_STATIC)
 
 
 # ---- (b) 3-DoF lossless convexification (Acikmese & Blackmore 2013) -----------------------
@@ -171,17 +173,20 @@ def _split_c_form(prob: ConicProblem):
     return s, Aeq, prob.b[s.eq_rows], G, prob.b[s.g_rows]
 
 
-def run_ours(prob: ConicProblem, reps: int) -> tuple[Run, int]:
+def run_ours(prob: ConicProblem, reps: int, kkt_backend: int = 0) -> tuple[Run, int, str]:
+    """This runtime with the given KKT method (0: its default choice); also the arena bytes
+    and the method that ran."""
     from guidance import csocp
 
-    solver = csocp.Solver(prob)
+    solver = csocp.Solver(prob, kkt_backend=kkt_backend)
     best = math.inf
     sol = None
     for _ in range(reps):
         sol = solver.solve()
         best = min(best, sol.solve_time_s)
     assert sol is not None
-    return Run(best, sol.iterations, sol.status), solver.arena_bytes
+    method = csocp.KKT_NAMES.get(int(sol.info.get("kkt_backend", 0)), "?")
+    return Run(best, sol.iterations, sol.status), solver.arena_bytes, method
 
 
 def run_clarabel(prob: ConicProblem, reps: int) -> Run:
@@ -294,14 +299,14 @@ def _callgrind(cmd: list[str], toggle: str) -> int | None:
     return None
 
 
-def instructions_ours(prob: ConicProblem) -> int | None:
+def instructions_ours(prob: ConicProblem, kkt_backend: int = 0) -> int | None:
     driver = ROOT / "build" / "ctest" / "bench_driver"
     if not driver.exists():
         return None
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "prob.bin"
         dump_c_problem(prob, path)
-        return _callgrind([str(driver), str(path), "1"], "tscvx_solve")
+        return _callgrind([str(driver), str(path), "1", str(kkt_backend)], "tscvx_solve")
 
 
 _QOCO_SCRIPT = """
@@ -352,14 +357,21 @@ def bench_set(name: str, probs: list[ConicProblem], reps: int) -> list[str]:
         "ecos": run_ecos,
         "qoco": run_qoco,
     }
-    ours_t, ours_it, arena, bad = [], [], [], 0
+    ours_t, ours_it, arena, methods, bad = [], [], [], set(), 0
+    sparse_t, sparse_it, sparse_arena = [], [], []
     others: dict[str, tuple[list[float], list[int]]] = {k: ([], []) for k in solvers}
     for prob in probs:
-        run, nbytes = run_ours(prob, reps)
+        run, nbytes, method = run_ours(prob, reps)
         ours_t.append(run.seconds)
         ours_it.append(run.iterations)
         arena.append(nbytes)
+        methods.add(method)
         bad += run.status not in ("solved", "solved_inaccurate")
+        if method == "banded":  # the same runtime with its other KKT method, for comparison
+            srun, sbytes, _ = run_ours(prob, reps, KKT_SPARSE)
+            sparse_t.append(srun.seconds)
+            sparse_it.append(srun.iterations)
+            sparse_arena.append(sbytes)
         for key, fn in solvers.items():
             try:
                 r = fn(prob, reps)
@@ -374,8 +386,14 @@ def bench_set(name: str, probs: list[ConicProblem], reps: int) -> list[str]:
         f"nnz(A)={probs[0].A.nnz}; not solved by tscvx: {bad})",
         f"  {'solver':<10}{'median ms':>11}{'ratio':>8}{'iters':>7}{'arena KB':>10}",
         f"  {'tscvx':<10}{1e3 * t_ours:>11.3f}{1.0:>8.2f}{_median(ours_it):>7.0f}"
-        f"{max(arena) / 1024:>10.0f}",
+        f"{max(arena) / 1024:>10.0f}   KKT method: {', '.join(sorted(methods))}",
     ]
+    if sparse_t:
+        t = _median(sparse_t)
+        lines.append(
+            f"  {'(sparse)':<10}{1e3 * t:>11.3f}{t / t_ours:>8.2f}{_median(sparse_it):>7.0f}"
+            f"{max(sparse_arena) / 1024:>10.0f}   tscvx with its sparse LDL' method"
+        )
     for key, (ts, its) in others.items():
         if ts:
             t = _median(ts)
@@ -413,11 +431,12 @@ def main(argv: list[str] | None = None) -> int:
         print("instructions per solve (callgrind, first problem of each set):")
         for name, probs in sets[:2]:
             ours = instructions_ours(probs[0])
+            sparse = instructions_ours(probs[0], KKT_SPARSE)
             qoco = instructions_qoco(probs[0])
             ratio = f"{qoco / ours:.2f}x" if ours and qoco else "n/a"
             print(
-                f"  {name[:4]} tscvx {ours or 'n/a':>12}  qoco {qoco or 'n/a':>12}  "
-                f"qoco/tscvx {ratio}"
+                f"  {name[:4]} tscvx {ours or 'n/a':>12} (sparse method {sparse or 'n/a':>12})  "
+                f"qoco {qoco or 'n/a':>12}  qoco/tscvx {ratio}"
             )
     return 0
 

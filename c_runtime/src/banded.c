@@ -1,16 +1,18 @@
 /* Banded KKT method: the Newton systems of stage-structured problems by three exact, small
- * dense reductions (cone rows, variable groups, equality rows); see socp_internal.h.
+ * dense reductions (cone rows, variable groups, equality rows); the math is in
+ * socp_internal.h.
  *
  * Setup (tscvx_banded_analyse) finds the variable groups, the border, a reverse Cuthill-McKee
- * order of the equality rows and the profile of Y = d I + sum_g A_g H_g^-1 A_g'. Each IPM
- * iteration (banded_factor) forms and factors
- *   H_g = P_gg + d I + sum_cones (W_c^-1 G_c)'(W_c^-1 G_c) = R_g'R_g   (R_g by Givens rotations
- *                                   of the stacked rows: W^-1 G's conditioning not squared)
- *   C_g' = (L_g^-1 A_g')'                                (H_g = L_g L_g')
- *   Y    = d I + sum_g C_g' C_g                          (profile Cholesky, Y = L_Y L_Y')
- *   S    = H_B + A_B' Y^-1 A_B                           (border, dense Cholesky)
- * and each solve (base_solve) runs them backwards; iterative refinement on the unregularized
- * KKT system removes d (as in the sparse method).
+ * order of the equality rows and the profile of Y. Each IPM iteration (banded_factor):
+ *   L_g' = R_g from Givens rotations of the rows of sqrt(d) I, P_gg's factor and
+ *          W_c^-1 G_c over the group's cones: H_g = R_g'R_g without forming H_g (forming it
+ *          would square the conditioning of W^-1 G, which passes 1e8 near a solution)
+ *   C_g' = (L_g^-1 A_g')'
+ *   Y    = d I + sum_g C_g' C_g  = L_Y L_Y'   (profile Cholesky)
+ *   S    = H_B + A_B' Y^-1 A_B   (border, dense Cholesky)
+ * Each solve (base_solve) runs them backwards, the cone rows NT-scaled as in CVXOPT's
+ * condensed solver; iterative refinement on the unregularized system follows (as in the sparse
+ * method).
  */
 #include <limits.h>
 #include <math.h>
@@ -22,47 +24,34 @@
 
 /* ---- small dense kernels ----------------------------------------------------------------- */
 
-/* Dynamic regularization (as QDLDL and Clarabel): a pivot that kept fewer than ~3 digits of
- * its diagonal entry (d <= DYN_EPS a_jj: the column is numerically dependent on the earlier
- * ones, as H_g of an infeasible problem's diverging scaling) is replaced by DYN_DELTA a_jj,
- * and the refinement removes the difference. A non-finite pivot is a failure. */
+/* Numerically zero pivots. A pivot d <= DYN_EPS a_jj has lost all but the last few digits of
+ * its diagonal entry to cancellation: the column is numerically dependent on the earlier ones
+ * (H_g or Y of an infeasible problem's diverging scaling; a singular P_gg). Dynamic
+ * regularization, as QDLDL and Clarabel do, replaces it by DYN_DELTA a_jj and leaves the
+ * difference to the refinement; the semidefinite factor of P_gg drops the column instead
+ * (P_gg = F'F exactly, F with a zero row). A non-finite pivot is a failure. */
 #define DYN_EPS 1e-13
 #define DYN_DELTA 1e-7
+enum { PIVOT_OK, PIVOT_DROP, PIVOT_FAIL };
 
-static int dyn_pivot(tscvx_float *d, tscvx_float ajj) {
-    if (!isfinite(*d)) return -1;
-    if (!(*d > DYN_EPS * ajj)) *d = DYN_DELTA * ajj;
-    return 0;
+static int fix_pivot(tscvx_float *d, tscvx_float ajj, int semidefinite) {
+    if (!isfinite(*d)) return PIVOT_FAIL;
+    if (*d > DYN_EPS * fabs(ajj)) return PIVOT_OK;
+    if (semidefinite) return PIVOT_DROP;
+    *d = DYN_DELTA * fabs(ajj);
+    return PIVOT_OK;
 }
 
 /* Cholesky L L' of the s x s column-major matrix whose lower part is in M (in place; entry
- * (i, k) at M[k s + i]), dynamically regularized. Returns -1 on a non-finite pivot. */
-static int chol(tscvx_float *M, tscvx_int s) {
+ * (i, k) at M[k s + i]); zero pivots as fix_pivot. Returns -1 on a non-finite pivot. */
+static int chol(tscvx_float *M, tscvx_int s, int semidefinite) {
     for (tscvx_int j = 0; j < s; j++) {
         const tscvx_float ajj = M[j * s + j];
         tscvx_float d = ajj;
         for (tscvx_int k = 0; k < j; k++) d -= M[k * s + j] * M[k * s + j];
-        if (dyn_pivot(&d, fabs(ajj)) != 0) return -1;
-        d = sqrt(d);
-        M[j * s + j] = d;
-        for (tscvx_int i = j + 1; i < s; i++) {
-            tscvx_float v = M[j * s + i];
-            for (tscvx_int k = 0; k < j; k++) v -= M[k * s + i] * M[k * s + j];
-            M[j * s + i] = v / d;
-        }
-    }
-    return 0;
-}
-
-/* Factor F of a positive semidefinite P_gg = F'F, F = L' (column-major lower in M, in place):
- * Cholesky that drops a numerically zero pivot's column (the rank-revealing semidefinite
- * variant; P_gg may be singular, a zero row of P included). */
-static void chol_psd(tscvx_float *M, tscvx_int s) {
-    for (tscvx_int j = 0; j < s; j++) {
-        const tscvx_float ajj = M[j * s + j];
-        tscvx_float d = ajj;
-        for (tscvx_int k = 0; k < j; k++) d -= M[k * s + j] * M[k * s + j];
-        if (!(d > DYN_EPS * fabs(ajj)) || !isfinite(d)) {
+        const int fix = fix_pivot(&d, ajj, semidefinite);
+        if (fix == PIVOT_FAIL) return -1;
+        if (fix == PIVOT_DROP) {
             for (tscvx_int i = j; i < s; i++) M[j * s + i] = 0.0;
             continue;
         }
@@ -74,6 +63,7 @@ static void chol_psd(tscvx_float *M, tscvx_int s) {
             M[j * s + i] = v / d;
         }
     }
+    return 0;
 }
 
 /* x := L^-1 x */
@@ -115,7 +105,7 @@ static tscvx_float *prow(const tscvx_banded *bd, tscvx_int i) {
 }
 
 /* Y = L L' in place, row by row (each entry one dot product of two contiguous row pieces),
- * dynamically regularized as chol(); Ydinv[i] = 1 / L_ii */
+ * zero pivots regularized (fix_pivot); Ydinv[i] = 1 / L_ii */
 static int profile_chol(tscvx_banded *bd, tscvx_int p) {
     tscvx_float *dinv = bd->Ydinv;
     for (tscvx_int i = 0; i < p; i++) {
@@ -127,7 +117,7 @@ static int profile_chol(tscvx_banded *bd, tscvx_int p) {
             Li[j] = (Li[j] - dot2(Li + f, Lj + f, j - f)) * dinv[j];
         }
         tscvx_float d = Li[i] - dot2(Li + fi, Li + fi, i - fi);
-        if (dyn_pivot(&d, fabs(Li[i])) != 0) return -1;
+        if (fix_pivot(&d, Li[i], 0) != PIVOT_OK) return -1;
         Li[i] = sqrt(d);
         dinv[i] = 1.0 / Li[i];
     }
@@ -372,8 +362,8 @@ int tscvx_banded_analyse(tscvx_workspace *ws, tscvx_arena *a) {
     CLAIM(bd->Ydinv, p, tscvx_float);
     CLAIM(bd->Hdinv, n, tscvx_float);
     tscvx_float **vec[] = {&bd->xg, &bd->res_x, &bd->ex, &bd->yb, &bd->res_y, &bd->ey,
-                           &bd->t, &bd->wz, &bd->res_z, &bd->ez, &bd->ewz};
-    const tscvx_int len[] = {n, n, n, p, p, p, m, m, m, m, m};
+                           &bd->t, &bd->res_z, &bd->ez, &bd->ewz};
+    const tscvx_int len[] = {n, n, n, p, p, p, m, m, m, m};
     for (size_t i = 0; i < sizeof len / sizeof len[0]; i++) CLAIM(*vec[i], len[i], tscvx_float);
     const size_t mark = a->top;
     /* temporaries */
@@ -714,7 +704,7 @@ static int form_border(tscvx_workspace *ws) {
             bd->S[c * nb + r] = v;
         }
     }
-    return chol(bd->S, nb);
+    return chol(bd->S, nb, 0);
 }
 
 /* The banded method's static regularization: TSCVX_BANDED_REG_SCALE times the IPM's delta.
@@ -736,7 +726,7 @@ static void banded_load(tscvx_workspace *ws) {
     }
     for (tscvx_int k = 0; k < ws->P.nnz; k++) bd->PF[bd->mapP[k]] += ws->P.x[k];
     for (tscvx_int g = 0; g < bd->ngroup; g++)
-        if (bd->hasP[g]) chol_psd(bd->PF + bd->hp[g], bd->gp[g + 1] - bd->gp[g]);
+        if (bd->hasP[g]) chol(bd->PF + bd->hp[g], bd->gp[g + 1] - bd->gp[g], 1);
     tscvx_float kmax = banded_reg(ws);
     for (tscvx_int k = 0; k < ws->P.nnz; k++) kmax = fmax(kmax, fabs(ws->P.x[k]));
     for (tscvx_int k = 0; k < ws->A.nnz; k++) kmax = fmax(kmax, fabs(ws->A.x[k]));
@@ -896,18 +886,6 @@ static tscvx_float residual(tscvx_workspace *ws, const tscvx_float *rx, const ts
     return vmax_abs(bd->res_z, m, r);
 }
 
-/* |ry - A dx|_inf: the equality rows' residual. A base solve meets the x rows up to d and
- * rounding by construction (dx_g from H_g's factor, dz from wdz), and the z rows too (wdz =
- * Gt dx - t, dz = W^-1 wdz); what the method's normal equations (Y) leave behind is here. */
-static tscvx_float equality_residual(tscvx_workspace *ws, const tscvx_float *ry,
-                                     const tscvx_float *dx) {
-    tscvx_float *r = ws->bd.res_y;
-    for (tscvx_int i = 0; i < ws->p; i++) r[i] = -ry[i];
-    for (tscvx_int j = 0; j < ws->n; j++)
-        for (tscvx_int k = ws->A.p[j]; k < ws->A.p[j + 1]; k++) r[ws->A.i[k]] += ws->A.x[k] * dx[j];
-    return vmax_abs(r, ws->p, 0.0);
-}
-
 static int banded_solve(tscvx_workspace *ws, const tscvx_float *rx, const tscvx_float *ry,
                         const tscvx_float *rz, tscvx_float *dx, tscvx_float *dy, tscvx_float *dz,
                         tscvx_float *wdz, tscvx_int refine) {
@@ -916,18 +894,14 @@ static int banded_solve(tscvx_workspace *ws, const tscvx_float *rx, const tscvx_
     base_solve(ws, rx, ry, rz, dx, dy, dz, wdz);
     if (refine <= 0) return 0;
     const tscvx_float bnorm = vmax_abs(rz, m, vmax_abs(ry, p, vmax_abs(rx, n, 0.0)));
-    const tscvx_float tol = TSCVX_REFINE_TOL * (1.0 + bnorm);
-    const tscvx_float ynorm = equality_residual(ws, ry, dx);
-    if (!isfinite(ynorm)) return -1;
-    if (ynorm <= tol) return 0; /* nothing for the refinement to gain */
     tscvx_float last = INFINITY;
     int steps = 0;
     for (tscvx_int it = 0; it < refine; it++) {
         const tscvx_float rnorm = residual(ws, rx, ry, rz, dx, dy, dz, wdz);
         if (!isfinite(rnorm)) return -1;
         const tscvx_float xnorm = vmax_abs(wdz, m, vmax_abs(dy, p, vmax_abs(dx, n, 0.0)));
-        if (rnorm <= tol || rnorm <= TSCVX_REFINE_FLOOR * bd->kmax * xnorm ||
-            rnorm > TSCVX_REFINE_RATIO * last)
+        if (rnorm <= TSCVX_REFINE_TOL * (1.0 + bnorm) ||
+            rnorm <= TSCVX_REFINE_FLOOR * bd->kmax * xnorm || rnorm > TSCVX_REFINE_RATIO * last)
             break;
         last = rnorm;
         base_solve(ws, bd->res_x, bd->res_y, bd->res_z, bd->ex, bd->ey, bd->ez, bd->ewz);

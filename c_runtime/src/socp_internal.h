@@ -160,7 +160,8 @@ void tscvx_kkt_cone_values(tscvx_kkt *kkt, const tscvx_cones *K, const tscvx_nt 
  *   1. cone rows, NT-scaled (CVXOPT's condensed solver): W dz = W^-1 (G dx - rz),
  *      H = P + d I + (W^-1 G)'(W^-1 G). H is block diagonal over the variable groups
  *      (connected components of "shares a cone or a P entry");
- *   2. groups:     dx_g = H_g^-1 (rx_g + G_g' W^-2 rz - A_g' dy)  (Cholesky H_g = L_g L_g');
+ *   2. groups:     dx_g = H_g^-1 (rx_g + G_g' W^-2 rz - A_g' dy),  H_g = L_g L_g' (L_g' by
+ *      Givens rotations of the rows of W^-1 G_g: H_g itself is never formed);
  *   3. equalities: Y dy = ...,  Y = d I + sum_g A_g H_g^-1 A_g' = d I + sum_g C_g' C_g,
  *      C_g = L_g^-1 A_g', factored by a profile (envelope) Cholesky in a reverse Cuthill-McKee
  *      order of the equality rows: the stages' block-tridiagonal pattern, with dense kernels.
@@ -178,7 +179,8 @@ typedef struct {
     /* variable groups */
     tscvx_int ngroup;
     tscvx_int *gp;       /* ngroup+1: group g holds gvar[gp[g] .. gp[g+1]) */
-    tscvx_int *gvar;     /* n: the variables, by group, ascending within a group */
+    tscvx_int *gvar;     /* n: the variables by group; within a group those without
+                            equality entries first (ga0 of them), each part ascending */
     tscvx_int *loc;      /* n: position of each variable within its group */
     signed char *border; /* ngroup: 1 for a border group */
     tscvx_int *hp;       /* ngroup+1: offset of group g's s_g x s_g blocks in H and PF */
@@ -212,19 +214,20 @@ typedef struct {
     tscvx_float S[TSCVX_BANDED_BORDER_MAX * TSCVX_BANDED_BORDER_MAX]; /* H_B + A_B' V, factored */
     tscvx_int *bp;       /* nsoc+1: offset of SOC k's block W_k^-1 G_k (q x s_g, row-major) */
     tscvx_float *B;      /* those blocks, from the last factorization */
-    tscvx_int *ga0;      /* ngroup: the group's first variables without equality entries */
+    tscvx_int *ga0;      /* ngroup: how many of the group's variables have no equality entry */
     /* sizes of the value arrays (set by the analysis) */
     size_t nH, nCT, nY;
     tscvx_float kmax_data; /* largest |entry| of P, A, G and d */
     tscvx_float kmax;    /* ... and of W (the scaled cone rows; refinement floor) */
-    /* work: xg (n, group order), yb (p, band order), t (m) = W^-1 rz, wz (m); refinement:
+    /* work: xg (n, group order), yb (p, band order), t (m) = W^-1 rz; refinement:
      * residuals (n, p, m) and corrections (n, p, m, m: W ez) */
-    tscvx_float *xg, *yb, *t, *wz, *res_x, *res_y, *res_z, *ex, *ey, *ez, *ewz;
+    tscvx_float *xg, *yb, *t, *res_x, *res_y, *res_z, *ex, *ey, *ez, *ewz;
 } tscvx_banded;
 
 /* Analysis at setup: claims the banded method's memory from `a` (temporary memory above it,
  * released). Returns 1 if the problem has the structure (memory claimed; with a->base NULL
- * or an overflowed arena only counted), 0 if not (nothing kept), -1 on an internal error.
+ * or an overflowed arena only counted), 0 if not (nothing kept), -1 when the memory for the
+ * analysis itself is short.
  * `ws` holds the data (patterns, values) and cones. */
 int tscvx_banded_analyse(tscvx_workspace *ws, tscvx_arena *a);
 

@@ -3,7 +3,8 @@
 /* Benchmark driver: loads a problem dumped by guidance.bench_socp (binary, little endian),
  * sets it up in one malloc'ed arena and solves it `reps` times. Used with callgrind:
  *   valgrind --tool=callgrind --toggle-collect=tscvx_solve build/ctest/bench_driver FILE 1
- * (optional third argument: kkt_backend, 2 static-pattern LDL' (default), 1 SuiteSparse LDL)
+ * (optional third argument: kkt_backend, 0 automatic (default: banded when the problem has the
+ * structure), 1 SuiteSparse LDL, 2 static-pattern LDL', 3 banded)
  * File: int32 n p m l nsoc nnzP nnzA nnzG (nnzP = -1: no P), then int32 q[nsoc],
  * [int32 Pp[n+1] Pi[nnzP] f64 Px[nnzP]], f64 c[n], int32 Ap[n+1] Ai[nnzA] f64 Ax[nnzA] b[p],
  * int32 Gp[n+1] Gi[nnzG] f64 Gx[nnzG] h[m]. */
