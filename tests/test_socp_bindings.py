@@ -20,6 +20,17 @@ def small_soc() -> ConicProblem:
     )
 
 
+def test_banded_method_refused_without_structure() -> None:
+    """A random dense SOCP has no stage structure: the banded method, asked for, refuses at
+    setup with its message; the default falls back to the sparse LDL' method."""
+    prob = random_feasible(7, n=40)
+    sol = csocp.solve(prob, kkt_backend=csocp.KKT_BANDED)
+    assert sol.status == "invalid_input"
+    assert "no structure for the banded KKT method" in sol.info["message"]
+    auto = csocp.solve(prob)
+    assert auto.status == "solved" and int(auto.info["kkt_backend"]) == csocp.KKT_STATIC
+
+
 def test_small_soc_solution_and_duals() -> None:
     prob = small_soc()
     sol = csocp.solve(prob)
