@@ -357,20 +357,31 @@ static pdg_setup_status build(void *mem, size_t bytes, int N, int roll_free,
     for (i = 0; i < ws->n; ++i) {
         ws->c[i] = 1.0;
     }
-    /* 3. the SOCP workspace: symbolic analysis in the rest of the memory, then set-up there */
+    /* 3. the SOCP workspace: symbolic analysis in the rest of the memory, then set-up there.
+     * The subproblem has stage structure by construction (every variable under the trust
+     * region or a penalty cone, the dynamics coupling neighbouring nodes): the banded KKT
+     * method first, whose analysis needs far less scratch than the sparse method's AMD; the
+     * sparse method only should the runtime refuse it. */
     socp_settings(st, &ts);
     socp_data(ws, &d);
-    if (tscvx_scratch_size(&d, &ts, &nscr) != TSCVX_SETUP_OK) {
-        return PDG_SETUP_SOCP_ERROR;
-    }
     socp_at = (a.top + (ALIGN - 1)) & ~(size_t)(ALIGN - 1);
-    if (socp_at + nscr > a.cap) {
-        *need = (socp_at + nscr > a.high ? socp_at + nscr : a.high) + ALIGN;
-        return short_memory;
-    }
-    if (tscvx_workspace_size(&d, &ts, a.base + socp_at, a.cap - socp_at, &nsocp) !=
-        TSCVX_SETUP_OK) {
-        return PDG_SETUP_SOCP_ERROR;
+    for (i = 0; i < 2; ++i) {
+        tscvx_setup_status sz;
+        ts.kkt_backend = i == 0 ? TSCVX_KKT_BANDED : TSCVX_KKT_STATIC;
+        if (tscvx_scratch_size(&d, &ts, &nscr) != TSCVX_SETUP_OK) {
+            return PDG_SETUP_SOCP_ERROR;
+        }
+        if (socp_at + nscr > a.cap) {
+            *need = (socp_at + nscr > a.high ? socp_at + nscr : a.high) + ALIGN;
+            return short_memory;
+        }
+        sz = tscvx_workspace_size(&d, &ts, a.base + socp_at, a.cap - socp_at, &nsocp);
+        if (sz == TSCVX_SETUP_OK) {
+            break;
+        }
+        if (sz != TSCVX_SETUP_NOT_BANDED || i == 1) {
+            return PDG_SETUP_SOCP_ERROR;
+        }
     }
     total = socp_at + (nsocp > nscr ? nsocp : nscr);
     *need = (total > a.high ? total : a.high) + ALIGN;
