@@ -330,6 +330,218 @@ static void sort_ints(tscvx_int *v, tscvx_int len) {
 /* Rows coupled to more than this many equality rows make a group a border group. */
 static tscvx_int border_rows(tscvx_int p) { return p / 8 > 32 ? p / 8 : 32; }
 
+/* Temporaries of the analysis (released after it). */
+typedef struct {
+    tscvx_int *parent, *gid; /* n: union-find forest, group of each variable */
+    tscvx_int *Grc;          /* nnz(G): column of each entry of G by rows */
+    tscvx_int *rgp, *rgg;    /* p+1, nnz(A): the non-border groups of each equality row */
+    tscvx_int *deg, *seen, *queue, *order; /* p: row degrees, marks, RCM work */
+} analysis_tmp;
+
+/* First and one-past-last row of cone c (orthant rows first, then the SOCs). */
+static void cone_rows(const tscvx_cones *K, tscvx_int c, tscvx_int *r0, tscvx_int *r1) {
+    *r0 = c < K->l ? c : K->off[c - K->l];
+    *r1 = c < K->l ? c + 1 : *r0 + K->q[c - K->l];
+}
+
+/* 1. G by rows: row i's entries Gr_k[Grp[i] .. Grp[i+1]), columns ascending (in Grc). */
+static void rows_of_G(tscvx_workspace *ws, analysis_tmp *t) {
+    tscvx_banded *bd = &ws->bd;
+    const tscvx_int m = ws->m;
+    tscvx_int *Grp = bd->Grp;
+    for (tscvx_int i = 0; i <= m; i++) Grp[i] = 0;
+    for (tscvx_int k = 0; k < ws->G.nnz; k++) Grp[ws->G.i[k] + 1]++;
+    for (tscvx_int i = 0; i < m; i++) Grp[i + 1] += Grp[i];
+    for (tscvx_int j = 0; j < ws->n; j++)
+        for (tscvx_int k = ws->G.p[j]; k < ws->G.p[j + 1]; k++) {
+            const tscvx_int e = Grp[ws->G.i[k]]++;
+            bd->Gr_k[e] = k, t->Grc[e] = j;
+        }
+    for (tscvx_int i = m; i > 0; i--) Grp[i] = Grp[i - 1];
+    Grp[0] = 0;
+}
+
+/* 2. The variable groups: connected components of "shares a cone or a P entry", each in group
+ * order (variables without equality entries first: their rows of C_g = L_g^-1 A_g' are zero),
+ * the cones of each group and its P flag. Returns 0, or -1 without the structure: a group
+ * larger than TSCVX_BANDED_GROUP_MAX, or a variable in no cone and not on P's diagonal
+ * (H_g would be only the regularization). */
+static int find_groups(tscvx_workspace *ws, analysis_tmp *t) {
+    tscvx_banded *bd = &ws->bd;
+    const tscvx_cones *K = &ws->K;
+    const tscvx_int n = ws->n, ncone = K->l + K->nsoc;
+    tscvx_int *parent = t->parent, *gid = t->gid;
+    for (tscvx_int j = 0; j < n; j++) {
+        int covered = ws->G.p[j + 1] > ws->G.p[j];
+        for (tscvx_int k = ws->P.p[j]; k < ws->P.p[j + 1]; k++) covered |= ws->P.i[k] == j;
+        if (!covered) return -1;
+        parent[j] = j;
+    }
+    for (tscvx_int c = 0; c < ncone; c++) {
+        tscvx_int r0, r1;
+        cone_rows(K, c, &r0, &r1);
+        for (tscvx_int e = bd->Grp[r0]; e < bd->Grp[r1]; e++)
+            uf_union(parent, t->Grc[bd->Grp[r0]], t->Grc[e], n);
+    }
+    for (tscvx_int j = 0; j < n; j++)
+        for (tscvx_int k = ws->P.p[j]; k < ws->P.p[j + 1]; k++) uf_union(parent, ws->P.i[k], j, n);
+    tscvx_int ng = 0;
+    for (tscvx_int j = 0; j < n; j++) { /* roots are the smallest members: numbered in order */
+        const tscvx_int r = uf_root(parent, j, n);
+        gid[j] = r == j ? ng++ : gid[r];
+    }
+    bd->ngroup = ng;
+    for (tscvx_int g = 0; g <= ng; g++) bd->gp[g] = 0;
+    for (tscvx_int j = 0; j < n; j++) bd->gp[gid[j] + 1]++;
+    for (tscvx_int g = 0; g < ng; g++) {
+        if (bd->gp[g + 1] > TSCVX_BANDED_GROUP_MAX) return -1;
+        bd->gp[g + 1] += bd->gp[g];
+    }
+    for (tscvx_int g = 0; g < ng; g++) parent[g] = bd->gp[g], bd->ga0[g] = 0; /* fill pointers */
+    for (int with_A = 0; with_A < 2; with_A++)
+        for (tscvx_int j = 0; j < n; j++) {
+            if ((ws->A.p[j + 1] > ws->A.p[j]) != with_A) continue;
+            const tscvx_int e = parent[gid[j]]++;
+            bd->gvar[e] = j, bd->loc[j] = e - bd->gp[gid[j]];
+            bd->ga0[gid[j]] += !with_A;
+        }
+    for (tscvx_int e = 0; e < ws->G.nnz; e++) bd->Gr_loc[e] = bd->loc[t->Grc[e]];
+    for (tscvx_int g = 0; g <= ng; g++) bd->gcp[g] = 0;
+    for (tscvx_int c = 0; c < ncone; c++) {
+        tscvx_int r0, r1;
+        cone_rows(K, c, &r0, &r1);
+        bd->cgroup[c] = bd->Grp[r1] > bd->Grp[r0] ? gid[t->Grc[bd->Grp[r0]]] : -1;
+        if (bd->cgroup[c] >= 0) bd->gcp[bd->cgroup[c] + 1]++;
+    }
+    for (tscvx_int g = 0; g < ng; g++) bd->gcp[g + 1] += bd->gcp[g];
+    for (tscvx_int g = 0; g < ng; g++) parent[g] = bd->gcp[g];
+    for (tscvx_int c = 0; c < ncone; c++)
+        if (bd->cgroup[c] >= 0) bd->gcone[parent[bd->cgroup[c]]++] = c;
+    for (tscvx_int g = 0; g < ng; g++) bd->hasP[g] = 0;
+    for (tscvx_int j = 0; j < n; j++) bd->hasP[gid[j]] |= ws->P.p[j + 1] > ws->P.p[j];
+    return 0;
+}
+
+/* 3. The equality rows of each group (rrow, original rows for now), the border, and the
+ * groups of each row (rgp, rgg). Returns -1 without the structure: more than
+ * TSCVX_BANDED_BORDER_MAX border variables, or a row of border variables only (Y singular). */
+static int group_rows(tscvx_workspace *ws, analysis_tmp *t) {
+    tscvx_banded *bd = &ws->bd;
+    const tscvx_int p = ws->p, ng = bd->ngroup;
+    tscvx_int *mark = t->seen, *rgp = t->rgp;
+    for (tscvx_int i = 0; i < p; i++) mark[i] = -1;
+    bd->nb = 0;
+    bd->rp[0] = 0;
+    for (tscvx_int g = 0; g < ng; g++) {
+        const tscvx_int start = bd->rp[g];
+        tscvx_int cnt = 0;
+        for (tscvx_int v = bd->gp[g]; v < bd->gp[g + 1]; v++) {
+            const tscvx_int j = bd->gvar[v];
+            for (tscvx_int k = ws->A.p[j]; k < ws->A.p[j + 1]; k++)
+                if (mark[ws->A.i[k]] != g) mark[ws->A.i[k]] = g, bd->rrow[start + cnt++] = ws->A.i[k];
+        }
+        bd->border[g] = cnt > border_rows(p);
+        if (bd->border[g]) {
+            for (tscvx_int v = bd->gp[g]; v < bd->gp[g + 1]; v++) {
+                if (bd->nb >= TSCVX_BANDED_BORDER_MAX) return -1;
+                bd->bgroup[bd->nb] = g;
+                bd->bvar[bd->nb++] = bd->gvar[v];
+            }
+            cnt = 0;
+        }
+        bd->rp[g + 1] = start + cnt;
+    }
+    for (tscvx_int i = 0; i <= p; i++) rgp[i] = 0;
+    for (tscvx_int u = 0; u < bd->rp[ng]; u++) rgp[bd->rrow[u] + 1]++;
+    for (tscvx_int i = 0; i < p; i++) {
+        if (rgp[i + 1] == 0) return -1;
+        rgp[i + 1] += rgp[i];
+    }
+    for (tscvx_int i = 0; i < p; i++) t->deg[i] = rgp[i]; /* fill pointers */
+    for (tscvx_int g = 0; g < ng; g++)
+        for (tscvx_int u = bd->rp[g]; u < bd->rp[g + 1]; u++) t->rgg[t->deg[bd->rrow[u]]++] = g;
+    return 0;
+}
+
+/* 4. Row degrees, the reverse Cuthill-McKee order of the rows and the profile of Y. Returns -1
+ * when the profile is too wide (more than TSCVX_BANDED_ENV_AVG entries per row on average,
+ * for more than 2 TSCVX_BANDED_ENV_AVG rows: a small Y is always accepted). */
+static int order_rows(tscvx_workspace *ws, analysis_tmp *t) {
+    tscvx_banded *bd = &ws->bd;
+    const tscvx_int p = ws->p;
+    const row_graph RG = {bd, t->rgp, t->rgg};
+    for (tscvx_int i = 0; i < p; i++) t->seen[i] = -1;
+    for (tscvx_int r = 0; r < p; r++) {
+        tscvx_int d = 0;
+        for (tscvx_int e = t->rgp[r]; e < t->rgp[r + 1]; e++)
+            for (tscvx_int u = bd->rp[t->rgg[e]]; u < bd->rp[t->rgg[e] + 1]; u++)
+                if (t->seen[bd->rrow[u]] != r) t->seen[bd->rrow[u]] = r, d++;
+        t->deg[r] = d;
+    }
+    rcm(&RG, p, t->deg, t->seen, t->queue, t->order, bd->perm, bd->iperm);
+    bd->yp[0] = 0;
+    for (tscvx_int b = 0; b < p; b++) {
+        const tscvx_int r = bd->perm[b];
+        tscvx_int f = b;
+        for (tscvx_int e = t->rgp[r]; e < t->rgp[r + 1]; e++)
+            for (tscvx_int u = bd->rp[t->rgg[e]]; u < bd->rp[t->rgg[e] + 1]; u++) {
+                const tscvx_int c = bd->iperm[bd->rrow[u]];
+                f = c < f ? c : f;
+            }
+        bd->yfirst[b] = f;
+        bd->yp[b + 1] = bd->yp[b] + (b - f + 1);
+        if (bd->yp[b + 1] > INT_MAX / 4) return -1;
+    }
+    bd->nY = (size_t)bd->yp[p];
+    return bd->nY > (size_t)TSCVX_BANDED_ENV_AVG * p && p > 2 * TSCVX_BANDED_ENV_AVG ? -1 : 0;
+}
+
+/* 5. The group row lists in band positions, ascending, and each A entry's place in its
+ * group's list (posA; -1 in border groups). */
+static void place_rows(tscvx_workspace *ws, analysis_tmp *t) {
+    tscvx_banded *bd = &ws->bd;
+    for (tscvx_int g = 0; g < bd->ngroup; g++) {
+        tscvx_int *R = bd->rrow + bd->rp[g];
+        const tscvx_int len_g = bd->rp[g + 1] - bd->rp[g];
+        for (tscvx_int u = 0; u < len_g; u++) R[u] = bd->iperm[R[u]];
+        sort_ints(R, len_g);
+        for (tscvx_int u = 0; u < len_g; u++) t->seen[R[u]] = u;
+        for (tscvx_int v = bd->gp[g]; v < bd->gp[g + 1]; v++) {
+            const tscvx_int j = bd->gvar[v];
+            for (tscvx_int k = ws->A.p[j]; k < ws->A.p[j + 1]; k++)
+                bd->posA[k] = bd->border[g] ? -1 : t->seen[bd->iperm[ws->A.i[k]]];
+        }
+    }
+}
+
+/* 6. Offsets and sizes of the value arrays (H and PF blocks, C_g', the SOC blocks W^-1 G_k)
+ * and the slots of P's entries. Returns -1 if a size overflows the index type. */
+static int size_values(tscvx_workspace *ws, const analysis_tmp *t) {
+    tscvx_banded *bd = &ws->bd;
+    const tscvx_int ng = bd->ngroup, l = ws->K.l;
+    bd->hp[0] = bd->cp[0] = bd->bp[0] = 0;
+    for (tscvx_int g = 0; g < ng; g++) {
+        const tscvx_int s = bd->gp[g + 1] - bd->gp[g];
+        bd->hp[g + 1] = bd->hp[g] + s * s;
+        bd->cp[g + 1] = bd->cp[g] + (s - bd->ga0[g]) * (bd->rp[g + 1] - bd->rp[g]);
+    }
+    for (tscvx_int k = 0; k < ws->K.nsoc; k++) {
+        const tscvx_int g = bd->cgroup[l + k];
+        const tscvx_int s = g < 0 ? 0 : bd->gp[g + 1] - bd->gp[g];
+        if (bd->bp[k] > INT_MAX / 4 - s * ws->K.q[k]) return -1;
+        bd->bp[k + 1] = bd->bp[k] + s * ws->K.q[k];
+    }
+    for (tscvx_int j = 0; j < ws->n; j++)
+        for (tscvx_int k = ws->P.p[j]; k < ws->P.p[j + 1]; k++) {
+            const tscvx_int i = ws->P.i[k], g = t->gid[j], s = bd->gp[g + 1] - bd->gp[g];
+            const tscvx_int lo = bd->loc[i] < bd->loc[j] ? bd->loc[i] : bd->loc[j];
+            const tscvx_int hi = bd->loc[i] < bd->loc[j] ? bd->loc[j] : bd->loc[i];
+            bd->mapP[k] = bd->hp[g] + lo * s + hi;
+        }
+    bd->nH = (size_t)bd->hp[ng], bd->nCT = (size_t)bd->cp[ng];
+    return 0;
+}
+
 int tscvx_banded_analyse(tscvx_workspace *ws, tscvx_arena *a) {
     tscvx_banded *bd = &ws->bd;
     const tscvx_int n = ws->n, p = ws->p, m = ws->m, l = ws->K.l, nsoc = ws->K.nsoc;
@@ -366,195 +578,32 @@ int tscvx_banded_analyse(tscvx_workspace *ws, tscvx_arena *a) {
     const tscvx_int len[] = {n, n, n, p, p, p, m, m, m, m};
     for (size_t i = 0; i < sizeof len / sizeof len[0]; i++) CLAIM(*vec[i], len[i], tscvx_float);
     const size_t mark = a->top;
-    /* temporaries */
-    tscvx_int *parent, *gid, *Grc, *rgp, *rgg, *deg, *seen, *queue, *order;
-    CLAIM(parent, n, tscvx_int);
-    CLAIM(gid, n, tscvx_int);
-    CLAIM(Grc, nnzG, tscvx_int);
-    CLAIM(rgp, p + 1, tscvx_int);
-    CLAIM(rgg, nnzA, tscvx_int);
-    CLAIM(deg, p, tscvx_int);
-    CLAIM(seen, p, tscvx_int);
-    CLAIM(queue, p, tscvx_int);
-    CLAIM(order, p, tscvx_int);
+    analysis_tmp t;
+    CLAIM(t.parent, n, tscvx_int);
+    CLAIM(t.gid, n, tscvx_int);
+    CLAIM(t.Grc, nnzG, tscvx_int);
+    CLAIM(t.rgp, p + 1, tscvx_int);
+    CLAIM(t.rgg, nnzA, tscvx_int);
+    CLAIM(t.deg, p, tscvx_int);
+    CLAIM(t.seen, p, tscvx_int);
+    CLAIM(t.queue, p, tscvx_int);
+    CLAIM(t.order, p, tscvx_int);
     if (a->base == NULL) { /* counting: the value arrays are sized by the analysis itself */
         a->top = mark;
         return 1;
     }
     if (a->overflow) return -1;
-#define DECLINE()       \
-    do {                \
-        a->top = entry; \
-        return 0;       \
-    } while (0) /* no banded structure: release everything */
-
-    /* 1. G by rows: row i's entries at Grp[i] .. Grp[i+1], ascending columns */
-    tscvx_int *Grp = bd->Grp;
-    for (tscvx_int i = 0; i <= m; i++) Grp[i] = 0;
-    for (tscvx_int k = 0; k < nnzG; k++) Grp[ws->G.i[k] + 1]++;
-    for (tscvx_int i = 0; i < m; i++) Grp[i + 1] += Grp[i];
-    for (tscvx_int j = 0; j < n; j++)
-        for (tscvx_int k = ws->G.p[j]; k < ws->G.p[j + 1]; k++) {
-            const tscvx_int t = Grp[ws->G.i[k]]++;
-            bd->Gr_k[t] = k, Grc[t] = j;
-        }
-    for (tscvx_int i = m; i > 0; i--) Grp[i] = Grp[i - 1];
-    Grp[0] = 0;
-
-    /* 2. variable groups: union over the variables of each cone and each P entry */
-    for (tscvx_int j = 0; j < n; j++) parent[j] = j;
-    for (tscvx_int c = 0; c < l + nsoc; c++) {
-        const tscvx_int r0 = c < l ? c : ws->K.off[c - l];
-        const tscvx_int r1 = c < l ? c + 1 : r0 + ws->K.q[c - l];
-        for (tscvx_int t = Grp[r0]; t < Grp[r1]; t++) uf_union(parent, Grc[Grp[r0]], Grc[t], n);
+    rows_of_G(ws, &t);
+    if (find_groups(ws, &t) != 0 || group_rows(ws, &t) != 0 || order_rows(ws, &t) != 0) {
+        a->top = entry; /* no banded structure: nothing kept */
+        return 0;
     }
-    for (tscvx_int j = 0; j < n; j++)
-        for (tscvx_int k = ws->P.p[j]; k < ws->P.p[j + 1]; k++) uf_union(parent, ws->P.i[k], j, n);
-    tscvx_int ng = 0;
-    for (tscvx_int j = 0; j < n; j++) { /* roots are the smallest members: numbered in order */
-        const tscvx_int r = uf_root(parent, j, n);
-        gid[j] = r == j ? ng++ : gid[r];
+    place_rows(ws, &t);
+    if (size_values(ws, &t) != 0) {
+        a->top = entry;
+        return 0;
     }
-    bd->ngroup = ng;
-    for (tscvx_int g = 0; g <= ng; g++) bd->gp[g] = 0;
-    for (tscvx_int j = 0; j < n; j++) bd->gp[gid[j] + 1]++;
-    for (tscvx_int g = 0; g < ng; g++) {
-        if (bd->gp[g + 1] > TSCVX_BANDED_GROUP_MAX) DECLINE();
-        bd->gp[g + 1] += bd->gp[g];
-    }
-    /* each group's variables without equality entries first (their rows of C_g = L_g^-1 A_g'
-     * are zero: skipped), then the others, ascending within both */
-    for (tscvx_int g = 0; g < ng; g++) parent[g] = bd->gp[g], bd->ga0[g] = 0; /* fill pointers */
-    for (int with_A = 0; with_A < 2; with_A++)
-        for (tscvx_int j = 0; j < n; j++) {
-            if ((ws->A.p[j + 1] > ws->A.p[j]) != with_A) continue;
-            const tscvx_int t = parent[gid[j]]++;
-            bd->gvar[t] = j, bd->loc[j] = t - bd->gp[gid[j]];
-            bd->ga0[gid[j]] += !with_A;
-        }
-    /* every variable in a cone or on P's diagonal, else H_g is only the regularization */
-    for (tscvx_int j = 0; j < n; j++) {
-        int covered = ws->G.p[j + 1] > ws->G.p[j];
-        for (tscvx_int k = ws->P.p[j]; k < ws->P.p[j + 1]; k++) covered |= ws->P.i[k] == j;
-        if (!covered) DECLINE();
-    }
-    for (tscvx_int c = 0; c < l + nsoc; c++) {
-        const tscvx_int r0 = c < l ? c : ws->K.off[c - l];
-        const tscvx_int r1 = c < l ? c + 1 : r0 + ws->K.q[c - l];
-        bd->cgroup[c] = Grp[r1] > Grp[r0] ? gid[Grc[Grp[r0]]] : -1;
-    }
-    for (tscvx_int t = 0; t < nnzG; t++) bd->Gr_loc[t] = bd->loc[Grc[t]];
-    for (tscvx_int g = 0; g <= ng; g++) bd->gcp[g] = 0; /* the cones of each group */
-    for (tscvx_int c = 0; c < l + nsoc; c++)
-        if (bd->cgroup[c] >= 0) bd->gcp[bd->cgroup[c] + 1]++;
-    for (tscvx_int g = 0; g < ng; g++) bd->gcp[g + 1] += bd->gcp[g];
-    for (tscvx_int g = 0; g < ng; g++) parent[g] = bd->gcp[g];
-    for (tscvx_int c = 0; c < l + nsoc; c++)
-        if (bd->cgroup[c] >= 0) bd->gcone[parent[bd->cgroup[c]]++] = c;
-    for (tscvx_int g = 0; g < ng; g++) bd->hasP[g] = 0;
-    for (tscvx_int j = 0; j < n; j++) bd->hasP[gid[j]] |= ws->P.p[j + 1] > ws->P.p[j];
-
-    /* 3. the equality rows of each group; the border */
-    tscvx_int *mark_row = seen;
-    for (tscvx_int i = 0; i < p; i++) mark_row[i] = -1;
-    bd->nb = 0;
-    bd->rp[0] = 0;
-    for (tscvx_int g = 0; g < ng; g++) {
-        tscvx_int cnt = 0;
-        const tscvx_int start = bd->rp[g];
-        for (tscvx_int v = bd->gp[g]; v < bd->gp[g + 1]; v++) {
-            const tscvx_int j = bd->gvar[v];
-            for (tscvx_int k = ws->A.p[j]; k < ws->A.p[j + 1]; k++)
-                if (mark_row[ws->A.i[k]] != g) mark_row[ws->A.i[k]] = g, bd->rrow[start + cnt++] = ws->A.i[k];
-        }
-        bd->border[g] = cnt > border_rows(p);
-        if (bd->border[g]) {
-            for (tscvx_int v = bd->gp[g]; v < bd->gp[g + 1]; v++) {
-                if (bd->nb >= TSCVX_BANDED_BORDER_MAX) DECLINE();
-                bd->bgroup[bd->nb] = g;
-                bd->bvar[bd->nb++] = bd->gvar[v];
-            }
-            cnt = 0;
-        }
-        bd->rp[g + 1] = start + cnt;
-    }
-    /* rows -> groups; a row without a non-border group would leave Y singular */
-    for (tscvx_int i = 0; i <= p; i++) rgp[i] = 0;
-    for (tscvx_int u = 0; u < bd->rp[ng]; u++) rgp[bd->rrow[u] + 1]++;
-    for (tscvx_int i = 0; i < p; i++) {
-        if (rgp[i + 1] == 0) DECLINE();
-        rgp[i + 1] += rgp[i];
-    }
-    for (tscvx_int i = 0; i < p; i++) deg[i] = rgp[i];
-    for (tscvx_int g = 0; g < ng; g++)
-        for (tscvx_int u = bd->rp[g]; u < bd->rp[g + 1]; u++) rgg[deg[bd->rrow[u]]++] = g;
-    const row_graph RG = {bd, rgp, rgg};
-
-    /* 4. row degrees, reverse Cuthill-McKee order, profile of Y */
-    for (tscvx_int i = 0; i < p; i++) seen[i] = -1;
-    for (tscvx_int r = 0; r < p; r++) {
-        tscvx_int d = 0;
-        for (tscvx_int t = rgp[r]; t < rgp[r + 1]; t++)
-            for (tscvx_int u = bd->rp[rgg[t]]; u < bd->rp[rgg[t] + 1]; u++)
-                if (seen[bd->rrow[u]] != r) seen[bd->rrow[u]] = r, d++;
-        deg[r] = d;
-    }
-    rcm(&RG, p, deg, seen, queue, order, bd->perm, bd->iperm);
-    bd->yp[0] = 0;
-    for (tscvx_int b = 0; b < p; b++) {
-        const tscvx_int r = bd->perm[b];
-        tscvx_int f = b;
-        for (tscvx_int t = rgp[r]; t < rgp[r + 1]; t++)
-            for (tscvx_int u = bd->rp[rgg[t]]; u < bd->rp[rgg[t] + 1]; u++) {
-                const tscvx_int c = bd->iperm[bd->rrow[u]];
-                f = c < f ? c : f;
-            }
-        bd->yfirst[b] = f;
-        bd->yp[b + 1] = bd->yp[b] + (b - f + 1);
-        if (bd->yp[b + 1] > INT_MAX / 4) DECLINE();
-    }
-    bd->nY = (size_t)bd->yp[p];
-    if (bd->nY > (size_t)TSCVX_BANDED_ENV_AVG * p && p > 2 * TSCVX_BANDED_ENV_AVG) DECLINE();
-
-    /* 5. group row lists in band positions (ascending); each A entry's place in its list */
-    for (tscvx_int g = 0; g < ng; g++) {
-        tscvx_int *R = bd->rrow + bd->rp[g];
-        const tscvx_int len_g = bd->rp[g + 1] - bd->rp[g];
-        for (tscvx_int u = 0; u < len_g; u++) R[u] = bd->iperm[R[u]];
-        sort_ints(R, len_g);
-        for (tscvx_int u = 0; u < len_g; u++) seen[R[u]] = u;
-        for (tscvx_int v = bd->gp[g]; v < bd->gp[g + 1]; v++) {
-            const tscvx_int j = bd->gvar[v];
-            for (tscvx_int k = ws->A.p[j]; k < ws->A.p[j + 1]; k++)
-                bd->posA[k] = bd->border[g] ? -1 : seen[bd->iperm[ws->A.i[k]]];
-        }
-    }
-
-    /* 6. sizes and slots of the value arrays */
-    bd->hp[0] = bd->cp[0] = bd->bp[0] = 0;
-    for (tscvx_int g = 0; g < ng; g++) {
-        const tscvx_int s = bd->gp[g + 1] - bd->gp[g];
-        bd->hp[g + 1] = bd->hp[g] + s * s;
-        bd->cp[g + 1] = bd->cp[g] + (s - bd->ga0[g]) * (bd->rp[g + 1] - bd->rp[g]);
-    }
-    for (tscvx_int k = 0; k < nsoc; k++) { /* the blocks W_k^-1 G_k (q x s_g) */
-        const tscvx_int g = bd->cgroup[l + k];
-        const tscvx_int s = g < 0 ? 0 : bd->gp[g + 1] - bd->gp[g];
-        if (bd->bp[k] > INT_MAX / 4 - s * ws->K.q[k]) DECLINE();
-        bd->bp[k + 1] = bd->bp[k] + s * ws->K.q[k];
-    }
-    for (tscvx_int j = 0; j < n; j++)
-        for (tscvx_int k = ws->P.p[j]; k < ws->P.p[j + 1]; k++) {
-            const tscvx_int i = ws->P.i[k], s = bd->gp[gid[j] + 1] - bd->gp[gid[j]];
-            const tscvx_int lo = bd->loc[i] < bd->loc[j] ? bd->loc[i] : bd->loc[j];
-            const tscvx_int hi = bd->loc[i] < bd->loc[j] ? bd->loc[j] : bd->loc[i];
-            bd->mapP[k] = bd->hp[gid[j]] + lo * s + hi;
-        }
-    bd->nH = (size_t)bd->hp[ng], bd->nCT = (size_t)bd->cp[ng];
-#undef DECLINE
-
-    /* 7. temporaries released; the value arrays */
-    a->top = mark;
+    a->top = mark; /* temporaries released; the value arrays */
     CLAIM(bd->H, bd->nH, tscvx_float);
     CLAIM(bd->PF, nnzP > 0 ? bd->nH : 0, tscvx_float);
     CLAIM(bd->CT, bd->nCT, tscvx_float);
