@@ -104,22 +104,60 @@ static tscvx_float *prow(const tscvx_banded *bd, tscvx_int i) {
     return bd->Y + bd->yp[i] - bd->yfirst[i];
 }
 
-/* Y = L L' in place, row by row (each entry one dot product of two contiguous row pieces),
- * zero pivots regularized (fix_pivot); Ydinv[i] = 1 / L_ii */
+/* (u'w, v'w): two rows against one, the loads of w shared */
+static inline void dot_pair(const tscvx_float *restrict u, const tscvx_float *restrict v,
+                            const tscvx_float *restrict w, tscvx_int n, tscvx_float *uw,
+                            tscvx_float *vw) {
+    tscvx_float a0 = 0.0, a1 = 0.0, b0 = 0.0, b1 = 0.0;
+    tscvx_int k = 0;
+    for (; k + 2 <= n; k += 2) {
+        const tscvx_float w0 = w[k], w1 = w[k + 1];
+        a0 += u[k] * w0, b0 += v[k] * w0;
+        a1 += u[k + 1] * w1, b1 += v[k + 1] * w1;
+    }
+    if (k < n) a0 += u[k] * w[k], b0 += v[k] * w[k];
+    *uw = a0 + a1, *vw = b0 + b1;
+}
+
+/* The pivot of row i (entries yfirst[i] .. i-1 done): L_ii and 1 / L_ii. */
+static int profile_pivot(tscvx_banded *bd, tscvx_int i) {
+    tscvx_float *Li = prow(bd, i);
+    const tscvx_int fi = bd->yfirst[i];
+    tscvx_float d = Li[i] - dot2(Li + fi, Li + fi, i - fi);
+    if (fix_pivot(&d, Li[i], 0) != PIVOT_OK) return -1;
+    Li[i] = sqrt(d);
+    bd->Ydinv[i] = 1.0 / Li[i];
+    return 0;
+}
+
+/* Y = L L' in place, row by row (each entry one dot product of two contiguous row pieces);
+ * two rows at a time where they start in the same column (the rows of one stage), sharing the
+ * loads of the earlier row they are both reduced with. Zero pivots regularized (fix_pivot). */
 static int profile_chol(tscvx_banded *bd, tscvx_int p) {
-    tscvx_float *dinv = bd->Ydinv;
-    for (tscvx_int i = 0; i < p; i++) {
+    const tscvx_float *dinv = bd->Ydinv;
+    for (tscvx_int i = 0; i < p;) {
         tscvx_float *Li = prow(bd, i);
         const tscvx_int fi = bd->yfirst[i];
+        const int pair = i + 1 < p && bd->yfirst[i + 1] == fi;
+        tscvx_float *Lk = pair ? prow(bd, i + 1) : NULL;
         for (tscvx_int j = fi; j < i; j++) {
             const tscvx_float *Lj = prow(bd, j);
             const tscvx_int f = fi > bd->yfirst[j] ? fi : bd->yfirst[j];
-            Li[j] = (Li[j] - dot2(Li + f, Lj + f, j - f)) * dinv[j];
+            if (pair) {
+                tscvx_float a, b;
+                dot_pair(Li + f, Lk + f, Lj + f, j - f, &a, &b);
+                Li[j] = (Li[j] - a) * dinv[j];
+                Lk[j] = (Lk[j] - b) * dinv[j];
+            } else {
+                Li[j] = (Li[j] - dot2(Li + f, Lj + f, j - f)) * dinv[j];
+            }
         }
-        tscvx_float d = Li[i] - dot2(Li + fi, Li + fi, i - fi);
-        if (fix_pivot(&d, Li[i], 0) != PIVOT_OK) return -1;
-        Li[i] = sqrt(d);
-        dinv[i] = 1.0 / Li[i];
+        if (profile_pivot(bd, i) != 0) return -1;
+        if (pair) { /* row i+1: column i, then its pivot */
+            Lk[i] = (Lk[i] - dot2(Lk + fi, Li + fi, i - fi)) * dinv[i];
+            if (profile_pivot(bd, i + 1) != 0) return -1;
+        }
+        i += pair ? 2 : 1;
     }
     return 0;
 }
@@ -132,12 +170,24 @@ static void profile_solve(const tscvx_banded *bd, tscvx_int p, tscvx_float *x) {
         const tscvx_int f = bd->yfirst[i];
         x[i] = (x[i] - dot2(Li + f, x + f, i - f)) * dinv[i];
     }
-    for (tscvx_int i = p - 1; i >= 0; i--) {
+    /* L' x = y by columns of L' (rows of L), two rows at a time where they start together */
+    for (tscvx_int i = p - 1; i >= 0;) {
         const tscvx_float *restrict Li = prow(bd, i);
+        const tscvx_int f = bd->yfirst[i];
         tscvx_float *restrict xk = x;
         const tscvx_float xi = x[i] * dinv[i];
         x[i] = xi;
-        for (tscvx_int k = bd->yfirst[i]; k < i; k++) xk[k] -= Li[k] * xi;
+        if (i > 0 && bd->yfirst[i - 1] == f) {
+            const tscvx_float *restrict Lh = prow(bd, i - 1);
+            x[i - 1] -= Li[i - 1] * xi;
+            const tscvx_float xh = x[i - 1] * dinv[i - 1];
+            x[i - 1] = xh;
+            for (tscvx_int k = f; k < i - 1; k++) xk[k] -= Li[k] * xi + Lh[k] * xh;
+            i -= 2;
+        } else {
+            for (tscvx_int k = f; k < i; k++) xk[k] -= Li[k] * xi;
+            i -= 1;
+        }
     }
 }
 
