@@ -31,6 +31,22 @@ def test_banded_method_refused_without_structure() -> None:
     assert auto.status == "solved" and int(auto.info["kkt_backend"]) == csocp.KKT_STATIC
 
 
+def test_banded_method_without_equalities() -> None:
+    """Cones only (no equality rows: Y is empty): the banded method solves it, as Clarabel."""
+    A = sp.csc_matrix(np.array([[-1.0, 0.0], [0.0, -1.0], [0.0, 0.0], [-1.0, 0.0], [0.0, -1.0]]))
+    prob = ConicProblem(  # min -x1 - x2 s.t. x >= 0, |(x1, x2)| <= 1
+        P=None,
+        q=np.array([-1.0, -1.0]),
+        A=A,
+        b=np.array([0.0, 0.0, 1.0, 0.0, 0.0]),
+        cones=[("nonneg", 2), ("soc", 3)],
+    )
+    sol = csocp.solve(prob, kkt_backend=csocp.KKT_BANDED)
+    ref = solve_clarabel(prob)
+    assert sol.status == "solved" and int(sol.info["kkt_backend"]) == csocp.KKT_BANDED
+    assert np.allclose(sol.x, ref.x, atol=1e-7)
+
+
 def test_small_soc_solution_and_duals() -> None:
     prob = small_soc()
     sol = csocp.solve(prob)

@@ -246,9 +246,9 @@ static void run_static_vs_ldl(int dim, double density) {
 /* ---- a stage-structured problem (optimal control) for the banded method ----------------- */
 
 #define T_ 30                    /* stages */
-#define SN (5 * T_ + 1)          /* x_k (3), u_k (2) per stage, then the global sigma */
+#define SN (5 * T_ + 3)          /* x_k (3), u_k (2) per stage, the global sigma (and g1, g2) */
 #define SP (3 * (T_ - 1) + 3)    /* dynamics, then x_0 = x0 (last: the row order is not banded) */
-#define SM (3 * T_ + 1 + 3 * T_) /* x_k <= 10 (3 per stage), sigma >= 0.1 | |u_k| <= x_k0 + 5 */
+#define SM (3 * T_ + 1 + 3 * T_ + 2) /* x_k <= 10, sigma >= 0.1 | |u_k| <= x_k0 + 5 (| |g2| <= g1 + 2) */
 #define SNZ 2048
 
 typedef struct {
@@ -273,15 +273,17 @@ static void to_csc(const triplets *t, int ncol, tscvx_int *Mp, tscvx_int *Mi, ts
     }
 }
 
-/* Stage problem; free_var leaves one state in no cone (no banded structure). */
-static void run_stages(int with_P, int backend, int free_var) {
+/* Stage problem; free_var leaves one state in no cone (no banded structure); two_more adds two
+ * more global variables g1, g2 in every dynamics row, sharing a cone (a border of three: two
+ * in one group). */
+static void run_stages(int with_P, int backend, int free_var, int two_more) {
     static triplets tA, tG, tP;
     static tscvx_int Ap[SN + 1], Ai[SNZ], Gp[SN + 1], Gi[SNZ], Pp[SN + 1], Pi[SNZ];
     static tscvx_float Ax[SNZ], Gx[SNZ], Px[SNZ], c[SN], b[SP], h[SM];
-    static const tscvx_int q3[T_] = {3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3,
-                                     3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3};
+    static tscvx_int q3[T_ + 1];
+    for (int k = 0; k <= T_; k++) q3[k] = k < T_ ? 3 : 2;
     tA.nz = tG.nz = tP.nz = 0;
-    const int sig = 5 * T_;
+    const int sig = 5 * T_, n = 5 * T_ + 1 + 2 * two_more;
     for (int k = 0; k + 1 < T_; k++) /* x_{k+1} - A_k x_k - B_k u_k - c_k sigma = 0 */
         for (int i = 0; i < 3; i++) {
             const int row = 3 * k + i;
@@ -289,6 +291,7 @@ static void run_stages(int with_P, int backend, int free_var) {
             for (int j = 0; j < 3; j++) put(&tA, row, 5 * k + j, -(i == j) - 0.1 * ct_randn());
             for (int j = 0; j < 2; j++) put(&tA, row, 5 * k + 3 + j, ct_randn());
             put(&tA, row, sig, ct_randn());
+            if (two_more) put(&tA, row, sig + 1, ct_randn()), put(&tA, row, sig + 2, ct_randn());
             b[row] = 0.1 * ct_randn();
         }
     for (int i = 0; i < 3; i++) put(&tA, SP - 3 + i, i, 1.0), b[SP - 3 + i] = ct_randn();
@@ -305,17 +308,21 @@ static void run_stages(int with_P, int backend, int free_var) {
         put(&tG, row, 5 * k + 3, -1.0), h[row++] = 0.0;
         put(&tG, row, 5 * k + 4, -1.0), h[row++] = 0.0;
     }
+    if (two_more) { /* (g1 + 2, g2) in Q2 */
+        put(&tG, row, sig + 1, -1.0), h[row++] = 2.0;
+        put(&tG, row, sig + 2, -1.0), h[row++] = 0.0;
+    }
     for (int k = 0; k < T_; k++) {
         put(&tP, 5 * k + 3, 5 * k + 3, 2.0);
         put(&tP, 5 * k + 3, 5 * k + 4, 0.5);
         put(&tP, 5 * k + 4, 5 * k + 4, 1.0);
     }
-    for (int j = 0; j < SN; j++) c[j] = ct_randn();
-    to_csc(&tA, SN, Ap, Ai, Ax);
-    to_csc(&tG, SN, Gp, Gi, Gx);
-    to_csc(&tP, SN, Pp, Pi, Px);
-    tscvx_data d = {SN, SP, row, with_P ? Pp : NULL, Pi, Px, c, Ap, Ai, Ax, b,
-                    Gp, Gi, Gx, h, l, T_, q3};
+    for (int j = 0; j < n; j++) c[j] = ct_randn();
+    to_csc(&tA, n, Ap, Ai, Ax);
+    to_csc(&tG, n, Gp, Gi, Gx);
+    to_csc(&tP, n, Pp, Pi, Px);
+    tscvx_data d = {n, SP, row, with_P ? Pp : NULL, Pi, Px, c, Ap, Ai, Ax, b,
+                    Gp, Gi, Gx, h, l, T_ + two_more, q3};
     tscvx_settings st;
     tscvx_default_settings(&st);
     st.kkt_backend = backend;
@@ -332,8 +339,13 @@ static void run_stages(int with_P, int backend, int free_var) {
     CHECK(status == TSCVX_SETUP_OK, "stage setup %d", (int)status);
     if (!ws) return;
     CHECK(ws->method->id == TSCVX_KKT_BANDED, "stage problem not banded (%s)", ws->method->name);
-    CHECK(ws->bd.nb == 1 && ws->bd.bvar[0] == sig, "border: %d variables", (int)ws->bd.nb);
-    CHECK(ws->bd.ngroup == 3 * T_ + 1, "groups %d", (int)ws->bd.ngroup);
+    CHECK(ws->bd.nb == 1 + 2 * two_more && ws->bd.bvar[0] == sig, "border: %d variables",
+          (int)ws->bd.nb);
+    if (two_more)
+        CHECK(ws->bd.bvar[1] == sig + 1 && ws->bd.bvar[2] == sig + 2 &&
+                  ws->bd.bgroup[1] == ws->bd.bgroup[2] && ws->bd.bgroup[0] != ws->bd.bgroup[1],
+              "border groups");
+    CHECK(ws->bd.ngroup == 3 * T_ + 1 + two_more, "groups %d", (int)ws->bd.ngroup);
     /* the profile follows the stages: at most two intervals wide */
     for (int i = 0; i < SP; i++) CHECK(i - ws->bd.yfirst[i] < 9, "row %d profile %d", i, i - (int)ws->bd.yfirst[i]);
     static tscvx_float s[SM], z[SM], lam[SM];
@@ -343,6 +355,11 @@ static void run_stages(int with_P, int backend, int free_var) {
         s[o + 1] = ct_randn(), s[o + 2] = ct_randn(), z[o + 1] = ct_randn(), z[o + 2] = ct_randn();
         s[o] = hypot(s[o + 1], s[o + 2]) * (1.0 + 0.1 * ct_rand()) + 1e-3;
         z[o] = hypot(z[o + 1], z[o + 2]) * (1.0 + 3.0 * ct_rand()) + 1e-3;
+    }
+    if (two_more) {
+        const int o = l + 3 * T_;
+        s[o + 1] = ct_randn(), z[o + 1] = ct_randn();
+        s[o] = fabs(s[o + 1]) + 0.5, z[o] = fabs(z[o + 1]) + 0.2;
     }
     CHECK(tscvx_nt_scaling(&ws->K, s, z, &ws->W, lam) == 0, "scaling");
     check_against_dense(ws, backend, 0, with_P);
@@ -357,11 +374,11 @@ int main(void) {
         }
     for (int rep = 0; rep < 200; rep++) /* dims 1..60, sparse to dense */
         run_static_vs_ldl(1 + rep % QD_MAX, rep < 100 ? 0.08 : 0.3);
-    for (int rep = 0; rep < 6; rep++) {
-        run_stages(rep % 2, TSCVX_KKT_BANDED, 0);
-        run_stages(rep % 2, TSCVX_KKT_AUTO, 0);
+    for (int rep = 0; rep < 8; rep++) {
+        run_stages(rep % 2, TSCVX_KKT_BANDED, 0, rep >= 4);
+        run_stages(rep % 2, TSCVX_KKT_AUTO, 0, rep >= 4);
     }
-    run_stages(0, TSCVX_KKT_BANDED, 1);
-    run_stages(0, TSCVX_KKT_AUTO, 1);
+    run_stages(0, TSCVX_KKT_BANDED, 1, 0);
+    run_stages(0, TSCVX_KKT_AUTO, 1, 0);
     return ct_report("test_kkt");
 }
