@@ -17,6 +17,7 @@ from guidance.nn.infer import ModelMismatchError, load_model  # noqa: E402
 from guidance.nn.model import ArchConfig, Transformer  # noqa: E402
 from guidance.nn.train import (  # noqa: E402
     TrainConfig,
+    breakdown,
     mask_metrics,
     prob_threshold,
     split_bases,
@@ -58,6 +59,15 @@ def test_a_few_training_steps_run_and_report(trained) -> None:
     assert np.isfinite(s["test_mse"]) and "ood_mse" in s
     assert c["n_test_bases"] == 2 and c["n_trainval_bases"] == 10
     assert c["n_calibration_bases"] == 1 and s["n_calibration_bases"] == 0
+    assert set(c["test_breakdown"]["by_type"]) == {
+        "mass",
+        "glideslope",
+        "tilt",
+        "omega",
+        "thrust_max",
+        "gimbal",
+        "thrust_min",
+    }
 
 
 def test_mask_metrics_and_threshold() -> None:
@@ -69,6 +79,47 @@ def test_mask_metrics_and_threshold() -> None:
     yy = np.array([1, 1, 1, 0, 0, 0])
     thr = prob_threshold(yy, p, 0.99)
     assert np.all(p[yy == 1] >= thr)  # every tight bit recalled
+
+
+def test_threshold_holds_its_recall_on_new_landings() -> None:
+    # landings differ in how confident the net is about their tight bits: a threshold that
+    # just reaches the target on 60 calibration landings often misses it on 60 new ones; the
+    # bootstrap threshold (95 % over resampled landings) must not, in most draws
+    rng = np.random.default_rng(3)
+
+    def landings(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        scale = rng.uniform(0.5, 3.0, n)  # per-landing spread of the tight bits' logits
+        y = rng.random((n, 40)) < 0.2
+        logit = np.where(y, 2.0 + scale[:, None] * rng.standard_normal((n, 40)), -3.0)
+        return y, 1 / (1 + np.exp(-logit)), np.arange(n)
+
+    y, p, g = landings(60)
+    plain = prob_threshold(y, p, 0.95)
+    boot = prob_threshold(y, p, 0.95, groups=g, confidence=0.95)
+    assert boot < plain
+    held_plain = held_boot = 0
+    for _ in range(40):
+        yn, pn, _ = landings(60)
+        held_plain += mask_metrics(yn, pn >= plain)["recall"] >= 0.95
+        held_boot += mask_metrics(yn, pn >= boot)["recall"] >= 0.95
+    assert held_boot >= 34 and held_boot > held_plain
+
+
+def test_breakdown_counts_by_type_and_iteration() -> None:
+    # two nodes (14 bits, bit 7k + c); row 0 at iteration 1, rows 1-2 at iteration 4
+    y = np.zeros((3, 14), np.uint8)
+    y[:, 1] = 1  # glideslope at node 0, every row
+    y[0, 11] = 1  # T_max at node 1, row 0
+    logits = np.full((3, 14), -5.0)
+    logits[:, 1] = 5.0  # every glideslope bit found
+    logits[2, 8] = 5.0  # one spurious glideslope bit (node 1), row 2
+    b = breakdown(y, logits, np.array([1.0, 4.0, 4.0]), 0.5)
+    gs, tmax = b["by_type"]["glideslope"], b["by_type"]["thrust_max"]
+    assert gs["precision"] == pytest.approx(3 / 4) and gs["recall"] == 1.0
+    assert gs["share_of_tight"] == pytest.approx(3 / 4) and tmax["recall"] == 0.0
+    assert b["by_iteration"]["1"]["rows"] == 1 and b["by_iteration"]["3-5"]["rows"] == 2
+    assert b["by_iteration"]["1"]["recall"] == pytest.approx(1 / 2)
+    assert b["by_iteration"]["3-5"]["precision"] == pytest.approx(2 / 3)
 
 
 def test_onnx_equals_pytorch_on_1000_inputs(trained) -> None:

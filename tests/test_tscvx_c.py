@@ -36,11 +36,11 @@ REDUCED = SCvxSettings().replace(eta_init=0.01)
 STRICT = ["default", "overhead", "high", "tilted", "steep_cone", "sample2", "sample3", "sample4"]
 # (landing, masks) where the C and Python T-SCvx drift apart although they start from guesses
 # 1e-6 apart (float64 C networks vs float32 onnxruntime): SCvx amplifies the difference, as in
-# test_cguidance.KNOWN_DRIFT. Measured with the models and SOCP runtime of 22 Nov 04:05
-# (tilted, Algorithm 2: iterations 10 vs 12, m_f rel 1.8e-4). With the constraint net of
-# 22 Nov 06:40 (one epoch per fold) every STRICT case meets the strict figure, tilted /
-# Algorithm 2 closest to it (iterations 10 vs 11, m_f rel 7.1e-5): it stays listed.
-KNOWN_DRIFT = {("tilted", True)}
+# test_cguidance.KNOWN_DRIFT. Which landings drift depends on the networks. With the models of
+# 22 Nov 17:50 (4,000 landings): sample2 / Algorithm 2, iterations 13 vs 15, m_f rel 1.2e-4;
+# every other STRICT case within the strict figure, the closest default / warm start
+# (17 vs 16, 9.0e-5). (With the earlier models it was tilted / Algorithm 2.)
+KNOWN_DRIFT = {("sample2", True)}
 DRIFT_REL_MF = 2e-3  # what every landing must meet regardless
 
 

@@ -62,6 +62,31 @@ def _pct(v: float) -> str:
     return f"{100 * v:.2f} %"
 
 
+def _breakdown(add, b: dict | None) -> None:
+    """Tables of where the constraint network's errors are (test split, shipped threshold)."""
+    if not b:
+        return
+    add("Where the spurious and missed tight bits are (test split, same threshold):")
+    add("")
+    add("| constraint | share of the tight bits | tight fraction | precision | recall |")
+    add("|---|---|---|---|---|")
+    for name, m in b["by_type"].items():
+        add(
+            f"| {name} | {_f(m['share_of_tight'], '{:.3f}')} | "
+            f"{_f(m['all_ones_accuracy'], '{:.3f}')} | {_f(m['precision'], '{:.3f}')} | "
+            f"{_f(m['recall'], '{:.3f}')} |"
+        )
+    add("")
+    add("| SCvx iteration k | rows | tight fraction | precision | recall |")
+    add("|---|---|---|---|---|")
+    for label, m in b["by_iteration"].items():
+        add(
+            f"| {label} | {m['rows']} | {_f(m['all_ones_accuracy'], '{:.3f}')} | "
+            f"{_f(m['precision'], '{:.3f}')} | {_f(m['recall'], '{:.3f}')} |"
+        )
+    add("")
+
+
 def _f(v: Any, fmt: str = "{:.4f}") -> str:
     try:
         return fmt.format(float(v))
@@ -134,11 +159,13 @@ def write_card(models: Path) -> Path:
     add("")
     c = metrics["shipped"].get("constraint")
     if c and "test" in c:
-        t, t5 = c["test"], c.get("test_at_0.5", {})
+        t, t5, tc = c["test"], c.get("test_at_0.5", {}), c["train_config"]
         add(f"Constraint network, architecture `{_arch(c['arch'])}`, threshold p >= ")
         add(
-            f"{c['threshold']:.4g} (chosen for recall >= 0.99 on a calibration split of "
-            f"{c.get('n_calibration_bases', 0)} train+val base landings kept out of training):"
+            f"{c['threshold']:.4g} (chosen for recall >= {tc['target_recall']} with "
+            f"{100 * tc.get('recall_confidence', 0):g} % confidence over bootstrap resamples "
+            f"of a calibration split of {c.get('n_calibration_bases', 0)} train+val base "
+            "landings kept out of training):"
         )
         add("")
         add("| metric | test | OOD test | test at p >= 0.5 |")
@@ -162,6 +189,7 @@ def write_card(models: Path) -> Path:
             "the training 95th percentile). Paper: 96.45 % vs 95.95 % all-zeros."
         )
         add("")
+        _breakdown(add, c.get("test_breakdown"))
     s = metrics["shipped"].get("solution")
     if s and "test_mse" in s:
         add(f"Solution network, architecture `{_arch(s['arch'])}`: MSE on standardized outputs")
@@ -283,8 +311,8 @@ def write_card(models: Path) -> Path:
     add("## Limits")
     add("")
     add(
-        f"- Trained on {h.get('n_base')} base landings (the `make models` default is 1,592); "
-        "the numbers above are for this data."
+        f"- Trained on {h.get('n_base')} base landings (`make models MODELS_N_BASE="
+        f"{h.get('n_base')}`); the numbers above are for this data."
     )
     add("- The ranges are narrower than the paper's Table 5 (chosen so that most landings are")
     add("  feasible for this fuel-tight vehicle); outside them the networks extrapolate and")
