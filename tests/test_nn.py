@@ -110,10 +110,10 @@ def test_breakdown_counts_by_type_and_iteration() -> None:
     y = np.zeros((3, 14), np.uint8)
     y[:, 1] = 1  # glideslope at node 0, every row
     y[0, 11] = 1  # T_max at node 1, row 0
-    logits = np.full((3, 14), -5.0)
-    logits[:, 1] = 5.0  # every glideslope bit found
-    logits[2, 8] = 5.0  # one spurious glideslope bit (node 1), row 2
-    b = breakdown(y, logits, np.array([1.0, 4.0, 4.0]), 0.5)
+    pred = np.zeros((3, 14), bool)
+    pred[:, 1] = True  # every glideslope bit found
+    pred[2, 8] = True  # one spurious glideslope bit (node 1), row 2
+    b = breakdown(y, pred, np.array([1.0, 4.0, 4.0]))
     gs, tmax = b["by_type"]["glideslope"], b["by_type"]["thrust_max"]
     assert gs["precision"] == pytest.approx(3 / 4) and gs["recall"] == 1.0
     assert gs["share_of_tight"] == pytest.approx(3 / 4) and tmax["recall"] == 0.0

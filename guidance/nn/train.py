@@ -345,9 +345,8 @@ def train(
         threshold = prob_threshold(
             Ys[rows], p_cal, cfg.target_recall, bid[rows], cfg.recall_confidence
         )
-    metrics = evaluate(net, kind, Xs, Ys, tv, te, theta, threshold)
-    if kind == "constraint" and te.any():
-        metrics["test_breakdown"] = breakdown(Ys[te], _predict(net, Xs[te]), X[te, -1], threshold)
+    k = X[:, -1] if kind == "constraint" else None  # the constraint rows' SCvx iteration
+    metrics = evaluate(net, kind, Xs, Ys, tv, te, theta, threshold, k)
     metrics.update(
         history=history,
         train_seconds=time.perf_counter() - t_start,
@@ -372,8 +371,11 @@ def evaluate(
     te: np.ndarray,
     theta: np.ndarray,
     threshold: float,
+    iteration: np.ndarray | None = None,
 ) -> dict[str, Any]:
-    """Test-split metrics, on all test rows and on the out-of-distribution ones."""
+    """Test-split metrics, on all test rows and on the out-of-distribution ones; for the
+    constraint network also their breakdown by constraint type and SCvx iteration (the rows'
+    raw k, ``iteration``)."""
     out: dict[str, Any] = {"threshold": threshold}
     if not te.any():
         return out
@@ -388,6 +390,8 @@ def evaluate(
         out["test"] = mask_metrics(Y, prob >= threshold)
         out["test_at_0.5"] = mask_metrics(Y, prob >= 0.5)
         out["test_prob_mse"] = float(np.mean((prob - Y) ** 2))
+        if iteration is not None:
+            out["test_breakdown"] = breakdown(Y, prob >= threshold, iteration[te])
         if ood.any():
             out["ood"] = mask_metrics(Y[ood], prob[ood] >= threshold)
             out["ood_prob_mse"] = float(np.mean((prob[ood] - Y[ood]) ** 2))
@@ -403,10 +407,9 @@ def evaluate(
 ITERATION_BINS = ((1, 1), (2, 2), (3, 5), (6, 10), (11, 10**6))
 
 
-def breakdown(y: np.ndarray, logits: np.ndarray, k: np.ndarray, threshold: float) -> dict:
-    """Where the tight set's errors are: metrics per constraint type (bit 7k + c: column
-    c of every node) and per SCvx iteration bin, at the decision threshold."""
-    pred = 1 / (1 + np.exp(-logits)) >= threshold
+def breakdown(y: np.ndarray, pred: np.ndarray, k: np.ndarray) -> dict:
+    """Where the tight set's errors are: metrics of the predicted mask bits ``pred`` per
+    constraint type (bit 7k + c: column c of every node) and per SCvx iteration bin."""
     n_types = len(CONSTRAINT_NAMES)
     by_type = {}
     for c, name in enumerate(CONSTRAINT_NAMES):
