@@ -172,24 +172,15 @@ class ClarabelSession:
         return _clarabel_solution(sol, time.perf_counter() - t0)
 
 
-class _OneShot:
-    def __init__(self, backend: str) -> None:
-        self.backend = backend
-
-    def solve(self, prob: ConicProblem) -> ConicSolution:
-        return solve(prob, self.backend)
-
-
-def session(backend: str) -> ClarabelSession | _OneShot:
-    """A solver for a sequence of problems sharing one sparsity pattern."""
+def session(backend: str, tol: float = 1e-9, max_iter: int = 200) -> object:
+    """A solver for a sequence of problems sharing one sparsity pattern (``.solve(prob)``),
+    stopping at the same gap and feasibility tolerance ``tol`` whichever the backend."""
     if backend == "clarabel":
-        return ClarabelSession()
+        return ClarabelSession(tol, max_iter)
     if backend == "c":
         from guidance import csocp
 
-        if hasattr(csocp, "Session"):
-            return csocp.Session()
-        return _OneShot("c")
+        return csocp.Session(tol_gap_abs=tol, tol_gap_rel=tol, tol_feas=tol, max_iter=max_iter)
     raise ValueError(f"unknown conic backend {backend!r} (use 'clarabel' or 'c')")
 
 

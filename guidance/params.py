@@ -149,6 +149,10 @@ class SCvxSettings:
     # "auto": C when the library is built. Both evaluate the same expressions (equal to 1e-10).
     discretization: str = "auto"
     tight_tol: float = 1e-6  # slack threshold of the tight-constraint labelling
+    # Conic subproblem solver (either backend, and the C loop): gap and feasibility
+    # tolerances, and the interior-point iteration limit.
+    socp_tol: float = 1e-9
+    socp_max_iter: int = 200
 
     def replace(self, **changes: object) -> SCvxSettings:
         return dataclasses.replace(self, **changes)

@@ -186,7 +186,7 @@ class SCvxSolver:
             if self.record:
                 subproblems.append(prob)
             if id(tpl) not in self._sessions:
-                self._sessions[id(tpl)] = conic.session(self.backend)
+                self._sessions[id(tpl)] = conic.session(self.backend, st.socp_tol, st.socp_max_iter)
             sol = self._sessions[id(tpl)].solve(prob)  # type: ignore[attr-defined]
             if not sol.ok:
                 status = "solver_error"

@@ -2,11 +2,15 @@
 
 - the C initial guess and the C subproblem (CSC data of A z = b, G z + s = h, c) equal the
   Python ones (guidance/guess.py, guidance/subproblem.py) to rounding;
-- the whole C solve agrees with ``guidance.scvx.solve_scvx`` (Clarabel): same status,
-  iterations within one, final mass within 1e-6 relative -- where the SCvx iteration does not
-  amplify the 1e-9-level differences between the two conic solvers (see KNOWN_DRIFT);
+- the whole C solve is the Python reference's solve (``guidance.scvx.solve_scvx``) when both
+  use the same conic solver (the C SOCP runtime): same status, iterations within one, final
+  mass within 1e-6 relative, on the catalog and on 20 more seeded random scenarios. A landing
+  may miss that only where its answer is not determined to 1e-6 at all: where moving r0 by
+  1e-12 relative moves the C solve's final mass by more than 1e-6 (checked in the test);
+- against the reference on Clarabel the answers differ where the two conic solvers stop at
+  different points of a flat optimal face (see KNOWN_DRIFT): bounded, strict figure xfail;
 - every C trajectory passes the independent open-loop audit (solve_ivp) of guidance.verify,
-  on the catalog and on 20 more seeded random scenarios (same status as the reference);
+  on the catalog and on the 20 random scenarios (same status as the reference);
 - the tight-constraint masks, and the penalty J recomputed by Python, agree;
 - bad scenarios get the same field-named errors as the Python validation;
 - no heap allocation inside a guidance call (malloc interposition in the C driver).
@@ -36,33 +40,55 @@ pytestmark = pytest.mark.skipif(
     not cguidance.LIB_PATH.exists(), reason="build/libtscvx_gnc.so not built (make lib)"
 )
 
-# Scenarios on which the C solve and the Clarabel reference end 1e-6 .. 1e-3 apart in final
-# mass although every subproblem agrees to the conic solvers' 1e-9 tolerance: the SCvx
-# iteration (accept/reject near rho0, stopping at step <= 5e-3) amplifies those differences.
-# The Python reference itself shows the same drift when it swaps Clarabel for the C SOCP
-# (backend "c": crossing 9e-4, north 1.5e-5). Which scenarios drift changes with the last bits
-# of either conic solver's arithmetic (on 22 Nov, Clarabel's refinement tolerance moved "high"
-# in; the new C SOCP arithmetic moved "spinning" and "light" out); five of eleven meet 1e-6.
-# Even the same conic solver does it: the C loop and the Python loop, both on the C SOCP, whose
-# inputs differ only in rounding (1e-13), end 1e-7 .. 5e-4 apart. 1e-6 is below what SCvx
-# itself resolves: continuing past its stopping test raises m_f by 5e-6 .. 6e-4 (README, SCvx).
-KNOWN_DRIFT = {
-    "north",
-    "high",
-    "crossing",
-    "low_fast",
-    "tilted",
-    "tilted_z",
-    "spinning",
-    "steep_cone",
-    "light",
-}
+# Scenarios on which the C solve and the reference on Clarabel end 1e-6 .. 1e-3 apart in final
+# mass although every subproblem agrees to the conic solvers' 1e-9 tolerance: Clarabel and the
+# C SOCP stop at different points of the subproblems' flat optimal faces, and the SCvx
+# iteration (accept/reject near rho0, stopping at step <= 5e-3) amplifies the difference. The
+# Python loop on the C SOCP shows the same figures (the C loop is the same solve, above).
+# Measured 22 Nov with the equilibration redone at every subproblem: 4 of 11 meet 1e-6.
+KNOWN_DRIFT = {"default", "north", "crossing", "low_fast", "high", "tilted_z", "steep_cone"}
 DRIFT_REL_MF = 2e-3  # what every scenario must meet regardless
+STRICT_REL_MF = 1e-6
 
 
 @pytest.fixture(scope="module")
 def pairs() -> dict[str, tuple[SCvxResult, SCvxResult]]:
-    return {name: (cguidance.solve_c(s), solve_scvx(s)) for name, s in SCENARIOS.items()}
+    """name -> (C solve, Python reference on the C SOCP): the same arithmetic."""
+    return {
+        name: (cguidance.solve_c(s), solve_scvx(s, backend="c")) for name, s in SCENARIOS.items()
+    }
+
+
+@pytest.fixture(scope="module")
+def clarabel_refs() -> dict[str, SCvxResult]:
+    return {name: solve_scvx(s) for name, s in SCENARIOS.items()}
+
+
+def _shifted_r0(scn: Scenario, rel: float) -> Scenario:
+    r0 = list(scn.initial.r0)
+    r0[0] *= 1.0 + rel
+    return Scenario(dataclasses.replace(scn.initial, r0=tuple(r0)), scn.params)
+
+
+def assert_same_solve(scn: Scenario, c: SCvxResult, ref: SCvxResult) -> None:
+    """Issue 4's figure: same status, iterations within one, m_f within 1e-6 relative --
+    unless the landing's answer is not determined to 1e-6 (then xfail with the figures)."""
+    assert c.status == ref.status, (c.reason, ref.reason)
+    rel = abs(c.m_f - ref.m_f) / ref.m_f
+    if rel <= STRICT_REL_MF and abs(c.iterations - ref.iterations) <= 1:
+        return
+    assert rel <= DRIFT_REL_MF, f"final mass differs by {rel:.2e} relative"
+    shifted = cguidance.solve_c(_shifted_r0(scn, 1e-12))
+    sensitivity = abs(shifted.m_f - c.m_f) / c.m_f
+    if sensitivity > STRICT_REL_MF or abs(shifted.iterations - c.iterations) > 1:
+        pytest.xfail(
+            f"m_f rel {rel:.1e}, iterations {c.iterations} vs {ref.iterations}; r0 moved by "
+            f"1e-12 moves the C answer by {sensitivity:.1e} ({shifted.iterations} iterations)"
+        )
+    raise AssertionError(
+        f"m_f rel {rel:.1e}, iterations {c.iterations} vs {ref.iterations}, on a landing whose "
+        f"answer is determined to {sensitivity:.1e}"
+    )
 
 
 # ---- pieces ---------------------------------------------------------------------------------
@@ -113,19 +139,25 @@ def test_c_subproblem_equals_python_subproblem(name: str) -> None:
 
 
 @pytest.mark.parametrize("name", list(SCENARIOS))
-def test_c_solve_matches_reference(pairs, name: str) -> None:
+def test_c_solve_is_the_python_solve(pairs, name: str) -> None:
     c, ref = pairs[name]
+    assert_same_solve(SCENARIOS[name], c, ref)
+
+
+@pytest.mark.parametrize("name", list(SCENARIOS))
+def test_c_solve_against_the_clarabel_reference(pairs, clarabel_refs, name: str) -> None:
+    c, ref = pairs[name][0], clarabel_refs[name]
     assert c.status == ref.status, (c.reason, ref.reason)
     rel = abs(c.m_f - ref.m_f) / ref.m_f
     assert rel <= DRIFT_REL_MF, f"final mass differs by {rel:.2e} relative"
     assert abs(c.iterations - ref.iterations) <= 2
-    strict = rel <= 1e-6 and abs(c.iterations - ref.iterations) <= 1
+    strict = rel <= STRICT_REL_MF and abs(c.iterations - ref.iterations) <= 1
     if not strict and name in KNOWN_DRIFT:
         pytest.xfail(
-            f"SCvx amplifies conic-solver differences here: m_f rel {rel:.1e}, "
-            f"iterations {c.iterations} vs {ref.iterations}"
+            f"Clarabel and the C SOCP stop on different points of flat optimal faces: m_f rel "
+            f"{rel:.1e}, iterations {c.iterations} vs {ref.iterations}"
         )
-    assert rel <= 1e-6, f"final mass differs by {rel:.2e} relative"
+    assert rel <= STRICT_REL_MF, f"final mass differs by {rel:.2e} relative"
     assert abs(c.iterations - ref.iterations) <= 1
 
 
@@ -152,23 +184,28 @@ def random_scenarios(n: int, seed: int = 4) -> list[Scenario]:
 @pytest.mark.slow
 @pytest.mark.parametrize("index", range(20))
 def test_twenty_more_scenarios(index: int) -> None:
-    """Issue 4: the default and 20 more. Same status, an open-loop landing, and the final
-    mass within the drift that the SCvx stopping rule allows (measured <= 2.2e-3 here)."""
+    """Issue 4: the default and 20 more. The C solve is the Python reference's solve (on the
+    C SOCP), lands in the open-loop audit, and stays within the conic-solver drift of the
+    reference on Clarabel (measured <= 1e-3 here)."""
     scn = random_scenarios(20)[index]
-    c, ref = cguidance.solve_c(scn), solve_scvx(scn)
-    assert c.status == ref.status, (c.reason, ref.reason)
-    assert abs(c.m_f - ref.m_f) / ref.m_f <= 5e-3
-    assert abs(c.iterations - ref.iterations) <= 4
+    c, ref = cguidance.solve_c(scn), solve_scvx(scn, backend="c")
+    clarabel = solve_scvx(scn)
+    assert c.status == clarabel.status, (c.reason, clarabel.reason)
+    assert abs(c.m_f - clarabel.m_f) / clarabel.m_f <= 5e-3
+    assert abs(c.iterations - clarabel.iterations) <= 4
     if c.status == "solved":
         a = audit(c.x, c.u, c.t_f, scn.params)
         assert a.landing_position_error <= 1e-3
         assert a.landing_velocity_error <= 1e-3
         assert a.max_path_violation <= 1e-6
+    assert_same_solve(scn, c, ref)
 
 
-def test_first_subproblem_matches_reference(pairs) -> None:
-    """Lockstep check of one SCvx step: same guess, same subproblem, same penalty."""
-    for name, (c, ref) in pairs.items():
+def test_first_subproblem_matches_reference(pairs, clarabel_refs) -> None:
+    """Lockstep check of one SCvx step: same guess, same subproblem, same penalty (against
+    the reference on Clarabel: the first candidate does not yet depend on earlier stops)."""
+    for name, (c, _) in pairs.items():
+        ref = clarabel_refs[name]
         h0, r0 = c.history[0], ref.history[0]
         assert h0.eta == r0.eta
         assert pytest.approx(r0.J, rel=1e-6) == h0.J, name
@@ -178,12 +215,8 @@ def test_first_subproblem_matches_reference(pairs) -> None:
 
 @pytest.mark.parametrize("name", ["default", "overhead", "spinning"])
 def test_tight_constraint_masks_match_reference(pairs, name: str) -> None:
-    """Labelling (slack / multiplier rule of guidance/constraints.py) on the same path
-    (scenarios where the C and Python iterations stay in step; see KNOWN_DRIFT)."""
+    """Labelling (slack / multiplier rule of guidance/constraints.py) on the same path."""
     c, ref = pairs[name]
-    if c.masks.shape != ref.masks.shape and name in KNOWN_DRIFT:
-        pytest.xfail(f"not the same path (KNOWN_DRIFT): {c.iterations} vs {ref.iterations} "
-                     "iterations")  # fmt: skip
     assert c.masks.shape == ref.masks.shape
     per_iteration = (c.masks != ref.masks).sum(axis=1)
     assert per_iteration.max() <= 3, per_iteration  # of 7N = 350 bits
@@ -243,19 +276,19 @@ def test_external_guess_is_used_as_given() -> None:
     scn = SCENARIOS["default"]
     guess = initial_guess(scn)
     c = cguidance.solve_c(scn, guess=guess)
-    ref = solve_scvx(scn)
+    ref = solve_scvx(scn, backend="c")
     assert c.status == ref.status == "solved"
-    assert abs(c.m_f - ref.m_f) / ref.m_f <= 1e-6
+    assert abs(c.m_f - ref.m_f) / ref.m_f <= STRICT_REL_MF
 
 
 def test_masks_run_tscvx_with_the_full_constraint_guard() -> None:
     """T-SCvx masks: the reference's tight masks, and a mask that wrongly drops the
     glideslope everywhere; both must end on a trajectory the FULL problem accepts."""
     scn = SCENARIOS["default"]
-    ref = solve_scvx(scn)
+    ref = solve_scvx(scn, backend="c")
     table = [m.astype(bool) for m in ref.masks]
     c = cguidance.solve_c(scn, masks=table)
-    py = SCvxSolver(scn).solve(masks=table)
+    py = SCvxSolver(scn, backend="c").solve(masks=table)
     # A mask can leave the iterate outside a constraint that a later mask puts back; the hard
     # trust region can then make a subproblem infeasible (the Python reference meets this here
     # with Clarabel: "solver_error ... primal_infeasible"). Whatever the status, a "solved"

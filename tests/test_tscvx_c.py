@@ -36,11 +36,12 @@ REDUCED = SCvxSettings().replace(eta_init=0.01)
 STRICT = ["default", "overhead", "high", "tilted", "steep_cone", "sample2", "sample3", "sample4"]
 # (landing, masks) where the C and Python T-SCvx drift apart although they start from guesses
 # 1e-6 apart (float64 C networks vs float32 onnxruntime): SCvx amplifies the difference, as in
-# test_cguidance.KNOWN_DRIFT. Which landings drift depends on the networks. With the models of
-# 22 Nov 17:50 (4,000 landings): sample2 / Algorithm 2, iterations 13 vs 15, m_f rel 1.2e-4;
-# every other STRICT case within the strict figure, the closest default / warm start
-# (17 vs 16, 9.0e-5). (With the earlier models it was tilted / Algorithm 2.)
-KNOWN_DRIFT = {("sample2", True)}
+# test_cguidance. Which landings drift depends on the networks and on the last bits of the
+# C arithmetic. With the models of 22 Nov 17:50 (4,000 landings) and the SOCP runtime that
+# equilibrates every update (22 Nov 19:30): steep_cone / Algorithm 2, iterations 14 vs 12,
+# m_f rel 7.9e-5; every other STRICT case within the strict figure, the closest
+# sample2 / warm start (14 vs 13, 5.6e-5). (Before: sample2 / Algorithm 2.)
+KNOWN_DRIFT = {("steep_cone", True)}
 DRIFT_REL_MF = 2e-3  # what every landing must meet regardless
 
 

@@ -199,8 +199,10 @@ tscvx_setup_status tscvx_setup(tscvx_workspace **ws, void *arena, size_t arena_b
                                const tscvx_data *data, const tscvx_settings *settings);
 
 /* New values with the setup sparsity (same nnz arrays); NULL leaves that part unchanged.
- * No symbolic work: the new numbers are scaled with the setup's equilibration and written
- * into the KKT matrix through the setup maps. Non-finite values make the workspace not ready
+ * No symbolic work: the problem is equilibrated again with the new numbers (O(nnz) per Ruiz
+ * pass) and written into the KKT matrix through the setup maps, so a solve after an update
+ * takes the same steps as a solve after a fresh setup with the same numbers (to rounding).
+ * Non-finite values make the workspace not ready
  * (solve returns TSCVX_INVALID_INPUT) until a valid update. */
 tscvx_setup_status tscvx_update_data(tscvx_workspace *ws, const tscvx_float *Px,
                                      const tscvx_float *c, const tscvx_float *Ax,

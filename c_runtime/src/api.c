@@ -460,7 +460,7 @@ tscvx_setup_status tscvx_update_data(tscvx_workspace *ws, const tscvx_float *Px,
         return TSCVX_SETUP_NONFINITE_DATA;
     }
     data_norms(ws, Px, c, b, h);
-    tscvx_scale_update(ws, Px, c, Ax, b, Gx, h);
+    tscvx_update_equilibrate(ws, Px, c, Ax, b, Gx, h);
     ws->ready = 1;
     ws->info.status = TSCVX_UNSOLVED;
     return TSCVX_SETUP_OK;

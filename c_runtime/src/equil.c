@@ -3,8 +3,9 @@
  * by repeated division of each row/column by the square root of its infinity norm, followed
  * by a cost scaling cs (Clarabel's rule): Ps = cs D P D, cs = 1/max(mean |P col|, |D c|_inf).
  * EG is made constant on each SOC so that the scaling maps the cone onto itself.
- * Works in place: on entry P, A, G, c, b, h hold the caller's numbers. The scaling is
- * computed once at setup; data updates reuse it (tscvx_scale_update).
+ * Works in place: on entry P, A, G, c, b, h hold the caller's numbers. Computed at setup and
+ * again on every data update (tscvx_update_equilibrate): O(ruiz_iters nnz), about 1 % of
+ * a landing subproblem's solve.
  */
 #include <math.h>
 
@@ -95,25 +96,24 @@ void tscvx_equilibrate(tscvx_workspace *ws) {
     for (tscvx_int i = 0; i < m; i++) ws->h[i] *= ws->EG[i];
 }
 
-/* Scale new numbers with the setup scaling (NULL = unchanged). */
-void tscvx_scale_update(tscvx_workspace *ws, const tscvx_float *Px, const tscvx_float *c,
-                        const tscvx_float *Ax, const tscvx_float *b, const tscvx_float *Gx,
-                        const tscvx_float *h) {
+/* New numbers (NULL = unchanged), equilibrated afresh: the kept arrays are brought back to
+ * the caller's units with the current scaling, the new ones copied, and the whole problem
+ * equilibrated again. A scaling computed for other numbers would make the conditioning, and
+ * so the stopping point on a flat optimal face, depend on the history of updates. */
+void tscvx_update_equilibrate(tscvx_workspace *ws, const tscvx_float *Px, const tscvx_float *c,
+                              const tscvx_float *Ax, const tscvx_float *b,
+                              const tscvx_float *Gx, const tscvx_float *h) {
     const tscvx_float *D = ws->D;
     for (tscvx_int j = 0; j < ws->n; j++) {
-        if (Px)
-            for (tscvx_int k = ws->P.p[j]; k < ws->P.p[j + 1]; k++)
-                ws->P.x[k] = ws->cs * D[ws->P.i[k]] * D[j] * Px[k];
-        if (Ax)
-            for (tscvx_int k = ws->A.p[j]; k < ws->A.p[j + 1]; k++)
-                ws->A.x[k] = ws->EA[ws->A.i[k]] * D[j] * Ax[k];
-        if (Gx)
-            for (tscvx_int k = ws->G.p[j]; k < ws->G.p[j + 1]; k++)
-                ws->G.x[k] = ws->EG[ws->G.i[k]] * D[j] * Gx[k];
-        if (c) ws->c[j] = ws->cs * D[j] * c[j];
+        for (tscvx_int k = ws->P.p[j]; k < ws->P.p[j + 1]; k++)
+            ws->P.x[k] = Px ? Px[k] : ws->P.x[k] / (ws->cs * D[ws->P.i[k]] * D[j]);
+        for (tscvx_int k = ws->A.p[j]; k < ws->A.p[j + 1]; k++)
+            ws->A.x[k] = Ax ? Ax[k] : ws->A.x[k] / (ws->EA[ws->A.i[k]] * D[j]);
+        for (tscvx_int k = ws->G.p[j]; k < ws->G.p[j + 1]; k++)
+            ws->G.x[k] = Gx ? Gx[k] : ws->G.x[k] / (ws->EG[ws->G.i[k]] * D[j]);
+        ws->c[j] = c ? c[j] : ws->c[j] / (ws->cs * D[j]);
     }
-    if (b)
-        for (tscvx_int i = 0; i < ws->p; i++) ws->b[i] = ws->EA[i] * b[i];
-    if (h)
-        for (tscvx_int i = 0; i < ws->m; i++) ws->h[i] = ws->EG[i] * h[i];
+    for (tscvx_int i = 0; i < ws->p; i++) ws->b[i] = b ? b[i] : ws->b[i] / ws->EA[i];
+    for (tscvx_int i = 0; i < ws->m; i++) ws->h[i] = h ? h[i] : ws->h[i] / ws->EG[i];
+    tscvx_equilibrate(ws);
 }

@@ -310,11 +310,11 @@ struct tscvx_workspace {
     size_t arena_used, arena_high;
 };
 
-/* Ruiz equilibration in place (setup), and scaling of updated numbers with it. */
+/* Ruiz equilibration in place (setup), and again with updated numbers (NULL = unchanged). */
 void tscvx_equilibrate(tscvx_workspace *ws);
-void tscvx_scale_update(tscvx_workspace *ws, const tscvx_float *Px, const tscvx_float *c,
-                        const tscvx_float *Ax, const tscvx_float *b, const tscvx_float *Gx,
-                        const tscvx_float *h);
+void tscvx_update_equilibrate(tscvx_workspace *ws, const tscvx_float *Px, const tscvx_float *c,
+                              const tscvx_float *Ax, const tscvx_float *b,
+                              const tscvx_float *Gx, const tscvx_float *h);
 
 /* Solution in original units (certificates normalized), from the final iterate. */
 void tscvx_unscale_solution(const tscvx_workspace *ws, tscvx_float *x, tscvx_float *y,

@@ -4,7 +4,7 @@
 #include "ctest_util.h"
 #include "tscvx_socp.h"
 
-static unsigned char arena[1 << 16];
+static unsigned char arena[1 << 16], arena2[1 << 16];
 
 static tscvx_solve_status solve(const tscvx_data *d, tscvx_float *x, tscvx_info *info) {
     tscvx_settings st;
@@ -118,7 +118,9 @@ static void test_bad_input(void) {
         CHECK(tscvx_solve_status_message((tscvx_solve_status)s) != NULL, "message");
 }
 
-/* update: same sparsity, new numbers; NaN update invalidates until a valid one */
+/* update: same sparsity, new numbers; NaN update invalidates until a valid one; a solve after
+ * an update takes the same steps as one after a fresh setup with those numbers (the
+ * equilibration is redone, the kept numbers recovered from their scaled copies) */
 static void test_update(void) {
     tscvx_int Gp[] = {0, 1, 2}, Gi[] = {1, 2}, q[] = {3};
     tscvx_float Gx[] = {-1, -1}, h[] = {1, 0, 0}, c[] = {-1, -1}, x[2];
@@ -136,8 +138,26 @@ static void test_update(void) {
     CHECK(tscvx_solve(ws) == TSCVX_SOLVED, "second solve");
     tscvx_get_solution(ws, x, NULL, NULL, NULL);
     CHECK(fabs(x[0] - sqrt(2.0)) < 1e-7, "updated x %g", x[0]);
-    tscvx_info info;
+    tscvx_info info, fresh_info;
     tscvx_get_info(ws, &info);
+    tscvx_float Gx2[] = {-3, -0.5}; /* |(3 x1, x2 / 2)| <= 2: another equilibration */
+    CHECK(tscvx_update_data(ws, NULL, NULL, NULL, NULL, Gx2, NULL) == TSCVX_SETUP_OK, "G update");
+    CHECK(tscvx_solve(ws) == TSCVX_SOLVED, "third solve");
+    tscvx_get_solution(ws, x, NULL, NULL, NULL);
+    tscvx_get_info(ws, &info);
+    tscvx_data d2 = d;
+    d2.h = h2;
+    d2.Gx = Gx2;
+    tscvx_workspace *fresh = NULL;
+    tscvx_float xf[2];
+    CHECK(tscvx_setup(&fresh, arena2, sizeof arena2, &d2, &st) == TSCVX_SETUP_OK, "fresh setup");
+    CHECK(tscvx_solve(fresh) == TSCVX_SOLVED, "fresh solve");
+    tscvx_get_solution(fresh, xf, NULL, NULL, NULL);
+    tscvx_get_info(fresh, &fresh_info);
+    CHECK(info.iterations == fresh_info.iterations, "update %d vs fresh %d iterations",
+          (int)info.iterations, (int)fresh_info.iterations);
+    CHECK(fabs(x[0] - xf[0]) < 1e-12 && fabs(x[1] - xf[1]) < 1e-12, "update vs fresh x %.3g %.3g",
+          x[0] - xf[0], x[1] - xf[1]);
     tscvx_iter_log row;
     CHECK(tscvx_get_iter_log(ws, info.iterations, &row) == TSCVX_SETUP_OK, "log row");
     CHECK(row.iter == info.iterations && fabs(row.pcost - info.pcost) < 1e-12, "log content");
