@@ -114,6 +114,24 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
     b.add_argument("--json", help="write the results here (default: MODELS_DIR/baselines.json)")
     b.set_defaults(func=cmd_baselines)
 
+    c = sub.add_parser(
+        "mask-ceiling",
+        help="how well any (theta, k) -> tight-mask predictor can do: masks of near landings",
+    )
+    c.add_argument("--landings", type=int, default=20)
+    c.add_argument("--neighbours", type=int, default=9, help="solved landings per eps (>= 3)")
+    c.add_argument("--eps", default="0.005,0.02,0.1", help="neighbourhood radii, in std units")
+    c.add_argument("--backend", choices=["c", "clarabel", "c-socp"], help="default: as dataset")
+    c.add_argument(
+        "--train-landings",
+        type=int,
+        help="for the data spacing (default: the shipped constraint network's, models/)",
+    )
+    c.add_argument("--models-dir", default=DEFAULT_MODELS_DIR)
+    c.add_argument("--seed", type=int, default=7)
+    c.add_argument("--json", help="write the results here (default: MODELS_DIR/mask_ceiling.json)")
+    c.set_defaults(func=cmd_mask_ceiling)
+
 
 # ---- dataset ------------------------------------------------------------------------------
 def cmd_dataset(args: argparse.Namespace) -> int:
@@ -315,6 +333,44 @@ def cmd_baselines(args: argparse.Namespace) -> int:
     out.write_text(results_json({"dataset": ds.header, "results": res}))
     print(f"wrote {out}")
     if not args.json and (models / "metrics.json").exists():
+        write_card(models)
+        print(f"updated {models / 'MODEL_CARD.md'}")
+    return 0
+
+
+# ---- mask ceiling -------------------------------------------------------------------------
+def cmd_mask_ceiling(args: argparse.Namespace) -> int:
+    from guidance.dataset import default_backend
+    from guidance.mask_ceiling import (
+        data_spacing,
+        format_table,
+        measure,
+        results_dict,
+        theta_spread,
+    )
+    from guidance.nn.card import write_card
+
+    if args.neighbours < 3:
+        raise SystemExit("--neighbours must be at least 3 (one predicted from two)")
+    eps = [float(e) for e in args.eps.split(",") if e.strip()]
+    n_train = args.train_landings
+    metrics = Path(args.models_dir) / "metrics.json"
+    if n_train is None and metrics.exists():
+        n_train = json.loads(metrics.read_text())["shipped"]["constraint"]["n_trainval_bases"]
+    std = theta_spread()
+    backend = args.backend or default_backend()
+    scores = measure(args.landings, args.neighbours, eps, backend, args.seed, std)
+    spacing = data_spacing(n_train, std) if n_train else None
+    print(format_table(scores, args.neighbours, spacing))
+    if spacing is not None:
+        print(f"  ({n_train} training landings x 8 rotations)")
+    models = Path(args.models_dir)
+    out = Path(args.json) if args.json else models / "mask_ceiling.json"
+    run = dict(landings=args.landings, neighbours=args.neighbours, backend=backend, seed=args.seed)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(json.dumps(results_dict(scores, spacing, n_train, **run), indent=1))
+    print(f"wrote {out}")
+    if not args.json and metrics.exists():
         write_card(models)
         print(f"updated {models / 'MODEL_CARD.md'}")
     return 0

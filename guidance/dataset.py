@@ -189,7 +189,7 @@ def solve_sample(job: tuple[int, int, dict, dict, dict, str]) -> dict[str, Any]:
     rec: dict[str, Any] = {"id": i, "theta": theta_of(scenario), "rejected_draws": rejected}
     t0 = time.perf_counter()
     try:
-        r = _solver(backend)(scenario, settings)
+        r = scvx_solver(backend)(scenario, settings)
         rec.update(
             status=r.status,
             reason=r.reason,
@@ -224,7 +224,8 @@ def default_backend() -> str:
     return "c" if LIB_PATH.exists() else "clarabel"
 
 
-def _solver(backend: str) -> Callable[[Scenario, SCvxSettings], Any]:
+def scvx_solver(backend: str) -> Callable[[Scenario, SCvxSettings], Any]:
+    """solve(scenario, settings) of one backend: "c" (the C library), "clarabel", "c-socp"."""
     if backend == "c":
         from guidance.cguidance import solve_c
 

@@ -1,4 +1,5 @@
-# Shipped networks: `make models` reproduces data generation, training, export and baselines.
+# Shipped networks: `make models` reproduces data generation, training, export, baselines and
+# the mask ceiling of the model card.
 # Included from the top Makefile (uses $(VENV) and the `setup` target).
 # The dataset step is resumable: an interrupted `make models` continues where it stopped.
 # Override for a quicker run, e.g. `make models MODELS_N_BASE=400`. The default is 2.5 times
@@ -22,3 +23,4 @@ models: setup lib $(BUILD)/nn_budget_driver
 	  --max-minutes $(MODELS_TRAIN_MINUTES)
 	$(GUIDANCE) export --train-dir $(MODELS_TRAIN) --dataset $(MODELS_DATA) --models-dir models
 	$(GUIDANCE) baselines --dataset $(MODELS_DATA) --models-dir models
+	$(GUIDANCE) mask-ceiling --models-dir models

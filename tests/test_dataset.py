@@ -12,7 +12,6 @@ from guidance.dataset import (
     N_ROTATIONS,
     ROTATION_DEG,
     SamplingRanges,
-    _solver,
     base_scenario,
     done_ids,
     generate,
@@ -21,6 +20,7 @@ from guidance.dataset import (
     rotate_theta,
     sample_path,
     scenario_of,
+    scvx_solver,
     theta_of,
 )
 from guidance.params import NC
@@ -110,7 +110,7 @@ def test_rotated_samples_are_the_solutions_of_the_rotated_scenarios(tiny_run) ->
     solved = np.flatnonzero((ds.status == "solved") & (ds.rotation > 0))
     assert len(solved) >= 7, "the tiny run should contain a solved landing"
     # re-solved by the solver that made the data (the C library when built)
-    solve = _solver(ds.header["solver_backend"])
+    solve = scvx_solver(ds.header["solver_backend"])
     for m in (solved[0], solved[len(solved) // 2 + 1]):
         r = solve(scenario_of(ds.theta[m]), None)
         assert r.status == "solved"

@@ -1,0 +1,201 @@
+"""How well can any (theta, k) -> tight-mask predictor do? A ceiling measured on SCvx itself.
+
+The constraint network maps a landing's parameters theta and the iteration k to the tight set
+of the k-th subproblem. That map is only as regular as the SCvx path: a change of theta far
+smaller than a training set can resolve moves accept/reject decisions and tight-constraint
+labels. This module measures how far. For each of a few landings it solves neighbours within
+a distance eps of theta (in units of the sampling distribution's standard deviation per
+component) and scores, leave-one-out, two predictors that know the exact masks of all the
+other neighbours of the same iteration k:
+
+  union     a bit is predicted tight if any other neighbour has it tight (recall first);
+  vote>=2   if at least two of them have it tight.
+
+A network cannot resolve detail finer than its training data's spacing, printed beside: the
+median distance from a fresh landing to the nearest training landing (its eight rotations
+included), in the same units.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from guidance.dataset import (
+    ROTATION_DEG,
+    SamplingRanges,
+    base_scenario,
+    code_version,
+    rotate_theta,
+    scenario_of,
+    scvx_solver,
+    theta_of,
+)
+from guidance.params import Scenario, SCvxSettings
+from guidance.scenario import ScenarioError, validate
+
+# theta components moved by a perturbation: r0, v0, the pitch and yaw rates, m0, glideslope
+# and tilt limit. q0 (unit norm) and the roll rate (zero by design) stay as drawn.
+PERTURBED = (0, 1, 2, 3, 4, 5, 11, 12, 13, 14, 15)
+RULES = (("union", 1), ("vote>=2", 2))
+DATA_SEED = 0  # the dataset's sampling seed (guidance dataset --seed)
+LANDING_SEED = 7  # landings whose neighbourhoods are probed (any seed other than the data's)
+
+
+@dataclass(frozen=True)
+class Score:
+    """Leave-one-out counts of one rule at one eps, over every (landing, neighbour, k)."""
+
+    eps: float
+    rule: str
+    tp: int
+    fp: int
+    fn: int
+    rows: int  # (neighbour, k) masks scored
+    rows_missing: int  # of which at least one tight bit was not predicted
+
+    @property
+    def precision(self) -> float:
+        return self.tp / max(self.tp + self.fp, 1)
+
+    @property
+    def recall(self) -> float:
+        return self.tp / max(self.tp + self.fn, 1)
+
+
+def theta_spread(n: int = 2000, seed: int = DATA_SEED) -> np.ndarray:
+    """Standard deviation of each theta component over n sampled base landings (1 where the
+    component does not vary)."""
+    ranges = SamplingRanges()
+    th = np.array([theta_of(base_scenario(seed, i, ranges)[0]) for i in range(n)])
+    std = th.std(axis=0)
+    return np.where(std > 0, std, 1.0)
+
+
+def neighbour(theta: np.ndarray, eps: float, std: np.ndarray, rng: np.random.Generator):
+    """theta moved by eps (standardized distance) in a random direction of PERTURBED."""
+    d = np.zeros_like(theta)
+    d[list(PERTURBED)] = rng.normal(size=len(PERTURBED))
+    d *= eps / np.linalg.norm(d)
+    return theta + d * std
+
+
+def loo_counts(masks: Sequence[np.ndarray], min_votes: int) -> tuple[int, int, int, int, int]:
+    """(tp, fp, fn, rows, rows_missing) of predicting each neighbour's (k, 7N) masks from the
+    others': a bit is predicted where at least ``min_votes`` others have it, iteration by
+    iteration over the iterations all of them reached."""
+    tp = fp = fn = rows = missing = 0
+    for j, target in enumerate(masks):
+        others = [m for i, m in enumerate(masks) if i != j]
+        K = min(len(m) for m in masks)
+        T = np.asarray(target[:K], bool)
+        votes = sum(np.asarray(o[:K], np.int64) for o in others)
+        pred = votes >= min_votes
+        tp += int((pred & T).sum())
+        fp += int((pred & ~T).sum())
+        fn += int((~pred & T).sum())
+        rows += K
+        missing += int(((~pred & T).sum(axis=1) > 0).sum())
+    return tp, fp, fn, rows, missing
+
+
+def data_spacing(n_train: int, std: np.ndarray, n_query: int = 500, seed: int = DATA_SEED) -> float:
+    """Median standardized distance from a fresh landing to the nearest of n_train training
+    landings and their rotations (all components but the roll rate)."""
+    from scipy.spatial import cKDTree
+
+    ranges = SamplingRanges()
+    base = [theta_of(base_scenario(seed, i, ranges)[0]) for i in range(n_train)]
+    train = np.array([rotate_theta(t, np.radians(deg)) for t in base for deg in ROTATION_DEG])
+    query = np.array([theta_of(base_scenario(seed + 1, i, ranges)[0]) for i in range(n_query)])
+    dist, _ = cKDTree(train / std).query(query / std)
+    return float(np.median(dist))
+
+
+def measure(
+    n_landings: int,
+    n_neighbours: int,
+    eps_values: Sequence[float],
+    backend: str = "c",
+    seed: int = LANDING_SEED,
+    std: np.ndarray | None = None,
+    progress: bool = True,
+) -> list[Score]:
+    """Scores of every rule at every eps. Neighbours that are not valid landings, or that
+    SCvx does not solve, are redrawn (at most 10 times the number asked)."""
+    from tqdm import tqdm
+
+    std = theta_spread() if std is None else std
+    solve: Callable[[Scenario, SCvxSettings], object] = scvx_solver(backend)
+    settings = SCvxSettings()
+    ranges = SamplingRanges()
+    rng = np.random.default_rng(seed)
+    landings = [theta_of(base_scenario(seed, i, ranges)[0]) for i in range(n_landings)]
+    scores = []
+    bar = tqdm(total=len(eps_values) * n_landings * n_neighbours, disable=not progress)
+    for eps in eps_values:
+        counts = {rule: np.zeros(5, np.int64) for rule, _ in RULES}
+        for theta in landings:
+            masks: list[np.ndarray] = []
+            for _ in range(10 * n_neighbours):
+                if len(masks) == n_neighbours:
+                    break
+                scenario = scenario_of(neighbour(theta, eps, std, rng))
+                try:
+                    validate(scenario)
+                except ScenarioError:
+                    continue
+                r = solve(scenario, settings)
+                if r.status == "solved":  # type: ignore[attr-defined]
+                    masks.append(r.masks)  # type: ignore[attr-defined]
+                    bar.update()
+            if len(masks) < 3:
+                continue  # a landing on the edge of feasibility: nothing to score
+            for rule, votes in RULES:
+                counts[rule] += loo_counts(masks, votes)
+        for rule, _ in RULES:
+            tp, fp, fn, rows, missing = (int(v) for v in counts[rule])
+            scores.append(Score(eps, rule, tp, fp, fn, rows, missing))
+    bar.close()
+    return scores
+
+
+def format_table(scores: Sequence[Score], n_neighbours: int, spacing: float | None) -> str:
+    lines = [
+        f"Tight-set ceiling of a (theta, k) -> mask predictor: each of {n_neighbours} "
+        f"neighbours' masks predicted from the other {n_neighbours - 1}'s",
+        f"{'eps [std]':>9}  {'rule':8}  {'precision':>9}  {'recall':>6}  "
+        f"{'masks':>6}  {'missing a bit':>13}",
+    ]
+    for s in scores:
+        lines.append(
+            f"{s.eps:9.3f}  {s.rule:8}  {s.precision:9.3f}  {s.recall:6.3f}  {s.rows:6d}  "
+            f"{s.rows_missing / max(s.rows, 1):13.1%}"
+        )
+    if spacing is not None:
+        lines.append(
+            f"training data spacing: a fresh landing's nearest training landing is {spacing:.2f} "
+            "std away (median)"
+        )
+    return "\n".join(lines)
+
+
+def results_dict(
+    scores: Sequence[Score], spacing: float | None, n_train: int | None, **run: Any
+) -> dict[str, Any]:
+    """What ``guidance mask-ceiling`` writes (models/mask_ceiling.json) for the model card."""
+    return {
+        "created_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+        "code_version": code_version(),
+        "run": run,
+        "scores": [
+            {**dataclasses.asdict(s), "precision": s.precision, "recall": s.recall} for s in scores
+        ],
+        "data_spacing_std": spacing,
+        "n_train_landings": n_train,
+    }
