@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from pathlib import Path
 
@@ -129,6 +130,12 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
     )
     c.add_argument("--models-dir", default=DEFAULT_MODELS_DIR)
     c.add_argument("--seed", type=int, default=7)
+    c.add_argument("--workers", type=int, default=0, help="worker processes (0: all cores)")
+    c.add_argument(
+        "--run-dir",
+        default="data/runs/mask_ceiling",
+        help="neighbour masks kept as solved (resumable); '' to keep nothing",
+    )
     c.add_argument("--json", help="write the results here (default: MODELS_DIR/mask_ceiling.json)")
     c.set_defaults(func=cmd_mask_ceiling)
 
@@ -359,7 +366,15 @@ def cmd_mask_ceiling(args: argparse.Namespace) -> int:
         n_train = json.loads(metrics.read_text())["shipped"]["constraint"]["n_trainval_bases"]
     std = theta_spread()
     backend = args.backend or default_backend()
-    scores = measure(args.landings, args.neighbours, eps, backend, args.seed, std)
+    try:
+        scores = measure(
+            args.landings, args.neighbours, eps, backend, args.seed, std,
+            workers=args.workers or os.cpu_count() or 1, run_dir=args.run_dir or None,
+        )  # fmt: skip
+    except KeyboardInterrupt:
+        print(f"\ninterrupted: solved neighbourhoods are kept in {args.run_dir}; "
+              "run the same command again to resume", file=sys.stderr)  # fmt: skip
+        return 130
     spacing = data_spacing(n_train, std) if n_train else None
     print(format_table(scores, args.neighbours, spacing))
     if spacing is not None:

@@ -317,7 +317,7 @@ def generate(
     _limit_threads()
     previous = signal.signal(signal.SIGTERM, _raise_interrupt)
     try:
-        for rec in _imap(jobs, workers):
+        for rec in imap_pool(solve_sample, jobs, workers):
             write_sample(out, rec)
             counts[str(rec["status"])] = counts.get(str(rec["status"]), 0) + 1
             bar.update(1)
@@ -332,19 +332,22 @@ def _raise_interrupt(signum: int, frame: object) -> None:
     raise KeyboardInterrupt  # SIGTERM stops the pool like Ctrl-C: solved samples are kept
 
 
-def _imap(jobs: Sequence, workers: int) -> Iterable[dict]:
+def imap_pool(fn: Callable[[Any], Any], jobs: Sequence, workers: int) -> Iterable[Any]:
+    """fn over jobs in a pool of single-threaded worker processes, results as they finish (in
+    this process when workers <= 1). Ctrl-C or SIGTERM stops the pool; results already
+    yielded are the caller's to keep."""
     if workers <= 1 or len(jobs) <= 1:
-        yield from map(solve_sample, jobs)
+        yield from map(fn, jobs)
         return
     import multiprocessing as mp
 
     ctx = mp.get_context("spawn")  # CasADi/Clarabel state is not fork-safe
     pool = ctx.Pool(workers, initializer=_limit_threads)
     try:
-        yield from pool.imap_unordered(solve_sample, jobs)
+        yield from pool.imap_unordered(fn, jobs)
         pool.close()
     except BaseException:
-        pool.terminate()  # Ctrl-C: finished samples are on disk already
+        pool.terminate()
         raise
     finally:
         pool.join()

@@ -19,9 +19,11 @@ included), in the same units.
 from __future__ import annotations
 
 import dataclasses
+import json
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -31,6 +33,7 @@ from guidance.dataset import (
     SamplingRanges,
     base_scenario,
     code_version,
+    imap_pool,
     rotate_theta,
     scenario_of,
     scvx_solver,
@@ -117,6 +120,43 @@ def data_spacing(n_train: int, std: np.ndarray, n_query: int = 500, seed: int = 
     return float(np.median(dist))
 
 
+def neighbour_masks(job: tuple) -> tuple[float, int, list[np.ndarray]]:
+    """Worker: the per-iteration masks of ``n`` solved neighbours of landing ``i`` at ``eps``.
+    Neighbours that are not valid landings, or that SCvx does not solve, are redrawn (at
+    most 10 n draws); the draws depend only on (seed, i, eps)."""
+    eps, i, theta, std, n, backend, seed = job
+    rng = np.random.default_rng([seed, i, round(eps * 1e6)])
+    solve: Callable[[Scenario, SCvxSettings], Any] = scvx_solver(backend)
+    settings = SCvxSettings()
+    masks: list[np.ndarray] = []
+    for _ in range(10 * n):
+        if len(masks) == n:
+            break
+        scenario = scenario_of(neighbour(theta, eps, std, rng))
+        try:
+            validate(scenario)
+        except ScenarioError:
+            continue
+        r = solve(scenario, settings)
+        if r.status == "solved":
+            masks.append(np.asarray(r.masks, np.uint8))
+    return eps, i, masks
+
+
+def _cache_file(run_dir: Path, eps: float, i: int) -> Path:
+    return run_dir / f"eps{eps:g}_landing{i:04d}.npz"
+
+
+def _check_run(run_dir: Path, config: dict[str, Any]) -> None:
+    path = run_dir / "run.json"
+    if path.exists():
+        if json.loads(path.read_text()) != config:
+            raise ValueError(f"{run_dir} holds neighbours of another run; use another directory")
+    else:
+        run_dir.mkdir(parents=True, exist_ok=True)
+        path.write_text(json.dumps(config, indent=1))
+
+
 def measure(
     n_landings: int,
     n_neighbours: int,
@@ -125,43 +165,50 @@ def measure(
     seed: int = LANDING_SEED,
     std: np.ndarray | None = None,
     progress: bool = True,
+    workers: int = 1,
+    run_dir: str | Path | None = None,
 ) -> list[Score]:
-    """Scores of every rule at every eps. Neighbours that are not valid landings, or that
-    SCvx does not solve, are redrawn (at most 10 times the number asked)."""
+    """Scores of every rule at every eps, over the landings with at least 3 solved
+    neighbours. With ``run_dir`` each landing's neighbour masks are kept there as they are
+    solved, and a rerun of the same run solves only what is missing."""
     from tqdm import tqdm
 
     std = theta_spread() if std is None else std
-    solve: Callable[[Scenario, SCvxSettings], object] = scvx_solver(backend)
-    settings = SCvxSettings()
     ranges = SamplingRanges()
-    rng = np.random.default_rng(seed)
     landings = [theta_of(base_scenario(seed, i, ranges)[0]) for i in range(n_landings)]
-    scores = []
-    bar = tqdm(total=len(eps_values) * n_landings * n_neighbours, disable=not progress)
+    cache = Path(run_dir) if run_dir is not None else None
+    if cache is not None:
+        config = dict(seed=seed, neighbours=n_neighbours, backend=backend,
+                      settings=dataclasses.asdict(SCvxSettings()), std=std.tolist())  # fmt: skip
+        _check_run(cache, config)
+    found: dict[tuple[float, int], list[np.ndarray]] = {}
+    jobs = []
     for eps in eps_values:
-        counts = {rule: np.zeros(5, np.int64) for rule, _ in RULES}
-        for theta in landings:
-            masks: list[np.ndarray] = []
-            for _ in range(10 * n_neighbours):
-                if len(masks) == n_neighbours:
-                    break
-                scenario = scenario_of(neighbour(theta, eps, std, rng))
-                try:
-                    validate(scenario)
-                except ScenarioError:
-                    continue
-                r = solve(scenario, settings)
-                if r.status == "solved":  # type: ignore[attr-defined]
-                    masks.append(r.masks)  # type: ignore[attr-defined]
-                    bar.update()
-            if len(masks) < 3:
-                continue  # a landing on the edge of feasibility: nothing to score
-            for rule, votes in RULES:
-                counts[rule] += loo_counts(masks, votes)
-        for rule, _ in RULES:
-            tp, fp, fn, rows, missing = (int(v) for v in counts[rule])
+        for i, theta in enumerate(landings):
+            path = _cache_file(cache, eps, i) if cache is not None else None
+            if path is not None and path.exists():
+                with np.load(path) as f:
+                    found[eps, i] = [f[k] for k in sorted(f.files, key=lambda k: int(k[4:]))]
+            else:
+                jobs.append((eps, i, theta, std, n_neighbours, backend, seed))
+    with tqdm(total=len(jobs), disable=not progress, unit="landing",
+              desc=f"neighbourhoods ({len(found)} done before)") as bar:  # fmt: skip
+        for eps, i, masks in imap_pool(neighbour_masks, jobs, workers):
+            found[eps, i] = masks
+            if cache is not None:
+                tmp = cache / f".tmp{eps:g}_{i}.npz"
+                np.savez(tmp, *masks)
+                tmp.replace(_cache_file(cache, eps, i))
+            bar.update()
+    scores = []
+    for eps in eps_values:
+        groups = [found[eps, i] for i in range(n_landings) if len(found[eps, i]) >= 3]
+        for rule, votes in RULES:
+            counts = np.zeros(5, np.int64)
+            for masks in groups:
+                counts += loo_counts(masks, votes)
+            tp, fp, fn, rows, missing = (int(v) for v in counts)
             scores.append(Score(eps, rule, tp, fp, fn, rows, missing))
-    bar.close()
     return scores
 
 

@@ -51,9 +51,23 @@ def test_more_training_landings_are_never_farther() -> None:
 
 
 @pytest.mark.skipif(not cguidance.LIB_PATH.exists(), reason="build/libtscvx_gnc.so not built")
-def test_identical_neighbours_score_one() -> None:
-    """eps = 0: every neighbour is the landing itself, and the C solve is deterministic."""
-    scores = measure(1, 3, [0.0], backend="c", std=theta_spread(200), progress=False)
+def test_identical_neighbours_score_one_and_a_rerun_solves_nothing(tmp_path, monkeypatch) -> None:
+    """eps = 0: every neighbour is the landing itself, and the C solve is deterministic. The
+    neighbour masks are kept in the run directory: a rerun reads them instead of solving."""
+    from guidance import mask_ceiling
+
+    std = theta_spread(200)
+    scores = measure(1, 3, [0.0], backend="c", std=std, progress=False, run_dir=tmp_path)
     for s in scores:
         assert s.rows > 0 and s.fn == 0 and s.fp == 0
         assert s.precision == 1.0 and s.recall == 1.0
+    assert len(list(tmp_path.glob("eps0_landing*.npz"))) == 1
+
+    def no_solving(job):
+        raise AssertionError("solved again")
+
+    monkeypatch.setattr(mask_ceiling, "neighbour_masks", no_solving)
+    again = measure(1, 3, [0.0], backend="c", std=std, progress=False, run_dir=tmp_path)
+    assert again == scores
+    with pytest.raises(ValueError, match="another run"):
+        measure(1, 4, [0.0], backend="c", std=std, progress=False, run_dir=tmp_path)
