@@ -113,6 +113,17 @@ def run(n: int, backend: str = "c", models_dir: Path | None = None, progress: bo
     return variants
 
 
+def ratio_interval(
+    num: np.ndarray, den: np.ndarray, level: float = 0.95, n_boot: int = 2000, seed: int = 0
+) -> tuple[float, float]:
+    """Bootstrap interval of mean(num) / mean(den) over resampled landings (paired)."""
+    num, den = np.asarray(num, float), np.asarray(den, float)
+    idx = np.random.default_rng(seed).integers(0, len(num), size=(n_boot, len(num)))
+    r = num[idx].mean(axis=1) / den[idx].mean(axis=1)
+    lo, hi = np.quantile(r, [(1.0 - level) / 2.0, (1.0 + level) / 2.0])
+    return float(lo), float(hi)
+
+
 def report(variants: list[Variant], backend: str) -> list[str]:
     base = variants[0]
     n = len(base.results)
@@ -121,24 +132,29 @@ def report(variants: list[Variant], backend: str) -> list[str]:
         f"T-SCvx benchmark: {n} fresh landings (seed {BENCH_SEED}), backend {backend}; "
         f"fuel and ratios over the {len(both)} that SCvx solves",
         f"{'variant':22s} {'solved':>6s} {'subprob.':>8s} {'iter.':>6s} {'time[s]':>8s} "
-        f"{'speed-up':>8s} {'dm_f med':>9s} {'dm_f min':>9s}",
+        f"{'speed-up':>8s} {'95% interval':>14s} {'dm_f med':>9s} {'dm_f min':>9s}",
     ]
-    t_base = float(np.mean([base.wall_s[i] for i in both])) if both else math.nan
+    base_s = np.array([base.wall_s[i] for i in both])
+    t_base = float(base_s.mean()) if both else math.nan
     for v in variants:
         ok = [i for i in both if v.results[i].status == "solved"]
         dm = [
             (v.results[i].x[-1, IM] - base.results[i].x[-1, IM]) / base.results[i].x[-1, IM]
             for i in ok
         ]
-        t = float(np.mean([v.wall_s[i] for i in both])) if both else math.nan
+        v_s = np.array([v.wall_s[i] for i in both])
+        t = float(v_s.mean()) if both else math.nan
+        lo, hi = ratio_interval(base_s, v_s) if len(both) > 1 else (math.nan, math.nan)
         lines.append(
             f"{v.name:22s} {sum(r.status == 'solved' for r in v.results):6d} "
             f"{np.mean([v.results[i].subproblems_solved for i in both]):8.2f} "
             f"{np.mean([v.results[i].iterations for i in both]):6.2f} {t:8.3f} "
-            f"{t_base / t:7.2f}x {np.median(dm):+9.1e} {np.min(dm):+9.1e}"
+            f"{t_base / t:7.2f}x {f'[{lo:.2f}, {hi:.2f}]':>14s} {np.median(dm):+9.1e} "
+            f"{np.min(dm):+9.1e}"
         )
     lines.append(
-        "subprob./iter./time: means per landing; dm_f: final mass relative to SCvx's "
+        "subprob./iter./time: means per landing; speed-up: mean SCvx time / mean time, with its "
+        "95% bootstrap interval over the landings; dm_f: final mass relative to SCvx's "
         "(negative: more fuel burnt); time includes the network inference for T-SCvx (in C "
         "with the C backend: the on-board call pdg_solve_tscvx)"
     )

@@ -67,6 +67,20 @@ def test_reference_masks_without_warm_start_match_in_c_and_python(
         assert audit(r.x, r.u, r.t_f, scenario.params).max_path_violation <= 1e-6
 
 
+def test_speed_up_interval_covers_the_ratio_and_narrows_with_landings() -> None:
+    from guidance.bench_tscvx import ratio_interval
+
+    rng = np.random.default_rng(3)
+    base = rng.uniform(0.3, 0.5, 400)
+    fast = base / 1.5 * rng.uniform(0.8, 1.2, 400)  # true speed-up about 1.5
+    lo16, hi16 = ratio_interval(base[:16], fast[:16])
+    lo400, hi400 = ratio_interval(base, fast)
+    assert lo400 <= base.mean() / fast.mean() <= hi400
+    assert 1.4 < lo400 < hi400 < 1.6
+    assert hi400 - lo400 < (hi16 - lo16) / 2
+    assert ratio_interval(base, base) == (1.0, 1.0)
+
+
 def test_tscvx_benchmark_landings_are_fresh_and_each_variant_is_audited() -> None:
     """`guidance bench --tscvx-landings`: valid landings that no dataset seed draws, each variant
     solved with the shipped networks and checked open loop like the reference."""
