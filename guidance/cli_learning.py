@@ -376,9 +376,7 @@ def cmd_mask_ceiling(args: argparse.Namespace) -> int:
               "run the same command again to resume", file=sys.stderr)  # fmt: skip
         return 130
     spacing = data_spacing(n_train, std) if n_train else None
-    print(format_table(scores, args.neighbours, spacing))
-    if spacing is not None:
-        print(f"  ({n_train} training landings x 8 rotations)")
+    print(format_table(scores, args.neighbours, spacing, n_train))
     models = Path(args.models_dir)
     out = Path(args.json) if args.json else models / "mask_ceiling.json"
     run = dict(landings=args.landings, neighbours=args.neighbours, backend=backend, seed=args.seed)

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
-from typing import Literal
+from typing import Literal, Protocol
 
 import numpy as np
 import scipy.sparse as sp
@@ -172,9 +172,13 @@ class ClarabelSession:
         return _clarabel_solution(sol, time.perf_counter() - t0)
 
 
-def session(backend: str, tol: float = 1e-9, max_iter: int = 200) -> object:
-    """A solver for a sequence of problems sharing one sparsity pattern (``.solve(prob)``),
-    stopping at the same gap and feasibility tolerance ``tol`` whichever the backend."""
+class Session(Protocol):
+    def solve(self, prob: ConicProblem) -> ConicSolution: ...
+
+
+def session(backend: str, tol: float = 1e-9, max_iter: int = 200) -> Session:
+    """A solver for a sequence of problems sharing one sparsity pattern, stopping at the same
+    gap and feasibility tolerance ``tol`` whichever the backend."""
     if backend == "clarabel":
         return ClarabelSession(tol, max_iter)
     if backend == "c":

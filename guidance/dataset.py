@@ -334,8 +334,8 @@ def _raise_interrupt(signum: int, frame: object) -> None:
 
 def imap_pool(fn: Callable[[Any], Any], jobs: Sequence, workers: int) -> Iterable[Any]:
     """fn over jobs in a pool of single-threaded worker processes, results as they finish (in
-    this process when workers <= 1). Ctrl-C or SIGTERM stops the pool; results already
-    yielded are the caller's to keep."""
+    this process when workers <= 1). An exception in the caller (Ctrl-C) stops the pool;
+    results already yielded are the caller's to keep."""
     if workers <= 1 or len(jobs) <= 1:
         yield from map(fn, jobs)
         return

@@ -212,7 +212,9 @@ def measure(
     return scores
 
 
-def format_table(scores: Sequence[Score], n_neighbours: int, spacing: float | None) -> str:
+def format_table(
+    scores: Sequence[Score], n_neighbours: int, spacing: float | None, n_train: int | None
+) -> str:
     lines = [
         f"Tight-set ceiling of a (theta, k) -> mask predictor: each of {n_neighbours} "
         f"neighbours' masks predicted from the other {n_neighbours - 1}'s",
@@ -226,8 +228,8 @@ def format_table(scores: Sequence[Score], n_neighbours: int, spacing: float | No
         )
     if spacing is not None:
         lines.append(
-            f"training data spacing: a fresh landing's nearest training landing is {spacing:.2f} "
-            "std away (median)"
+            f"training data spacing: a fresh landing's nearest training landing (of {n_train} "
+            f"x 8 rotations) is {spacing:.2f} std away (median)"
         )
     return "\n".join(lines)
 

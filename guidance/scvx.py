@@ -96,7 +96,7 @@ class SCvxSolver:
         self.log = log
         self.record = record_subproblems
         self._templates: dict[bytes, SubproblemTemplate] = {}
-        self._sessions: dict[int, object] = {}  # conic solver per sparsity pattern
+        self._sessions: dict[int, conic.Session] = {}  # conic solver per sparsity pattern
         self.engine = self.st.discretization
         if self.engine == "auto":
             from guidance import cgnc
@@ -187,7 +187,7 @@ class SCvxSolver:
                 subproblems.append(prob)
             if id(tpl) not in self._sessions:
                 self._sessions[id(tpl)] = conic.session(self.backend, st.socp_tol, st.socp_max_iter)
-            sol = self._sessions[id(tpl)].solve(prob)  # type: ignore[attr-defined]
+            sol = self._sessions[id(tpl)].solve(prob)
             if not sol.ok:
                 status = "solver_error"
                 reason = f"subproblem at iteration {k + 1}: conic solver returned {sol.status}"

@@ -4,7 +4,7 @@
  * by a cost scaling cs (Clarabel's rule): Ps = cs D P D, cs = 1/max(mean |P col|, |D c|_inf).
  * EG is made constant on each SOC so that the scaling maps the cone onto itself.
  * Works in place: on entry P, A, G, c, b, h hold the caller's numbers. Computed at setup and
- * again on every data update (tscvx_update_equilibrate): O(ruiz_iters nnz), about 1 % of
+ * again on every data update (tscvx_update_equilibrate): O(ruiz_iters nnz), about 0.5 % of
  * a landing subproblem's solve.
  */
 #include <math.h>

@@ -347,11 +347,12 @@ def _ceiling_section(add, ceiling: dict) -> None:
             f"{_pct(sc['rows_missing'] / max(sc['rows'], 1))} |"
         )
     add("")
-    if ceiling.get("data_spacing_std") is not None:
+    spacing = ceiling.get("data_spacing_std")
+    if spacing is not None:
         add(
             f"The training data is far coarser: a fresh landing's nearest training landing "
-            f"(of {ceiling['n_train_landings']:,} x 8 rotations) is "
-            f"{ceiling['data_spacing_std']:.2f} std away (median)."
+            f"(of {ceiling['n_train_landings']:,} x 8 rotations) is {spacing:.2f} std away "
+            "(median)."
         )
         add("")
     meets = {sc["eps"]: False for sc in ceiling["scores"]}
@@ -359,7 +360,6 @@ def _ceiling_section(add, ceiling: dict) -> None:
         meets[sc["eps"]] |= sc["recall"] >= 0.99 and sc["precision"] >= 0.9
     fine = [e for e, ok in meets.items() if ok]
     coarse = [e for e, ok in meets.items() if not ok]
-    spacing = ceiling.get("data_spacing_std")
     if coarse and spacing is not None:
         within = f"only within {max(fine):g} std" if fine else "at none of the distances tried"
         add(
