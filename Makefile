@@ -71,6 +71,7 @@ demo: setup lib
 
 bench: setup lib
 	$(GUIDANCE) bench --backend clarabel c-socp c --tscvx-landings 24
+	$(GUIDANCE) agreement --landings 20
 
 budget: setup lib
 	$(GUIDANCE) budget

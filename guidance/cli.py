@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -143,6 +144,13 @@ def cmd_bench(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_agreement(args: argparse.Namespace) -> int:
+    from guidance import agreement
+
+    catalog = None if args.catalog == ["all"] else args.catalog
+    return agreement.main(catalog, args.landings, args.workers)
+
+
 def cmd_budget(args: argparse.Namespace) -> int:
     try:
         from guidance import budget
@@ -204,6 +212,17 @@ def build_parser() -> argparse.ArgumentParser:
     )
     b.add_argument("--tscvx-backend", default="c", choices=["clarabel", "c-socp", "c"])
     b.set_defaults(func=cmd_bench)
+
+    a = sub.add_parser(
+        "agreement",
+        help="final mass of SCvx across conic solvers and tolerances (reference, C library)",
+    )
+    a.add_argument(
+        "--catalog", nargs="+", default=["all"], help="catalog landings to include (default: all)"
+    )
+    a.add_argument("--landings", type=int, default=20, help="fresh sampled landings to add")
+    a.add_argument("--workers", type=int, default=os.cpu_count() or 1)
+    a.set_defaults(func=cmd_agreement)
 
     g = sub.add_parser("budget", help="RAD750 time and memory budget of one C guidance call")
     g.set_defaults(func=cmd_budget)

@@ -45,7 +45,8 @@ pytestmark = pytest.mark.skipif(
 # C SOCP stop at different points of the subproblems' flat optimal faces, and the SCvx
 # iteration (accept/reject near rho0, stopping at step <= 5e-3) amplifies the difference. The
 # Python loop on the C SOCP shows the same figures (the C loop is the same solve, above).
-# Measured 22 Nov with the equilibration redone at every subproblem: 4 of 11 meet 1e-6.
+# Measured 22 Nov with the equilibration redone at every subproblem: 4 of 11 meet 1e-6; the
+# reference itself at socp_tol 1e-10 meets it on 6 of 11 (`guidance agreement`).
 KNOWN_DRIFT = {"default", "north", "crossing", "low_fast", "high", "tilted_z", "steep_cone"}
 DRIFT_REL_MF = 2e-3  # what every scenario must meet regardless
 STRICT_REL_MF = 1e-6

@@ -1,0 +1,184 @@
+"""How many digits of an SCvx answer two correct conic solvers share (`guidance agreement`).
+
+Every landing is solved by the reference (Python SCvx + Clarabel, subproblems at
+``SCvxSettings.socp_tol`` = 1e-9) and by four variants:
+
+  reference at 1e-10   the same loop and solver, subproblems one decade tighter
+  Python + C SOCP      the reference loop on the flight conic solver (``--backend c-socp``)
+  C library            the whole solve in the flight library (``--backend c``)
+  converged            the C library with every subproblem solved to 1e-12
+
+Each variant is scored against the reference and against the converged answer: how many
+landings end within 1e-6 relative final mass with the same iteration count (issue 3's figure of
+"the same trajectory"), and the median and largest final-mass gaps. The subproblems' optimal
+sets are nearly flat in some directions, so each solver stops at its own point of them within
+its tolerance, and SCvx's accept/reject steps amplify that; the first row says how much of the
+disagreement the reference shows against itself.
+"""
+
+from __future__ import annotations
+
+import statistics
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+from guidance.params import Scenario, SCvxSettings
+
+if TYPE_CHECKING:
+    from guidance.scvx import SCvxResult
+
+STRICT_REL_MF = 1e-6  # issue 3's "same trajectory": final mass within 1e-6 relative ...
+# ... and the same iteration count.
+CONVERGED_TOL = 1e-12
+CELL = 20  # width of a variant's column in the per-landing table
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """The figures of one solve that the comparison uses."""
+
+    m_f: float
+    iterations: int
+    status: str
+
+
+def _reference(scenario: Scenario, tol: float) -> Outcome:
+    from guidance.scvx import solve_scvx
+
+    return _outcome(solve_scvx(scenario, SCvxSettings(socp_tol=tol)))
+
+
+def _python_c_socp(scenario: Scenario) -> Outcome:
+    from guidance.scvx import solve_scvx
+
+    return _outcome(solve_scvx(scenario, backend="c"))
+
+
+def _c_library(scenario: Scenario, tol: float) -> Outcome:
+    from guidance.cguidance import solve_c
+
+    return _outcome(solve_c(scenario, SCvxSettings(socp_tol=tol)))
+
+
+def _outcome(result: SCvxResult) -> Outcome:
+    return Outcome(result.m_f, result.iterations, result.status)
+
+
+REFERENCE = "reference (Clarabel, 1e-9)"
+VARIANTS: dict[str, Callable[[Scenario], Outcome]] = {
+    REFERENCE: lambda s: _reference(s, SCvxSettings().socp_tol),
+    "reference at 1e-10": lambda s: _reference(s, 1e-10),
+    "Python + C SOCP": _python_c_socp,
+    "C library": lambda s: _c_library(s, SCvxSettings().socp_tol),
+    "converged (C, 1e-12)": lambda s: _c_library(s, CONVERGED_TOL),
+}
+CONVERGED = "converged (C, 1e-12)"
+
+
+def solve_landing(job: tuple[str, Scenario]) -> tuple[str, dict[str, Outcome]]:
+    """Every variant on one landing (a pool job: module-level, picklable)."""
+    name, scenario = job
+    return name, {variant: solve(scenario) for variant, solve in VARIANTS.items()}
+
+
+def rel_gap(a: Outcome, b: Outcome) -> float:
+    return abs(a.m_f - b.m_f) / abs(b.m_f)
+
+
+def same_trajectory(a: Outcome, b: Outcome) -> bool:
+    """Issue 3's figure: same status, final mass within 1e-6 relative, same iterations."""
+    return a.status == b.status and rel_gap(a, b) <= STRICT_REL_MF and a.iterations == b.iterations
+
+
+@dataclass(frozen=True)
+class Score:
+    """One variant against one baseline over all landings."""
+
+    same: int  # landings meeting same_trajectory
+    total: int
+    median_gap: float
+    max_gap: float
+
+
+def score(results: Sequence[dict[str, Outcome]], variant: str, baseline: str) -> Score:
+    gaps = [rel_gap(r[variant], r[baseline]) for r in results]
+    same = sum(same_trajectory(r[variant], r[baseline]) for r in results)
+    return Score(same, len(results), statistics.median(gaps), max(gaps))
+
+
+def summary_table(results: Sequence[dict[str, Outcome]]) -> str:
+    """Markdown table: each variant against the reference and against the converged answer."""
+    lines = [
+        "| variant | same as reference | median / max gap | same as converged | median / max gap |",
+        "|---|---|---|---|---|",
+    ]
+    for variant in VARIANTS:
+        cells = [variant]
+        for baseline in (REFERENCE, CONVERGED):
+            if variant == baseline:
+                cells += ["–", "–"]
+                continue
+            s = score(results, variant, baseline)
+            cells += [f"{s.same} of {s.total}", f"{s.median_gap:.1e} / {s.max_gap:.1e}"]
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def landing_table(names: Sequence[str], results: Sequence[dict[str, Outcome]]) -> str:
+    """Per landing: the reference's final mass and iterations, each variant's gap to it."""
+    others = [v for v in VARIANTS if v != REFERENCE]
+    head = f"{'landing':14s} {'m_f (ref)':>10s} {'it':>3s}"
+    head += "".join(f" | {v[:CELL]:>{CELL}s}" for v in others)
+    lines = [head]
+    for name, r in zip(names, results, strict=True):
+        ref = r[REFERENCE]
+        row = f"{name:14s} {ref.m_f:10.6f} {ref.iterations:3d}"
+        for v in others:
+            o = r[v]
+            mark = " " if same_trajectory(o, ref) else "*"
+            row += " | " + f"{rel_gap(o, ref):.1e}{mark} it {o.iterations:3d}".rjust(CELL)
+        lines.append(row)
+    lines.append("(*: not the reference's trajectory: 1e-6 relative final mass, same iterations)")
+    return "\n".join(lines)
+
+
+def landings(catalog: Sequence[str] | None, n_random: int) -> list[tuple[str, Scenario]]:
+    """The named catalog landings (all when None), then n fresh sampled landings (the
+    T-SCvx benchmark's: from the training distribution, never trained on)."""
+    from guidance.bench_tscvx import sample_landings
+    from guidance.catalog import SCENARIOS
+
+    names = list(SCENARIOS) if catalog is None else list(catalog)
+    unknown = [n for n in names if n not in SCENARIOS]
+    if unknown:
+        raise ValueError(f"unknown catalog landings {unknown}; known: {list(SCENARIOS)}")
+    jobs = [(n, SCENARIOS[n]) for n in names]
+    jobs += [(f"sampled {i}", s) for i, s in enumerate(sample_landings(n_random))]
+    return jobs
+
+
+def main(catalog: Sequence[str] | None, n_random: int, workers: int, progress: bool = True) -> int:
+    from guidance.dataset import imap_pool
+
+    jobs = landings(catalog, n_random)
+    order = {name: i for i, (name, _) in enumerate(jobs)}
+    done: dict[str, dict[str, Outcome]] = {}
+    bar = None
+    if progress:
+        from tqdm import tqdm
+
+        bar = tqdm(total=len(jobs), desc="landings", unit="landing")
+    for name, outcome in imap_pool(solve_landing, jobs, workers):
+        done[name] = outcome
+        if bar is not None:
+            bar.update()
+    if bar is not None:
+        bar.close()
+    names = sorted(done, key=order.__getitem__)
+    results = [done[n] for n in names]
+    print(f"SCvx final mass across conic solvers and tolerances, {len(results)} landings")
+    print(landing_table(names, results))
+    print()
+    print(summary_table(results))
+    return 0

@@ -1,0 +1,52 @@
+"""guidance agreement: the scoring of final masses across conic solvers, counted by hand."""
+
+from __future__ import annotations
+
+import pytest
+
+from guidance.agreement import (
+    CONVERGED,
+    REFERENCE,
+    VARIANTS,
+    Outcome,
+    landings,
+    same_trajectory,
+    score,
+    summary_table,
+)
+
+
+def test_same_trajectory_is_issue_3s_figure() -> None:
+    ref = Outcome(2.0, 11, "solved")
+    assert same_trajectory(Outcome(2.0 * (1 + 0.9e-6), 11, "solved"), ref)
+    assert not same_trajectory(Outcome(2.0 * (1 + 1.1e-6), 11, "solved"), ref)
+    assert not same_trajectory(Outcome(2.0, 12, "solved"), ref)  # iterations must be equal
+    assert not same_trajectory(Outcome(2.0, 11, "max_iterations"), ref)
+
+
+def test_score_counts_and_gaps() -> None:
+    gaps = [0.0, 2e-7, 5e-6, 1e-3]  # two within 1e-6, two beyond
+    results = [
+        {REFERENCE: Outcome(2.0, 10, "solved"), "C library": Outcome(2.0 * (1 + g), 10, "solved")}
+        for g in gaps
+    ]
+    s = score(results, "C library", REFERENCE)
+    assert (s.same, s.total) == (2, 4)
+    assert s.median_gap == pytest.approx((2e-7 + 5e-6) / 2)
+    assert s.max_gap == pytest.approx(1e-3)
+
+
+def test_summary_has_every_variant_against_both_baselines() -> None:
+    one = {v: Outcome(2.0, 10, "solved") for v in VARIANTS}
+    table = summary_table([one, one])
+    for v in VARIANTS:
+        assert f"| {v} |" in table
+    assert table.count("2 of 2") == 2 * (len(VARIANTS) - 2) + 2  # baselines skip themselves
+    assert CONVERGED in VARIANTS and REFERENCE in VARIANTS
+
+
+def test_landings_reject_unknown_catalog_names() -> None:
+    with pytest.raises(ValueError, match="nowhere"):
+        landings(["nowhere"], 0)
+    names = [n for n, _ in landings(["default"], 2)]
+    assert names == ["default", "sampled 0", "sampled 1"]
