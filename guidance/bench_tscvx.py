@@ -6,6 +6,8 @@ plain SCvx (cubic guess, eta_init 2) and by two T-SCvx variants with the shipped
 
   warm start   the solution network's trajectory as the initial guess, eta_reduced,init 0.01
   Algorithm 2  the same plus the constraint network's per-iteration tight masks
+  Algorithm 2 with the Eq. (13) radius
+               the same, the trust radius updated as in Algorithm 1 (tau_r_update off)
 
 Subproblems solved (accepted and rejected) is the figure that flight time follows; the final
 mass difference says what the warm start costs in fuel (a different local optimum).
@@ -75,8 +77,11 @@ def run(n: int, backend: str = "c", models_dir: Path | None = None, progress: bo
     models = models_dir or MODELS_DIR
     solve = _solver(backend)
     full = SCvxSettings()
-    reduced = full.replace(eta_init=REDUCED_ETA_INIT)
-    variants = [Variant("SCvx"), Variant("T-SCvx warm start"), Variant("T-SCvx (Algorithm 2)")]
+    variants = [Variant("SCvx"), Variant("T-SCvx warm start"), Variant("T-SCvx (Algorithm 2)"),
+                Variant("Alg. 2, Eq. 13 radius")]  # fmt: skip
+    eq13 = full.replace(tau_r_update=False)
+    # (settings, masks) of each T-SCvx variant
+    tscvx_runs = ((full, False), (full, True), (eq13, True))
     sol_model = con_model = None
     landings = sample_landings(n)
     if backend == "c":  # the on-board call: both networks run in C too (pdg_solve_tscvx)
@@ -88,12 +93,10 @@ def run(n: int, backend: str = "c", models_dir: Path | None = None, progress: bo
         variants[0].results.append(solve(scenario, full))
         variants[0].wall_s.append(time.perf_counter() - t0)
         if backend == "c":
-            for v, masked in zip(variants[1:], (False, True), strict=True):
+            for v, (st, masked) in zip(variants[1:], tscvx_runs, strict=True):
                 t0 = time.perf_counter()
                 v.results.append(
-                    solve_tscvx_c(
-                        scenario, full, masks=masked, eta_init=REDUCED_ETA_INIT, nets=nets
-                    )
+                    solve_tscvx_c(scenario, st, masks=masked, eta_init=REDUCED_ETA_INIT, nets=nets)
                 )
                 v.wall_s.append(time.perf_counter() - t0)
             continue
@@ -106,9 +109,10 @@ def run(n: int, backend: str = "c", models_dir: Path | None = None, progress: bo
         guess = project_guess(scenario, *sol_model.solution(theta))
         masks = con_model.mask_fn(theta)
         t_nn = time.perf_counter() - t0  # both networks and the projection, in Python
-        for v, m in zip(variants[1:], (None, masks), strict=True):
+        for v, (st, masked) in zip(variants[1:], tscvx_runs, strict=True):
             t0 = time.perf_counter()
-            v.results.append(solve(scenario, reduced, guess=guess, masks=m))
+            st = st.replace(eta_init=REDUCED_ETA_INIT)
+            v.results.append(solve(scenario, st, guess=guess, masks=masks if masked else None))
             v.wall_s.append(time.perf_counter() - t0 + t_nn)
     return variants
 

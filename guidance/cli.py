@@ -85,7 +85,7 @@ def cmd_solve(args: argparse.Namespace) -> int:
     from guidance.trajectory_io import write_trajectory
 
     scenario = _load(args.scenario, args.pin_final_attitude)
-    settings = SCvxSettings(iter_max=args.iter_max)
+    settings = SCvxSettings(iter_max=args.iter_max, tau_r_update=args.trust_update == "tau_r")
     print(f"scenario: {json.dumps(scenario_to_dict(scenario))}")
     print(f"method: {args.method}, backend: {args.backend}, N = {scenario.params.N}")
     result = run_solve(scenario, args.method, args.backend, settings, Path(args.models), print)
@@ -186,6 +186,13 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--out", help="trajectory .npz to write")
     s.add_argument("--plot", help="figure (.png) to write")
     s.add_argument("--iter-max", type=int, default=SCvxSettings().iter_max)
+    s.add_argument(
+        "--trust-update",
+        choices=["tau_r", "eq13"],
+        default="tau_r",
+        help="T-SCvx trust radius: tau_r = Algorithm 2's update (paper), eq13 = Algorithm 1's "
+        "Eq. (13) with the masks as well",
+    )
     s.add_argument(
         "--pin-final-attitude",
         action="store_true",

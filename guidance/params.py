@@ -153,6 +153,10 @@ class SCvxSettings:
     # tolerances, and the interior-point iteration limit.
     socp_tol: float = 1e-9
     socp_max_iter: int = 200
+    # T-SCvx trust radius: True is Algorithm 2's update (alpha^tau_r, beta^(1 - tau_r), tau_r
+    # the fraction of mask bits changed since the last subproblem); False keeps Eq. (13) of
+    # Algorithm 1 with the masks as well (`guidance bench` compares the two).
+    tau_r_update: bool = True
 
     def replace(self, **changes: object) -> SCvxSettings:
         return dataclasses.replace(self, **changes)

@@ -207,7 +207,8 @@ class SCvxSolver:
             rho = dJ / dL if dL != 0.0 else float("nan")
             step = float(np.abs(z_new[: self.lay.n_traj] - z[: self.lay.n_traj]).max())
             accepted = dJ == 0.0 or dL <= 0.0 or rho >= st.rho0
-            tau_r = _changed_fraction(prev_mask, mask) if masks is not None else None
+            use_tau = masks is not None and st.tau_r_update
+            tau_r = _changed_fraction(prev_mask, mask) if use_tau else None
             eta_new = _trust_update(eta, rho if dL > 0 else 1.0, accepted, st, tau_r)
             newly_forced = False
             if mask is not None:

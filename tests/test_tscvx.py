@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from guidance.catalog import SCENARIOS
-from guidance.params import NC
-from guidance.scvx import SCvxResult, solve_scvx
+from guidance.params import NC, SCvxSettings
+from guidance.scvx import SCvxResult, SCvxSolver, solve_scvx
 from guidance.tscvx import solve_tscvx
 from guidance.verify import audit
 
@@ -67,6 +67,34 @@ def test_reference_masks_without_warm_start_match_in_c_and_python(
         assert audit(r.x, r.u, r.t_f, scenario.params).max_path_violation <= 1e-6
 
 
+@pytest.mark.parametrize("where", ["python", "c"])
+def test_full_masks_with_the_eq13_radius_are_plain_scvx(where: str) -> None:
+    """Masks that keep every constraint change nothing but the trust radius: with
+    tau_r_update off (Eq. 13) the solve is plain SCvx's, step for step; with Algorithm 2's
+    update (tau_r = 0: a poor accepted step no longer shrinks the radius) it is not."""
+    scenario = SCENARIOS["default"]
+    ones = np.ones(NC * scenario.params.N, dtype=bool)
+    if where == "c":
+        cguidance = pytest.importorskip("guidance.cguidance")
+        if not cguidance.LIB_PATH.exists():
+            pytest.skip("run `make lib` first")
+
+        def solve(st: SCvxSettings, masked: bool) -> SCvxResult:
+            return cguidance.solve_c(scenario, st, masks=(lambda k: ones) if masked else None)
+    else:
+
+        def solve(st: SCvxSettings, masked: bool) -> SCvxResult:
+            return SCvxSolver(scenario, st).solve(masks=(lambda k: ones) if masked else None)
+
+    plain = solve(SCvxSettings(), False)
+    eq13 = solve(SCvxSettings(tau_r_update=False), True)
+    paper = solve(SCvxSettings(), True)
+    radii = [[h.eta for h in r.history] for r in (plain, eq13, paper)]
+    assert radii[1] == radii[0]
+    assert eq13.m_f == plain.m_f and eq13.iterations == plain.iterations
+    assert radii[2] != radii[0]
+
+
 def test_speed_up_interval_covers_the_ratio_and_narrows_with_landings() -> None:
     from guidance.bench_tscvx import ratio_interval
 
@@ -94,7 +122,8 @@ def test_tscvx_benchmark_landings_are_fresh_and_each_variant_is_audited() -> Non
         validate(s)
         assert tuple(theta_of(s)) not in trained
     variants = bench_tscvx.run(1, backend="c", progress=False)
-    assert [v.name for v in variants] == ["SCvx", "T-SCvx warm start", "T-SCvx (Algorithm 2)"]
+    assert [v.name for v in variants] == [
+        "SCvx", "T-SCvx warm start", "T-SCvx (Algorithm 2)", "Alg. 2, Eq. 13 radius"]  # fmt: skip
     for v in variants:
         r = v.results[0]
         assert r.status == "solved", (v.name, r.reason)

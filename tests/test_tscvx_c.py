@@ -17,6 +17,8 @@ guidance.guess.project_guess, eta_init 0.01, the C solver).
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -198,6 +200,24 @@ def test_cli_tscvx_on_the_c_backend_runs_the_networks_in_c(nets) -> None:
     assert res.tscvx_report["warm_started"]  # the on-board call, not onnxruntime + solve_c
     assert (res.status, res.iterations) == (c.status, c.iterations)
     assert res.m_f == pytest.approx(c.m_f, rel=1e-12)
+
+
+def test_cli_trust_update_reaches_the_c_loop(tmp_path: Path, nets) -> None:
+    """`guidance solve --method tscvx --backend c --trust-update eq13` is the on-board call with
+    tau_r_update off (the file records the solve)."""
+    from guidance.cli import main
+    from guidance.trajectory_io import read_trajectory
+
+    out = tmp_path / "eq13.npz"
+    args = ["solve", "--method", "tscvx", "--backend", "c", "--trust-update", "eq13"]
+    assert main([*args, "--out", str(out)]) == 0
+    eq13 = cguidance.solve_tscvx_c(
+        SCENARIOS["default"], SCvxSettings(tau_r_update=False), nets=nets
+    )
+    paper = cguidance.solve_tscvx_c(SCENARIOS["default"], nets=nets)
+    written = read_trajectory(out)
+    assert int(written["iterations"]) == eq13.iterations != paper.iterations
+    np.testing.assert_allclose(written["x"][-1], eq13.x[-1], rtol=1e-12, atol=0)
 
 
 # ---- bad input ------------------------------------------------------------------------------

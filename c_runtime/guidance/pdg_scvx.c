@@ -109,7 +109,8 @@ static int settings_ok(const pdg_settings *s)
            s->max_subproblems <= 500 && s->step_tol >= 0 && s->vc_tol >= 0 &&
            s->defect_tol >= 0 && s->tight_tol >= 0 && s->rk4_substeps >= 1 &&
            s->rk4_substeps <= PDG_MAX_SUBSTEPS && s->socp_tol > 0 && s->socp_tol < 1 &&
-           s->socp_max_iter >= 1 && s->socp_max_iter <= 500;
+           s->socp_max_iter >= 1 && s->socp_max_iter <= 500 &&
+           (s->tau_r_update == 0 || s->tau_r_update == 1);
 }
 
 static void socp_settings(const pdg_settings *st, tscvx_settings *ts)
@@ -961,7 +962,8 @@ pdg_status pdg_solve_from(pdg_workspace *ws, const pdg_scenario *scenario,
         if (have_masks && prev_has_mask && has_mask) {
             tau_r = changed_fraction(ws);
         }
-        eta_new = trust_update(st, eta, dL > 0 ? rho : 1.0, accepted, have_masks, tau_r);
+        eta_new = trust_update(st, eta, dL > 0 ? rho : 1.0, accepted,
+                               have_masks && st->tau_r_update, tau_r);
         /* Full-constraint guard of T-SCvx: a candidate that violates a constraint the mask
          * dropped is rejected and the constraint put back for the rest of the solve; the retry
          * starts from the same reference (which meets every convex constraint, so the

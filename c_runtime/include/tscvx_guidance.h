@@ -135,6 +135,9 @@ typedef struct {
     /* conic subproblem solver (tscvx_socp.h) */
     double socp_tol;        /* gap and feasibility tolerances (the reference uses 1e-9) */
     int socp_max_iter;      /* IPM iteration limit, 1..500 */
+    /* T-SCvx only: 1 = Algorithm 2's radius update (alpha^tau_r, beta^(1 - tau_r), tau_r the
+     * fraction of mask bits changed); 0 = Eq. (13) of Algorithm 1 with the masks as well */
+    int tau_r_update;
 } pdg_settings;
 
 /* Returns k-th mask (7N bytes, nonzero = keep) into `mask` for SCvx iteration k = 1, 2, ...;

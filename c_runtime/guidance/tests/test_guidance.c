@@ -127,6 +127,10 @@ static void test_settings_and_sizes(void)
     st.iter_max = 0;
     CHECK(pdg_workspace_size(50, 1, &st, NULL, 0, &need) == PDG_SETUP_BAD_SETTINGS);
     pdg_default_settings(&st);
+    CHECK(st.tau_r_update == 1); /* Algorithm 2's radius rule unless asked otherwise */
+    st.tau_r_update = 2;
+    CHECK(pdg_workspace_size(50, 1, &st, NULL, 0, &need) == PDG_SETUP_BAD_SETTINGS);
+    pdg_default_settings(&st);
     CHECK(pdg_workspace_size(50, 1, &st, NULL, 0, &need) == PDG_SETUP_SCRATCH_TOO_SMALL);
     CHECK(need > 0);
     CHECK(pdg_setup(&ws, buf, sizeof buf, 50, 1, &st) == PDG_SETUP_ARENA_TOO_SMALL);
