@@ -19,6 +19,7 @@ disagreement the reference shows against itself.
 from __future__ import annotations
 
 import statistics
+import sys
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -159,9 +160,13 @@ def landings(catalog: Sequence[str] | None, n_random: int) -> list[tuple[str, Sc
 
 
 def main(catalog: Sequence[str] | None, n_random: int, workers: int, progress: bool = True) -> int:
+    from guidance.cguidance import LIB_PATH
     from guidance.dataset import imap_pool
 
     jobs = landings(catalog, n_random)
+    if not LIB_PATH.exists():
+        print(f"{LIB_PATH} not found: run `make lib` (the C variants need it)", file=sys.stderr)
+        return 1
     order = {name: i for i, (name, _) in enumerate(jobs)}
     done: dict[str, dict[str, Outcome]] = {}
     bar = None

@@ -148,7 +148,11 @@ def cmd_agreement(args: argparse.Namespace) -> int:
     from guidance import agreement
 
     catalog = None if args.catalog == ["all"] else args.catalog
-    return agreement.main(catalog, args.landings, args.workers)
+    try:
+        return agreement.main(catalog, args.landings, args.workers)
+    except ValueError as exc:  # an unknown catalog name
+        print(f"error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
 
 
 def cmd_budget(args: argparse.Namespace) -> int:

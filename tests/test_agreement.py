@@ -50,6 +50,7 @@ def test_summary_has_every_variant_against_both_baselines() -> None:
 def test_landings_reject_unknown_catalog_names() -> None:
     with pytest.raises(ValueError, match="nowhere"):
         landings(["nowhere"], 0)
+    assert main(["agreement", "--catalog", "nowhere"]) == 2  # bad input, nothing solved
     names = [n for n, _ in landings(["default"], 2)]
     assert names == ["default", "sampled 0", "sampled 1"]
 
