@@ -105,7 +105,9 @@ def cmd_solve(args: argparse.Namespace) -> int:
         f"(conic solves {sum(sub_times):.3f} s, median {1e3 * np.median(sub_times):.1f} ms)"
     )
     if args.out:
-        write_trajectory(args.out, result, p, scenario, args.method, args.backend)
+        # the settings the solve ran with (T-SCvx starts from the reduced radius, Table 1)
+        used = settings.replace(eta_init=REDUCED_ETA_INIT) if args.method == "tscvx" else settings
+        write_trajectory(args.out, result, p, scenario, args.method, args.backend, used)
         print(f"wrote {args.out}")
     if args.plot:
         from guidance.plots import landing_figure

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import platform
 from datetime import datetime, timezone
@@ -9,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from guidance.params import Params
+from guidance.params import Params, SCvxSettings
 from guidance.scenario import scenario_to_dict
 from guidance.scvx import SCvxResult
 
@@ -34,8 +35,10 @@ def write_trajectory(
     scenario: object,
     method: str,
     backend: str,
+    settings: SCvxSettings | None = None,
 ) -> None:
-    """Writes the contract keys plus the iteration masks, reason, scenario and provenance."""
+    """Writes the contract keys plus the iteration masks, reason, scenario, the SCvx settings
+    of the solve (when given) and provenance."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(path.name + ".tmp.npz")
@@ -54,6 +57,11 @@ def write_trajectory(
         method=np.str_(method),
         backend=np.str_(backend),
         provenance=np.str_(json.dumps(provenance())),
+        **(
+            {}
+            if settings is None
+            else {"settings": np.str_(json.dumps(dataclasses.asdict(settings)))}
+        ),
     )
     tmp.replace(path)  # never leave a half-written file under the final name
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 from pathlib import Path
@@ -11,7 +12,7 @@ import pytest
 
 from guidance.catalog import SCENARIOS
 from guidance.cli import main
-from guidance.params import NC, InitialState, Scenario
+from guidance.params import NC, InitialState, Scenario, SCvxSettings
 from guidance.scvx import SCvxResult, solve_scvx
 from guidance.symmetry import rotate_scenario, rotate_states
 from guidance.trajectory_io import read_trajectory
@@ -105,4 +106,5 @@ def test_cli_writes_the_trajectory_contract(tmp_path: Path) -> None:
     ):
         assert key in params
     assert json.loads(str(data["scenario"]))["m0"] == 3.0
+    assert json.loads(str(data["settings"])) == dataclasses.asdict(SCvxSettings())
     assert fig.stat().st_size > 10_000

@@ -17,6 +17,7 @@ guidance.guess.project_guess, eta_init 0.01, the C solver).
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -217,6 +218,8 @@ def test_cli_trust_update_reaches_the_c_loop(tmp_path: Path, nets) -> None:
     paper = cguidance.solve_tscvx_c(SCENARIOS["default"], nets=nets)
     written = read_trajectory(out)
     assert int(written["iterations"]) == eq13.iterations != paper.iterations
+    recorded = json.loads(str(written["settings"]))
+    assert recorded["tau_r_update"] is False and recorded["eta_init"] == 0.01
     np.testing.assert_allclose(written["x"][-1], eq13.x[-1], rtol=1e-12, atol=0)
 
 
