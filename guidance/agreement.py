@@ -22,6 +22,7 @@ import statistics
 import sys
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 from guidance.params import Scenario, SCvxSettings
@@ -144,26 +145,37 @@ def landing_table(names: Sequence[str], results: Sequence[dict[str, Outcome]]) -
     return "\n".join(lines)
 
 
-def landings(catalog: Sequence[str] | None, n_random: int) -> list[tuple[str, Scenario]]:
-    """The named catalog landings (all when None), then n fresh sampled landings (the
-    T-SCvx benchmark's: from the training distribution, never trained on)."""
+def landings(
+    catalog: Sequence[str] | None, n_random: int, files: Sequence[str] = ()
+) -> list[tuple[str, Scenario]]:
+    """The scenario files (named by their stem), the named catalog landings (all when None),
+    then n fresh sampled landings (the T-SCvx benchmark's: from the training distribution,
+    never trained on). A bad file raises ScenarioError, an unknown name ValueError."""
     from guidance.bench_tscvx import sample_landings
     from guidance.catalog import SCENARIOS
+    from guidance.scenario import load_scenario
 
     names = list(SCENARIOS) if catalog is None else list(catalog)
     unknown = [n for n in names if n not in SCENARIOS]
     if unknown:
         raise ValueError(f"unknown catalog landings {unknown}; known: {list(SCENARIOS)}")
-    jobs = [(n, SCENARIOS[n]) for n in names]
+    jobs = [(Path(f).stem, load_scenario(f)) for f in files]
+    jobs += [(n, SCENARIOS[n]) for n in names]
     jobs += [(f"sampled {i}", s) for i, s in enumerate(sample_landings(n_random))]
     return jobs
 
 
-def main(catalog: Sequence[str] | None, n_random: int, workers: int, progress: bool = True) -> int:
+def main(
+    catalog: Sequence[str] | None,
+    n_random: int,
+    workers: int,
+    files: Sequence[str] = (),
+    progress: bool = True,
+) -> int:
     from guidance.cguidance import LIB_PATH
     from guidance.dataset import imap_pool
 
-    jobs = landings(catalog, n_random)
+    jobs = landings(catalog, n_random, files)
     if not LIB_PATH.exists():
         print(f"{LIB_PATH} not found: run `make lib` (the C variants need it)", file=sys.stderr)
         return 1
@@ -182,7 +194,8 @@ def main(catalog: Sequence[str] | None, n_random: int, workers: int, progress: b
         bar.close()
     names = sorted(done, key=order.__getitem__)
     results = [done[n] for n in names]
-    print(f"SCvx final mass across conic solvers and tolerances, {len(results)} landings")
+    plural = "" if len(results) == 1 else "s"
+    print(f"SCvx final mass across conic solvers and tolerances, {len(results)} landing{plural}")
     print(landing_table(names, results))
     print()
     print(summary_table(results))

@@ -149,9 +149,15 @@ def cmd_bench(args: argparse.Namespace) -> int:
 def cmd_agreement(args: argparse.Namespace) -> int:
     from guidance import agreement
 
-    catalog = None if args.catalog == ["all"] else args.catalog
+    # defaults: the whole catalog and 20 samples, or only the files when files are given
+    files_only = bool(args.scenarios)
+    if args.catalog is None:
+        catalog = [] if files_only else None
+    else:
+        catalog = None if args.catalog == ["all"] else args.catalog
+    n = (0 if files_only else 20) if args.landings is None else args.landings
     try:
-        return agreement.main(catalog, args.landings, args.workers)
+        return agreement.main(catalog, n, args.workers, args.scenarios)
     except ValueError as exc:  # an unknown catalog name
         print(f"error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
@@ -231,9 +237,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="final mass of SCvx across conic solvers and tolerances (reference, C library)",
     )
     a.add_argument(
-        "--catalog", nargs="+", default=["all"], help="catalog landings to include (default: all)"
+        "scenarios", nargs="*", help="scenario JSON files (given alone: only these landings)"
     )
-    a.add_argument("--landings", type=int, default=20, help="fresh sampled landings to add")
+    a.add_argument(
+        "--catalog", nargs="+", help="catalog landings to include, or all (default: all)"
+    )
+    a.add_argument("--landings", type=int, help="fresh sampled landings to add (default: 20)")
     a.add_argument("--workers", type=int, default=os.cpu_count() or 1)
     a.set_defaults(func=cmd_agreement)
 

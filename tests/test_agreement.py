@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import json
+from pathlib import Path
+
 import pytest
 
 from guidance.agreement import (
@@ -14,8 +17,10 @@ from guidance.agreement import (
     score,
     summary_table,
 )
+from guidance.catalog import SCENARIOS
 from guidance.cguidance import LIB_PATH
 from guidance.cli import main
+from guidance.scenario import scenario_to_dict
 
 
 def test_same_trajectory_is_issue_3s_figure() -> None:
@@ -64,3 +69,17 @@ def test_cli_on_a_landing_every_solver_resolves(capsys: pytest.CaptureFixture[st
     row = next(line for line in out.splitlines() if line.startswith("overhead"))
     assert "*" not in row, row
     assert out.count("1 of 1") == 2 * (len(VARIANTS) - 2) + 2
+
+
+@pytest.mark.skipif(not LIB_PATH.exists(), reason="build/libtscvx_gnc.so not built (make lib)")
+def test_cli_on_a_scenario_file(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """A user's scenario file alone: one landing named by the file, every variant solved."""
+    path = tmp_path / "my_landing.json"
+    path.write_text(json.dumps(scenario_to_dict(SCENARIOS["overhead"])))
+    assert main(["agreement", str(path), "--workers", "1"]) == 0
+    out = capsys.readouterr().out
+    assert "tolerances, 1 landing\n" in out and out.count("of 1 |") == 2 * (len(VARIANTS) - 2) + 2
+    assert any(line.startswith("my_landing") for line in out.splitlines())
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps({"m0": -1.0}))
+    assert main(["agreement", str(bad)]) == 2
