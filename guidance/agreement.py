@@ -12,8 +12,8 @@ Each variant is scored against the reference and against the converged answer: h
 landings end within 1e-6 relative final mass with the same iteration count (issue 3's figure of
 "the same trajectory"), and the median and largest final-mass gaps. The subproblems' optimal
 sets are nearly flat in some directions, so each solver stops at its own point of them within
-its tolerance, and SCvx's accept/reject steps amplify that; the first row says how much of the
-disagreement the reference shows against itself.
+its tolerance, and SCvx's accept/reject steps amplify that; the row "reference at 1e-10" says
+how much of the disagreement the reference shows against itself.
 """
 
 from __future__ import annotations
@@ -68,14 +68,14 @@ def _outcome(result: SCvxResult) -> Outcome:
 
 
 REFERENCE = "reference (Clarabel, 1e-9)"
+CONVERGED = "converged (C, 1e-12)"
 VARIANTS: dict[str, Callable[[Scenario], Outcome]] = {
     REFERENCE: lambda s: _reference(s, SCvxSettings().socp_tol),
     "reference at 1e-10": lambda s: _reference(s, 1e-10),
     "Python + C SOCP": _python_c_socp,
     "C library": lambda s: _c_library(s, SCvxSettings().socp_tol),
-    "converged (C, 1e-12)": lambda s: _c_library(s, CONVERGED_TOL),
+    CONVERGED: lambda s: _c_library(s, CONVERGED_TOL),
 }
-CONVERGED = "converged (C, 1e-12)"
 
 
 def solve_landing(job: tuple[str, Scenario]) -> tuple[str, dict[str, Outcome]]:
