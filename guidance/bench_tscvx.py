@@ -79,9 +79,9 @@ def run(n: int, backend: str = "c", models_dir: Path | None = None, progress: bo
     full = SCvxSettings()
     variants = [Variant("SCvx"), Variant("T-SCvx warm start"), Variant("T-SCvx (Algorithm 2)"),
                 Variant("Alg. 2, Eq. 13 radius")]  # fmt: skip
-    eq13 = full.replace(tau_r_update=False)
+    reduced = full.replace(eta_init=REDUCED_ETA_INIT)
     # (settings, masks) of each T-SCvx variant
-    tscvx_runs = ((full, False), (full, True), (eq13, True))
+    tscvx_runs = ((reduced, False), (reduced, True), (reduced.replace(tau_r_update=False), True))
     sol_model = con_model = None
     landings = sample_landings(n)
     if backend == "c":  # the on-board call: both networks run in C too (pdg_solve_tscvx)
@@ -96,7 +96,7 @@ def run(n: int, backend: str = "c", models_dir: Path | None = None, progress: bo
             for v, (st, masked) in zip(variants[1:], tscvx_runs, strict=True):
                 t0 = time.perf_counter()
                 v.results.append(
-                    solve_tscvx_c(scenario, st, masks=masked, eta_init=REDUCED_ETA_INIT, nets=nets)
+                    solve_tscvx_c(scenario, st, masks=masked, eta_init=st.eta_init, nets=nets)
                 )
                 v.wall_s.append(time.perf_counter() - t0)
             continue
@@ -111,7 +111,6 @@ def run(n: int, backend: str = "c", models_dir: Path | None = None, progress: bo
         t_nn = time.perf_counter() - t0  # both networks and the projection, in Python
         for v, (st, masked) in zip(variants[1:], tscvx_runs, strict=True):
             t0 = time.perf_counter()
-            st = st.replace(eta_init=REDUCED_ETA_INIT)
             v.results.append(solve(scenario, st, guess=guess, masks=masks if masked else None))
             v.wall_s.append(time.perf_counter() - t0 + t_nn)
     return variants

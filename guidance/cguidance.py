@@ -294,11 +294,23 @@ def solve_c(
     t_start = time.perf_counter()  # the guidance call only (set-up is a one-time init)
     status = lib.pdg_solve(ws.ws, ct.byref(cs), ct.byref(opt), ct.byref(res))
     solve_time = time.perf_counter() - t_start
-    return _collect(ws, status, res, x, u, solve_time)
+    return _collect(ws, status, res, x, u, solve_time, _ran_with(settings, socp))
+
+
+def _ran_with(settings: SCvxSettings | None, socp: dict[str, float | int]) -> SCvxSettings:
+    """The SCvxSettings of a C call: the given ones with any per-call override of a field."""
+    names = {f.name for f in dataclasses.fields(SCvxSettings)}
+    return (settings or SCvxSettings()).replace(**{k: v for k, v in socp.items() if k in names})
 
 
 def _collect(
-    ws: Workspace, status: int, res: _Result, x: np.ndarray, u: np.ndarray, solve_time: float
+    ws: Workspace,
+    status: int,
+    res: _Result,
+    x: np.ndarray,
+    u: np.ndarray,
+    solve_time: float,
+    settings: SCvxSettings,
 ) -> SCvxResult:
     """The SCvxResult of a finished C call (log and masks read from the workspace)."""
     lib = ws.lib
@@ -347,6 +359,7 @@ def _collect(
         masks=mask_log,
         max_defect=float(res.max_defect),
         max_violation=float(res.max_violation),
+        settings=settings,
     )
 
 
@@ -464,7 +477,8 @@ def solve_tscvx_c(
     solve_time = time.perf_counter() - t_start
     if status == 4 and res.message.startswith(b"nets: "):
         raise FlightNetsError(res.message.decode())
-    out = _collect(ws, status, res, x, u, solve_time)
+    ran_with = _ran_with(settings, socp).replace(eta_init=float(rep.eta_init))
+    out = _collect(ws, status, res, x, u, solve_time, ran_with)
     out.tscvx_report = {  # type: ignore[attr-defined]
         "warm_started": bool(rep.warm_started),
         "masks_predicted": int(rep.masks_predicted),

@@ -105,9 +105,7 @@ def cmd_solve(args: argparse.Namespace) -> int:
         f"(conic solves {sum(sub_times):.3f} s, median {1e3 * np.median(sub_times):.1f} ms)"
     )
     if args.out:
-        # the settings the solve ran with (T-SCvx starts from the reduced radius, Table 1)
-        used = settings.replace(eta_init=REDUCED_ETA_INIT) if args.method == "tscvx" else settings
-        write_trajectory(args.out, result, p, scenario, args.method, args.backend, used)
+        write_trajectory(args.out, result, p, scenario, args.method, args.backend)
         print(f"wrote {args.out}")
     if args.plot:
         from guidance.plots import landing_figure
@@ -158,7 +156,7 @@ def cmd_agreement(args: argparse.Namespace) -> int:
     n = (0 if files_only else 20) if args.landings is None else args.landings
     try:
         return agreement.main(catalog, n, args.workers, args.scenarios)
-    except ValueError as exc:  # an unknown catalog name
+    except ValueError as exc:  # an unknown catalog name or a bad scenario file
         print(f"error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
 

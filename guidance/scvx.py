@@ -68,6 +68,7 @@ class SCvxResult:
     max_defect: float = float("nan")  # max |x_{k+1} - F(...)| over nodes, physical units
     max_violation: float = float("nan")  # max h over nodes and constraints (<= 0 when met)
     subproblems: list[ConicProblem] = field(default_factory=list)
+    settings: SCvxSettings | None = None  # what the solve ran with (trajectory files record it)
 
     @property
     def final_mask(self) -> np.ndarray:
@@ -277,6 +278,7 @@ class SCvxSolver:
             max_defect=defect,
             max_violation=viol,
             subproblems=subproblems,
+            settings=st,
         )
 
     def _diagnose(

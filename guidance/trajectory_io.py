@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from guidance.params import Params, SCvxSettings
+from guidance.params import Params
 from guidance.scenario import scenario_to_dict
 from guidance.scvx import SCvxResult
 
@@ -35,10 +35,9 @@ def write_trajectory(
     scenario: object,
     method: str,
     backend: str,
-    settings: SCvxSettings | None = None,
 ) -> None:
     """Writes the contract keys plus the iteration masks, reason, scenario, the SCvx settings
-    of the solve (when given) and provenance."""
+    the solve ran with (``result.settings``, when known) and provenance."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(path.name + ".tmp.npz")
@@ -59,8 +58,8 @@ def write_trajectory(
         provenance=np.str_(json.dumps(provenance())),
         **(
             {}
-            if settings is None
-            else {"settings": np.str_(json.dumps(dataclasses.asdict(settings)))}
+            if result.settings is None
+            else {"settings": np.str_(json.dumps(dataclasses.asdict(result.settings)))}
         ),
     )
     tmp.replace(path)  # never leave a half-written file under the final name
