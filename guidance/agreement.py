@@ -10,10 +10,11 @@ Every landing is solved by the reference (Python SCvx + Clarabel, subproblems at
 
 Each variant is scored against the reference and against the converged answer: how many
 landings end within 1e-6 relative final mass with the same iteration count (issue 3's figure of
-"the same trajectory"), and the median and largest final-mass gaps. The subproblems' optimal
-sets are nearly flat in some directions, so each solver stops at its own point of them within
-its tolerance, and SCvx's accept/reject steps amplify that; the row "reference at 1e-10" says
-how much of the disagreement the reference shows against itself.
+"the same trajectory"), and the median and largest final-mass gaps; the row "reference at 1e-10"
+says how much of any disagreement the reference shows against itself. ``--prox-u 0`` runs every
+variant with the paper's linear subproblem objective, whose optimal sets are flat in the thrust
+history: each solver stops at its own point of them within its tolerance, and SCvx's
+accept/reject steps amplify that (SCvxSettings.prox_u).
 """
 
 from __future__ import annotations
@@ -45,22 +46,22 @@ class Outcome:
     status: str
 
 
-def _reference(scenario: Scenario, tol: float) -> Outcome:
+def _reference(scenario: Scenario, st: SCvxSettings, tol: float) -> Outcome:
     from guidance.scvx import solve_scvx
 
-    return _outcome(solve_scvx(scenario, SCvxSettings(socp_tol=tol)))
+    return _outcome(solve_scvx(scenario, st.replace(socp_tol=tol)))
 
 
-def _python_c_socp(scenario: Scenario) -> Outcome:
+def _python_c_socp(scenario: Scenario, st: SCvxSettings) -> Outcome:
     from guidance.scvx import solve_scvx
 
-    return _outcome(solve_scvx(scenario, backend="c"))
+    return _outcome(solve_scvx(scenario, st, backend="c"))
 
 
-def _c_library(scenario: Scenario, tol: float) -> Outcome:
+def _c_library(scenario: Scenario, st: SCvxSettings, tol: float) -> Outcome:
     from guidance.cguidance import solve_c
 
-    return _outcome(solve_c(scenario, SCvxSettings(socp_tol=tol)))
+    return _outcome(solve_c(scenario, st.replace(socp_tol=tol)))
 
 
 def _outcome(result: SCvxResult) -> Outcome:
@@ -69,19 +70,19 @@ def _outcome(result: SCvxResult) -> Outcome:
 
 REFERENCE = "reference (Clarabel, 1e-9)"
 CONVERGED = "converged (C, 1e-12)"
-VARIANTS: dict[str, Callable[[Scenario], Outcome]] = {
-    REFERENCE: lambda s: _reference(s, SCvxSettings().socp_tol),
-    "reference at 1e-10": lambda s: _reference(s, 1e-10),
+VARIANTS: dict[str, Callable[[Scenario, SCvxSettings], Outcome]] = {
+    REFERENCE: lambda s, st: _reference(s, st, st.socp_tol),
+    "reference at 1e-10": lambda s, st: _reference(s, st, 1e-10),
     "Python + C SOCP": _python_c_socp,
-    "C library": lambda s: _c_library(s, SCvxSettings().socp_tol),
-    CONVERGED: lambda s: _c_library(s, CONVERGED_TOL),
+    "C library": lambda s, st: _c_library(s, st, st.socp_tol),
+    CONVERGED: lambda s, st: _c_library(s, st, CONVERGED_TOL),
 }
 
 
-def solve_landing(job: tuple[str, Scenario]) -> tuple[str, dict[str, Outcome]]:
+def solve_landing(job: tuple[str, Scenario, SCvxSettings]) -> tuple[str, dict[str, Outcome]]:
     """Every variant on one landing (a pool job: module-level, picklable)."""
-    name, scenario = job
-    return name, {variant: solve(scenario) for variant, solve in VARIANTS.items()}
+    name, scenario, st = job
+    return name, {variant: solve(scenario, st) for variant, solve in VARIANTS.items()}
 
 
 def rel_gap(a: Outcome, b: Outcome) -> float:
@@ -171,15 +172,17 @@ def main(
     workers: int,
     files: Sequence[str] = (),
     progress: bool = True,
+    settings: SCvxSettings | None = None,
 ) -> int:
     from guidance.cguidance import LIB_PATH
     from guidance.dataset import imap_pool
 
-    jobs = landings(catalog, n_random, files)
+    st = settings or SCvxSettings()
+    jobs = [(name, s, st) for name, s in landings(catalog, n_random, files)]
     if not LIB_PATH.exists():
         print(f"{LIB_PATH} not found: run `make lib` (the C variants need it)", file=sys.stderr)
         return 1
-    order = {name: i for i, (name, _) in enumerate(jobs)}
+    order = {name: i for i, (name, _, _) in enumerate(jobs)}
     done: dict[str, dict[str, Outcome]] = {}
     bar = None
     if progress:
@@ -195,7 +198,11 @@ def main(
     names = sorted(done, key=order.__getitem__)
     results = [done[n] for n in names]
     plural = "" if len(results) == 1 else "s"
-    print(f"SCvx final mass across conic solvers and tolerances, {len(results)} landing{plural}")
+    objective = "paper's linear objective" if st.prox_u == 0 else f"prox_u = {st.prox_u:g}"
+    print(
+        f"SCvx final mass across conic solvers and tolerances, {len(results)} landing{plural} "
+        f"(subproblems: {objective})"
+    )
     print(landing_table(names, results))
     print()
     print(summary_table(results))

@@ -85,7 +85,9 @@ def cmd_solve(args: argparse.Namespace) -> int:
     from guidance.trajectory_io import write_trajectory
 
     scenario = _load(args.scenario, args.pin_final_attitude)
-    settings = SCvxSettings(iter_max=args.iter_max, tau_r_update=args.trust_update == "tau_r")
+    settings = SCvxSettings(
+        iter_max=args.iter_max, tau_r_update=args.trust_update == "tau_r", prox_u=args.prox_u
+    )
     print(f"scenario: {json.dumps(scenario_to_dict(scenario))}")
     print(f"method: {args.method}, backend: {args.backend}, N = {scenario.params.N}")
     result = run_solve(scenario, args.method, args.backend, settings, Path(args.models), print)
@@ -155,7 +157,8 @@ def cmd_agreement(args: argparse.Namespace) -> int:
         catalog = None if args.catalog == ["all"] else args.catalog
     n = (0 if files_only else 20) if args.landings is None else args.landings
     try:
-        return agreement.main(catalog, n, args.workers, args.scenarios)
+        settings = SCvxSettings(prox_u=args.prox_u)
+        return agreement.main(catalog, n, args.workers, args.scenarios, settings=settings)
     except ValueError as exc:  # an unknown catalog name or a bad scenario file
         print(f"error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
@@ -204,6 +207,13 @@ def build_parser() -> argparse.ArgumentParser:
         "Eq. (13) with the masks as well",
     )
     s.add_argument(
+        "--prox-u",
+        type=float,
+        default=SCvxSettings().prox_u,
+        help="weight of the subproblem's proximal term on the scaled thrust (0: the paper's "
+        "linear objective, whose answer depends on the conic solver)",
+    )
+    s.add_argument(
         "--pin-final-attitude",
         action="store_true",
         help="require q(t_f) = q_f instead of only an upright touchdown",
@@ -242,6 +252,12 @@ def build_parser() -> argparse.ArgumentParser:
     )
     a.add_argument("--landings", type=int, help="fresh sampled landings to add (default: 20)")
     a.add_argument("--workers", type=int, default=os.cpu_count() or 1)
+    a.add_argument(
+        "--prox-u",
+        type=float,
+        default=SCvxSettings().prox_u,
+        help="weight of the subproblems' proximal term (0: the paper's objective)",
+    )
     a.set_defaults(func=cmd_agreement)
 
     g = sub.add_parser("budget", help="RAD750 time and memory budget of one C guidance call")

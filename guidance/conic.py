@@ -99,11 +99,9 @@ def _clarabel_settings(tol: float, max_iter: int, verbose: bool) -> object:
     settings.tol_gap_rel = tol
     settings.tol_feas = tol
     settings.max_iter = max_iter
-    # Refine each KKT solve to 1e-10 (Clarabel's default is 1e-13 relative, 1e-12 absolute):
-    # ample for termination at 1e-9, and about a third of the solve time on the landing
-    # subproblems (objectives agree with the default to 1e-9).
-    settings.iterative_refinement_reltol = 1e-10
-    settings.iterative_refinement_abstol = 1e-10
+    # Clarabel's own iterative refinement (1e-13 relative, 1e-12 absolute): with the 1e-10 that
+    # this reference used until 22 Nov, the subproblems with the proximal term (a quadratic
+    # objective) end "AlmostSolved" at a 6e-8 gap on the default landing's first subproblem.
     # Presolve may drop rows, which would forbid updating the numbers in place.
     settings.presolve_enable = False
     return settings
@@ -152,7 +150,7 @@ class ClarabelSession:
     """Clarabel for a sequence of problems of one sparsity pattern (what SCvx solves).
 
     The first solve sets Clarabel up (ordering, symbolic factorization); later solves only
-    write the new numbers of q, A and b into it. Problems without P only.
+    write the new numbers of P, q, A and b into it.
     """
 
     def __init__(self, tol: float = 1e-9, max_iter: int = 200) -> None:
@@ -160,13 +158,14 @@ class ClarabelSession:
         self._solver: object | None = None
 
     def solve(self, prob: ConicProblem) -> ConicSolution:
-        if prob.P is not None:
-            return solve_clarabel(prob, tol=self.tol, max_iter=self.max_iter)
         if self._solver is None:
             settings = _clarabel_settings(self.tol, self.max_iter, False)
             self._solver = clarabel_solver(prob, settings)
         else:
-            self._solver.update(q=prob.q, A=prob.A.data, b=prob.b)  # type: ignore[attr-defined]
+            new = {"q": prob.q, "A": prob.A.data, "b": prob.b}
+            if prob.P is not None:
+                new["P"] = sp.csc_matrix(prob.P).data
+            self._solver.update(**new)  # type: ignore[attr-defined]
         t0 = time.perf_counter()
         sol = self._solver.solve()  # type: ignore[attr-defined]
         return _clarabel_solution(sol, time.perf_counter() - t0)

@@ -149,6 +149,13 @@ class SCvxSettings:
     # "auto": C when the library is built. Both evaluate the same expressions (equal to 1e-10).
     discretization: str = "auto"
     tight_tol: float = 1e-6  # slack threshold of the tight-constraint labelling
+    # Beyond the paper: weight w of the proximal term (w/2) |u_hat - u_hat_ref|^2 on the
+    # scaled thrust, added to the subproblem objective (not to L, Eq. (11)). The paper's
+    # linear objective leaves the subproblem's optimal set flat in the thrust history, so two
+    # correct conic solvers stop at different points of it and SCvx follows them apart (final
+    # masses 1e-4 apart); with w = 2e-2 the answer is unique and the solvers agree to about
+    # 1e-8 (README, "Why the subproblem has a proximal term"). 0 gives the paper's objective.
+    prox_u: float = 2e-2
     # Conic subproblem solver (either backend, and the C loop): gap and feasibility
     # tolerances, and the interior-point iteration limit.
     socp_tol: float = 1e-9
@@ -157,6 +164,10 @@ class SCvxSettings:
     # the fraction of mask bits changed since the last subproblem); False keeps Eq. (13) of
     # Algorithm 1 with the masks as well (`guidance bench` compares the two).
     tau_r_update: bool = True
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.prox_u) and self.prox_u >= 0.0):
+            raise ValueError(f"prox_u must be a finite weight >= 0, got {self.prox_u}")
 
     def replace(self, **changes: object) -> SCvxSettings:
         return dataclasses.replace(self, **changes)

@@ -183,7 +183,7 @@ class SCvxSolver:
             if mask is not None:
                 mask = np.asarray(mask, dtype=bool) | forced
             tpl = self.template(mask)
-            prob = tpl.assemble(disc, z, eta, st.lam, self.scn, self.sc)
+            prob = tpl.assemble(disc, z, eta, st.lam, self.scn, self.sc, st.prox_u)
             if self.record:
                 subproblems.append(prob)
             if id(tpl) not in self._sessions:

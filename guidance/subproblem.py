@@ -289,8 +289,10 @@ class SubproblemTemplate:
         lam: float,
         scenario: Scenario,
         scaling: Scaling,
+        prox_u: float = 0.0,
     ) -> ConicProblem:
-        """Writes the numbers of the subproblem linearized about the scaled iterate z_ref."""
+        """Writes the numbers of the subproblem linearized about the scaled iterate z_ref;
+        prox_u > 0 adds (prox_u / 2) |u_hat - u_hat_ref|^2 (SCvxSettings.prox_u)."""
         p = scenario.params
         N, L, sc = self.N, self.lay, scaling
         Sx, cx, Su, Ss = sc.Sx, sc.cx, sc.Su, sc.Ss
@@ -367,7 +369,13 @@ class SubproblemTemplate:
         q = np.zeros(self.n)
         q[L.x_index(N - 1, IM)] = -1.0  # minimize -m_hat(t_f)
         q[L.ivc :] = lam  # lambda (sum t + sum s')
-        return ConicProblem(P=None, q=q, A=Amat, b=b, cones=list(self.cones))
+        P = None
+        if prox_u > 0.0:
+            w = np.zeros(self.n)
+            w[L.iu : L.isig] = prox_u
+            P = sp.csc_matrix((w[L.iu : L.isig], (np.arange(L.iu, L.isig),) * 2), (self.n,) * 2)
+            q -= w * z_ref
+        return ConicProblem(P=P, q=q, A=Amat, b=b, cones=list(self.cones))
 
 
 def pack(xh: np.ndarray, uh: np.ndarray, sh: float, lay: Layout) -> np.ndarray:

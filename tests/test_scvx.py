@@ -108,3 +108,36 @@ def test_cli_writes_the_trajectory_contract(tmp_path: Path) -> None:
     assert json.loads(str(data["scenario"]))["m0"] == 3.0
     assert json.loads(str(data["settings"])) == dataclasses.asdict(SCvxSettings())
     assert fig.stat().st_size > 10_000
+
+
+def test_proximal_term_is_on_the_thrust_only() -> None:
+    """SCvxSettings.prox_u adds (w/2)|u_hat - u_hat_ref|^2 to the subproblem and nothing else:
+    P = w on the thrust columns, q shifted by -w u_hat_ref there, the constraints unchanged;
+    prox_u = 0 is the paper's objective (no P)."""
+    from guidance.guess import initial_guess
+    from guidance.model import discretize
+    from guidance.subproblem import Scaling, SubproblemTemplate, physical, scaled
+
+    scn = SCENARIOS["tilted"]
+    x, u, tf = initial_guess(scn)
+    sc = Scaling.for_scenario(scn, tf)
+    tpl = SubproblemTemplate(scn.params.N, scn.params.final_roll_free)
+    z = scaled(x, u, tf, tpl.lay, sc)
+    z += np.random.default_rng(0).normal(scale=0.1, size=z.size)  # u_ref not the guess's
+    disc = discretize(*physical(z, tpl.lay, sc), scn.params, 2)
+    paper = tpl.assemble(disc, z, 0.5, 500.0, scn, sc, 0.0)
+    w = 0.03
+    prox = tpl.assemble(disc, z, 0.5, 500.0, scn, sc, w)
+    assert paper.P is None
+    thrust = np.zeros(tpl.lay.n, bool)
+    thrust[tpl.lay.iu : tpl.lay.isig] = True
+    np.testing.assert_array_equal(prox.P.toarray(), np.diag(np.where(thrust, w, 0.0)))
+    np.testing.assert_array_equal(prox.q - paper.q, np.where(thrust, -w * z, 0.0))
+    assert (prox.A != paper.A).nnz == 0
+    np.testing.assert_array_equal(prox.b, paper.b)
+    # the objective difference is the proximal term up to a constant: zero at u_hat_ref
+    for v in (z, z + 0.2):
+        quad = 0.5 * v @ (prox.P @ v) + prox.q @ v - paper.q @ v
+        assert quad + 0.5 * w * (z[thrust] ** 2).sum() == pytest.approx(
+            0.5 * w * ((v - z)[thrust] ** 2).sum(), rel=1e-9
+        )

@@ -1,13 +1,12 @@
 """The reference SCvx with the flight C SOCP runtime (``--backend c-socp``) against Clarabel.
 
-Issue 3 asks for the final mass within 1e-6 relative and the same iteration count. The two
-conic solvers stop at different points of the subproblems' flat optimal faces (both within
-their 1e-9 tolerances), and SCvx, whose steps near the end all lie on the trust-region
-boundary, follows those points. Over the catalog and the 20 random landings of
-test_cguidance (22 Nov) the iteration counts differ by 0 on 21 landings, 1 on 8, 2 and 3 on
-one each, and the final masses agree to 1e-6 on 15 of 31 (median 1.3e-6, largest 4.7e-4).
-So this checks the default landing for the same status, at most two iterations apart and
-1e-4; the strict figure is open in issue 3."""
+Issue 3's figure: the same trajectory, final mass within 1e-6 relative and the same iteration
+count. It holds because the subproblem has a unique answer: the proximal term on the thrust
+(``SCvxSettings.prox_u``). With the paper's linear objective (``prox_u = 0``) the subproblems'
+optimal sets are flat in the thrust history, the two conic solvers stop at different points of
+them (both within their 1e-9 tolerances), and SCvx follows them apart: 1e-4 in final mass on
+this landing and iteration counts two apart (``guidance agreement``; README).
+"""
 
 from __future__ import annotations
 
@@ -15,13 +14,26 @@ import pytest
 
 scvx = pytest.importorskip("guidance.scvx")
 params = pytest.importorskip("guidance.params")
+catalog = pytest.importorskip("guidance.catalog")
 
 
-def test_scvx_backend_c_matches_clarabel() -> None:
-    scenario = params.Scenario()
+@pytest.mark.parametrize("name", ["default", "crossing", "steep_cone"])
+def test_scvx_backend_c_is_the_clarabel_trajectory(name: str) -> None:
+    scenario = catalog.SCENARIOS[name]
     ref = scvx.solve_scvx(scenario, backend="clarabel")
     got = scvx.solve_scvx(scenario, backend="c")
     assert ref.status == got.status == "solved"
+    assert got.iterations == ref.iterations
+    assert got.subproblems_solved == ref.subproblems_solved
+    assert abs(got.m_f - ref.m_f) <= 1e-6 * ref.m_f
+
+
+def test_paper_objective_still_solves() -> None:
+    """prox_u = 0 is the paper's subproblem (no P): both backends land, close in fuel."""
+    scenario = params.Scenario()
+    st = params.SCvxSettings(prox_u=0.0)
+    ref = scvx.solve_scvx(scenario, st, backend="clarabel")
+    got = scvx.solve_scvx(scenario, st, backend="c")
+    assert ref.status == got.status == "solved"
     assert abs(got.iterations - ref.iterations) <= 2
-    m_ref, m_got = ref.x[-1, 13], got.x[-1, 13]
-    assert abs(m_got - m_ref) <= 1e-4 * abs(m_ref)
+    assert abs(got.m_f - ref.m_f) <= 1e-4 * ref.m_f

@@ -58,7 +58,7 @@ typedef struct {
     const double *disc;         /* (N-1) x N_DISC */
     const double *zref;         /* scaled iterate */
     const unsigned char *keep;  /* 7N, NULL = keep everything */
-    double eta, lam;
+    double eta, lam, prox_u;
     double *b, *h, *c;          /* outputs: p, m, n */
 } pdg_values;
 
@@ -75,6 +75,8 @@ struct pdg_workspace {
     int *Ap, *Ai, *Gp, *Gi, *q, *dest;
     /* subproblem numbers */
     double *Ax, *Gx, *b, *h, *c;
+    int *Pp, *Pi;   /* prox_u > 0: P = prox_u I on the thrust columns */
+    double *Px;
     tscvx_workspace *socp;
     /* scenario-dependent */
     pdg_scenario scn;

@@ -76,6 +76,7 @@ void pdg_default_settings(pdg_settings *st)
     st->socp_tol = 1e-9;
     st->socp_max_iter = 200;
     st->tau_r_update = 1;
+    st->prox_u = 2e-2;
 }
 
 /* ---- derived quantities (guidance/params.py properties) ---------------------------------- */

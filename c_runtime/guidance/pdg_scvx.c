@@ -96,7 +96,7 @@ static int settings_ok(const pdg_settings *s)
 {
     const double d[] = {s->lam, s->rho0, s->rho1, s->rho2, s->alpha, s->beta, s->eta_init,
                         s->eta_lb, s->eta_ub, s->step_tol, s->vc_tol, s->defect_tol,
-                        s->tight_tol, s->socp_tol};
+                        s->tight_tol, s->socp_tol, s->prox_u};
     size_t i;
     for (i = 0; i < sizeof d / sizeof d[0]; ++i) {
         if (!isfinite(d[i])) {
@@ -110,7 +110,7 @@ static int settings_ok(const pdg_settings *s)
            s->defect_tol >= 0 && s->tight_tol >= 0 && s->rk4_substeps >= 1 &&
            s->rk4_substeps <= PDG_MAX_SUBSTEPS && s->socp_tol > 0 && s->socp_tol < 1 &&
            s->socp_max_iter >= 1 && s->socp_max_iter <= 500 &&
-           (s->tau_r_update == 0 || s->tau_r_update == 1);
+           (s->tau_r_update == 0 || s->tau_r_update == 1) && s->prox_u >= 0.0;
 }
 
 static void socp_settings(const pdg_settings *st, tscvx_settings *ts)
@@ -128,6 +128,11 @@ static void socp_data(const pdg_workspace *ws, tscvx_data *d)
     d->n = ws->n;
     d->p = ws->p;
     d->m = ws->m;
+    if (ws->st.prox_u > 0.0) {
+        d->Pp = ws->Pp;
+        d->Pi = ws->Pi;
+        d->Px = ws->Px;
+    }
     d->c = ws->c;
     d->Ap = ws->Ap;
     d->Ai = ws->Ai;
@@ -140,6 +145,22 @@ static void socp_data(const pdg_workspace *ws, tscvx_data *d)
     d->l = ws->l;
     d->nsoc = ws->nsoc;
     d->q = ws->q;
+}
+
+/* P = prox_u I on the thrust columns u_hat (upper-triangular CSC: the diagonal). */
+static void prox_pattern(pdg_workspace *ws)
+{
+    const int iu = ws->lay.iu, isig = ws->lay.isig;
+    int j, e = 0;
+    for (j = 0; j < ws->n; ++j) {
+        ws->Pp[j] = e;
+        if (j >= iu && j < isig) {
+            ws->Pi[e] = j;
+            ws->Px[e] = ws->st.prox_u;
+            ++e;
+        }
+    }
+    ws->Pp[ws->n] = e;
 }
 
 /* Builds the CSC patterns of A and G from the emitted (row, col) list and the map from
@@ -251,6 +272,11 @@ static void claim_arrays(pdg_workspace *t, arena *a)
     t->b = (double *)take(a, (size_t)t->p, sizeof(double));
     t->h = (double *)take(a, (size_t)t->m, sizeof(double));
     t->c = (double *)take(a, n, sizeof(double));
+    if (t->st.prox_u > 0.0) { /* P = w I on the thrust columns, fixed */
+        t->Pp = (int *)take(a, n + 1, sizeof(int));
+        t->Pi = (int *)take(a, N * NU, sizeof(int));
+        t->Px = (double *)take(a, N * NU, sizeof(double));
+    }
     t->z = (double *)take(a, n, sizeof(double));
     t->znew = (double *)take(a, n, sizeof(double));
     t->zdual = (double *)take(a, (size_t)t->m, sizeof(double));
@@ -342,6 +368,9 @@ static pdg_setup_status build(void *mem, size_t bytes, int N, int roll_free,
         return PDG_SETUP_SOCP_ERROR; /* an inconsistent pattern is a bug: report, never crash */
     }
     a.top = mark; /* temporaries released */
+    if (ws->st.prox_u > 0.0) {
+        prox_pattern(ws);
+    }
     /* placeholder numbers (finite); every solve writes the real ones */
     for (i = 0; i < ws->nnz_A; ++i) {
         ws->Ax[i] = 1.0;
@@ -607,6 +636,7 @@ static int assemble(pdg_workspace *ws, const double *z, const double *disc,
     v.keep = keep;
     v.eta = eta;
     v.lam = ws->st.lam;
+    v.prox_u = ws->st.prox_u;
     v.b = ws->b;
     v.h = ws->h;
     v.c = ws->c;

@@ -151,6 +151,10 @@ void pdg_emit(pdg_emitter *e, const pdg_layout *L, int roll_free, const pdg_valu
             v->c[i] = i >= L->ivc ? v->lam : 0.0;
         }
         v->c[XI(N - 1, IM)] = -1.0;
+        /* proximal term (w/2)|u_hat - u_ref|^2: its linear part -w u_ref */
+        for (i = L->iu; i < L->isig; ++i) {
+            v->c[i] -= v->prox_u * v->zref[i];
+        }
     }
     /* ---- dynamics: x_{k+1} - A_hat x_k - Bm_hat u_k - Bp_hat u_{k+1} - S_hat sigma - nu
      *      = Sx^-1 (A c_x + z - c_x) */

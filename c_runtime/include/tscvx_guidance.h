@@ -138,6 +138,10 @@ typedef struct {
     /* T-SCvx only: 1 = Algorithm 2's radius update (alpha^tau_r, beta^(1 - tau_r), tau_r the
      * fraction of mask bits changed); 0 = Eq. (13) of Algorithm 1 with the masks as well */
     int tau_r_update;
+    /* Beyond the paper: weight w >= 0 of (w/2)|u_hat - u_hat_ref|^2 on the scaled thrust in
+     * the subproblem objective (not in L, Eq. (11)); it makes the subproblem's answer unique,
+     * so that conic solvers agree. 0: the paper's linear objective. Fixed at pdg_setup. */
+    double prox_u;
 } pdg_settings;
 
 /* Returns k-th mask (7N bytes, nonzero = keep) into `mask` for SCvx iteration k = 1, 2, ...;

@@ -58,6 +58,15 @@ def callgrind_instructions(models: Path) -> dict[str, int]:
     return out
 
 
+def _objective(settings: dict) -> str:
+    """The subproblem objective the data were solved with (files older than
+    SCvxSettings.prox_u were solved with the paper's, prox_u = 0)."""
+    w = float(settings.get("prox_u", 0.0))
+    if w == 0.0:
+        return "the paper's linear subproblem objective, prox_u = 0"
+    return f"proximal term on the thrust prox_u = {w:g}"
+
+
 def _pct(v: float) -> str:
     return f"{100 * v:.2f} %"
 
@@ -144,7 +153,8 @@ def write_card(models: Path) -> Path:
         f"`{h.get('n_base')}` base landings x 8 rotations = `{h.get('n_samples')}` samples "
         f"(created {h.get('created_utc')}, {h.get('code_version')}, seed {h.get('seed')}, "
         f"solved by SCvx on the `{h.get('solver_backend', 'clarabel')}` backend with "
-        f"{h.get('scvx_settings', {}).get('rk4_substeps', '?')} RK4 substeps per interval). "
+        f"{h.get('scvx_settings', {}).get('rk4_substeps', '?')} RK4 substeps per interval, "
+        f"{_objective(h.get('scvx_settings', {}))}). "
         f"Base status: {h.get('base_status_counts')}; feasible fraction "
         f"{_pct(h.get('feasible_fraction', 0))}. Only solved landings are used for training."
     )
