@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from guidance.cli import main
-from guidance.params import Params
+from guidance.params import Params, SCvxSettings
 from guidance.scenario import ScenarioError, scenario_from_dict
 
 GOOD = {
@@ -79,3 +79,14 @@ def test_parameter_override_and_defaults() -> None:
     assert p.beta_mdot == pytest.approx(0.1 * 0.5 / 30)
     assert p.aero_coeff == pytest.approx(0.1)
     assert p.J_B == (0.001, 0.01, 0.01)
+
+
+@pytest.mark.parametrize("weight", ["-0.01", "nan", "inf", "heavy"])
+def test_bad_proximal_weight_exits_2(weight: str, capsys: pytest.CaptureFixture[str]) -> None:
+    for command in ("solve", "agreement"):
+        with pytest.raises(SystemExit) as exc:
+            main([command, "--prox-u", weight])
+        assert exc.value.code == 2
+        assert "--prox-u" in capsys.readouterr().err
+    with pytest.raises(ValueError, match="prox_u"):
+        SCvxSettings(prox_u=float("nan") if weight == "heavy" else float(weight))
