@@ -101,7 +101,11 @@ def cmd_solve(args: argparse.Namespace) -> int:
         iter_max=args.iter_max, tau_r_update=args.trust_update == "tau_r", prox_u=args.prox_u
     )
     print(f"scenario: {json.dumps(scenario_to_dict(scenario))}")
-    print(f"method: {args.method}, backend: {args.backend}, N = {scenario.params.N}")
+    objective = "paper's linear" if settings.prox_u == 0 else f"proximal weight {settings.prox_u:g}"
+    print(
+        f"method: {args.method}, backend: {args.backend}, N = {scenario.params.N}, "
+        f"subproblem objective: {objective}"
+    )
     result = run_solve(scenario, args.method, args.backend, settings, Path(args.models), print)
     p = scenario.params
     fuel = scenario.initial.m0 - result.x[-1, IM]

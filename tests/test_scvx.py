@@ -110,6 +110,18 @@ def test_cli_writes_the_trajectory_contract(tmp_path: Path) -> None:
     assert fig.stat().st_size > 10_000
 
 
+def test_cli_prox_u_reaches_the_solve(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """`--prox-u 0` solves with the paper's objective, says so, and the file records it."""
+    out = tmp_path / "paper.npz"
+    assert main(["solve", "--prox-u", "0", "--out", str(out)]) == 0
+    assert "subproblem objective: paper's linear" in capsys.readouterr().out
+    data = read_trajectory(out)
+    assert json.loads(str(data["settings"]))["prox_u"] == 0.0
+    paper = solve_scvx(SCENARIOS["default"], SCvxSettings(prox_u=0.0))
+    assert int(data["iterations"]) == paper.iterations
+    assert float(data["x"][-1, 13]) == pytest.approx(paper.m_f, rel=1e-12)
+
+
 def test_proximal_term_is_on_the_thrust_only() -> None:
     """SCvxSettings.prox_u adds (w/2)|u_hat - u_hat_ref|^2 to the subproblem and nothing else:
     P = w on the thrust columns, q shifted by -w u_hat_ref there, the constraints unchanged;
