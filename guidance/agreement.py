@@ -24,7 +24,7 @@ import sys
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Protocol
 
 from guidance.params import Scenario, SCvxSettings
 
@@ -35,6 +35,17 @@ STRICT_REL_MF = 1e-6  # issue 3's "same trajectory": final mass within 1e-6 rela
 # ... and the same iteration count.
 CONVERGED_TOL = 1e-12
 CELL = 20  # width of a variant's column in the per-landing table
+
+
+class Landed(Protocol):
+    """What the comparison reads of a solve: an Outcome, or an SCvxResult itself."""
+
+    @property
+    def m_f(self) -> float: ...
+    @property
+    def iterations(self) -> int: ...
+    @property
+    def status(self) -> str: ...
 
 
 @dataclass(frozen=True)
@@ -85,11 +96,11 @@ def solve_landing(job: tuple[str, Scenario, SCvxSettings]) -> tuple[str, dict[st
     return name, {variant: solve(scenario, st) for variant, solve in VARIANTS.items()}
 
 
-def rel_gap(a: Outcome, b: Outcome) -> float:
+def rel_gap(a: Landed, b: Landed) -> float:
     return abs(a.m_f - b.m_f) / abs(b.m_f)
 
 
-def same_trajectory(a: Outcome, b: Outcome) -> bool:
+def same_trajectory(a: Landed, b: Landed) -> bool:
     """Issue 3's figure: same status, final mass within 1e-6 relative, same iterations."""
     return a.status == b.status and rel_gap(a, b) <= STRICT_REL_MF and a.iterations == b.iterations
 

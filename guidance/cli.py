@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import os
 import sys
 from collections.abc import Callable, Sequence
@@ -82,15 +81,12 @@ def run_solve(
     return solver.solve(guess=guess, masks=mask_fn)
 
 
-def _weight(text: str) -> float:
-    """A finite weight >= 0 (argparse type: a bad one exits 2 with the message)."""
+def _prox_weight(text: str) -> float:
+    """--prox-u, checked by SCvxSettings itself (argparse type: a bad one exits 2)."""
     try:
-        w = float(text)
-    except ValueError:
-        w = math.nan
-    if not (math.isfinite(w) and w >= 0.0):
-        raise argparse.ArgumentTypeError(f"must be a finite number >= 0, got {text!r}")
-    return w
+        return SCvxSettings(prox_u=float(text)).prox_u
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
 
 
 def cmd_solve(args: argparse.Namespace) -> int:
@@ -224,7 +220,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     s.add_argument(
         "--prox-u",
-        type=_weight,
+        type=_prox_weight,
         default=SCvxSettings().prox_u,
         help="weight of the subproblem's proximal term on the scaled thrust (0: the paper's "
         "linear objective, whose answer depends on the conic solver)",
@@ -270,7 +266,7 @@ def build_parser() -> argparse.ArgumentParser:
     a.add_argument("--workers", type=int, default=os.cpu_count() or 1)
     a.add_argument(
         "--prox-u",
-        type=_weight,
+        type=_prox_weight,
         default=SCvxSettings().prox_u,
         help="weight of the subproblems' proximal term (0: the paper's objective)",
     )

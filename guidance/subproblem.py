@@ -370,11 +370,10 @@ class SubproblemTemplate:
         q[L.x_index(N - 1, IM)] = -1.0  # minimize -m_hat(t_f)
         q[L.ivc :] = lam  # lambda (sum t + sum s')
         P = None
-        if prox_u > 0.0:
-            w = np.zeros(self.n)
-            w[L.iu : L.isig] = prox_u
-            P = sp.csc_matrix((w[L.iu : L.isig], (np.arange(L.iu, L.isig),) * 2), (self.n,) * 2)
-            q -= w * z_ref
+        if prox_u > 0.0:  # (prox_u / 2) |u_hat - u_ref|^2 = P part + linear part, + const
+            thrust = np.arange(L.iu, L.isig)
+            P = sp.csc_matrix((np.full(thrust.size, prox_u), (thrust, thrust)), (self.n,) * 2)
+            q[thrust] -= prox_u * z_ref[thrust]
         return ConicProblem(P=P, q=q, A=Amat, b=b, cones=list(self.cones))
 
 

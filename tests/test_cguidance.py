@@ -25,6 +25,7 @@ import numpy as np
 import pytest
 
 from guidance import cguidance
+from guidance.agreement import STRICT_REL_MF, same_trajectory
 from guidance.catalog import SCENARIOS
 from guidance.constraints import constraint_scales
 from guidance.guess import initial_guess
@@ -38,14 +39,6 @@ from guidance.verify import audit
 pytestmark = pytest.mark.skipif(
     not cguidance.LIB_PATH.exists(), reason="build/libtscvx_gnc.so not built (make lib)"
 )
-
-STRICT_REL_MF = 1e-6
-
-
-def same_trajectory(a: SCvxResult, b: SCvxResult) -> bool:
-    """Issue 3's figure: same status and iterations, final mass within 1e-6 relative."""
-    rel = abs(a.m_f - b.m_f) / b.m_f
-    return a.status == b.status and a.iterations == b.iterations and rel <= STRICT_REL_MF
 
 
 @pytest.fixture(scope="module")
