@@ -207,10 +207,11 @@ class SCvxSolver:
             tmask = tight_mask(h, self.scales, self._duals(tpl, sol.z), st.tight_tol)
             rho = dJ / dL if dL != 0.0 else float("nan")
             step = float(np.abs(z_new[: self.lay.n_traj] - z[: self.lay.n_traj]).max())
+            tr_step = tpl.trust_norm(z_new - z)
             accepted = dJ == 0.0 or dL <= 0.0 or rho >= st.rho0
             use_tau = masks is not None and st.tau_r_update
             tau_r = _changed_fraction(prev_mask, mask) if use_tau else None
-            eta_new = _trust_update(eta, rho if dL > 0 else 1.0, accepted, st, tau_r)
+            eta_new = _trust_update(eta, rho if dL > 0 else 1.0, accepted, tr_step, st, tau_r)
             newly_forced = False
             if mask is not None:
                 # Full-constraint guard: a candidate that violates a constraint the mask
@@ -350,8 +351,32 @@ def _changed_fraction(prev: np.ndarray | None, cur: np.ndarray | None) -> float:
     return float(np.mean(np.asarray(prev, bool) != np.asarray(cur, bool)))
 
 
+# _retry_radius: radii within RETRY_MARGIN of the rejected step count as holding it; at most
+# RETRY_SKIP_MAX of them are skipped (a bound for alpha near 1). The C library has the same.
+RETRY_MARGIN = 1.001
+RETRY_SKIP_MAX = 64
+
+
+def _retry_radius(eta: float, tr_step: float, st: SCvxSettings) -> float:
+    """The radius after a rejection. The retry has the same reference and data, only a smaller
+    radius: every radius eta / alpha^j that still holds the rejected step (tr_step, in the
+    trust region's norm) gives the same step back and is rejected again, so those solves are
+    skipped. Eq. (13)'s radius sequence is unchanged."""
+    eta = eta / st.alpha
+    for _ in range(RETRY_SKIP_MAX):
+        if not (eta > st.eta_lb and eta > RETRY_MARGIN * tr_step):
+            break
+        eta = eta / st.alpha
+    return max(eta, st.eta_lb)
+
+
 def _trust_update(
-    eta: float, rho: float, accepted: bool, st: SCvxSettings, tau_r: float | None
+    eta: float,
+    rho: float,
+    accepted: bool,
+    tr_step: float,
+    st: SCvxSettings,
+    tau_r: float | None,
 ) -> float:
     """Eq. (13); with tau_r (T-SCvx) the factors become alpha^tau_r and beta^(1 - tau_r)."""
     shrink = st.alpha if tau_r is None else st.alpha**tau_r
@@ -359,7 +384,7 @@ def _trust_update(
     if not accepted:
         # Algorithm 2 divides by alpha^tau_r here, which is 1 when the mask did not change and
         # would retry the same rejected step forever; a rejection always contracts.
-        eta = eta / st.alpha
+        eta = _retry_radius(eta, tr_step, st)
     elif rho < st.rho1:
         eta = eta / shrink
     elif rho >= st.rho2:

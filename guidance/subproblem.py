@@ -267,6 +267,12 @@ class SubproblemTemplate:
         if np.any((np.diff(rows[order]) == 0) & (np.diff(cols[order]) == 0)):
             raise AssertionError("duplicate entries in the subproblem pattern")
 
+    def trust_norm(self, dz: np.ndarray) -> float:
+        """|dz| in the trust region's norm: the largest |component| of the scalar part and
+        2-norm of a rotation pair (the step a radius must hold to leave the answer alone)."""
+        pairs = np.hypot(dz[self.tr_pairs[:, 0]], dz[self.tr_pairs[:, 1]])
+        return float(max(np.abs(dz[self.tr_scalar]).max(), pairs.max()))
+
     def _soc_entries(self, node: int, c: int) -> tuple[np.ndarray, np.ndarray]:
         L = self.lay
         if c == 1:  # [r1; tan(gs) r2; tan(gs) r3]

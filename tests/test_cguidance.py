@@ -114,6 +114,10 @@ def test_c_subproblem_equals_python_subproblem(name: str) -> None:
 def test_c_solve_is_the_python_solve(pairs, name: str) -> None:
     c, ref = pairs[name]
     assert_same_solve(c, ref)
+    # the same radii, rejected steps' retries included (Eq. (13) and the skipped retries)
+    c_eta, ref_eta = [h.eta for h in c.history], [h.eta for h in ref.history]
+    n = min(len(c_eta), len(ref_eta))
+    np.testing.assert_allclose(c_eta[:n], ref_eta[:n], rtol=1e-12)
 
 
 @pytest.mark.parametrize("name", list(SCENARIOS))

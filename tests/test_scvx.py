@@ -153,3 +153,54 @@ def test_proximal_term_is_on_the_thrust_only() -> None:
         assert quad + 0.5 * w * (z[thrust] ** 2).sum() == pytest.approx(
             0.5 * w * ((v - z)[thrust] ** 2).sum(), rel=1e-9
         )
+
+
+def test_a_rejection_skips_the_radii_that_hold_the_step() -> None:
+    """After a rejection only the radius changes. A radius that still holds the rejected step
+    gives the same step back (Clarabel solves one here), so SCvx goes straight to the first
+    radius of Eq. (13)'s sequence that cuts into the step."""
+    from guidance.conic import solve
+    from guidance.guess import initial_guess
+    from guidance.model import discretize
+    from guidance.scvx import RETRY_MARGIN, _retry_radius
+    from guidance.subproblem import Scaling, SubproblemTemplate, physical, scaled
+
+    scn, st = SCENARIOS["default"], SCvxSettings()
+    x, u, tf = initial_guess(scn)
+    sc = Scaling.for_scenario(scn, tf)
+    tpl = SubproblemTemplate(scn.params.N, scn.params.final_roll_free)
+    z = scaled(x, u, tf, tpl.lay, sc)
+    disc = discretize(*physical(z, tpl.lay, sc), scn.params, st.rk4_substeps)
+
+    def step(eta: float) -> tuple[np.ndarray, float]:
+        sol = solve(tpl.assemble(disc, z, eta, st.lam, scn, sc, st.prox_u))
+        assert sol.ok
+        return (sol.x - z)[: tpl.lay.n_traj], sol.obj
+
+    d, obj = step(st.eta_init)
+    s = tpl.trust_norm(d)
+    assert s < st.eta_init / st.alpha  # the first step fits in half the initial radius
+    eta = _retry_radius(st.eta_init, s, st)
+    assert eta <= RETRY_MARGIN * s < st.alpha * eta
+    # every skipped radius gives the rejected step back (to Clarabel's accuracy, which
+    # ends one of them "AlmostSolved"); the first radius not skipped gives another step
+    skipped = st.eta_init / st.alpha
+    while skipped > eta:
+        d_skip, obj_skip = step(skipped)
+        np.testing.assert_allclose(d_skip, d, atol=1e-4)
+        assert obj_skip == pytest.approx(obj, rel=1e-7)
+        skipped /= st.alpha
+    assert np.abs(step(eta)[0] - d).max() > 0.1
+    r = solve_scvx(scn)
+    assert not r.history[0].accepted and r.history[1].eta == eta
+
+
+def test_retry_radius_follows_the_sequence_and_its_bounds() -> None:
+    from guidance.scvx import _retry_radius
+
+    st = SCvxSettings()  # alpha = 2, eta_lb = 1e-3
+    assert _retry_radius(2.0, 1.5, st) == 1.0  # the step is cut at once: Eq. (13)
+    assert _retry_radius(2.0, 0.3, st) == 0.25  # 1 and 0.5 hold the step: skipped
+    assert _retry_radius(2.0, 0.2502, st) == 0.25  # within the margin: not skipped
+    assert _retry_radius(2.0, 0.0, st) == st.eta_lb
+    assert _retry_radius(2.0, 0.3, dataclasses.replace(st, alpha=1.0)) == 2.0  # bounded

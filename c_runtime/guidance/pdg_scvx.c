@@ -600,13 +600,58 @@ static int label_tight(pdg_workspace *ws, const double *h, const unsigned char *
     return count;
 }
 
+/* retry_radius: radii within RETRY_MARGIN of the rejected step count as holding it; at most
+ * RETRY_SKIP_MAX of them skipped (a bound for alpha near 1) */
+#define RETRY_MARGIN 1.001
+#define RETRY_SKIP_MAX 64
+
+/* |z_new - z| in the trust region's norm: the largest |difference| of a scalar component
+ * (states, thrust, sigma) and 2-norm of a rotation pair of states (guidance/subproblem.py). */
+static double trust_norm_step(const pdg_workspace *ws)
+{
+    const pdg_layout *L = &ws->lay;
+    double r = 0.0;
+    int k, i;
+    for (i = L->iu; i < L->n_traj; ++i) { /* thrust and sigma */
+        const double d = fabs(ws->znew[i] - ws->z[i]);
+        r = d > r ? d : r;
+    }
+    for (k = 0; k < ws->N; ++k) {
+        const double *zn = ws->znew + L->ix + NX * k, *zr = ws->z + L->ix + NX * k;
+        for (i = 0; i < N_TR_SCALAR; ++i) {
+            const double d = fabs(zn[pdg_tr_scalar_states[i]] - zr[pdg_tr_scalar_states[i]]);
+            r = d > r ? d : r;
+        }
+        for (i = 0; i < N_TR_PAIRS; ++i) {
+            const int a = pdg_tr_pairs[i][0], b = pdg_tr_pairs[i][1];
+            const double d = hypot(zn[a] - zr[a], zn[b] - zr[b]);
+            r = d > r ? d : r;
+        }
+    }
+    return r;
+}
+
+/* The radius after a rejection. The retry has the same reference and data, only a smaller
+ * radius: every radius eta / alpha^j that still holds the rejected step (tr_step, with a
+ * margin for the solver's tolerance) gives the same step back and is rejected again, so
+ * those solves are skipped. Eq. (13)'s radius sequence is unchanged. */
+static double retry_radius(const pdg_settings *st, double eta, double tr_step)
+{
+    int j;
+    eta = eta / st->alpha;
+    for (j = 0; j < RETRY_SKIP_MAX && eta > st->eta_lb && eta > RETRY_MARGIN * tr_step; ++j) {
+        eta = eta / st->alpha;
+    }
+    return eta > st->eta_lb ? eta : st->eta_lb;
+}
+
 static double trust_update(const pdg_settings *st, double eta, double rho, int accepted,
-                           int use_tau, double tau_r)
+                           double tr_step, int use_tau, double tau_r)
 {
     const double shrink = use_tau ? pow(st->alpha, tau_r) : st->alpha;
     const double grow = use_tau ? pow(st->beta, 1.0 - tau_r) : st->beta;
     if (!accepted) {
-        eta = eta / st->alpha; /* a rejection always contracts (see guidance/scvx.py) */
+        eta = retry_radius(st, eta, tr_step); /* a rejection always contracts */
     } else if (rho < st->rho1) {
         eta = eta / shrink;
     } else if (rho >= st->rho2) {
@@ -769,6 +814,7 @@ typedef struct {
     double L;         /* predicted cost: the subproblem objective */
     double vc;        /* virtual control + buffers, max(sum, 0) */
     double step;      /* |z_new - z|_inf over the trajectory variables */
+    double tr_step;   /* |z_new - z| in the trust region's norm (retry_radius) */
     int n_tight;
 } candidate;
 
@@ -842,6 +888,7 @@ static int evaluate(pdg_workspace *ws, const unsigned char *keep, candidate *cd)
         const double d = fabs(ws->znew[i] - ws->z[i]);
         cd->step = d > cd->step ? d : cd->step;
     }
+    cd->tr_step = trust_norm_step(ws);
     cd->n_tight = label_tight(ws, ws->hval, keep, ws->tight);
     return 0;
 }
@@ -992,7 +1039,7 @@ pdg_status pdg_solve_from(pdg_workspace *ws, const pdg_scenario *scenario,
         if (have_masks && prev_has_mask && has_mask) {
             tau_r = changed_fraction(ws);
         }
-        eta_new = trust_update(st, eta, dL > 0 ? rho : 1.0, accepted,
+        eta_new = trust_update(st, eta, dL > 0 ? rho : 1.0, accepted, cd.tr_step,
                                have_masks && st->tau_r_update, tau_r);
         /* Full-constraint guard of T-SCvx: a candidate that violates a constraint the mask
          * dropped is rejected and the constraint put back for the rest of the solve; the retry
