@@ -34,6 +34,7 @@ from guidance.csocp import SOLVE_STATUS
 from guidance.params import NC, NU, NX, Params, Scenario, SCvxSettings
 from guidance.scenario import ScenarioError
 from guidance.scvx import IterationRecord, SCvxResult
+from guidance.tscvx import REDUCED_ETA_INIT
 
 LIB_PATH = Path(__file__).resolve().parent.parent / "build" / "libtscvx_gnc.so"
 MESSAGE_LEN = 256
@@ -446,7 +447,7 @@ def solve_tscvx_c(
     settings: SCvxSettings | None = None,
     models_dir: Path | str | None = None,
     masks: bool = True,
-    eta_init: float = 0.01,
+    eta_init: float = REDUCED_ETA_INIT,
     nets: tuple | None = None,
     **socp: float | int,
 ) -> SCvxResult:
@@ -477,7 +478,9 @@ def solve_tscvx_c(
     solve_time = time.perf_counter() - t_start
     if status == 4 and res.message.startswith(b"nets: "):
         raise FlightNetsError(res.message.decode())
-    ran_with = _ran_with(settings, socp).replace(eta_init=float(rep.eta_init))
+    ran_with = _ran_with(settings, socp)
+    if status != 4:  # on PDG_INVALID_INPUT no radius was taken; _collect raises the message
+        ran_with = ran_with.replace(eta_init=float(rep.eta_init))
     out = _collect(ws, status, res, x, u, solve_time, ran_with)
     out.tscvx_report = {  # type: ignore[attr-defined]
         "warm_started": bool(rep.warm_started),

@@ -38,6 +38,7 @@ def run_solve(
     settings: SCvxSettings,
     models_dir: Path = MODELS_DIR,
     log: Callable[[str], None] | None = None,
+    tscvx_eta_init: float = REDUCED_ETA_INIT,
 ) -> SCvxResult:
     """One landing by SCvx or T-SCvx on a backend:
 
@@ -45,12 +46,15 @@ def run_solve(
     c-socp    the Python SCvx with the flight C SOCP runtime for the subproblems
     c         the whole solve in the flight C library (for tscvx the networks too:
               guidance.cguidance.solve_tscvx_c, not onnxruntime)
+
+    SCvx starts from settings.eta_init, T-SCvx (from the networks' warm start) from
+    tscvx_eta_init (Table 1's reduced radius by default).
     """
     if method == "tscvx" and backend == "c":
         # the complete on-board call: networks, projection and SCvx all in the C library
         from guidance.cguidance import solve_tscvx_c
 
-        result = solve_tscvx_c(scenario, settings, models_dir=models_dir)
+        result = solve_tscvx_c(scenario, settings, models_dir=models_dir, eta_init=tscvx_eta_init)
         if log:
             for line in format_log(result.history):
                 log(line)
@@ -66,7 +70,7 @@ def run_solve(
         con_model = ConstraintModel(models_dir / CONSTRAINT_MODEL, scenario.params)
         guess = project_guess(scenario, *sol_model.solution(theta))
         mask_fn = con_model.mask_fn(theta)
-        settings = settings.replace(eta_init=REDUCED_ETA_INIT)
+        settings = settings.replace(eta_init=tscvx_eta_init)
     if backend == "c":
         from guidance.cguidance import solve_c
 
@@ -89,6 +93,14 @@ def _prox_weight(text: str) -> float:
         raise argparse.ArgumentTypeError(str(exc)) from None
 
 
+def _radius(text: str) -> float:
+    """--eta-init, checked by SCvxSettings itself (argparse type: a bad one exits 2)."""
+    try:
+        return SCvxSettings(eta_init=float(text)).eta_init
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
 def cmd_solve(args: argparse.Namespace) -> int:
     from guidance.trajectory_io import write_trajectory
 
@@ -96,13 +108,19 @@ def cmd_solve(args: argparse.Namespace) -> int:
     settings = SCvxSettings(
         iter_max=args.iter_max, tau_r_update=args.trust_update == "tau_r", prox_u=args.prox_u
     )
+    tscvx_eta_init = REDUCED_ETA_INIT
+    if args.eta_init is not None:
+        settings = settings.replace(eta_init=args.eta_init)
+        tscvx_eta_init = args.eta_init
     print(f"scenario: {json.dumps(scenario_to_dict(scenario))}")
     objective = "paper's linear" if settings.prox_u == 0 else f"proximal weight {settings.prox_u:g}"
     print(
         f"method: {args.method}, backend: {args.backend}, N = {scenario.params.N}, "
         f"subproblem objective: {objective}"
     )
-    result = run_solve(scenario, args.method, args.backend, settings, Path(args.models), print)
+    result = run_solve(
+        scenario, args.method, args.backend, settings, Path(args.models), print, tscvx_eta_init
+    )
     p = scenario.params
     fuel = scenario.initial.m0 - result.x[-1, IM]
     propellant = scenario.initial.m0 - p.m_dry
@@ -224,6 +242,13 @@ def build_parser() -> argparse.ArgumentParser:
         default=SCvxSettings().prox_u,
         help="weight of the subproblem's proximal term on the scaled thrust (0: the paper's "
         "linear objective, whose answer depends on the conic solver)",
+    )
+    s.add_argument(
+        "--eta-init",
+        type=_radius,
+        default=None,
+        help=f"initial trust radius (default: Table 1's, {SCvxSettings().eta_init:g} for scvx, "
+        f"{REDUCED_ETA_INIT:g} for tscvx from the networks' warm start)",
     )
     s.add_argument(
         "--pin-final-attitude",

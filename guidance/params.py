@@ -168,6 +168,11 @@ class SCvxSettings:
     def __post_init__(self) -> None:
         if not (math.isfinite(self.prox_u) and self.prox_u >= 0.0):
             raise ValueError(f"prox_u must be a finite weight >= 0, got {self.prox_u}")
+        if not (0.0 < self.eta_lb <= self.eta_init <= self.eta_ub < math.inf):
+            raise ValueError(
+                f"eta_init must lie within [eta_lb, eta_ub] = [{self.eta_lb:g}, "
+                f"{self.eta_ub:g}], got {self.eta_init:g}"
+            )
 
     def replace(self, **changes: object) -> SCvxSettings:
         return dataclasses.replace(self, **changes)

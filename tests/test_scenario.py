@@ -90,3 +90,13 @@ def test_bad_proximal_weight_exits_2(weight: str, capsys: pytest.CaptureFixture[
         assert "--prox-u" in capsys.readouterr().err
     with pytest.raises(ValueError, match="prox_u"):
         SCvxSettings(prox_u=float("nan") if weight == "heavy" else float(weight))
+
+
+@pytest.mark.parametrize("radius", ["0", "-1", "20", "nan", "inf", "wide"])
+def test_bad_initial_radius_exits_2(radius: str, capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit) as exc:
+        main(["solve", "--eta-init", radius])
+    assert exc.value.code == 2
+    assert "--eta-init" in capsys.readouterr().err
+    with pytest.raises(ValueError, match=r"eta_init must lie within \[eta_lb, eta_ub\]"):
+        SCvxSettings(eta_init=float("nan") if radius == "wide" else float(radius))

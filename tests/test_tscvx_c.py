@@ -216,7 +216,31 @@ def test_cli_trust_update_reaches_the_c_loop(tmp_path: Path, nets) -> None:
     np.testing.assert_allclose(written["x"][-1], eq13.x[-1], rtol=1e-12, atol=0)
 
 
+def test_cli_initial_radius_reaches_the_c_loop(tmp_path: Path, nets) -> None:
+    """`guidance solve --method tscvx --backend c --eta-init 0.3` is the on-board call started
+    from radius 0.3 instead of Table 1's 0.01 (the log and the file say so)."""
+    from guidance.cli import main
+    from guidance.trajectory_io import read_trajectory
+
+    out = tmp_path / "eta.npz"
+    args = ["solve", "--method", "tscvx", "--backend", "c", "--eta-init", "0.3"]
+    assert main([*args, "--out", str(out)]) == 0
+    c = cguidance.solve_tscvx_c(SCENARIOS["default"], nets=nets, eta_init=0.3)
+    assert c.history[0].eta == 0.3 and c.tscvx_report["eta_init"] == 0.3
+    written = read_trajectory(out)
+    assert json.loads(str(written["settings"]))["eta_init"] == 0.3
+    assert int(written["iterations"]) == c.iterations
+    np.testing.assert_allclose(written["x"][-1], c.x[-1], rtol=1e-12, atol=0)
+
+
 # ---- bad input ------------------------------------------------------------------------------
+
+
+def test_initial_radius_outside_the_bounds_is_refused(nets) -> None:
+    """The C library refuses an initial radius outside [eta_lb, eta_ub] with a message (it
+    is not replaced by the default)."""
+    with pytest.raises(ValueError, match=r"eta_init: must be 0 .* got 20"):
+        cguidance.solve_tscvx_c(SCENARIOS["default"], nets=nets, eta_init=20.0)
 
 
 def test_networks_of_the_wrong_kind_are_refused(nets) -> None:

@@ -159,8 +159,10 @@ pdg_status pdg_solve_tscvx(pdg_workspace *ws, const pdg_scenario *s,
         (o->constraint && check_net(o->constraint, TSCVX_NN_KIND_CONSTRAINT, N, res->message))) {
         return PDG_INVALID_INPUT;
     }
-    if (isnan(o->eta_init) || o->eta_init < 0.0) {
-        snprintf(res->message, PDG_MESSAGE_LEN, "eta_init: must be 0 (default) or positive");
+    if (!(o->eta_init == 0.0 || (o->eta_init >= ws->st.eta_lb && o->eta_init <= ws->st.eta_ub))) {
+        snprintf(res->message, PDG_MESSAGE_LEN,
+                 "eta_init: must be 0 (Table 1's %g) or within [eta_lb, eta_ub] = [%g, %g], got %g",
+                 PDG_TSCVX_ETA_INIT, ws->st.eta_lb, ws->st.eta_ub, o->eta_init);
         return PDG_INVALID_INPUT;
     }
     memset(&opt, 0, sizeof opt);
@@ -176,8 +178,7 @@ pdg_status pdg_solve_tscvx(pdg_workspace *ws, const pdg_scenario *s,
         opt.guess_x = ws->nn_out;
         opt.guess_u = ws->nn_out + (size_t)N * NX;
         opt.guess_t_f = ws->nn_out[N * (NX + NU)];
-        eta = o->eta_init >= ws->st.eta_lb && o->eta_init <= ws->st.eta_ub ? o->eta_init
-                                                                            : PDG_TSCVX_ETA_INIT;
+        eta = o->eta_init > 0.0 ? o->eta_init : PDG_TSCVX_ETA_INIT;
     }
     if (o->constraint) {
         mc.net = o->constraint;

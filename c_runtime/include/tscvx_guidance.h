@@ -261,8 +261,9 @@ typedef struct {
                                     NULL: the built-in guess and the settings' eta_init */
     struct tscvx_nn *constraint; /* constraint network: theta + k (17) -> 7N logits.
                                     NULL: no masks (every subproblem is the full one) */
-    double eta_init;             /* initial trust radius with the warm start; 0 (or a value
-                                    outside [eta_lb, eta_ub]): PDG_TSCVX_ETA_INIT */
+    double eta_init;             /* initial trust radius with the warm start, within
+                                    [eta_lb, eta_ub]; 0: PDG_TSCVX_ETA_INIT. Anything else
+                                    is refused (PDG_INVALID_INPUT) */
     double (*clock_s)(void);     /* optional clock for the log's subproblem times */
 } pdg_tscvx_options;
 

@@ -110,6 +110,11 @@ int main(int argc, char **argv)
     o.eta_init = -1.0;
     CHECK(pdg_solve_tscvx(ws, &s, &o, &r, NULL) == PDG_INVALID_INPUT);
     CHECK(strstr(r.message, "eta_init") != NULL);
+    o.eta_init = 20.0; /* above eta_ub = 10: refused, not replaced by the default */
+    CHECK(pdg_solve_tscvx(ws, &s, &o, &r, NULL) == PDG_INVALID_INPUT);
+    CHECK(strstr(r.message, "[eta_lb, eta_ub] = [0.001, 10], got 20") != NULL);
+    o.eta_init = NAN;
+    CHECK(pdg_solve_tscvx(ws, &s, &o, &r, NULL) == PDG_INVALID_INPUT);
     o.eta_init = 0.0;
     /* networks trained for N = 50 against a workspace for N = 30 */
     s30 = s;
