@@ -123,7 +123,7 @@ typedef struct {
     double lam;             /* penalty weight on virtual control and buffers, > 0 */
     double rho0, rho1, rho2;/* acceptance / shrink / grow thresholds, rho0 <= rho1 <= rho2 */
     double alpha, beta;     /* trust-region shrink and growth factors, >= 1 */
-    double eta_init;        /* initial trust radius (scaled units) */
+    double eta_init;        /* initial trust radius (scaled units), in [eta_lb, eta_ub] */
     double eta_lb, eta_ub;  /* trust-radius bounds, 0 < eta_lb <= eta_ub */
     int iter_max;           /* accepted steps at most, 1..100 */
     int max_subproblems;    /* subproblem solves at most (rejections included), 1..500 */

@@ -139,6 +139,11 @@ static void test_settings_and_sizes(void)
     st.prox_u = 0.0; /* the paper's linear objective: valid */
     CHECK(pdg_workspace_size(50, 1, &st, NULL, 0, &need) == PDG_SETUP_SCRATCH_TOO_SMALL);
     pdg_default_settings(&st);
+    st.eta_init = 20.0; /* outside [eta_lb, eta_ub] = [0.001, 10] (SCvxSettings checks the same) */
+    CHECK(pdg_workspace_size(50, 1, &st, NULL, 0, &need) == PDG_SETUP_BAD_SETTINGS);
+    st.eta_init = 5e-4;
+    CHECK(pdg_workspace_size(50, 1, &st, NULL, 0, &need) == PDG_SETUP_BAD_SETTINGS);
+    pdg_default_settings(&st);
     CHECK(pdg_workspace_size(50, 1, &st, NULL, 0, &need) == PDG_SETUP_SCRATCH_TOO_SMALL);
     CHECK(need > 0);
     CHECK(pdg_setup(&ws, buf, sizeof buf, 50, 1, &st) == PDG_SETUP_ARENA_TOO_SMALL);
