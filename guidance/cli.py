@@ -85,20 +85,17 @@ def run_solve(
     return solver.solve(guess=guess, masks=mask_fn)
 
 
-def _prox_weight(text: str) -> float:
-    """--prox-u, checked by SCvxSettings itself (argparse type: a bad one exits 2)."""
-    try:
-        return SCvxSettings(prox_u=float(text)).prox_u
-    except ValueError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
+def _setting(name: str) -> Callable[[str], float]:
+    """argparse type of a float SCvxSettings field, checked by SCvxSettings itself: a bad
+    value exits 2 with its message (--prox-u, --eta-init)."""
 
+    def parse(text: str) -> float:
+        try:
+            return float(getattr(SCvxSettings(**{name: float(text)}), name))
+        except ValueError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
 
-def _radius(text: str) -> float:
-    """--eta-init, checked by SCvxSettings itself (argparse type: a bad one exits 2)."""
-    try:
-        return SCvxSettings(eta_init=float(text)).eta_init
-    except ValueError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
+    return parse
 
 
 def cmd_solve(args: argparse.Namespace) -> int:
@@ -238,14 +235,14 @@ def build_parser() -> argparse.ArgumentParser:
     )
     s.add_argument(
         "--prox-u",
-        type=_prox_weight,
+        type=_setting("prox_u"),
         default=SCvxSettings().prox_u,
         help="weight of the subproblem's proximal term on the scaled thrust (0: the paper's "
         "linear objective, whose answer depends on the conic solver)",
     )
     s.add_argument(
         "--eta-init",
-        type=_radius,
+        type=_setting("eta_init"),
         default=None,
         help=f"initial trust radius (default: Table 1's, {SCvxSettings().eta_init:g} for scvx, "
         f"{REDUCED_ETA_INIT:g} for tscvx from the networks' warm start)",
@@ -291,7 +288,7 @@ def build_parser() -> argparse.ArgumentParser:
     a.add_argument("--workers", type=int, default=os.cpu_count() or 1)
     a.add_argument(
         "--prox-u",
-        type=_prox_weight,
+        type=_setting("prox_u"),
         default=SCvxSettings().prox_u,
         help="weight of the subproblems' proximal term (0: the paper's objective)",
     )
