@@ -38,7 +38,7 @@ def run_solve(
     settings: SCvxSettings,
     models_dir: Path = MODELS_DIR,
     log: Callable[[str], None] | None = None,
-    tscvx_eta_init: float = REDUCED_ETA_INIT,
+    eta_init: float | None = None,
 ) -> SCvxResult:
     """One landing by SCvx or T-SCvx on a backend:
 
@@ -47,14 +47,20 @@ def run_solve(
     c         the whole solve in the flight C library (for tscvx the networks too:
               guidance.cguidance.solve_tscvx_c, not onnxruntime)
 
-    SCvx starts from settings.eta_init, T-SCvx (from the networks' warm start) from
-    tscvx_eta_init (Table 1's reduced radius by default).
+    ``eta_init`` overrides the initial trust radius; without it SCvx starts from
+    settings.eta_init and T-SCvx (from the networks' warm start) from Table 1's reduced radius.
     """
+    if method == "tscvx":
+        eta_init = REDUCED_ETA_INIT if eta_init is None else eta_init
+    if eta_init is not None:
+        settings = settings.replace(eta_init=eta_init)
     if method == "tscvx" and backend == "c":
         # the complete on-board call: networks, projection and SCvx all in the C library
         from guidance.cguidance import solve_tscvx_c
 
-        result = solve_tscvx_c(scenario, settings, models_dir=models_dir, eta_init=tscvx_eta_init)
+        result = solve_tscvx_c(
+            scenario, settings, models_dir=models_dir, eta_init=settings.eta_init
+        )
         if log:
             for line in format_log(result.history):
                 log(line)
@@ -70,7 +76,6 @@ def run_solve(
         con_model = ConstraintModel(models_dir / CONSTRAINT_MODEL, scenario.params)
         guess = project_guess(scenario, *sol_model.solution(theta))
         mask_fn = con_model.mask_fn(theta)
-        settings = settings.replace(eta_init=tscvx_eta_init)
     if backend == "c":
         from guidance.cguidance import solve_c
 
@@ -105,10 +110,6 @@ def cmd_solve(args: argparse.Namespace) -> int:
     settings = SCvxSettings(
         iter_max=args.iter_max, tau_r_update=args.trust_update == "tau_r", prox_u=args.prox_u
     )
-    tscvx_eta_init = REDUCED_ETA_INIT
-    if args.eta_init is not None:
-        settings = settings.replace(eta_init=args.eta_init)
-        tscvx_eta_init = args.eta_init
     print(f"scenario: {json.dumps(scenario_to_dict(scenario))}")
     objective = "paper's linear" if settings.prox_u == 0 else f"proximal weight {settings.prox_u:g}"
     print(
@@ -116,7 +117,7 @@ def cmd_solve(args: argparse.Namespace) -> int:
         f"subproblem objective: {objective}"
     )
     result = run_solve(
-        scenario, args.method, args.backend, settings, Path(args.models), print, tscvx_eta_init
+        scenario, args.method, args.backend, settings, Path(args.models), print, args.eta_init
     )
     p = scenario.params
     fuel = scenario.initial.m0 - result.x[-1, IM]

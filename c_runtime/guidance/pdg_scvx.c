@@ -105,9 +105,9 @@ static int settings_ok(const pdg_settings *s)
     }
     return s->lam > 0 && s->rho0 <= s->rho1 && s->rho1 <= s->rho2 && s->alpha >= 1.0 &&
            s->beta >= 1.0 && s->eta_lb > 0 && s->eta_lb <= s->eta_init &&
-           s->eta_init <= s->eta_ub && s->iter_max >= 1 && s->iter_max <= 100 && s->max_subproblems >= 1 &&
-           s->max_subproblems <= 500 && s->step_tol >= 0 && s->vc_tol >= 0 &&
-           s->defect_tol >= 0 && s->tight_tol >= 0 && s->rk4_substeps >= 1 &&
+           s->eta_init <= s->eta_ub && s->iter_max >= 1 && s->iter_max <= 100 &&
+           s->max_subproblems >= 1 && s->max_subproblems <= 500 && s->step_tol >= 0 &&
+           s->vc_tol >= 0 && s->defect_tol >= 0 && s->tight_tol >= 0 && s->rk4_substeps >= 1 &&
            s->rk4_substeps <= PDG_MAX_SUBSTEPS && s->socp_tol > 0 && s->socp_tol < 1 &&
            s->socp_max_iter >= 1 && s->socp_max_iter <= 500 &&
            (s->tau_r_update == 0 || s->tau_r_update == 1) && s->prox_u >= 0.0;
