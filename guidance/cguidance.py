@@ -31,6 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from guidance.csocp import SOLVE_STATUS
+from guidance.errors import InputError
 from guidance.params import NC, NU, NX, Params, Scenario, SCvxSettings
 from guidance.scenario import ScenarioError
 from guidance.scvx import IterationRecord, SCvxResult
@@ -112,7 +113,7 @@ class _LogRow(ct.Structure):
     _fields_ = [
         ("k", _i), ("J", _d), ("dJ", _d), ("dL", _d), ("rho", _d), ("eta", _d),
         ("vc_norm1", _d), ("n_tight", _i), ("subproblem_time_s", _d), ("accepted", _i),
-        ("solver_status", _i), ("solver_iterations", _i),
+        ("solver_status", _i), ("solver_iterations", _i), ("restored", _i),
     ]  # fmt: skip
 
 
@@ -131,6 +132,7 @@ def library() -> ct.CDLL:
     lib.pdg_solve.argtypes = [ct.c_void_p, ct.POINTER(_Scenario), ct.POINTER(_Options),
                               ct.POINTER(_Result)]  # fmt: skip
     lib.pdg_validate_scenario.argtypes = [ct.POINTER(_Scenario), ct.c_char_p]
+    lib.pdg_check_settings.argtypes = [ct.POINTER(_Settings), ct.c_char_p]
     lib.pdg_get_log.argtypes = [ct.c_void_p, _i, ct.POINTER(_LogRow)]
     lib.pdg_get_mask.argtypes = [ct.c_void_p, _i, _ucp]
     lib.pdg_log_length.argtypes = [ct.c_void_p]
@@ -193,6 +195,9 @@ class Workspace:
     def __init__(self, N: int, final_roll_free: bool, settings: _Settings) -> None:
         lib = library()
         self.lib, self.N, self.settings = lib, N, settings
+        msg = ct.create_string_buffer(MESSAGE_LEN)
+        if lib.pdg_check_settings(ct.byref(settings), msg) != 0:
+            raise ValueError(msg.value.decode())
         need = ct.c_size_t(0)
         scratch = None
         for _ in range(4):  # bounded: pattern size, then analysis size, then exact size
@@ -342,6 +347,7 @@ def _collect(
                 if 0 <= row.solver_status < len(SOCP_STATUS_NAMES)
                 else "numerical_error",
                 row.solver_iterations,
+                row.restored,
             )
         )
     mask_log = np.zeros((res.iterations, NC * N), np.uint8)
@@ -370,11 +376,11 @@ BUILD_MODELS_DIR = LIB_PATH.parent / "models"
 NET_KINDS = ("solution", "constraint")
 
 
-class FlightNetsError(ValueError):
+class FlightNetsError(InputError):
     """The C library refused the networks for this problem; the message says why."""
 
 
-def _net_source(models_dir: Path, kind: str) -> Path:
+def net_source(models_dir: Path, kind: str) -> Path:
     """``{kind}.tnn`` in the folder, else ``{kind}.onnx`` (converted to the flight blob)."""
     for ext in ("tnn", "onnx"):
         path = Path(models_dir) / f"{kind}.{ext}"
@@ -392,7 +398,7 @@ def flight_net(models_dir: Path | str, kind: str):
     (guidance.nn.flight.tnn_bytes: the bytes `make lib` writes to build/models)."""
     from guidance.nn.flight import FlightNet, FlightNetError, tnn_bytes
 
-    path = _net_source(Path(models_dir), kind)
+    path = net_source(Path(models_dir), kind)
     stat = path.stat()
     key = (str(path.resolve()), stat.st_mtime_ns, stat.st_size)
     if key not in _NETS:
@@ -415,7 +421,7 @@ def check_trained_params(models_dir: Path | str, kind: str, params: Params) -> N
 
     from guidance.nn.infer import META_KEY, _params_diff
 
-    path = _net_source(Path(models_dir), kind)
+    path = net_source(Path(models_dir), kind)
     if path.suffix != ".onnx":
         return
     stat = path.stat()

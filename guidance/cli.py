@@ -11,8 +11,9 @@ from pathlib import Path
 
 import numpy as np
 
+from guidance.errors import InputError
 from guidance.params import IM, Scenario, SCvxSettings
-from guidance.scenario import ScenarioError, load_scenario, scenario_to_dict
+from guidance.scenario import load_scenario, scenario_to_dict
 from guidance.scvx import SCvxResult, SCvxSolver, format_log
 from guidance.tscvx import REDUCED_ETA_INIT
 
@@ -90,23 +91,56 @@ def run_solve(
     return solver.solve(guess=guess, masks=mask_fn)
 
 
-def _setting(name: str) -> Callable[[str], float]:
-    """argparse type of a float SCvxSettings field, checked by SCvxSettings itself: a bad
-    value exits 2 with its message (--prox-u, --eta-init)."""
+def _setting(name: str, cast: Callable[[str], float] = float) -> Callable[[str], float]:
+    """argparse type of an SCvxSettings field, checked by SCvxSettings itself: a bad value
+    exits 2 with its message (--prox-u, --eta-init, --iter-max)."""
 
     def parse(text: str) -> float:
         try:
-            return float(getattr(SCvxSettings(**{name: float(text)}), name))
+            return getattr(SCvxSettings(**{name: cast(text)}), name)
         except ValueError as exc:
             raise argparse.ArgumentTypeError(str(exc)) from None
 
     return parse
 
 
+def _count(minimum: int) -> Callable[[str], int]:
+    """argparse type of an integer count >= minimum."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
+        if value < minimum:
+            raise argparse.ArgumentTypeError(f"must be >= {minimum}, got {value}")
+        return value
+
+    return parse
+
+
+def _check_plot_format(path: str) -> None:
+    """Refuse a figure name matplotlib cannot write before solving, not after."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib.backend_bases import FigureCanvasBase
+
+    suffix = Path(path).suffix.lstrip(".").lower()
+    formats = FigureCanvasBase.get_supported_filetypes()
+    if suffix not in formats:
+        raise InputError(
+            f"--plot {path}: unknown figure format {suffix!r} (use one of "
+            f"{', '.join(sorted(formats))})"
+        )
+
+
 def cmd_solve(args: argparse.Namespace) -> int:
     from guidance.trajectory_io import write_trajectory
 
     scenario = _load(args.scenario, args.pin_final_attitude)
+    if args.plot:
+        _check_plot_format(args.plot)
     settings = SCvxSettings(
         iter_max=args.iter_max, tau_r_update=args.trust_update == "tau_r", prox_u=args.prox_u
     )
@@ -135,7 +169,10 @@ def cmd_solve(args: argparse.Namespace) -> int:
         f"(conic solves {sum(sub_times):.3f} s, median {1e3 * np.median(sub_times):.1f} ms)"
     )
     if args.out:
-        write_trajectory(args.out, result, p, scenario, args.method, args.backend)
+        networks = None
+        if args.method == "tscvx":  # the files the networks were read from
+            networks = _network_files(Path(args.models), args.backend)
+        write_trajectory(args.out, result, p, scenario, args.method, args.backend, networks)
         print(f"wrote {args.out}")
     if args.plot:
         from guidance.plots import landing_figure
@@ -147,6 +184,16 @@ def cmd_solve(args: argparse.Namespace) -> int:
         landing_figure(result.x, result.u, result.t_f, p, args.plot, title)
         print(f"wrote {args.plot}")
     return 0
+
+
+def _network_files(models: Path, backend: str) -> dict[str, Path]:
+    """The network files a T-SCvx solve reads: the ONNX files for onnxruntime, for the C
+    library the flight blob (.tnn) when the folder has one, else the ONNX it converts."""
+    if backend == "c":
+        from guidance.cguidance import net_source
+
+        return {kind: net_source(models, kind) for kind in ("constraint", "solution")}
+    return {"constraint": models / CONSTRAINT_MODEL, "solution": models / SOLUTION_MODEL}
 
 
 def cmd_scenario(args: argparse.Namespace) -> int:
@@ -226,7 +273,12 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--models", default=str(MODELS_DIR), help="folder of the ONNX networks")
     s.add_argument("--out", help="trajectory .npz to write")
     s.add_argument("--plot", help="figure (.png) to write")
-    s.add_argument("--iter-max", type=int, default=SCvxSettings().iter_max)
+    s.add_argument(
+        "--iter-max",
+        type=_setting("iter_max", int),
+        default=SCvxSettings().iter_max,
+        help="accepted SCvx iterations at most (Table 1: 20)",
+    )
     s.add_argument(
         "--trust-update",
         choices=["tau_r", "eq13"],
@@ -256,19 +308,21 @@ def build_parser() -> argparse.ArgumentParser:
     s.set_defaults(func=cmd_solve)
 
     c = sub.add_parser("scenario", help="print a scenario (default: the default) as JSON")
-    c.add_argument("scenario", nargs="?")
+    c.add_argument(
+        "scenario", nargs="?", help="scenario JSON to check and print with its defaults filled"
+    )
     c.set_defaults(func=cmd_scenario)
 
     b = sub.add_parser("bench", help="time the reference SCvx (and the conic solvers)")
     b.add_argument(
         "--backend", nargs="+", default=["clarabel"], choices=["clarabel", "c-socp", "c"]
     )
-    b.add_argument("--repeats", type=int, default=1)
+    b.add_argument("--repeats", type=_count(1), default=1)
     b.add_argument("--method", choices=["scvx", "tscvx"], default="scvx")
     b.add_argument("--skip-socp", action="store_true", help="skip the conic solver benchmark")
     b.add_argument(
         "--tscvx-landings",
-        type=int,
+        type=_count(0),
         default=0,
         help="also compare SCvx and T-SCvx on this many fresh sampled landings",
     )
@@ -285,8 +339,8 @@ def build_parser() -> argparse.ArgumentParser:
     a.add_argument(
         "--catalog", nargs="+", help="catalog landings to include, or all (default: all)"
     )
-    a.add_argument("--landings", type=int, help="fresh sampled landings to add (default: 20)")
-    a.add_argument("--workers", type=int, default=os.cpu_count() or 1)
+    a.add_argument("--landings", type=_count(0), help="fresh sampled landings to add (default: 20)")
+    a.add_argument("--workers", type=_count(1), default=os.cpu_count() or 1)
     a.add_argument(
         "--prox-u",
         type=_setting("prox_u"),
@@ -309,7 +363,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     try:
         return int(args.func(args))
-    except ScenarioError as exc:
+    except InputError as exc:  # a scenario, setting, model or data file that cannot be used
         print(f"error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
 

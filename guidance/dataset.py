@@ -25,7 +25,6 @@ import json
 import math
 import os
 import signal
-import subprocess
 import sys
 import time
 from collections.abc import Callable, Iterable, Sequence
@@ -35,7 +34,9 @@ from typing import Any
 
 import numpy as np
 
+from guidance.errors import InputError
 from guidance.params import NC, NU, NX, InitialState, Params, Scenario, SCvxSettings
+from guidance.provenance import code_version
 from guidance.scenario import ScenarioError, validate
 
 FORMAT = "tscvx-dataset"
@@ -366,27 +367,6 @@ def _progress(total: int, enabled: bool, already: int):
 
 
 # ---- augmentation and packing -------------------------------------------------------------
-def code_version() -> str:
-    try:
-        from importlib.metadata import version
-
-        pkg = version("guidance")
-    except Exception:
-        pkg = "unknown"
-    root = Path(__file__).resolve().parent.parent
-
-    def git(*args: str) -> str:
-        return subprocess.run(
-            ["git", "-C", str(root), *args], capture_output=True, text=True, timeout=5
-        ).stdout.strip()
-
-    try:
-        rev, dirty = git("rev-parse", "--short", "HEAD"), git("status", "--porcelain", "guidance")
-    except (OSError, subprocess.SubprocessError):
-        rev, dirty = "", ""
-    return f"guidance {pkg}" + (f" git {rev}{'+dirty' if dirty else ''}" if rev else "")
-
-
 def rotate_theta(theta: np.ndarray, psi: float) -> np.ndarray:
     from guidance.symmetry import rotate_states
 
@@ -537,12 +517,14 @@ class Dataset:
 
 
 def load_dataset(path: str | Path) -> Dataset:
+    if not Path(path).is_file():
+        raise InputError(f"dataset {path}: no such file (`guidance dataset` makes one)")
     with np.load(path, allow_pickle=False) as f:
-        header = json.loads(str(f["header"]))
+        header = json.loads(str(f["header"])) if "header" in f.files else {}
         if header.get("format") != FORMAT:
-            raise ValueError(f"{path} is not a {FORMAT} file")
+            raise InputError(f"{path} is not a {FORMAT} file")
         if header.get("format_version") != FORMAT_VERSION:
-            raise ValueError(
+            raise InputError(
                 f"{path} has format version {header.get('format_version')}, "
                 f"this code reads version {FORMAT_VERSION}"
             )

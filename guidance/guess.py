@@ -179,7 +179,7 @@ def initial_guess(scenario: Scenario) -> tuple[np.ndarray, np.ndarray, float]:
         if q[k] @ q[k - 1] < 0:
             q[k] = -q[k]
     if not p.final_roll_free:
-        q_f = np.array(p.q_f)
+        q_f = scenario.x_final_target()[IQ]
         q = (1.0 - w_end) * q + w_end * np.where(q @ q_f < 0, -1.0, 1.0)[:, None] * q_f
         q /= np.linalg.norm(q, axis=1, keepdims=True)
     x = np.zeros((N, NX))
@@ -213,7 +213,7 @@ def project_guess(
     p = scenario.params
     x, u = np.array(x, dtype=float), np.array(u, dtype=float)
     x[0] = scenario.x0
-    xf = p.x_final_target()
+    xf = scenario.x_final_target()
     x[-1, IR], x[-1, IV], x[-1, IW] = xf[IR], xf[IV], xf[IW]
     if p.final_roll_free:
         x[-1, 8:10] = 0.0

@@ -32,7 +32,6 @@ from guidance.dataset import (
     ROTATION_DEG,
     SamplingRanges,
     base_scenario,
-    code_version,
     imap_pool,
     rotate_theta,
     scenario_of,
@@ -40,6 +39,7 @@ from guidance.dataset import (
     theta_of,
 )
 from guidance.params import Scenario, SCvxSettings
+from guidance.provenance import code_version
 from guidance.scenario import ScenarioError, validate
 
 # theta components moved by a perturbation: r0, v0, the pitch and yaw rates, m0, glideslope

@@ -91,15 +91,6 @@ class Params:
         off_axis = (self.r_T_B[1], self.r_T_B[2], self.r_cp_B[1], self.r_cp_B[2])
         return J[1] == J[2] and all(c == 0.0 for c in off_axis)
 
-    def x_final_target(self) -> np.ndarray:
-        """Terminal state with the mass slot left at zero (mass is free)."""
-        x = np.zeros(NX)
-        x[IR] = self.r_f
-        x[IV] = self.v_f
-        x[IQ] = self.q_f
-        x[IW] = self.omega_f
-        return x
-
     def to_json_dict(self) -> dict:
         return {f.name: _plain(getattr(self, f.name)) for f in dataclasses.fields(self)}
 
@@ -118,6 +109,15 @@ VECTOR_PARAM_SIZES = {
     f.name: len(f.default)  # type: ignore[arg-type]
     for f in dataclasses.fields(Params)
     if isinstance(f.default, tuple)
+}
+
+
+# Integer settings and their ranges (the flight library's bounds on its fixed-size loops).
+INT_SETTING_RANGES = {
+    "iter_max": (1, 100),
+    "max_subproblems": (1, 500),
+    "rk4_substeps": (1, 64),
+    "socp_max_iter": (1, 500),
 }
 
 
@@ -166,13 +166,31 @@ class SCvxSettings:
     tau_r_update: bool = True
 
     def __post_init__(self) -> None:
+        """The ranges the flight library checks too (pdg_check_settings in pdg_scvx.c)."""
+        for f in dataclasses.fields(self):
+            value = getattr(self, f.name)
+            if isinstance(value, float) and not math.isfinite(value):
+                raise ValueError(f"{f.name} must be finite, got {value}")
         if not (math.isfinite(self.prox_u) and self.prox_u >= 0.0):
-            raise ValueError(f"prox_u must be a finite weight >= 0, got {self.prox_u}")
+            raise ValueError(f"prox_u must be a weight >= 0, got {self.prox_u}")
         if not (0.0 < self.eta_lb <= self.eta_init <= self.eta_ub < math.inf):
             raise ValueError(
                 f"eta_init must lie within [eta_lb, eta_ub] = [{self.eta_lb:g}, "
                 f"{self.eta_ub:g}], got {self.eta_init:g}"
             )
+        for name, (lo, hi) in INT_SETTING_RANGES.items():
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int) or not lo <= value <= hi:
+                raise ValueError(f"{name} must be an integer within {lo}..{hi}, got {value!r}")
+        if not (self.lam > 0.0 and self.rho0 <= self.rho1 <= self.rho2):
+            raise ValueError("lam must be > 0 and rho0 <= rho1 <= rho2")
+        if not (self.alpha >= 1.0 and self.beta >= 1.0):
+            raise ValueError("alpha and beta (trust-region factors) must be >= 1")
+        for name in ("step_tol", "vc_tol", "defect_tol", "tight_tol"):
+            if not getattr(self, name) >= 0.0:
+                raise ValueError(f"{name} must be >= 0, got {getattr(self, name)!r}")
+        if not 0.0 < self.socp_tol < 1.0:
+            raise ValueError(f"socp_tol must lie within (0, 1), got {self.socp_tol!r}")
 
     def replace(self, **changes: object) -> SCvxSettings:
         return dataclasses.replace(self, **changes)
@@ -203,3 +221,16 @@ class Scenario:
     @property
     def x0(self) -> np.ndarray:
         return self.initial.as_vector()
+
+    def x_final_target(self) -> np.ndarray:
+        """Terminal state with the mass slot left at zero (mass is free). q_f is taken in q0's
+        hemisphere: q and -q are the same attitude, and from q0 . q_f < 0 the pinned condition
+        q(t_f) = q_f as written would ask for a turn of 360 degrees more (pdg_x_final_target
+        in C does the same)."""
+        p = self.params
+        x = np.zeros(NX)
+        x[IR] = p.r_f
+        x[IV] = p.v_f
+        x[IQ] = p.q_f if np.dot(self.initial.q0, p.q_f) >= 0.0 else -np.asarray(p.q_f)
+        x[IW] = p.omega_f
+        return x

@@ -1,4 +1,5 @@
-"""Figures of a landing: 3-D path with thrust vectors and the constrained time histories."""
+"""Figures of a landing: 3-D path with the plume (minus the thrust) and the constrained time
+histories."""
 
 from __future__ import annotations
 
@@ -54,7 +55,7 @@ def landing_figure(
     ax.set_xlabel("east [U_L]")
     ax.set_ylabel("north [U_L]")
     ax.set_zlabel("up [U_L]")
-    ax.set_title("trajectory, thrust vectors (red) and glideslope cone")
+    ax.set_title("trajectory, plume = -thrust (red) and glideslope cone")
 
     panels = [
         ("|T| [U_M U_L/U_T^2]", Tn, [(p.T_min, "T_min"), (p.T_max, "T_max")]),

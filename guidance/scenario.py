@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from guidance.errors import InputError
 from guidance.params import (
     PARAM_NAMES,
     VECTOR_PARAM_SIZES,
@@ -26,23 +27,34 @@ SCALAR_STATE_KEYS = ("m0",)
 UNIT_QUATERNION_TOL = 1e-6
 INT_PARAMS = {"N"}
 BOOL_PARAMS = {"final_roll_free"}
+# The keys DESIGN.md's scenario format always has; a missing one is an error, not a default.
+REQUIRED_KEYS = (*STATE_KEYS, *SCALAR_STATE_KEYS, "glideslope_deg", "tilt_max_deg")
 
 
-class ScenarioError(ValueError):
+class ScenarioError(InputError):
     """A scenario that must not be solved. ``field`` names the offending key."""
 
     def __init__(self, field: str, message: str) -> None:
-        super().__init__(f"scenario field '{field}': {message}")
+        where = "scenario file" if field == "<file>" else f"scenario field '{field}'"
+        super().__init__(f"{where}: {message}")
         self.field = field
+
+
+def _shown(value: Any) -> str:
+    """A value as the user wrote it in JSON (true, not Python's True)."""
+    try:
+        return json.dumps(value)
+    except (TypeError, ValueError):
+        return repr(value)
 
 
 def _finite_vector(field: str, value: Any, size: int) -> tuple[float, ...]:
     if not isinstance(value, list | tuple) or len(value) != size:
-        raise ScenarioError(field, f"expected a list of {size} numbers, got {value!r}")
+        raise ScenarioError(field, f"expected a list of {size} numbers, got {_shown(value)}")
     out = []
     for v in value:
         if isinstance(v, bool) or not isinstance(v, int | float):
-            raise ScenarioError(field, f"expected numbers, got {v!r}")
+            raise ScenarioError(field, f"expected numbers, got {_shown(v)}")
         if not math.isfinite(v):
             raise ScenarioError(field, f"must be finite, got {v!r}")
         out.append(float(v))
@@ -51,7 +63,7 @@ def _finite_vector(field: str, value: Any, size: int) -> tuple[float, ...]:
 
 def _finite_scalar(field: str, value: Any) -> float:
     if isinstance(value, bool) or not isinstance(value, int | float):
-        raise ScenarioError(field, f"expected a number, got {value!r}")
+        raise ScenarioError(field, f"expected a number, got {_shown(value)}")
     if not math.isfinite(value):
         raise ScenarioError(field, f"must be finite, got {value!r}")
     return float(value)
@@ -62,11 +74,11 @@ def _parse_param(name: str, value: Any) -> Any:
         return _finite_vector(name, value, VECTOR_PARAM_SIZES[name])
     if name in BOOL_PARAMS:
         if not isinstance(value, bool):
-            raise ScenarioError(name, f"expected true or false, got {value!r}")
+            raise ScenarioError(name, f"expected true or false, got {_shown(value)}")
         return value
     if name in INT_PARAMS:
         if isinstance(value, bool) or not isinstance(value, int):
-            raise ScenarioError(name, f"expected an integer, got {value!r}")
+            raise ScenarioError(name, f"expected an integer, got {_shown(value)}")
         return value
     return _finite_scalar(name, value)
 
@@ -79,6 +91,11 @@ def scenario_from_dict(data: dict[str, Any]) -> Scenario:
     for key in data:
         if key not in allowed:
             raise ScenarioError(key, f"unknown key (allowed: {', '.join(sorted(allowed))})")
+    for key in REQUIRED_KEYS:
+        if key not in data:
+            raise ScenarioError(
+                key, f"missing (a scenario gives all of {', '.join(REQUIRED_KEYS)})"
+            )
     initial_kwargs: dict[str, Any] = {}
     for key, size in STATE_KEYS.items():
         if key in data:
@@ -150,9 +167,9 @@ def validate(scenario: Scenario) -> None:
         )
     tilt_q = float(np.linalg.norm(q0[2:4]))
     if tilt_q > p.tilt_q_max + 1e-12:
-        tilt = math.degrees(math.acos(max(-1.0, min(1.0, 1.0 - 2.0 * tilt_q**2))))
         raise ScenarioError(
-            "q0", f"initial tilt {tilt:.3f} deg exceeds tilt_max_deg = {p.tilt_max_deg:g}"
+            "q0",
+            f"initial tilt {_tilt_deg(tilt_q):.3f} deg exceeds tilt_max_deg = {p.tilt_max_deg:g}",
         )
     w0 = np.asarray(s.w0)
     if np.linalg.norm(w0) > p.omega_max + 1e-12:
@@ -194,3 +211,32 @@ def _validate_params(p: Params) -> None:
         raise ScenarioError("N", f"must lie in [3, 400], got {p.N}")
     if p.r_f[0] < 0.0:
         raise ScenarioError("r_f", "landing point must not be below the surface")
+    _validate_terminal(p)
+
+
+def _validate_terminal(p: Params) -> None:
+    """The terminal state must meet the path constraints it is held to at the last node."""
+    r_f = np.asarray(p.r_f)
+    gs = math.radians(p.glideslope_deg)
+    if math.sin(gs) * float(np.linalg.norm(r_f[1:])) > math.cos(gs) * r_f[0] + 1e-12:
+        raise ScenarioError(
+            "r_f", f"landing point is outside the {p.glideslope_deg:g} deg glideslope cone"
+        )
+    if np.linalg.norm(p.omega_f) > p.omega_max + 1e-12:
+        raise ScenarioError(
+            "omega_f",
+            f"|omega_f| = {math.degrees(np.linalg.norm(p.omega_f)):.3f} deg/U_T exceeds "
+            f"omega_max_deg = {p.omega_max_deg:g}",
+        )
+    tilt_q = float(np.linalg.norm(p.q_f[2:4]))
+    if not p.final_roll_free and tilt_q > p.tilt_q_max + 1e-12:
+        raise ScenarioError(
+            "q_f",
+            f"pinned final tilt {_tilt_deg(tilt_q):.3f} deg exceeds tilt_max_deg = "
+            f"{p.tilt_max_deg:g}",
+        )
+
+
+def _tilt_deg(tilt_q: float) -> float:
+    """Tilt of body axis 1 from up for |(q2, q3)| = tilt_q: cos(tilt) = 1 - 2 tilt_q^2."""
+    return math.degrees(math.acos(max(-1.0, min(1.0, 1.0 - 2.0 * tilt_q**2))))

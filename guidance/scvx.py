@@ -50,6 +50,14 @@ class IterationRecord:
     accepted: bool
     solver_status: str
     solver_iterations: int
+    restored: int = 0  # T-SCvx: dropped constraints the full-constraint guard put back here
+
+
+def step_label(accepted: bool, restored: int) -> str:
+    """The log's last column: a guard rejection (same radius) reads apart from a rho one."""
+    if accepted:
+        return "acc"
+    return f"rej, {restored} put back" if restored else "rej"
 
 
 @dataclass
@@ -212,7 +220,7 @@ class SCvxSolver:
             use_tau = masks is not None and st.tau_r_update
             tau_r = _changed_fraction(prev_mask, mask) if use_tau else None
             eta_new = _trust_update(eta, rho if dL > 0 else 1.0, accepted, tr_step, st, tau_r)
-            newly_forced = False
+            newly_forced, restored = False, 0
             if mask is not None:
                 # Full-constraint guard: a candidate that violates a constraint the mask
                 # dropped is rejected, and the constraint is put back for the rest of the solve.
@@ -222,6 +230,7 @@ class SCvxSolver:
                 if dropped.any():
                     forced |= dropped
                     newly_forced, accepted, eta_new = True, False, eta
+                    restored = int(dropped.sum())
             history.append(
                 IterationRecord(
                     k + 1,
@@ -236,6 +245,7 @@ class SCvxSolver:
                     accepted,
                     sol.status,
                     sol.iterations,
+                    restored,
                 )
             )
             if self.log:
@@ -323,7 +333,7 @@ def _format(r: IterationRecord) -> str:
     return (
         f"{r.k:3d} {r.J:10.5f} {r.dJ:10.3e} {r.dL:10.3e} {r.rho:8.3f} {r.eta:9.4f} "
         f"{r.vc_norm1:8.1e} {r.n_tight:6d} {1e3 * r.subproblem_time_s:8.1f}  "
-        f"{'acc' if r.accepted else 'rej'}"
+        f"{step_label(r.accepted, r.restored)}"
     )
 
 

@@ -322,7 +322,7 @@ class SubproblemTemplate:
         b[self.r_dyn : self.r_dyn + NX * nI] = (inv * (A @ cx + zk - cx)).ravel()
         # Boundary conditions.
         x0h = sc.scale_x(scenario.x0)
-        xf = p.x_final_target()
+        xf = scenario.x_final_target()
         vals.append(np.ones(NX))
         b[self.r_x0 : self.r_x0 + NX] = x0h
         vals.append(np.ones(len(self.final_idx)))

@@ -4,28 +4,17 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import platform
-from datetime import datetime, timezone
 from pathlib import Path
 
 import numpy as np
 
 from guidance.params import Params
+from guidance.provenance import provenance
 from guidance.scenario import scenario_to_dict
 from guidance.scvx import SCvxResult
 
 REQUIRED_KEYS = ("t_f", "x", "u", "status", "iterations", "solve_time_s", "params")
-
-
-def provenance() -> dict[str, str]:
-    from importlib.metadata import version
-
-    return {
-        "generator": f"guidance {version('guidance')}",
-        "created_utc": datetime.now(timezone.utc).isoformat(timespec="seconds"),
-        "python": platform.python_version(),
-        "host": platform.machine(),
-    }
+JSON_KEYS = ("params", "scenario", "settings", "provenance")
 
 
 def write_trajectory(
@@ -35,9 +24,11 @@ def write_trajectory(
     scenario: object,
     method: str,
     backend: str,
+    inputs: dict[str, Path] | None = None,
 ) -> None:
     """Writes the contract keys plus the iteration masks, reason, scenario, the SCvx settings
-    the solve ran with (``result.settings``, when known) and provenance."""
+    the solve ran with (``result.settings``, when known) and provenance (with the path and
+    sha256 of each file in ``inputs``, such as the networks of a T-SCvx solve)."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(path.name + ".tmp.npz")
@@ -55,7 +46,7 @@ def write_trajectory(
         scenario=np.str_(json.dumps(scenario_to_dict(scenario))),  # type: ignore[arg-type]
         method=np.str_(method),
         backend=np.str_(backend),
-        provenance=np.str_(json.dumps(provenance())),
+        provenance=np.str_(json.dumps(provenance(inputs))),
         **(
             {}
             if result.settings is None
@@ -71,5 +62,7 @@ def read_trajectory(path: str | Path) -> dict[str, object]:
         if missing:
             raise ValueError(f"{path}: not a trajectory file, missing {', '.join(missing)}")
         out: dict[str, object] = {k: data[k] for k in data.files}
-    out["params"] = json.loads(str(out["params"]))
+    for key in JSON_KEYS:  # decoded to dictionaries
+        if key in out:
+            out[key] = json.loads(str(out[key]))
     return out

@@ -31,7 +31,7 @@ from guidance.constraints import constraint_scales
 from guidance.guess import initial_guess
 from guidance.model import discretize
 from guidance.params import NC, InitialState, Params, Scenario, SCvxSettings
-from guidance.scenario import ScenarioError, scenario_from_dict, validate
+from guidance.scenario import ScenarioError, scenario_from_dict, scenario_to_dict, validate
 from guidance.scvx import SCvxResult, SCvxSolver, solve_scvx
 from guidance.subproblem import Scaling, SubproblemTemplate, physical, scaled
 from guidance.verify import audit
@@ -246,6 +246,33 @@ def test_pinned_final_attitude_in_c() -> None:
     assert audit(c.x, c.u, c.t_f, pinned.params).landing_position_error <= 1e-3
 
 
+def test_pinned_final_attitude_from_the_other_sign_of_q0() -> None:
+    """q0 = -q_id is q_id's attitude: C and Python both take q_f in q0's hemisphere (a pinned
+    q(t_f) = +q_f from -q_id would be a full turn) and land as from +q_id."""
+    base = SCENARIOS["north"]
+    params = base.params.replace(final_roll_free=False)
+    flipped = Scenario(dataclasses.replace(base.initial, q0=(-1.0, 0.0, 0.0, 0.0)), params)
+    c, ref = cguidance.solve_c(flipped), solve_scvx(flipped, backend="c")
+    assert c.status == ref.status == "solved", c.reason
+    np.testing.assert_allclose(c.x[-1, 6:10], [-1.0, 0.0, 0.0, 0.0], atol=1e-8)
+    assert abs(c.m_f - ref.m_f) / ref.m_f <= STRICT_REL_MF
+    upright = cguidance.solve_c(Scenario(base.initial, params))
+    assert c.m_f == pytest.approx(upright.m_f, rel=1e-9)
+
+
+def test_settings_out_of_range_are_named() -> None:
+    """The C library's own check (pdg_check_settings) names the setting, its range and value,
+    for a caller that skips SCvxSettings' check."""
+    st = cguidance.c_settings()
+    st.iter_max = 0
+    with pytest.raises(ValueError, match=r"settings.iter_max: must lie within 1..100, got 0"):
+        cguidance.Workspace(50, True, st)
+    st = cguidance.c_settings()
+    st.eta_lb = 5.0
+    with pytest.raises(ValueError, match=r"settings.eta_init: must lie within \[eta_lb"):
+        cguidance.Workspace(50, True, st)
+
+
 def test_external_guess_is_used_as_given() -> None:
     """With the reference's own guess passed in, the C solve is the same solve."""
     scn = SCENARIOS["default"]
@@ -307,6 +334,10 @@ BAD_DICTS = [
     ({"r_f": [-1.0, 0, 0]}, "r_f"),
     ({"beta_mdot": -0.1}, "beta_mdot"),
     ({"N": 2}, "N"),
+    # terminal states that break the path constraints they are held to at the last node
+    ({"omega_f": [0.0, 0.0, 5.0]}, "omega_f"),
+    ({"q_f": [0.0, 0.0, 1.0, 0.0], "final_roll_free": False}, "q_f"),
+    ({"r_f": [0.0, 1.0, 0.0]}, "r_f"),
 ]
 
 
@@ -322,7 +353,7 @@ def _unchecked(d: dict) -> Scenario:
 @pytest.mark.parametrize(("data", "field"), BAD_DICTS)
 def test_bad_scenarios_get_the_same_errors(data: dict, field: str) -> None:
     with pytest.raises(ScenarioError) as py:
-        scenario_from_dict(data)
+        scenario_from_dict({**scenario_to_dict(Scenario()), **data})
     assert py.value.field == field
     with pytest.raises(ScenarioError) as c:
         cguidance.solve_c(_unchecked(data))

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from guidance.cli import main
@@ -38,13 +39,27 @@ BAD = [
     ({"N": 2}, "N"),
     ({"final_roll_free": "yes"}, "final_roll_free"),
     ({"J_B": [0.001, 0.01]}, "J_B"),
+    # DESIGN.md's format has these keys; a missing one is not quietly the default landing's
+    ({"m0": None}, "m0"),
+    ({"r0": None}, "r0"),
+    ({"tilt_max_deg": None}, "tilt_max_deg"),
+    # terminal states outside the path constraints of the last node
+    ({"omega_f": [0, 0, 2.0]}, "omega_f"),
+    ({"q_f": [0, 0, 1, 0], "final_roll_free": False}, "q_f"),
+    ({"r_f": [0, 1, 0]}, "r_f"),
 ]
+
+
+def _with(change: dict) -> dict:
+    """GOOD with the change applied; a None value removes the key."""
+    data = {**GOOD, **change}
+    return {k: v for k, v in data.items() if v is not None}
 
 
 @pytest.mark.parametrize(("change", "field"), BAD)
 def test_bad_scenario_is_rejected_naming_the_field(change: dict, field: str) -> None:
     with pytest.raises(ScenarioError) as err:
-        scenario_from_dict({**GOOD, **change})
+        scenario_from_dict(_with(change))
     assert err.value.field == field
     assert field in str(err.value)
 
@@ -55,7 +70,7 @@ def test_cli_exit_code_2_and_nothing_written(
 ) -> None:
     path = tmp_path / "s.json"
     # allow_nan writes NaN / Infinity literals, which the loader must reject by field
-    path.write_text(json.dumps({**GOOD, **change}, allow_nan=True))
+    path.write_text(json.dumps(_with(change), allow_nan=True))
     out, fig = tmp_path / "t.npz", tmp_path / "t.png"
     code = main(["solve", str(path), "--out", str(out), "--plot", str(fig)])
     assert code == 2
@@ -63,11 +78,71 @@ def test_cli_exit_code_2_and_nothing_written(
     assert not out.exists() and not fig.exists()
 
 
-def test_unreadable_and_malformed_files(tmp_path: Path) -> None:
+def test_unreadable_and_malformed_files(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
     assert main(["solve", str(tmp_path / "missing.json")]) == 2
     bad = tmp_path / "bad.json"
     bad.write_text("{not json")
     assert main(["solve", str(bad)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("error: scenario file: ") == 2 and "field" not in err
+
+
+def test_values_are_shown_as_json() -> None:
+    with pytest.raises(ScenarioError, match="expected a number, got true"):
+        scenario_from_dict({**GOOD, "m0": True})
+
+
+def test_pinned_attitude_from_either_sign_of_q0() -> None:
+    """q0 and -q0 are the same attitude: the pinned q(t_f) = q_f is reached from both, by the
+    same turn (the target is taken in q0's hemisphere), to the same landing."""
+    from guidance.scvx import solve_scvx
+
+    landings = []
+    for sign in (1, -1):
+        scn = scenario_from_dict({**GOOD, "q0": [sign, 0, 0, 0], "final_roll_free": False})
+        np.testing.assert_array_equal(scn.x_final_target()[6:10], [sign, 0, 0, 0])
+        landings.append(solve_scvx(scn))
+    assert [r.status for r in landings] == ["solved", "solved"]
+    assert landings[1].m_f == pytest.approx(landings[0].m_f, rel=1e-9)
+    np.testing.assert_allclose(landings[1].x[:, 6:10], -landings[0].x[:, 6:10], atol=1e-9)
+
+
+def test_bad_settings_exit_2_naming_the_setting(capsys: pytest.CaptureFixture[str]) -> None:
+    for value in ("0", "101", "-3", "2.5", "many"):
+        with pytest.raises(SystemExit) as exc:
+            main(["solve", "--iter-max", value])
+        assert exc.value.code == 2
+        assert "--iter-max" in capsys.readouterr().err
+    bad = {"iter_max": 0, "socp_max_iter": 501, "lam": float("inf"), "rho1": -1.0,
+           "alpha": 0.5, "socp_tol": 1.0, "vc_tol": -1e-9}  # fmt: skip
+    for name, value in bad.items():
+        with pytest.raises(ValueError, match=name):
+            SCvxSettings(**{name: value})  # type: ignore[arg-type]
+
+
+def test_counts_and_figure_format_are_checked_before_work(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    for args in (["agreement", "--landings", "-1"], ["agreement", "--workers", "0"],
+                 ["bench", "--repeats", "0"]):  # fmt: skip
+        with pytest.raises(SystemExit) as exc:
+            main(args)
+        assert exc.value.code == 2
+    out = tmp_path / "t.npz"
+    assert main(["solve", "--out", str(out), "--plot", str(tmp_path / "fig.xyz")]) == 2
+    assert "unknown figure format 'xyz'" in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_missing_models_and_data_exit_2(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    """Model folders and data files the user names are input too: a message, not a trace."""
+    for backend in ("clarabel", "c"):
+        code = main(["solve", "--method", "tscvx", "--backend", backend, "--models",
+                     str(tmp_path)])  # fmt: skip
+        assert code == 2, backend
+        assert capsys.readouterr().err.startswith("error: ")
+    assert main(["baselines", "--dataset", str(tmp_path / "none.npz")]) == 2
+    assert "no such file" in capsys.readouterr().err
 
 
 def test_parameter_override_and_defaults() -> None:
@@ -98,5 +173,5 @@ def test_bad_initial_radius_exits_2(radius: str, capsys: pytest.CaptureFixture[s
         main(["solve", "--eta-init", radius])
     assert exc.value.code == 2
     assert "--eta-init" in capsys.readouterr().err
-    with pytest.raises(ValueError, match=r"eta_init must lie within \[eta_lb, eta_ub\]"):
+    with pytest.raises(ValueError, match=r"eta_init must (lie within \[eta_lb, eta_ub\]|be fin)"):
         SCvxSettings(eta_init=float("nan") if radius == "wide" else float(radius))

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import dataclasses
-import json
 import math
 from pathlib import Path
 
@@ -105,8 +104,11 @@ def test_cli_writes_the_trajectory_contract(tmp_path: Path) -> None:
         "N",
     ):
         assert key in params
-    assert json.loads(str(data["scenario"]))["m0"] == 3.0
-    assert json.loads(str(data["settings"])) == dataclasses.asdict(SCvxSettings())
+    assert data["scenario"]["m0"] == 3.0
+    assert data["settings"] == dataclasses.asdict(SCvxSettings())
+    prov = data["provenance"]
+    assert prov["generator"].startswith("guidance ") and "clarabel" in prov["packages"]
+    assert "files" not in prov  # SCvx reads no model file
     assert fig.stat().st_size > 10_000
 
 
@@ -116,7 +118,7 @@ def test_cli_prox_u_reaches_the_solve(tmp_path: Path, capsys: pytest.CaptureFixt
     assert main(["solve", "--prox-u", "0", "--out", str(out)]) == 0
     assert "subproblem objective: paper's linear" in capsys.readouterr().out
     data = read_trajectory(out)
-    assert json.loads(str(data["settings"]))["prox_u"] == 0.0
+    assert data["settings"]["prox_u"] == 0.0
     paper = solve_scvx(SCENARIOS["default"], SCvxSettings(prox_u=0.0))
     assert int(data["iterations"]) == paper.iterations
     assert float(data["x"][-1, 13]) == pytest.approx(paper.m_f, rel=1e-12)

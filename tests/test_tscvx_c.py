@@ -17,7 +17,6 @@ guidance.guess.project_guess, eta_init 0.01, the C solver).
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import numpy as np
@@ -211,8 +210,16 @@ def test_cli_trust_update_reaches_the_c_loop(tmp_path: Path, nets) -> None:
     # the two radius rules take different paths here, so matching eq13 is not matching both
     assert [h.eta for h in eq13.history] != [h.eta for h in paper.history]
     assert abs(eq13.m_f - paper.m_f) > 1e-9 * paper.m_f
-    recorded = json.loads(str(written["settings"]))
+    recorded = written["settings"]
     assert recorded["tau_r_update"] is False and recorded["eta_init"] == 0.01
+    # the networks the solve used, by path and content
+    from guidance.cli import MODELS_DIR
+    from guidance.provenance import file_digest
+
+    files = written["provenance"]["files"]
+    assert set(files) == {"constraint", "solution"}
+    onnx = MODELS_DIR / "solution.onnx"
+    assert files["solution"] == {"path": str(onnx), "sha256": file_digest(onnx)}
     np.testing.assert_allclose(written["x"][-1], eq13.x[-1], rtol=1e-12, atol=0)
 
 
@@ -228,7 +235,7 @@ def test_cli_initial_radius_reaches_the_c_loop(tmp_path: Path, nets) -> None:
     c = cguidance.solve_tscvx_c(SCENARIOS["default"], nets=nets, eta_init=0.3)
     assert c.history[0].eta == 0.3 and c.tscvx_report["eta_init"] == 0.3
     written = read_trajectory(out)
-    assert json.loads(str(written["settings"]))["eta_init"] == 0.3
+    assert written["settings"]["eta_init"] == 0.3
     assert int(written["iterations"]) == c.iterations
     np.testing.assert_allclose(written["x"][-1], c.x[-1], rtol=1e-12, atol=0)
 
@@ -283,3 +290,19 @@ def test_without_networks_it_is_plain_scvx() -> None:
         ref.status, ref.iterations, ref.subproblems_solved)  # fmt: skip
     assert c.m_f == ref.m_f
     assert not c.tscvx_report["warm_started"]
+
+
+def test_example_program_refuses_swapped_networks_and_prints_nothing_else() -> None:
+    """build/pdg_example (plain C, no Python) with the two weight files swapped: the library's
+    refusal, exit 2, and no log or trajectory table of a solve that did not happen."""
+    import subprocess
+
+    example = cguidance.LIB_PATH.parent / "pdg_example"
+    models = cguidance.BUILD_MODELS_DIR
+    run = subprocess.run(
+        [str(example), str(models / "constraint.tnn"), str(models / "solution.tnn")],
+        capture_output=True, text=True, check=False, timeout=60,
+    )  # fmt: skip
+    assert run.returncode == 2, run.stdout + run.stderr
+    assert "refused: " in run.stderr and "solution network" in run.stderr
+    assert "node" not in run.stdout and "m_f" not in run.stdout

@@ -13,6 +13,9 @@
  *   cc -std=c99 -Ic_runtime/include pdg_example.c build/libtscvx_gnc.a build/libtscvx.a \
  *      -lamd -lldl -lsuitesparseconfig -lm
  *
+ * Exit status: 0 solved, 3 not solved (the status line says why), 2 input refused by the
+ * library (nothing solved, nothing printed but the message), 1 set-up failure.
+ *
  * All memory comes from arenas obtained once before the solve (malloc here stands for the
  * flight computer's statically reserved SRAM blocks: the guidance arena, one per network, and
  * the weight blobs read in place); the library never allocates.
@@ -104,10 +107,16 @@ int main(int argc, char **argv)
     topt.clock_s = now_s;
     {
         const double t0 = now_s();
-        if (tscvx) {
-            pdg_solve_tscvx(ws, &scn, &topt, &res, &rep);
-        } else {
-            pdg_solve(ws, &scn, &opt, &res);
+        const pdg_status st_solve = tscvx ? pdg_solve_tscvx(ws, &scn, &topt, &res, &rep)
+                                          : pdg_solve(ws, &scn, &opt, &res);
+        if (st_solve == PDG_INVALID_INPUT) { /* nothing was solved: no log, no trajectory */
+            fprintf(stderr, "refused: %s\n", res.message);
+            free(arena);
+            for (i = 0; i < 2; ++i) {
+                free(net_arenas[i]);
+                free(blobs[i]);
+            }
+            return 2;
         }
         printf("%s time %.1f ms\n", tscvx ? "T-SCvx (networks included)" : "SCvx",
                1e3 * (now_s() - t0));
@@ -122,9 +131,13 @@ int main(int argc, char **argv)
     for (i = 0; i < pdg_log_length(ws); ++i) {
         pdg_log_row r;
         pdg_get_log(ws, i, &r);
-        printf("%3d %10.5f %10.3e %10.3e %8.3f %9.4f %8.1e %6d %8.1f  %s\n", r.k, r.J, r.dJ,
+        printf("%3d %10.5f %10.3e %10.3e %8.3f %9.4f %8.1e %6d %8.1f  %s", r.k, r.J, r.dJ,
                r.dL, r.rho, r.eta, r.vc_norm1, r.n_tight, 1e3 * r.subproblem_time_s,
                r.accepted ? "acc" : "rej");
+        if (r.restored) { /* the full-constraint guard's rejection (same radius) */
+            printf(", %d put back", r.restored);
+        }
+        printf("\n");
     }
     printf("status %s (%s)\niterations %d, subproblems %d, t_f %.6f, m_f %.6f, fuel %.6f\n",
            pdg_status_name(res.status), res.message, res.iterations, res.subproblems_solved,

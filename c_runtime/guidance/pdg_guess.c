@@ -353,7 +353,7 @@ void pdg_project_guess(const pdg_scenario *sc, double *x, double *u, double *t_f
     const double tan_d = tan(acos(cg)), cone0 = cg, cone1 = sqrt(1 - cg * cg);
     double xf[NX];
     int k, i;
-    pdg_x_final_target(p, xf);
+    pdg_x_final_target(sc, xf);
     pdg_initial_state(sc, x);
     {
         double *xl = x + NX * (N - 1);

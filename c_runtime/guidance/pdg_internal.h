@@ -62,8 +62,13 @@ typedef struct {
     double *b, *h, *c;          /* outputs: p, m, n */
 } pdg_values;
 
+/* Set by a successful pdg_setup: a workspace whose arena was reused or never set up is
+ * refused instead of trusted (an int flag would pass on leftover bytes). */
+#define PDG_WS_MAGIC 0x50444757u /* "PDGW" */
+#define PDG_WS_READY(ws) ((ws) && (ws)->magic == PDG_WS_MAGIC)
+
 struct pdg_workspace {
-    int ready;
+    unsigned magic;
     int N, roll_free;
     pdg_settings st;
     pdg_layout lay;
@@ -113,7 +118,7 @@ double pdg_tan_glideslope(const pdg_params *p);
 double pdg_cos_gimbal(const pdg_params *p);
 double pdg_tilt_q_max(const pdg_params *p);
 double pdg_omega_max(const pdg_params *p);
-void pdg_x_final_target(const pdg_params *p, double *xf);
+void pdg_x_final_target(const pdg_scenario *s, double *xf);
 /* x0 (NX) of a scenario in the state order of DESIGN.md */
 void pdg_initial_state(const pdg_scenario *s, double *x0);
 void pdg_dcm_bi(const double *q, double C[3][3]);

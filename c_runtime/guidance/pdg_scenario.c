@@ -118,8 +118,14 @@ void pdg_initial_state(const pdg_scenario *s, double *x0)
     x0[13] = s->m0;
 }
 
-void pdg_x_final_target(const pdg_params *p, double *xf)
+/* q_f in q0's hemisphere: q and -q are the same attitude, and from q0 . q_f < 0 the pinned
+ * q(t_f) = q_f as written would ask for 360 degrees more of turn (Scenario.x_final_target). */
+void pdg_x_final_target(const pdg_scenario *s, double *xf)
 {
+    const pdg_params *p = &s->params;
+    const double dot = s->q0[0] * p->q_f[0] + s->q0[1] * p->q_f[1] + s->q0[2] * p->q_f[2] +
+                       s->q0[3] * p->q_f[3];
+    const double sign = dot >= 0.0 ? 1.0 : -1.0;
     int i;
     for (i = 0; i < NX; ++i) {
         xf[i] = 0.0;
@@ -130,7 +136,7 @@ void pdg_x_final_target(const pdg_params *p, double *xf)
         xf[10 + i] = p->omega_f[i];
     }
     for (i = 0; i < 4; ++i) {
-        xf[6 + i] = p->q_f[i];
+        xf[6 + i] = sign * p->q_f[i];
     }
 }
 
@@ -208,6 +214,37 @@ static int check_finite(const pdg_scenario *s, char *msg)
     return 0;
 }
 
+static double tilt_deg(double tilt_q)
+{
+    double c = 1.0 - 2.0 * tilt_q * tilt_q; /* cos(tilt) for |(q2, q3)| = tilt_q */
+    c = c < -1.0 ? -1.0 : (c > 1.0 ? 1.0 : c);
+    return acos(c) / DEG;
+}
+
+/* The terminal state must meet the path constraints it is held to at the last node. */
+static int check_terminal(const pdg_params *p, char *msg)
+{
+    char text[200];
+    const double gs = p->glideslope_deg * DEG, wn = norm(p->omega_f, 3);
+    const double tilt_q = norm(p->q_f + 2, 2);
+    if (sin(gs) * norm(p->r_f + 1, 2) > cos(gs) * p->r_f[0] + 1e-12) {
+        snprintf(text, sizeof text, "landing point is outside the %g deg glideslope cone",
+                 p->glideslope_deg);
+        return fail(msg, "r_f", text);
+    }
+    if (wn > pdg_omega_max(p) + 1e-12) {
+        snprintf(text, sizeof text, "|omega_f| = %.3f deg/U_T exceeds omega_max_deg = %g",
+                 wn / DEG, p->omega_max_deg);
+        return fail(msg, "omega_f", text);
+    }
+    if (!p->final_roll_free && tilt_q > pdg_tilt_q_max(p) + 1e-12) {
+        snprintf(text, sizeof text, "pinned final tilt %.3f deg exceeds tilt_max_deg = %g",
+                 tilt_deg(tilt_q), p->tilt_max_deg);
+        return fail(msg, "q_f", text);
+    }
+    return 0;
+}
+
 static int check_params(const pdg_params *p, char *msg)
 {
     char text[200];
@@ -262,7 +299,7 @@ static int check_params(const pdg_params *p, char *msg)
     if (p->final_roll_free != 0 && p->final_roll_free != 1) {
         return fail(msg, "final_roll_free", "expected true or false");
     }
-    return 0;
+    return check_terminal(p, msg);
 }
 
 int pdg_check_scenario(const pdg_scenario *s, char *msg)
@@ -298,10 +335,8 @@ int pdg_check_scenario(const pdg_scenario *s, char *msg)
     }
     tilt_q = norm(s->q0 + 2, 2);
     if (tilt_q > pdg_tilt_q_max(p) + 1e-12) {
-        double c = 1.0 - 2.0 * tilt_q * tilt_q;
-        c = c < -1.0 ? -1.0 : (c > 1.0 ? 1.0 : c);
         snprintf(text, sizeof text, "initial tilt %.3f deg exceeds tilt_max_deg = %g",
-                 acos(c) / DEG, p->tilt_max_deg);
+                 tilt_deg(tilt_q), p->tilt_max_deg);
         return fail(msg, "q0", text);
     }
     wn = norm(s->w0, 3);

@@ -92,25 +92,74 @@ static void *take(arena *a, size_t count, size_t size)
     return a->base + start;
 }
 
-static int settings_ok(const pdg_settings *s)
+static int bad_setting(char *msg, const char *text)
 {
-    const double d[] = {s->lam, s->rho0, s->rho1, s->rho2, s->alpha, s->beta, s->eta_init,
-                        s->eta_lb, s->eta_ub, s->step_tol, s->vc_tol, s->defect_tol,
-                        s->tight_tol, s->socp_tol, s->prox_u};
+    if (msg) {
+        snprintf(msg, PDG_MESSAGE_LEN, "settings.%s", text);
+    }
+    return PDG_SETUP_BAD_SETTINGS;
+}
+
+/* The ranges of SCvxSettings.__post_init__ (guidance/params.py); the integer bounds bound the
+ * solve's loops and the log. */
+static pdg_setup_status check_settings(const pdg_settings *s, char *msg)
+{
+    const struct {
+        const char *name;
+        double v;
+    } d[] = {{"lam", s->lam},         {"rho0", s->rho0},           {"rho1", s->rho1},
+             {"rho2", s->rho2},       {"alpha", s->alpha},         {"beta", s->beta},
+             {"eta_init", s->eta_init}, {"eta_lb", s->eta_lb},     {"eta_ub", s->eta_ub},
+             {"step_tol", s->step_tol}, {"vc_tol", s->vc_tol},     {"defect_tol", s->defect_tol},
+             {"tight_tol", s->tight_tol}, {"socp_tol", s->socp_tol}, {"prox_u", s->prox_u}};
+    const struct {
+        const char *name;
+        int v, lo, hi;
+    } n[] = {{"iter_max", s->iter_max, 1, 100},
+             {"max_subproblems", s->max_subproblems, 1, 500},
+             {"rk4_substeps", s->rk4_substeps, 1, PDG_MAX_SUBSTEPS},
+             {"socp_max_iter", s->socp_max_iter, 1, 500},
+             {"tau_r_update", s->tau_r_update, 0, 1}};
+    char text[PDG_MESSAGE_LEN - 16];
     size_t i;
     for (i = 0; i < sizeof d / sizeof d[0]; ++i) {
-        if (!isfinite(d[i])) {
-            return 0;
+        if (!isfinite(d[i].v)) {
+            snprintf(text, sizeof text, "%s: must be finite, got %g", d[i].name, d[i].v);
+            return bad_setting(msg, text);
         }
     }
-    return s->lam > 0 && s->rho0 <= s->rho1 && s->rho1 <= s->rho2 && s->alpha >= 1.0 &&
-           s->beta >= 1.0 && s->eta_lb > 0 && s->eta_lb <= s->eta_init &&
-           s->eta_init <= s->eta_ub && s->iter_max >= 1 && s->iter_max <= 100 &&
-           s->max_subproblems >= 1 && s->max_subproblems <= 500 && s->step_tol >= 0 &&
-           s->vc_tol >= 0 && s->defect_tol >= 0 && s->tight_tol >= 0 && s->rk4_substeps >= 1 &&
-           s->rk4_substeps <= PDG_MAX_SUBSTEPS && s->socp_tol > 0 && s->socp_tol < 1 &&
-           s->socp_max_iter >= 1 && s->socp_max_iter <= 500 &&
-           (s->tau_r_update == 0 || s->tau_r_update == 1) && s->prox_u >= 0.0;
+    for (i = 0; i < sizeof n / sizeof n[0]; ++i) {
+        if (n[i].v < n[i].lo || n[i].v > n[i].hi) {
+            snprintf(text, sizeof text, "%s: must lie within %d..%d, got %d", n[i].name,
+                     n[i].lo, n[i].hi, n[i].v);
+            return bad_setting(msg, text);
+        }
+    }
+    if (!(s->eta_lb > 0 && s->eta_lb <= s->eta_init && s->eta_init <= s->eta_ub)) {
+        snprintf(text, sizeof text, "eta_init: must lie within [eta_lb, eta_ub] = [%g, %g], got %g",
+                 s->eta_lb, s->eta_ub, s->eta_init);
+        return bad_setting(msg, text);
+    }
+    if (!(s->lam > 0 && s->rho0 <= s->rho1 && s->rho1 <= s->rho2)) {
+        return bad_setting(msg, "lam, rho0..2: need lam > 0 and rho0 <= rho1 <= rho2");
+    }
+    if (!(s->alpha >= 1.0 && s->beta >= 1.0)) {
+        return bad_setting(msg, "alpha, beta: trust-region factors must be >= 1");
+    }
+    if (!(s->step_tol >= 0 && s->vc_tol >= 0 && s->defect_tol >= 0 && s->tight_tol >= 0 &&
+          s->prox_u >= 0)) {
+        return bad_setting(msg, "step_tol, vc_tol, defect_tol, tight_tol, prox_u: must be >= 0");
+    }
+    if (!(s->socp_tol > 0 && s->socp_tol < 1)) {
+        snprintf(text, sizeof text, "socp_tol: must lie within (0, 1), got %g", s->socp_tol);
+        return bad_setting(msg, text);
+    }
+    return PDG_SETUP_OK;
+}
+
+pdg_setup_status pdg_check_settings(const pdg_settings *settings, char *message)
+{
+    return settings ? check_settings(settings, message) : PDG_SETUP_NULL_ARGUMENT;
 }
 
 static void socp_settings(const pdg_settings *st, tscvx_settings *ts)
@@ -325,7 +374,7 @@ static pdg_setup_status build(void *mem, size_t bytes, int N, int roll_free,
     if (N < PDG_N_MIN || N > PDG_N_MAX) {
         return PDG_SETUP_BAD_SIZE;
     }
-    if (!settings_ok(st)) {
+    if (pdg_check_settings(st, NULL) != PDG_SETUP_OK) {
         return PDG_SETUP_BAD_SETTINGS;
     }
     if (mem) { /* align the arena start; the +ALIGN of every size covers this */
@@ -432,7 +481,7 @@ static pdg_setup_status build(void *mem, size_t bytes, int N, int roll_free,
         ws->arena_high = skip + (hw > a.high ? hw : a.high);
     }
     ws->arena_bytes = bytes;
-    ws->ready = 1;
+    ws->magic = PDG_WS_MAGIC;
     *out = ws;
     return PDG_SETUP_OK;
 }
@@ -941,7 +990,7 @@ static void failed_row(pdg_log_row *r, double J)
 pdg_status pdg_solve(pdg_workspace *ws, const pdg_scenario *scenario, const pdg_options *opt,
                      pdg_result *res)
 {
-    return pdg_solve_from(ws, scenario, opt, res, ws && ws->ready ? ws->st.eta_init : 1.0);
+    return pdg_solve_from(ws, scenario, opt, res, PDG_WS_READY(ws) ? ws->st.eta_init : 1.0);
 }
 
 int pdg_result_begin(const pdg_workspace *ws, pdg_result *res)
@@ -953,7 +1002,7 @@ int pdg_result_begin(const pdg_workspace *ws, pdg_result *res)
     res->message[0] = '\0';
     res->iterations = res->subproblems_solved = res->socp_iterations = 0;
     res->t_f = res->max_defect = res->max_violation = NAN;
-    if (!ws || !ws->ready) {
+    if (!PDG_WS_READY(ws)) {
         snprintf(res->message, PDG_MESSAGE_LEN, "workspace not set up (call pdg_setup)");
         return -1;
     }
@@ -987,13 +1036,12 @@ pdg_status pdg_solve_from(pdg_workspace *ws, const pdg_scenario *scenario,
     /* k counts successions (accepted steps); a rejection retries the same k (Algorithm 1) */
     for (it = 0; it < st->max_subproblems && k < st->iter_max; ++it) {
         pdg_log_row *r = &ws->log[ws->n_log++];
-        const double t0 = opt->clock_s ? opt->clock_s() : 0.0;
         const int has_mask = have_masks ? mask_for(ws, opt, k + 1) : 0;
         const unsigned char *keep = NULL;
         candidate cd;
         tscvx_info info;
-        double dJ, dL, rho, tau_r = 0.0, eta_new;
-        int sst, i, accepted, converged, newly_forced;
+        double dJ, dL, rho, tau_r = 0.0, eta_new, t_solve = 0.0;
+        int sst, i, accepted, converged, newly_forced, restored;
 
         /* 1. mask (T-SCvx): the caller's, plus what the full-constraint guard put back */
         if (has_mask) {
@@ -1003,11 +1051,17 @@ pdg_status pdg_solve_from(pdg_workspace *ws, const pdg_scenario *scenario,
             }
             keep = ws->keep;
         }
-        /* 2. convex subproblem about z with radius eta, solved by the SOCP runtime */
-        sst = assemble(ws, ws->z, ws->disc, keep, eta) == 0 ? (int)tscvx_solve(ws->socp)
-                                                             : TSCVX_INVALID_INPUT;
+        /* 2. convex subproblem about z with radius eta, solved by the SOCP runtime (the log's
+         * time is the conic solve's alone, as in the Python reference's log) */
+        sst = TSCVX_INVALID_INPUT;
+        if (assemble(ws, ws->z, ws->disc, keep, eta) == 0) {
+            const double t0 = opt->clock_s ? opt->clock_s() : 0.0;
+            sst = (int)tscvx_solve(ws->socp);
+            t_solve = opt->clock_s ? opt->clock_s() - t0 : 0.0;
+        }
         tscvx_get_info(ws->socp, &info);
         memset(r, 0, sizeof *r);
+        r->subproblem_time_s = t_solve;
         r->k = k + 1;
         r->eta = eta;
         r->solver_status = sst;
@@ -1045,7 +1099,8 @@ pdg_status pdg_solve_from(pdg_workspace *ws, const pdg_scenario *scenario,
          * dropped is rejected and the constraint put back for the rest of the solve; the retry
          * starts from the same reference (which meets every convex constraint, so the
          * subproblem stays feasible) with the same radius. */
-        newly_forced = has_mask && put_back_dropped(ws) > 0;
+        restored = has_mask ? put_back_dropped(ws) : 0;
+        newly_forced = restored > 0;
         if (newly_forced) {
             accepted = 0;
             eta_new = eta;
@@ -1057,7 +1112,7 @@ pdg_status pdg_solve_from(pdg_workspace *ws, const pdg_scenario *scenario,
         r->vc_norm1 = cd.vc;
         r->n_tight = cd.n_tight;
         r->accepted = accepted;
-        r->subproblem_time_s = opt->clock_s ? opt->clock_s() - t0 : 0.0;
+        r->restored = restored;
         prev_has_mask = has_mask;
         if (has_mask) {
             memcpy(ws->prev_mask, ws->mask, (size_t)NC * ws->N);
@@ -1097,14 +1152,14 @@ pdg_status pdg_solve_from(pdg_workspace *ws, const pdg_scenario *scenario,
 
 /* ---- record of the last solve ------------------------------------------------------------ */
 
-int pdg_log_length(const pdg_workspace *ws) { return ws && ws->ready ? ws->n_log : 0; }
+int pdg_log_length(const pdg_workspace *ws) { return PDG_WS_READY(ws) ? ws->n_log : 0; }
 
 pdg_setup_status pdg_get_log(const pdg_workspace *ws, int i, pdg_log_row *row)
 {
     if (!ws || !row) {
         return PDG_SETUP_NULL_ARGUMENT;
     }
-    if (!ws->ready) {
+    if (!PDG_WS_READY(ws)) {
         return PDG_SETUP_NOT_READY;
     }
     if (i < 0 || i >= ws->n_log) {
@@ -1119,7 +1174,7 @@ pdg_setup_status pdg_get_mask(const pdg_workspace *ws, int k, unsigned char *mas
     if (!ws || !mask) {
         return PDG_SETUP_NULL_ARGUMENT;
     }
-    if (!ws->ready) {
+    if (!PDG_WS_READY(ws)) {
         return PDG_SETUP_NOT_READY;
     }
     if (k < 0 || k >= ws->n_masks_out) {
@@ -1129,11 +1184,14 @@ pdg_setup_status pdg_get_mask(const pdg_workspace *ws, int k, unsigned char *mas
     return PDG_SETUP_OK;
 }
 
-size_t pdg_arena_high_water(const pdg_workspace *ws) { return ws ? ws->arena_high : 0; }
+size_t pdg_arena_high_water(const pdg_workspace *ws)
+{
+    return PDG_WS_READY(ws) ? ws->arena_high : 0;
+}
 
 void pdg_problem_size(const pdg_workspace *ws, int *n, int *p, int *m, int *nnz_A, int *nnz_G)
 {
-    if (!ws) {
+    if (!PDG_WS_READY(ws)) {
         return;
     }
     if (n) *n = ws->n;
@@ -1148,7 +1206,7 @@ void pdg_problem_size(const pdg_workspace *ws, int *n, int *p, int *m, int *nnz_
 int pdg_debug_guess(pdg_workspace *ws, const pdg_scenario *s, double *x, double *u, double *t_f)
 {
     char msg[PDG_MESSAGE_LEN];
-    if (!ws || !ws->ready || !x || !u || !t_f) {
+    if (!PDG_WS_READY(ws) || !x || !u || !t_f) {
         return PDG_INVALID_INPUT;
     }
     if (pdg_check_workspace_scenario(ws, s, msg)) {
@@ -1165,7 +1223,7 @@ int pdg_debug_assemble(pdg_workspace *ws, const pdg_scenario *s, const double *x
     char msg[PDG_MESSAGE_LEN];
     double tf2;
     int i;
-    if (!ws || !ws->ready || !x || !u) {
+    if (!PDG_WS_READY(ws) || !x || !u || !(eta > 0.0 && isfinite(eta))) {
         return PDG_INVALID_INPUT;
     }
     if (pdg_check_workspace_scenario(ws, s, msg)) {

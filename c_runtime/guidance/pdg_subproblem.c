@@ -143,7 +143,7 @@ void pdg_emit(pdg_emitter *e, const pdg_layout *L, int roll_free, const pdg_valu
         for (i = 0; i < NX; ++i) {
             inv[i] = 1.0 / sc->Sx[i];
         }
-        pdg_x_final_target(p, xf);
+        pdg_x_final_target(v->scn, xf);
         tg = pdg_tan_glideslope(p);
         cg = pdg_cos_gimbal(p);
         eta = v->eta;

@@ -81,7 +81,7 @@ int pdg_tscvx_guess(pdg_workspace *ws, const pdg_scenario *s, tscvx_nn *solution
     char *msg = message ? message : local;
     double theta[THETA];
     msg[0] = '\0';
-    if (!ws || !ws->ready || !s || !solution || !x || !u || !t_f) {
+    if (!PDG_WS_READY(ws) || !s || !solution || !x || !u || !t_f) {
         snprintf(msg, PDG_MESSAGE_LEN, "a required pointer is NULL or the workspace not set up");
         return PDG_INVALID_INPUT;
     }
@@ -134,7 +134,7 @@ pdg_status pdg_solve_tscvx(pdg_workspace *ws, const pdg_scenario *s,
 {
     pdg_options opt;
     mask_ctx mc;
-    double eta;
+    double eta, warm_eta;
     pdg_status status;
     int N;
 
@@ -159,10 +159,15 @@ pdg_status pdg_solve_tscvx(pdg_workspace *ws, const pdg_scenario *s,
         (o->constraint && check_net(o->constraint, TSCVX_NN_KIND_CONSTRAINT, N, res->message))) {
         return PDG_INVALID_INPUT;
     }
-    if (!(o->eta_init == 0.0 || (o->eta_init >= ws->st.eta_lb && o->eta_init <= ws->st.eta_ub))) {
+    /* 0 stands for Table 1's radius, which the settings' bounds must admit when it is used */
+    warm_eta = o->eta_init == 0.0 ? PDG_TSCVX_ETA_INIT : o->eta_init;
+    if ((o->eta_init != 0.0 || o->solution) &&
+        !(warm_eta >= ws->st.eta_lb && warm_eta <= ws->st.eta_ub)) {
         snprintf(res->message, PDG_MESSAGE_LEN,
-                 "eta_init: must be 0 (Table 1's %g) or within [eta_lb, eta_ub] = [%g, %g], got %g",
-                 PDG_TSCVX_ETA_INIT, ws->st.eta_lb, ws->st.eta_ub, o->eta_init);
+                 "eta_init: must be 0 (Table 1's %g) or within [eta_lb, eta_ub] = [%g, %g], got %g"
+                 "%s",
+                 PDG_TSCVX_ETA_INIT, ws->st.eta_lb, ws->st.eta_ub, o->eta_init,
+                 o->eta_init == 0.0 ? " (Table 1's radius is outside the settings' bounds)" : "");
         return PDG_INVALID_INPUT;
     }
     memset(&opt, 0, sizeof opt);
@@ -178,7 +183,7 @@ pdg_status pdg_solve_tscvx(pdg_workspace *ws, const pdg_scenario *s,
         opt.guess_x = ws->nn_out;
         opt.guess_u = ws->nn_out + (size_t)N * NX;
         opt.guess_t_f = ws->nn_out[N * (NX + NU)];
-        eta = o->eta_init > 0.0 ? o->eta_init : PDG_TSCVX_ETA_INIT;
+        eta = warm_eta;
     }
     if (o->constraint) {
         mc.net = o->constraint;

@@ -187,10 +187,12 @@ typedef struct {
     double eta;               /* trust radius used */
     double vc_norm1;          /* virtual control (block norm) + buffers, scaled */
     int n_tight;              /* tight constraints at the solution */
-    double subproblem_time_s; /* 0 without options.clock_s */
+    double subproblem_time_s; /* the conic solve (tscvx_solve) alone; 0 without options.clock_s */
     int accepted;
     int solver_status;        /* tscvx_solve_status of the subproblem */
     int solver_iterations;
+    int restored;             /* T-SCvx: dropped constraints the full-constraint guard put
+                                 back (the step is then rejected at the same radius) */
 } pdg_log_row;
 
 typedef struct pdg_workspace pdg_workspace; /* opaque, lives in the arena */
@@ -201,6 +203,10 @@ void pdg_default_settings(pdg_settings *settings);
 void pdg_default_params(pdg_params *params);
 /* The default scenario of DESIGN.md (r0 = (4, 4, 0), v0 = (0, -1, -2), m0 = 3, ...). */
 void pdg_default_scenario(pdg_scenario *scenario);
+
+/* PDG_SETUP_OK, or PDG_SETUP_BAD_SETTINGS with the field, its range and the value in `message`
+ * (PDG_MESSAGE_LEN bytes; may be NULL): what pdg_workspace_size and pdg_setup refuse. */
+pdg_setup_status pdg_check_settings(const pdg_settings *settings, char *message);
 
 pdg_setup_status pdg_workspace_size(int N, int final_roll_free, const pdg_settings *settings,
                                     void *scratch, size_t scratch_bytes, size_t *bytes);

@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from guidance.dataset import N_THETA, THETA_NAMES
+from guidance.errors import InputError
 from guidance.params import NC, NU, NX, Params, Scenario
 
 META_KEY = "tscvx"
@@ -28,7 +29,7 @@ INPUT_PARAMS = ("glideslope_deg", "tilt_max_deg")
 PROBE_RTOL = 1e-4
 
 
-class ModelMismatchError(ValueError):
+class ModelMismatchError(InputError):
     """The model file cannot serve this problem; the message says why."""
 
 

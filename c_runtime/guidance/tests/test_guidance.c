@@ -151,6 +151,42 @@ static void test_settings_and_sizes(void)
     CHECK(strcmp(pdg_status_name(PDG_INFEASIBLE), "infeasible") == 0);
     CHECK(strcmp(pdg_status_name((pdg_status)99), "unknown") == 0);
     CHECK(strlen(pdg_setup_status_message(PDG_SETUP_ARENA_TOO_SMALL)) > 0);
+    {   /* the check names the setting, its range and the value */
+        char msg[PDG_MESSAGE_LEN];
+        pdg_default_settings(&st);
+        CHECK(pdg_check_settings(&st, msg) == PDG_SETUP_OK);
+        CHECK(pdg_check_settings(NULL, msg) == PDG_SETUP_NULL_ARGUMENT);
+        st.socp_max_iter = 501;
+        CHECK(pdg_check_settings(&st, msg) == PDG_SETUP_BAD_SETTINGS);
+        CHECK(strcmp(msg, "settings.socp_max_iter: must lie within 1..500, got 501") == 0);
+        pdg_default_settings(&st);
+        st.defect_tol = INFINITY;
+        CHECK(pdg_check_settings(&st, msg) == PDG_SETUP_BAD_SETTINGS);
+        CHECK(strstr(msg, "settings.defect_tol: must be finite") == msg);
+        CHECK(pdg_check_settings(&st, NULL) == PDG_SETUP_BAD_SETTINGS);
+    }
+}
+
+/* A workspace whose arena was overwritten (reused for something else) is refused, not
+ * trusted; a trust radius that is not positive is refused by the assembly hook. */
+static void test_stale_workspace(pdg_workspace *ws, void *arena, size_t bytes)
+{
+    pdg_scenario s;
+    pdg_result r;
+    pdg_log_row row;
+    double tf = 0.0;
+    pdg_default_scenario(&s);
+    CHECK(pdg_debug_guess(ws, &s, x, u, &tf) == 0);
+    CHECK(pdg_debug_assemble(ws, &s, x, u, tf, -5.0, NULL, NULL, NULL, NULL, NULL, NULL, NULL,
+                             NULL, NULL) == PDG_INVALID_INPUT);
+    CHECK(pdg_debug_assemble(ws, &s, x, u, tf, 0.5, NULL, NULL, NULL, NULL, NULL, NULL, NULL,
+                             NULL, NULL) == 0);
+    memset(arena, 0x5A, bytes);
+    r.x = x;
+    r.u = u;
+    CHECK(pdg_solve(ws, &s, NULL, &r) == PDG_INVALID_INPUT);
+    CHECK(pdg_get_log(ws, 0, &row) == PDG_SETUP_NOT_READY);
+    CHECK(pdg_log_length(ws) == 0 && pdg_arena_high_water(ws) == 0);
 }
 
 /* Mask callback: keep everything except every constraint c = 1 (glideslope). */
@@ -241,6 +277,7 @@ int main(void)
     if (ws) {
         test_bad_input(ws);
         test_solve(ws, full);
+        test_stale_workspace(ws, arena, bytes);
     }
     free(arena);
     {   /* a pinned final attitude and another N set up and run without errors */

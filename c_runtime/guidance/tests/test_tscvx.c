@@ -18,13 +18,16 @@
 #include "tscvx_guidance.h"
 #include "tscvx_nn.h"
 
-static pdg_workspace *make_ws(int N, void **arena)
+/* A workspace for N nodes with Table 1's settings, but the trust radius bounded below by
+ * eta_lb (0: Table 1's) */
+static pdg_workspace *make_ws(int N, double eta_lb, void **arena)
 {
     pdg_settings st;
     pdg_workspace *ws = NULL;
     size_t need = 0;
     int tries;
     pdg_default_settings(&st);
+    if (eta_lb > 0.0) st.eta_lb = eta_lb;
     if (arena_size(N, 1, &st, &need, &tries) != PDG_SETUP_OK || !(*arena = malloc(need))) {
         return NULL;
     }
@@ -53,11 +56,11 @@ int main(int argc, char **argv)
 {
     const char *paths[2] = {"build/models/solution.tnn", "build/models/constraint.tnn"};
     unsigned char *blob[2] = {NULL, NULL};
-    void *net_arena[2] = {NULL, NULL}, *arena = NULL, *arena30 = NULL;
+    void *net_arena[2] = {NULL, NULL}, *arena = NULL, *arena30 = NULL, *arena_lb = NULL;
     size_t net_bytes[2] = {0, 0};
     size_t len[2] = {0, 0};
     tscvx_nn *nets[2] = {NULL, NULL}, *sol, *con;
-    pdg_workspace *ws, *ws30;
+    pdg_workspace *ws, *ws30, *ws_lb;
     pdg_scenario s, bad, s30;
     pdg_tscvx_options o = {0};
     pdg_tscvx_report rep;
@@ -81,7 +84,7 @@ int main(int argc, char **argv)
     con = nets[1];
     pdg_default_scenario(&s);
     N = s.params.N;
-    ws = make_ws(N, &arena);
+    ws = make_ws(N, 0.0, &arena);
     CHECK(sol && con && ws);
     if (!sol || !con || !ws) return 1;
 
@@ -116,10 +119,16 @@ int main(int argc, char **argv)
     o.eta_init = NAN;
     CHECK(pdg_solve_tscvx(ws, &s, &o, &r, NULL) == PDG_INVALID_INPUT);
     o.eta_init = 0.0;
+    /* settings whose eta_lb = 0.1 exclude Table 1's 0.01: refused, not started below eta_lb */
+    ws_lb = make_ws(N, 0.1, &arena_lb);
+    CHECK(ws_lb != NULL);
+    if (ws_lb) {
+        expect_refused(ws_lb, &s, sol, NULL, "Table 1's radius is outside the settings' bounds");
+    }
     /* networks trained for N = 50 against a workspace for N = 30 */
     s30 = s;
     s30.params.N = 30;
-    ws30 = make_ws(30, &arena30);
+    ws30 = make_ws(30, 0.0, &arena30);
     CHECK(ws30 != NULL);
     if (ws30) {
         expect_refused(ws30, &s30, sol, NULL, "trained for N = 50");
@@ -164,6 +173,7 @@ int main(int argc, char **argv)
 
     free(arena);
     free(arena30);
+    free(arena_lb);
     for (i = 0; i < 2; ++i) {
         free(net_arena[i]);
         free(blob[i]);

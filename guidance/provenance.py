@@ -1,0 +1,60 @@
+"""Where a data file came from: the code (package version and git commit), the solvers, and
+the model files a result depended on. One definition for every file this package writes."""
+
+from __future__ import annotations
+
+import hashlib
+import platform
+import subprocess
+from datetime import datetime, timezone
+from importlib.metadata import PackageNotFoundError, version
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+# The libraries whose arithmetic a trajectory depends on.
+SOLVER_PACKAGES = ("numpy", "scipy", "casadi", "clarabel", "onnxruntime")
+
+
+def _version(package: str) -> str | None:
+    try:
+        return version(package)
+    except PackageNotFoundError:
+        return None
+
+
+def code_version() -> str:
+    """'guidance 0.1.0 git 2177901' ('+dirty' when guidance/ has uncommitted changes)."""
+    pkg = _version("guidance") or "unknown"
+
+    def git(*args: str) -> str:
+        return subprocess.run(
+            ["git", "-C", str(ROOT), *args], capture_output=True, text=True, timeout=5
+        ).stdout.strip()
+
+    try:
+        rev, dirty = git("rev-parse", "--short", "HEAD"), git("status", "--porcelain", "guidance")
+    except (OSError, subprocess.SubprocessError):
+        rev, dirty = "", ""
+    return f"guidance {pkg}" + (f" git {rev}{'+dirty' if dirty else ''}" if rev else "")
+
+
+def file_digest(path: Path) -> str:
+    """sha256 of a file's bytes (which model file exactly, not only its name)."""
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+def provenance(files: dict[str, Path] | None = None) -> dict[str, object]:
+    """The code, the solver versions, the machine and the time; with ``files`` (a name for
+    each input file, such as the networks of a T-SCvx solve) their paths and sha256."""
+    out: dict[str, object] = {
+        "generator": code_version(),
+        "created_utc": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+        "python": platform.python_version(),
+        "host": platform.machine(),
+        "packages": {name: v for name in SOLVER_PACKAGES if (v := _version(name))},
+    }
+    if files:
+        out["files"] = {
+            name: {"path": str(path), "sha256": file_digest(path)} for name, path in files.items()
+        }
+    return out
