@@ -41,10 +41,15 @@
  *                                                          NULL = unchanged; no symbolic work
  *   5. tscvx_solve(ws)                                   -- no allocation, bounded loops
  *      tscvx_get_solution / tscvx_get_info / tscvx_get_iter_log
- *   6. cleanup is trivial: the caller owns the arena and may reuse it.
+ *   6. tscvx_cleanup(ws)                                 -- ends the workspace (later calls
+ *                                                          with it are refused); the caller
+ *                                                          owns the arena and may reuse it
  *
- * The workspace is opaque and lives inside the arena. The library never calls malloc, has no
- * recursion and no global mutable state. Every public function returns a status code.
+ * The workspace is opaque and lives inside the arena. Every call taking it first checks a mark
+ * that setup writes last and cleanup clears, so a workspace whose arena was reused or
+ * overwritten is refused (TSCVX_SETUP_NOT_READY; tscvx_solve: TSCVX_INVALID_INPUT) before any
+ * of its pointers is followed. The library never calls malloc, has no recursion and no global
+ * mutable state. Every public function returns a status code.
  */
 #ifndef TSCVX_SOCP_H
 #define TSCVX_SOCP_H
@@ -72,7 +77,8 @@ typedef enum {
     TSCVX_SETUP_SCRATCH_TOO_SMALL, /* scratch smaller than tscvx_scratch_size() */
     TSCVX_SETUP_ARENA_TOO_SMALL, /* arena smaller than tscvx_workspace_size() */
     TSCVX_SETUP_TOO_LARGE,       /* sizes overflow the index type */
-    TSCVX_SETUP_NOT_READY,       /* workspace not set up or invalidated by a failed update */
+    TSCVX_SETUP_NOT_READY,       /* workspace not set up, cleaned up or overwritten, or
+                                    invalidated by a failed update */
     TSCVX_SETUP_BAD_INDEX,       /* iteration-log index out of range */
     TSCVX_SETUP_NOT_BANDED,      /* kkt_backend TSCVX_KKT_BANDED, but no banded structure */
     TSCVX_SETUP_NSTATUS
@@ -87,7 +93,8 @@ typedef enum {
     TSCVX_DUAL_INFEASIBLE,       /* certificate (x, s): Px = 0, Ax = 0, Gx + s = 0, s in K, c'x < 0 */
     TSCVX_MAX_ITER,              /* iteration limit reached */
     TSCVX_NUMERICAL_ERROR,       /* factorization or step failure, no acceptable iterate */
-    TSCVX_INVALID_INPUT,         /* workspace not ready (setup or update failed) */
+    TSCVX_INVALID_INPUT,         /* workspace not ready (setup or update failed, cleaned up
+                                    or overwritten) */
     TSCVX_NSTATUS
 } tscvx_solve_status;
 
@@ -226,6 +233,10 @@ tscvx_setup_status tscvx_get_info(const tscvx_workspace *ws, tscvx_info *info);
 /* Row k (0 <= k <= info.iterations) of the last solve's iteration log. */
 tscvx_setup_status tscvx_get_iter_log(const tscvx_workspace *ws, tscvx_int k,
                                       tscvx_iter_log *row);
+
+/* Ends the workspace: every later call with it returns TSCVX_SETUP_NOT_READY (tscvx_solve:
+ * TSCVX_INVALID_INPUT). Frees nothing: the arena is the caller's. */
+tscvx_setup_status tscvx_cleanup(tscvx_workspace *ws);
 
 #ifdef __cplusplus
 }

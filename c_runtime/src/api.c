@@ -20,7 +20,7 @@ static const char *const setup_messages[TSCVX_SETUP_NSTATUS] = {
     "scratch smaller than tscvx_scratch_size()",
     "arena smaller than tscvx_workspace_size()",
     "problem too large for the index type",
-    "workspace not ready (setup or a data update failed)",
+    "workspace not ready (not set up, cleaned up or overwritten, or a data update failed)",
     "iteration-log index out of range",
     "the problem has no structure for the banded KKT method (variable groups larger than 32, "
     "more than 8 border variables, a variable in no cone and not on P's diagonal, an equality "
@@ -414,6 +414,7 @@ static tscvx_setup_status build(const tscvx_data *d, const tscvx_settings *st, t
     }
     ws->info.arena_used = ws->arena_used, ws->info.arena_high_water = ws->arena_high;
     ws->ready = 1;
+    ws->magic = TSCVX_WS_MAGIC;
     *out = ws;
     return TSCVX_SETUP_OK;
 }
@@ -445,6 +446,24 @@ tscvx_setup_status tscvx_setup(tscvx_workspace **ws, void *arena, size_t arena_b
     return build(data, settings, &a, MODE_SETUP, ws, &unused);
 }
 
+/* ---- workspace validity ------------------------------------------------------------------ */
+
+/* The magic of a successful setup and KKT method pointers that are ours: checked before
+ * anything else of the workspace is read (a stale one holds garbage pointers). */
+static int ws_live(const tscvx_workspace *ws) {
+    if (ws->magic != TSCVX_WS_MAGIC) return 0;
+    if (ws->method == &tscvx_method_banded) return 1;
+    return ws->method == &tscvx_method_sparse &&
+           (ws->kkt.backend == &tscvx_backend_static || ws->kkt.backend == &tscvx_backend_ldl);
+}
+
+tscvx_setup_status tscvx_cleanup(tscvx_workspace *ws) {
+    if (ws == NULL) return TSCVX_SETUP_NULL_ARGUMENT;
+    if (!ws_live(ws)) return TSCVX_SETUP_NOT_READY;
+    ws->magic = 0, ws->ready = 0;
+    return TSCVX_SETUP_OK;
+}
+
 /* ---- updates ----------------------------------------------------------------------------- */
 
 tscvx_setup_status tscvx_update_data(tscvx_workspace *ws, const tscvx_float *Px,
@@ -452,6 +471,7 @@ tscvx_setup_status tscvx_update_data(tscvx_workspace *ws, const tscvx_float *Px,
                                      const tscvx_float *b, const tscvx_float *Gx,
                                      const tscvx_float *h) {
     if (ws == NULL) return TSCVX_SETUP_NULL_ARGUMENT;
+    if (!ws_live(ws)) return TSCVX_SETUP_NOT_READY;
     if ((Px && !all_finite(Px, ws->P.nnz)) || (c && !all_finite(c, ws->n)) ||
         (Ax && !all_finite(Ax, ws->A.nnz)) || (b && !all_finite(b, ws->p)) ||
         (Gx && !all_finite(Gx, ws->G.nnz)) || (h && !all_finite(h, ws->m))) {
@@ -468,6 +488,7 @@ tscvx_setup_status tscvx_update_data(tscvx_workspace *ws, const tscvx_float *Px,
 
 tscvx_setup_status tscvx_update_settings(tscvx_workspace *ws, const tscvx_settings *st) {
     if (ws == NULL || st == NULL) return TSCVX_SETUP_NULL_ARGUMENT;
+    if (!ws_live(ws)) return TSCVX_SETUP_NOT_READY;
     const tscvx_setup_status s = check_settings(st);
     if (s != TSCVX_SETUP_OK) return s;
     if (st->max_iter > ws->log_cap - 1 || st->soc_dense_max != ws->st.soc_dense_max ||
@@ -480,7 +501,7 @@ tscvx_setup_status tscvx_update_settings(tscvx_workspace *ws, const tscvx_settin
 /* ---- solve and results ------------------------------------------------------------------- */
 
 tscvx_solve_status tscvx_solve(tscvx_workspace *ws) {
-    if (ws == NULL) return TSCVX_INVALID_INPUT;
+    if (ws == NULL || !ws_live(ws)) return TSCVX_INVALID_INPUT;
     if (!ws->ready) {
         ws->info.status = TSCVX_INVALID_INPUT;
         return TSCVX_INVALID_INPUT;
@@ -491,13 +512,15 @@ tscvx_solve_status tscvx_solve(tscvx_workspace *ws) {
 tscvx_setup_status tscvx_get_solution(const tscvx_workspace *ws, tscvx_float *x, tscvx_float *y,
                                       tscvx_float *z, tscvx_float *s) {
     if (ws == NULL) return TSCVX_SETUP_NULL_ARGUMENT;
-    if (!ws->ready || ws->info.status == TSCVX_UNSOLVED) return TSCVX_SETUP_NOT_READY;
+    if (!ws_live(ws) || !ws->ready || ws->info.status == TSCVX_UNSOLVED)
+        return TSCVX_SETUP_NOT_READY;
     tscvx_unscale_solution(ws, x, y, z, s);
     return TSCVX_SETUP_OK;
 }
 
 tscvx_setup_status tscvx_get_info(const tscvx_workspace *ws, tscvx_info *info) {
     if (ws == NULL || info == NULL) return TSCVX_SETUP_NULL_ARGUMENT;
+    if (!ws_live(ws)) return TSCVX_SETUP_NOT_READY;
     *info = ws->info;
     return TSCVX_SETUP_OK;
 }
@@ -505,6 +528,7 @@ tscvx_setup_status tscvx_get_info(const tscvx_workspace *ws, tscvx_info *info) {
 tscvx_setup_status tscvx_get_iter_log(const tscvx_workspace *ws, tscvx_int k,
                                       tscvx_iter_log *row) {
     if (ws == NULL || row == NULL) return TSCVX_SETUP_NULL_ARGUMENT;
+    if (!ws_live(ws)) return TSCVX_SETUP_NOT_READY;
     if (k < 0 || k >= ws->log_cap || k > ws->info.iterations) return TSCVX_SETUP_BAD_INDEX;
     *row = ws->log[k];
     return TSCVX_SETUP_OK;

@@ -3,6 +3,7 @@
 #define TSCVX_SOCP_INTERNAL_H
 
 #include <stddef.h>
+#include <stdint.h>
 
 #include "tscvx_socp.h"
 
@@ -268,7 +269,13 @@ void tscvx_spmv_sym(const tscvx_csc *P, const tscvx_float *x, tscvx_float *y);
 
 /* ---- workspace --------------------------------------------------------------------------- */
 
+/* Set as the last step of a successful setup and cleared by tscvx_cleanup: every public call
+ * checks it first, so a workspace whose arena was reused or overwritten is refused instead of
+ * having its (garbage) pointers followed. */
+#define TSCVX_WS_MAGIC 0x54534F43u /* "TSOC" */
+
 struct tscvx_workspace {
+    uint32_t magic; /* TSCVX_WS_MAGIC while set up */
     tscvx_settings st;
     tscvx_int n, p, m;
     tscvx_cones K;

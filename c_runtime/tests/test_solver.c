@@ -2,6 +2,7 @@
 #include <string.h>
 
 #include "ctest_util.h"
+#include "socp_internal.h"
 #include "tscvx_socp.h"
 
 static unsigned char arena[1 << 16], arena2[1 << 16];
@@ -164,11 +165,50 @@ static void test_update(void) {
     CHECK(tscvx_get_iter_log(ws, info.iterations + 1, &row) == TSCVX_SETUP_BAD_INDEX, "log range");
 }
 
+/* Every call on a stale workspace (arena overwritten after setup, or cleaned up) is refused
+ * before any of its pointers is followed; so is one whose KKT method pointer is not ours. */
+static void test_stale_workspace(void) {
+    tscvx_int Gp[] = {0, 1, 2}, Gi[] = {1, 2}, q[] = {3};
+    tscvx_float Gx[] = {-1, -1}, h[] = {1, 0, 0}, c[] = {-1, -1}, x[2];
+    tscvx_data d = {2, 0, 3, NULL, NULL, NULL, c, NULL, NULL, NULL, NULL, Gp, Gi, Gx, h, 0, 1, q};
+    tscvx_settings st;
+    tscvx_default_settings(&st);
+    tscvx_workspace *ws = NULL;
+    tscvx_info info;
+    tscvx_iter_log row;
+    CHECK(tscvx_setup(&ws, arena2, sizeof arena2, &d, &st) == TSCVX_SETUP_OK, "setup");
+    CHECK(tscvx_solve(ws) == TSCVX_SOLVED, "solve");
+    memset(arena2, 0x5A, sizeof arena2);
+    CHECK(tscvx_solve(ws) == TSCVX_INVALID_INPUT, "solve on an overwritten arena");
+    CHECK(tscvx_update_data(ws, NULL, c, NULL, NULL, NULL, NULL) == TSCVX_SETUP_NOT_READY,
+          "update on an overwritten arena");
+    CHECK(tscvx_update_settings(ws, &st) == TSCVX_SETUP_NOT_READY, "settings, overwritten");
+    CHECK(tscvx_get_solution(ws, x, NULL, NULL, NULL) == TSCVX_SETUP_NOT_READY, "solution");
+    CHECK(tscvx_get_info(ws, &info) == TSCVX_SETUP_NOT_READY, "info, overwritten");
+    CHECK(tscvx_get_iter_log(ws, 0, &row) == TSCVX_SETUP_NOT_READY, "log, overwritten");
+    CHECK(tscvx_cleanup(ws) == TSCVX_SETUP_NOT_READY, "cleanup, overwritten");
+    CHECK(tscvx_cleanup(NULL) == TSCVX_SETUP_NULL_ARGUMENT, "cleanup(NULL)");
+
+    CHECK(tscvx_setup(&ws, arena2, sizeof arena2, &d, &st) == TSCVX_SETUP_OK, "setup again");
+    CHECK(tscvx_cleanup(ws) == TSCVX_SETUP_OK, "cleanup");
+    CHECK(tscvx_solve(ws) == TSCVX_INVALID_INPUT, "solve after cleanup");
+    CHECK(tscvx_get_info(ws, &info) == TSCVX_SETUP_NOT_READY, "info after cleanup");
+
+    /* the magic intact, the method pointer not: refused, not called */
+    CHECK(tscvx_setup(&ws, arena2, sizeof arena2, &d, &st) == TSCVX_SETUP_OK, "third setup");
+    const tscvx_kkt_method *method = ws->method;
+    ws->method = (const tscvx_kkt_method *)(void *)arena;
+    CHECK(tscvx_solve(ws) == TSCVX_INVALID_INPUT, "solve with a foreign method pointer");
+    ws->method = method;
+    CHECK(tscvx_solve(ws) == TSCVX_SOLVED, "solve with the method restored");
+}
+
 int main(void) {
     test_soc();
     test_qp();
     test_infeasible();
     test_bad_input();
     test_update();
+    test_stale_workspace();
     return ct_report("test_solver");
 }
