@@ -230,7 +230,8 @@ tscvx_setup_status tscvx_get_solution(const tscvx_workspace *ws, tscvx_float *x,
 
 tscvx_setup_status tscvx_get_info(const tscvx_workspace *ws, tscvx_info *info);
 
-/* Row k (0 <= k <= info.iterations) of the last solve's iteration log. */
+/* Row k (0 <= k <= info.iterations) of the last solve's iteration log; TSCVX_SETUP_NOT_READY
+ * before a solve (since setup or the last data update), as tscvx_get_solution. */
 tscvx_setup_status tscvx_get_iter_log(const tscvx_workspace *ws, tscvx_int k,
                                       tscvx_iter_log *row);
 

@@ -528,7 +528,8 @@ tscvx_setup_status tscvx_get_info(const tscvx_workspace *ws, tscvx_info *info) {
 tscvx_setup_status tscvx_get_iter_log(const tscvx_workspace *ws, tscvx_int k,
                                       tscvx_iter_log *row) {
     if (ws == NULL || row == NULL) return TSCVX_SETUP_NULL_ARGUMENT;
-    if (!ws_live(ws)) return TSCVX_SETUP_NOT_READY;
+    if (!ws_live(ws) || !ws->ready || ws->info.status == TSCVX_UNSOLVED)
+        return TSCVX_SETUP_NOT_READY; /* no log since setup or the last update */
     if (k < 0 || k >= ws->log_cap || k > ws->info.iterations) return TSCVX_SETUP_BAD_INDEX;
     *row = ws->log[k];
     return TSCVX_SETUP_OK;

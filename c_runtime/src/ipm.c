@@ -394,6 +394,7 @@ tscvx_solve_status tscvx_ipm(tscvx_workspace *ws) {
     ws->refine_now = ws->st.refine_iters;
     ws->method->load(ws);
     if (initialize(ws) != 0) {
+        log_row(ws, 0, &r, 0.0); /* row 0 of the log, as the info says: no iterate */
         finish_info(ws, TSCVX_NUMERICAL_ERROR, 0, &r);
         return TSCVX_NUMERICAL_ERROR;
     }

@@ -129,13 +129,18 @@ static void test_update(void) {
     tscvx_settings st;
     tscvx_default_settings(&st);
     tscvx_workspace *ws = NULL;
+    tscvx_iter_log row;
     CHECK(tscvx_setup(&ws, arena, sizeof arena, &d, &st) == TSCVX_SETUP_OK, "setup");
+    CHECK(tscvx_get_iter_log(ws, 0, &row) == TSCVX_SETUP_NOT_READY, "log before a solve");
     CHECK(tscvx_solve(ws) == TSCVX_SOLVED, "first solve");
+    CHECK(tscvx_get_iter_log(ws, 0, &row) == TSCVX_SETUP_OK, "log after a solve");
     tscvx_float h2[] = {2, 0, 0}, bad[] = {NAN, 0, 0};
     CHECK(tscvx_update_data(ws, NULL, NULL, NULL, NULL, NULL, bad) == TSCVX_SETUP_NONFINITE_DATA,
           "NaN update accepted");
+    CHECK(tscvx_get_iter_log(ws, 0, &row) == TSCVX_SETUP_NOT_READY, "log after a bad update");
     CHECK(tscvx_solve(ws) == TSCVX_INVALID_INPUT, "solve after bad update");
     CHECK(tscvx_update_data(ws, NULL, NULL, NULL, NULL, NULL, h2) == TSCVX_SETUP_OK, "update");
+    CHECK(tscvx_get_iter_log(ws, 0, &row) == TSCVX_SETUP_NOT_READY, "log after an update");
     CHECK(tscvx_solve(ws) == TSCVX_SOLVED, "second solve");
     tscvx_get_solution(ws, x, NULL, NULL, NULL);
     CHECK(fabs(x[0] - sqrt(2.0)) < 1e-7, "updated x %g", x[0]);
@@ -159,7 +164,6 @@ static void test_update(void) {
           (int)info.iterations, (int)fresh_info.iterations);
     CHECK(fabs(x[0] - xf[0]) < 1e-12 && fabs(x[1] - xf[1]) < 1e-12, "update vs fresh x %.3g %.3g",
           x[0] - xf[0], x[1] - xf[1]);
-    tscvx_iter_log row;
     CHECK(tscvx_get_iter_log(ws, info.iterations, &row) == TSCVX_SETUP_OK, "log row");
     CHECK(row.iter == info.iterations && fabs(row.pcost - info.pcost) < 1e-12, "log content");
     CHECK(tscvx_get_iter_log(ws, info.iterations + 1, &row) == TSCVX_SETUP_BAD_INDEX, "log range");
