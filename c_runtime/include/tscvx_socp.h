@@ -7,7 +7,14 @@
  *     subject to  A x = b                    (p equality rows)
  *                 G x + s = h,   s in K      (m cone rows)
  *
- *   x in R^n.  P (n x n) is given by its UPPER triangle only (it may be absent: Pp == NULL).
+ *   x in R^n.  P (n x n) must be positive semidefinite (a convex objective) and is given by its
+ *   UPPER triangle only (it may be absent: Pp == NULL). Setup and tscvx_update_data check a
+ *   necessary condition only (TSCVX_SETUP_P_NOT_PSD): every P_jj >= 0 and every entry
+ *   P_ij^2 <= P_ii P_jj (to 1e-12 relative, plus entries below 1e-12 max P_jj). An indefinite P
+ *   can pass it (a negative 3 x 3 or larger principal minor): the banded method then finds it
+ *   in its factors of P's diagonal blocks (tscvx_solve: TSCVX_NUMERICAL_ERROR); the sparse
+ *   method cannot tell (its pivots mix P with the constraint terms) and its result is
+ *   meaningless (at best a stationary point of a nonconvex problem).
  *   K = R_+^l  x  Q^{q_1} x ... x Q^{q_nsoc}: the first l rows of G are the nonnegative
  *   orthant, the following rows are second-order cones Q^q = {(t, u) in R x R^{q-1}: |u|_2 <= t}
  *   in the order given by q[]; l + sum(q) = m.
@@ -81,6 +88,7 @@ typedef enum {
                                     invalidated by a failed update */
     TSCVX_SETUP_BAD_INDEX,       /* iteration-log index out of range */
     TSCVX_SETUP_NOT_BANDED,      /* kkt_backend TSCVX_KKT_BANDED, but no banded structure */
+    TSCVX_SETUP_P_NOT_PSD,       /* P fails the semidefiniteness check (see the problem form) */
     TSCVX_SETUP_NSTATUS
 } tscvx_setup_status;
 
@@ -205,11 +213,12 @@ tscvx_setup_status tscvx_workspace_size(const tscvx_data *data, const tscvx_sett
 tscvx_setup_status tscvx_setup(tscvx_workspace **ws, void *arena, size_t arena_bytes,
                                const tscvx_data *data, const tscvx_settings *settings);
 
-/* New values with the setup sparsity (same nnz arrays); NULL leaves that part unchanged.
+/* New values with the setup sparsity (same nnz arrays); NULL leaves that part unchanged;
+ * new P values are checked as at setup (TSCVX_SETUP_P_NOT_PSD).
  * No symbolic work: the problem is equilibrated again with the new numbers (O(nnz) per Ruiz
  * pass) and written into the KKT matrix through the setup maps, so a solve after an update
  * takes the same steps as a solve after a fresh setup with the same numbers (to rounding).
- * Non-finite values make the workspace not ready
+ * Non-finite values or a P that fails its check make the workspace not ready
  * (solve returns TSCVX_INVALID_INPUT) until a valid update. */
 tscvx_setup_status tscvx_update_data(tscvx_workspace *ws, const tscvx_float *Px,
                                      const tscvx_float *c, const tscvx_float *Ax,

@@ -25,6 +25,8 @@ static const char *const setup_messages[TSCVX_SETUP_NSTATUS] = {
     "the problem has no structure for the banded KKT method (variable groups larger than 32, "
     "more than 8 border variables, a variable in no cone and not on P's diagonal, an equality "
     "row of border variables only, or too wide a profile)",
+    "P is not positive semidefinite (a negative diagonal entry, or an entry with "
+    "P_ij^2 > P_ii P_jj)",
 };
 
 static const char *const solve_messages[TSCVX_NSTATUS] = {
@@ -143,6 +145,39 @@ static tscvx_setup_status check_csc(const tscvx_int *Mp, const tscvx_int *Mi, ts
 
 static tscvx_int nnz_of(const tscvx_int *Mp, tscvx_int ncol) { return Mp ? Mp[ncol] : 0; }
 
+/* P_jj, 0 when absent: the last entry of column j (rows ascend, none below the diagonal) */
+static tscvx_float p_diag(const tscvx_int *Pp, const tscvx_int *Pi, const tscvx_float *Px,
+                          tscvx_int j) {
+    const tscvx_int k = Pp[j + 1] - 1;
+    return k >= Pp[j] && Pi[k] == j ? Px[k] : 0.0;
+}
+
+/* Necessary for P >= 0, and cheap (the full test is a factorization): no negative diagonal
+ * entry and no negative 2 x 2 principal minor, P_ij^2 <= P_ii P_jj. In units of the largest
+ * diagonal entry (the products neither overflow nor underflow), to a relative PSD_TOL (P = v v'
+ * in rounded numbers passes) plus an absolute PSD_TOL^2 (entries at the rounding level of that
+ * largest diagonal). Finite values and a valid upper-triangle pattern are checked before. */
+#define PSD_TOL 1e-12
+static int p_maybe_psd(const tscvx_int *Pp, const tscvx_int *Pi, const tscvx_float *Px,
+                       tscvx_int n) {
+    tscvx_float dmax = 0.0;
+    for (tscvx_int j = 0; j < n; j++) {
+        const tscvx_float djj = p_diag(Pp, Pi, Px, j);
+        if (djj < 0.0) return 0;
+        dmax = fmax(dmax, djj);
+    }
+    /* a zero diagonal admits exact zeros only */
+    const tscvx_float unit = dmax > 0.0 ? dmax : 1.0, tiny = dmax > 0.0 ? PSD_TOL * PSD_TOL : 0.0;
+    for (tscvx_int j = 0; j < n; j++) {
+        const tscvx_float djj = p_diag(Pp, Pi, Px, j) / unit;
+        for (tscvx_int k = Pp[j]; k < Pp[j + 1] && Pi[k] < j; k++) {
+            const tscvx_float pij = Px[k] / unit, dii = p_diag(Pp, Pi, Px, Pi[k]) / unit;
+            if (pij * pij > (1.0 + PSD_TOL) * dii * djj + tiny) return 0;
+        }
+    }
+    return 1;
+}
+
 static tscvx_setup_status check_data(const tscvx_data *d) {
     if (d->n < 1 || d->p < 0 || d->m < 0) return TSCVX_SETUP_BAD_DIMENSIONS;
     if (d->n > INT_MAX / 8 || d->p > INT_MAX / 8 || d->m > INT_MAX / 8)
@@ -173,6 +208,7 @@ static tscvx_setup_status check_data(const tscvx_data *d) {
         (d->Ap && !all_finite(d->Ax, nnz_of(d->Ap, d->n))) ||
         (d->Gp && !all_finite(d->Gx, nnz_of(d->Gp, d->n))))
         return TSCVX_SETUP_NONFINITE_DATA;
+    if (d->Pp && !p_maybe_psd(d->Pp, d->Pi, d->Px, d->n)) return TSCVX_SETUP_P_NOT_PSD;
     return TSCVX_SETUP_OK;
 }
 
@@ -472,12 +508,17 @@ tscvx_setup_status tscvx_update_data(tscvx_workspace *ws, const tscvx_float *Px,
                                      const tscvx_float *h) {
     if (ws == NULL) return TSCVX_SETUP_NULL_ARGUMENT;
     if (!ws_live(ws)) return TSCVX_SETUP_NOT_READY;
+    tscvx_setup_status s = TSCVX_SETUP_OK;
     if ((Px && !all_finite(Px, ws->P.nnz)) || (c && !all_finite(c, ws->n)) ||
         (Ax && !all_finite(Ax, ws->A.nnz)) || (b && !all_finite(b, ws->p)) ||
-        (Gx && !all_finite(Gx, ws->G.nnz)) || (h && !all_finite(h, ws->m))) {
+        (Gx && !all_finite(Gx, ws->G.nnz)) || (h && !all_finite(h, ws->m)))
+        s = TSCVX_SETUP_NONFINITE_DATA;
+    else if (Px && !p_maybe_psd(ws->P.p, ws->P.i, Px, ws->n)) /* the setup pattern */
+        s = TSCVX_SETUP_P_NOT_PSD;
+    if (s != TSCVX_SETUP_OK) { /* not ready until a valid update */
         ws->ready = 0;
         ws->info.status = TSCVX_INVALID_INPUT;
-        return TSCVX_SETUP_NONFINITE_DATA;
+        return s;
     }
     data_norms(ws, Px, c, b, h);
     tscvx_update_equilibrate(ws, Px, c, Ax, b, Gx, h);

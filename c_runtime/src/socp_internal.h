@@ -239,8 +239,9 @@ int tscvx_banded_analyse(tscvx_workspace *ws, tscvx_arena *a);
 typedef struct {
     const char *name;
     tscvx_int id;                         /* TSCVX_KKT_STATIC, _LDL or _BANDED */
-    /* the data or ws->delta changed */
-    void (*load)(tscvx_workspace *ws);
+    /* the data or ws->delta changed; 0, or -1 when P is found indefinite (banded: the
+     * factors of its diagonal blocks) */
+    int (*load)(tscvx_workspace *ws);
     /* the NT scaling ws->W changed: factor with regularization ws->delta; 0 or -1 */
     int (*factor)(tscvx_workspace *ws);
     /* solve the unregularized system for (rx, ry, rz) (original order) by the factored one
