@@ -30,7 +30,8 @@
  * Lifecycle (memory is claimed in exactly one place, from ONE caller-provided arena):
  *
  *   1. tscvx_nn_arena_size(blob, len, flags, &bytes)   validates the blob (magic, version,
- *        sizes, CRC-32, every weight finite, normalization scales positive) and sizes the arena
+ *        sizes, CRC-32, input and output sizes against the kind and N, every weight finite,
+ *        normalization scales positive) and sizes the arena
  *   2. tscvx_nn_init(&net, arena, bytes, blob, len, flags)   validates again, lays out the net
  *        and its activation buffers in the arena. Without TSCVX_NN_COPY_WEIGHTS the weights are
  *        read from the blob in place: the blob must stay valid and unchanged while the net is
@@ -72,7 +73,8 @@ typedef enum {
     TSCVX_NN_BAD_VERSION,      /* unsupported format version or header size */
     TSCVX_NN_TRUNCATED,        /* the blob is shorter (or longer) than its header says */
     TSCVX_NN_BAD_CHECKSUM,     /* CRC-32 mismatch: the blob is corrupt */
-    TSCVX_NN_BAD_DIMENSIONS,   /* dimensions out of range or inconsistent with each other */
+    TSCVX_NN_BAD_DIMENSIONS,   /* dimensions out of range or inconsistent with each other (the
+                                  input and output sizes with the kind and N) */
     TSCVX_NN_BAD_WEIGHTS,      /* a weight or normalization value is NaN/inf (or a scale <= 0) */
     TSCVX_NN_BAD_ALIGNMENT,    /* in-place weights need an 8-byte aligned blob */
     TSCVX_NN_ARENA_TOO_SMALL,  /* arena smaller than tscvx_nn_arena_size() */

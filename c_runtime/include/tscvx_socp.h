@@ -7,7 +7,14 @@
  *     subject to  A x = b                    (p equality rows)
  *                 G x + s = h,   s in K      (m cone rows)
  *
- *   x in R^n.  P (n x n) is given by its UPPER triangle only (it may be absent: Pp == NULL).
+ *   x in R^n.  P (n x n) must be positive semidefinite (a convex objective) and is given by its
+ *   UPPER triangle only (it may be absent: Pp == NULL). Setup and tscvx_update_data check a
+ *   necessary condition only (TSCVX_SETUP_P_NOT_PSD): every P_jj >= 0 and every entry
+ *   P_ij^2 <= P_ii P_jj (to 1e-12 relative, plus entries below 1e-12 max P_jj). An indefinite P
+ *   can pass it (a negative 3 x 3 or larger principal minor): the banded method then finds it
+ *   in its factors of P's diagonal blocks (tscvx_solve: TSCVX_NUMERICAL_ERROR); the sparse
+ *   method cannot tell (its pivots mix P with the constraint terms) and its result is
+ *   meaningless (at best a stationary point of a nonconvex problem).
  *   K = R_+^l  x  Q^{q_1} x ... x Q^{q_nsoc}: the first l rows of G are the nonnegative
  *   orthant, the following rows are second-order cones Q^q = {(t, u) in R x R^{q-1}: |u|_2 <= t}
  *   in the order given by q[]; l + sum(q) = m.
@@ -41,10 +48,15 @@
  *                                                          NULL = unchanged; no symbolic work
  *   5. tscvx_solve(ws)                                   -- no allocation, bounded loops
  *      tscvx_get_solution / tscvx_get_info / tscvx_get_iter_log
- *   6. cleanup is trivial: the caller owns the arena and may reuse it.
+ *   6. tscvx_cleanup(ws)                                 -- ends the workspace (later calls
+ *                                                          with it are refused); the caller
+ *                                                          owns the arena and may reuse it
  *
- * The workspace is opaque and lives inside the arena. The library never calls malloc, has no
- * recursion and no global mutable state. Every public function returns a status code.
+ * The workspace is opaque and lives inside the arena. Every call taking it first checks a mark
+ * that setup writes last and cleanup clears, so a workspace whose arena was reused or
+ * overwritten is refused (TSCVX_SETUP_NOT_READY; tscvx_solve: TSCVX_INVALID_INPUT) before any
+ * of its pointers is followed. The library never calls malloc, has no recursion and no global
+ * mutable state. Every public function returns a status code.
  */
 #ifndef TSCVX_SOCP_H
 #define TSCVX_SOCP_H
@@ -72,9 +84,11 @@ typedef enum {
     TSCVX_SETUP_SCRATCH_TOO_SMALL, /* scratch smaller than tscvx_scratch_size() */
     TSCVX_SETUP_ARENA_TOO_SMALL, /* arena smaller than tscvx_workspace_size() */
     TSCVX_SETUP_TOO_LARGE,       /* sizes overflow the index type */
-    TSCVX_SETUP_NOT_READY,       /* workspace not set up or invalidated by a failed update */
+    TSCVX_SETUP_NOT_READY,       /* workspace not set up, cleaned up or overwritten, or
+                                    invalidated by a failed update */
     TSCVX_SETUP_BAD_INDEX,       /* iteration-log index out of range */
     TSCVX_SETUP_NOT_BANDED,      /* kkt_backend TSCVX_KKT_BANDED, but no banded structure */
+    TSCVX_SETUP_P_NOT_PSD,       /* P fails the semidefiniteness check (see the problem form) */
     TSCVX_SETUP_NSTATUS
 } tscvx_setup_status;
 
@@ -87,7 +101,8 @@ typedef enum {
     TSCVX_DUAL_INFEASIBLE,       /* certificate (x, s): Px = 0, Ax = 0, Gx + s = 0, s in K, c'x < 0 */
     TSCVX_MAX_ITER,              /* iteration limit reached */
     TSCVX_NUMERICAL_ERROR,       /* factorization or step failure, no acceptable iterate */
-    TSCVX_INVALID_INPUT,         /* workspace not ready (setup or update failed) */
+    TSCVX_INVALID_INPUT,         /* workspace not ready (setup or update failed, cleaned up
+                                    or overwritten) */
     TSCVX_NSTATUS
 } tscvx_solve_status;
 
@@ -198,11 +213,12 @@ tscvx_setup_status tscvx_workspace_size(const tscvx_data *data, const tscvx_sett
 tscvx_setup_status tscvx_setup(tscvx_workspace **ws, void *arena, size_t arena_bytes,
                                const tscvx_data *data, const tscvx_settings *settings);
 
-/* New values with the setup sparsity (same nnz arrays); NULL leaves that part unchanged.
+/* New values with the setup sparsity (same nnz arrays); NULL leaves that part unchanged;
+ * new P values are checked as at setup (TSCVX_SETUP_P_NOT_PSD).
  * No symbolic work: the problem is equilibrated again with the new numbers (O(nnz) per Ruiz
  * pass) and written into the KKT matrix through the setup maps, so a solve after an update
  * takes the same steps as a solve after a fresh setup with the same numbers (to rounding).
- * Non-finite values make the workspace not ready
+ * Non-finite values or a P that fails its check make the workspace not ready
  * (solve returns TSCVX_INVALID_INPUT) until a valid update. */
 tscvx_setup_status tscvx_update_data(tscvx_workspace *ws, const tscvx_float *Px,
                                      const tscvx_float *c, const tscvx_float *Ax,
@@ -223,9 +239,14 @@ tscvx_setup_status tscvx_get_solution(const tscvx_workspace *ws, tscvx_float *x,
 
 tscvx_setup_status tscvx_get_info(const tscvx_workspace *ws, tscvx_info *info);
 
-/* Row k (0 <= k <= info.iterations) of the last solve's iteration log. */
+/* Row k (0 <= k <= info.iterations) of the last solve's iteration log; TSCVX_SETUP_NOT_READY
+ * before a solve (since setup or the last data update), as tscvx_get_solution. */
 tscvx_setup_status tscvx_get_iter_log(const tscvx_workspace *ws, tscvx_int k,
                                       tscvx_iter_log *row);
+
+/* Ends the workspace: every later call with it returns TSCVX_SETUP_NOT_READY (tscvx_solve:
+ * TSCVX_INVALID_INPUT). Frees nothing: the arena is the caller's. */
+tscvx_setup_status tscvx_cleanup(tscvx_workspace *ws);
 
 #ifdef __cplusplus
 }

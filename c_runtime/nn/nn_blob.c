@@ -2,8 +2,9 @@
  * nn_blob.c -- model blob validation and the net's set-up in the caller's arena.
  *
  * Everything that can be wrong with a model is found here, before any inference: magic,
- * version, header size, dimensions (range, consistency, sizes that overflow), the blob's
- * length against its header, the CRC-32, non-finite values, non-positive scales.
+ * version, header size, dimensions (range, consistency, sizes that overflow, the input and
+ * output sizes against the kind and N), the blob's length against its header, the CRC-32,
+ * non-finite values, non-positive scales.
  */
 #include <limits.h>
 #include <math.h>
@@ -18,7 +19,8 @@ static const char *const status_messages[TSCVX_NN_NSTATUS] = {
     "unsupported network blob format version or header size",
     "network blob length does not match its header (truncated or trailing bytes)",
     "network blob checksum (CRC-32) mismatch: the blob is corrupt",
-    "network dimensions out of range or inconsistent (token mode, sequence length, heads)",
+    "network dimensions out of range or inconsistent (token mode, sequence length, heads, or "
+    "input/output sizes that do not fit the kind and N)",
     "network blob holds a NaN/inf value or a non-positive normalization scale",
     "in-place weights need an 8-byte aligned blob (or the TSCVX_NN_COPY_WEIGHTS flag)",
     "arena smaller than tscvx_nn_arena_size()",
@@ -122,6 +124,17 @@ size_t nn_count_weights(const nn_header *hd)
 
 static int in_range(uint32_t v, uint32_t lo, uint32_t hi) { return v >= lo && v <= hi; }
 
+/* The input and output sizes of a valid kind for its N: a header edited along with its CRC
+ * must not pass (a solution network's outputs taken for logits, N not the one trained for). */
+static int sizes_fit_kind(const nn_header *hd)
+{
+    const uint64_t N = hd->N;
+    if (hd->kind == TSCVX_NN_KIND_CONSTRAINT) {
+        return hd->d_in == NN_THETA_LEN + 1u && hd->d_out == NN_TIGHT_PER_NODE * N;
+    }
+    return hd->d_in == NN_THETA_LEN && hd->d_out == NN_SOLUTION_PER_NODE * N + 1u;
+}
+
 /* Non-finite binary64 bit pattern: exponent all ones. Positive: sign clear, not zero. */
 static int f64_bits_finite(uint64_t u) { return ((u >> 52) & 0x7FFu) != 0x7FFu; }
 static int f64_bits_positive(uint64_t u)
@@ -186,7 +199,7 @@ tscvx_nn_status nn_parse(const void *blob, size_t len, nn_header *hd)
         || !in_range(hd->n_heads, 1, TSCVX_NN_MAX_HEADS)
         || !in_range(hd->n_layers, 0, TSCVX_NN_MAX_LAYERS)
         || !in_range(hd->n_probes, 0, TSCVX_NN_MAX_PROBES) || !in_range(hd->N, 1, 1u << 20)
-        || hd->d_model % hd->n_heads != 0
+        || !sizes_fit_kind(hd) || hd->d_model % hd->n_heads != 0
         || hd->seq_len != (hd->tokens == TSCVX_NN_TOKENS_SINGLE ? 1u : hd->d_in)
         || (uint64_t)hd->seq_len * 3u * hd->d_model > (uint64_t)INT_MAX) { /* int indices */
         return TSCVX_NN_BAD_DIMENSIONS;

@@ -42,6 +42,12 @@
 #define NN_CRC_OFFSET 124u
 #define NN_COOKIE 0x544E4E31u  /* "TNN1": set by init, checked by every call */
 #define NN_SELF_TEST_TOL 1e-4
+/* Sizes the kind fixes (tscvx_nn_kind; guidance.nn.infer.expected_sizes): theta (16 numbers)
+ * in, with the iteration k for a constraint network; out 7 tight-constraint logits per node,
+ * or per node x (14) and u (3), then t_f. */
+#define NN_THETA_LEN 16u
+#define NN_TIGHT_PER_NODE 7u
+#define NN_SOLUTION_PER_NODE 17u
 
 /* Header fields, decoded. */
 typedef struct {
@@ -86,8 +92,8 @@ struct tscvx_nn {
     double *yb;  /* d_out: self-test output */
 };
 
-/* nn_blob.c: decodes and validates a blob (magic, version, sizes, CRC-32, finite weights,
- * positive scales). */
+/* nn_blob.c: decodes and validates a blob (magic, version, sizes, CRC-32, input and output
+ * sizes against the kind and N, finite weights, positive scales). */
 tscvx_nn_status nn_parse(const void *blob, size_t len, nn_header *hdr);
 /* Float32 values of the network (normalization included) for the given dimensions, or 0
  * when a size overflows. */

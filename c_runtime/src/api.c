@@ -20,11 +20,13 @@ static const char *const setup_messages[TSCVX_SETUP_NSTATUS] = {
     "scratch smaller than tscvx_scratch_size()",
     "arena smaller than tscvx_workspace_size()",
     "problem too large for the index type",
-    "workspace not ready (setup or a data update failed)",
+    "workspace not ready (not set up, cleaned up or overwritten, or a data update failed)",
     "iteration-log index out of range",
     "the problem has no structure for the banded KKT method (variable groups larger than 32, "
     "more than 8 border variables, a variable in no cone and not on P's diagonal, an equality "
     "row of border variables only, or too wide a profile)",
+    "P is not positive semidefinite (a negative diagonal entry, or an entry with "
+    "P_ij^2 > P_ii P_jj)",
 };
 
 static const char *const solve_messages[TSCVX_NSTATUS] = {
@@ -143,6 +145,39 @@ static tscvx_setup_status check_csc(const tscvx_int *Mp, const tscvx_int *Mi, ts
 
 static tscvx_int nnz_of(const tscvx_int *Mp, tscvx_int ncol) { return Mp ? Mp[ncol] : 0; }
 
+/* P_jj, 0 when absent: the last entry of column j (rows ascend, none below the diagonal) */
+static tscvx_float p_diag(const tscvx_int *Pp, const tscvx_int *Pi, const tscvx_float *Px,
+                          tscvx_int j) {
+    const tscvx_int k = Pp[j + 1] - 1;
+    return k >= Pp[j] && Pi[k] == j ? Px[k] : 0.0;
+}
+
+/* Necessary for P >= 0, and cheap (the full test is a factorization): no negative diagonal
+ * entry and no negative 2 x 2 principal minor, P_ij^2 <= P_ii P_jj. In units of the largest
+ * diagonal entry (the products neither overflow nor underflow), to a relative PSD_TOL (P = v v'
+ * in rounded numbers passes) plus an absolute PSD_TOL^2 (entries at the rounding level of that
+ * largest diagonal). Finite values and a valid upper-triangle pattern are checked before. */
+#define PSD_TOL 1e-12
+static int p_maybe_psd(const tscvx_int *Pp, const tscvx_int *Pi, const tscvx_float *Px,
+                       tscvx_int n) {
+    tscvx_float dmax = 0.0;
+    for (tscvx_int j = 0; j < n; j++) {
+        const tscvx_float djj = p_diag(Pp, Pi, Px, j);
+        if (djj < 0.0) return 0;
+        dmax = fmax(dmax, djj);
+    }
+    /* a zero diagonal admits exact zeros only */
+    const tscvx_float unit = dmax > 0.0 ? dmax : 1.0, tiny = dmax > 0.0 ? PSD_TOL * PSD_TOL : 0.0;
+    for (tscvx_int j = 0; j < n; j++) {
+        const tscvx_float djj = p_diag(Pp, Pi, Px, j) / unit;
+        for (tscvx_int k = Pp[j]; k < Pp[j + 1] && Pi[k] < j; k++) {
+            const tscvx_float pij = Px[k] / unit, dii = p_diag(Pp, Pi, Px, Pi[k]) / unit;
+            if (pij * pij > (1.0 + PSD_TOL) * dii * djj + tiny) return 0;
+        }
+    }
+    return 1;
+}
+
 static tscvx_setup_status check_data(const tscvx_data *d) {
     if (d->n < 1 || d->p < 0 || d->m < 0) return TSCVX_SETUP_BAD_DIMENSIONS;
     if (d->n > INT_MAX / 8 || d->p > INT_MAX / 8 || d->m > INT_MAX / 8)
@@ -173,6 +208,7 @@ static tscvx_setup_status check_data(const tscvx_data *d) {
         (d->Ap && !all_finite(d->Ax, nnz_of(d->Ap, d->n))) ||
         (d->Gp && !all_finite(d->Gx, nnz_of(d->Gp, d->n))))
         return TSCVX_SETUP_NONFINITE_DATA;
+    if (d->Pp && !p_maybe_psd(d->Pp, d->Pi, d->Px, d->n)) return TSCVX_SETUP_P_NOT_PSD;
     return TSCVX_SETUP_OK;
 }
 
@@ -414,6 +450,7 @@ static tscvx_setup_status build(const tscvx_data *d, const tscvx_settings *st, t
     }
     ws->info.arena_used = ws->arena_used, ws->info.arena_high_water = ws->arena_high;
     ws->ready = 1;
+    ws->magic = TSCVX_WS_MAGIC;
     *out = ws;
     return TSCVX_SETUP_OK;
 }
@@ -445,6 +482,24 @@ tscvx_setup_status tscvx_setup(tscvx_workspace **ws, void *arena, size_t arena_b
     return build(data, settings, &a, MODE_SETUP, ws, &unused);
 }
 
+/* ---- workspace validity ------------------------------------------------------------------ */
+
+/* The magic of a successful setup and KKT method pointers that are ours: checked before
+ * anything else of the workspace is read (a stale one holds garbage pointers). */
+static int ws_live(const tscvx_workspace *ws) {
+    if (ws->magic != TSCVX_WS_MAGIC) return 0;
+    if (ws->method == &tscvx_method_banded) return 1;
+    return ws->method == &tscvx_method_sparse &&
+           (ws->kkt.backend == &tscvx_backend_static || ws->kkt.backend == &tscvx_backend_ldl);
+}
+
+tscvx_setup_status tscvx_cleanup(tscvx_workspace *ws) {
+    if (ws == NULL) return TSCVX_SETUP_NULL_ARGUMENT;
+    if (!ws_live(ws)) return TSCVX_SETUP_NOT_READY;
+    ws->magic = 0, ws->ready = 0;
+    return TSCVX_SETUP_OK;
+}
+
 /* ---- updates ----------------------------------------------------------------------------- */
 
 tscvx_setup_status tscvx_update_data(tscvx_workspace *ws, const tscvx_float *Px,
@@ -452,12 +507,18 @@ tscvx_setup_status tscvx_update_data(tscvx_workspace *ws, const tscvx_float *Px,
                                      const tscvx_float *b, const tscvx_float *Gx,
                                      const tscvx_float *h) {
     if (ws == NULL) return TSCVX_SETUP_NULL_ARGUMENT;
+    if (!ws_live(ws)) return TSCVX_SETUP_NOT_READY;
+    tscvx_setup_status s = TSCVX_SETUP_OK;
     if ((Px && !all_finite(Px, ws->P.nnz)) || (c && !all_finite(c, ws->n)) ||
         (Ax && !all_finite(Ax, ws->A.nnz)) || (b && !all_finite(b, ws->p)) ||
-        (Gx && !all_finite(Gx, ws->G.nnz)) || (h && !all_finite(h, ws->m))) {
+        (Gx && !all_finite(Gx, ws->G.nnz)) || (h && !all_finite(h, ws->m)))
+        s = TSCVX_SETUP_NONFINITE_DATA;
+    else if (Px && !p_maybe_psd(ws->P.p, ws->P.i, Px, ws->n)) /* the setup pattern */
+        s = TSCVX_SETUP_P_NOT_PSD;
+    if (s != TSCVX_SETUP_OK) { /* not ready until a valid update */
         ws->ready = 0;
         ws->info.status = TSCVX_INVALID_INPUT;
-        return TSCVX_SETUP_NONFINITE_DATA;
+        return s;
     }
     data_norms(ws, Px, c, b, h);
     tscvx_update_equilibrate(ws, Px, c, Ax, b, Gx, h);
@@ -468,6 +529,7 @@ tscvx_setup_status tscvx_update_data(tscvx_workspace *ws, const tscvx_float *Px,
 
 tscvx_setup_status tscvx_update_settings(tscvx_workspace *ws, const tscvx_settings *st) {
     if (ws == NULL || st == NULL) return TSCVX_SETUP_NULL_ARGUMENT;
+    if (!ws_live(ws)) return TSCVX_SETUP_NOT_READY;
     const tscvx_setup_status s = check_settings(st);
     if (s != TSCVX_SETUP_OK) return s;
     if (st->max_iter > ws->log_cap - 1 || st->soc_dense_max != ws->st.soc_dense_max ||
@@ -480,7 +542,7 @@ tscvx_setup_status tscvx_update_settings(tscvx_workspace *ws, const tscvx_settin
 /* ---- solve and results ------------------------------------------------------------------- */
 
 tscvx_solve_status tscvx_solve(tscvx_workspace *ws) {
-    if (ws == NULL) return TSCVX_INVALID_INPUT;
+    if (ws == NULL || !ws_live(ws)) return TSCVX_INVALID_INPUT;
     if (!ws->ready) {
         ws->info.status = TSCVX_INVALID_INPUT;
         return TSCVX_INVALID_INPUT;
@@ -491,13 +553,15 @@ tscvx_solve_status tscvx_solve(tscvx_workspace *ws) {
 tscvx_setup_status tscvx_get_solution(const tscvx_workspace *ws, tscvx_float *x, tscvx_float *y,
                                       tscvx_float *z, tscvx_float *s) {
     if (ws == NULL) return TSCVX_SETUP_NULL_ARGUMENT;
-    if (!ws->ready || ws->info.status == TSCVX_UNSOLVED) return TSCVX_SETUP_NOT_READY;
+    if (!ws_live(ws) || !ws->ready || ws->info.status == TSCVX_UNSOLVED)
+        return TSCVX_SETUP_NOT_READY;
     tscvx_unscale_solution(ws, x, y, z, s);
     return TSCVX_SETUP_OK;
 }
 
 tscvx_setup_status tscvx_get_info(const tscvx_workspace *ws, tscvx_info *info) {
     if (ws == NULL || info == NULL) return TSCVX_SETUP_NULL_ARGUMENT;
+    if (!ws_live(ws)) return TSCVX_SETUP_NOT_READY;
     *info = ws->info;
     return TSCVX_SETUP_OK;
 }
@@ -505,6 +569,8 @@ tscvx_setup_status tscvx_get_info(const tscvx_workspace *ws, tscvx_info *info) {
 tscvx_setup_status tscvx_get_iter_log(const tscvx_workspace *ws, tscvx_int k,
                                       tscvx_iter_log *row) {
     if (ws == NULL || row == NULL) return TSCVX_SETUP_NULL_ARGUMENT;
+    if (!ws_live(ws) || !ws->ready || ws->info.status == TSCVX_UNSOLVED)
+        return TSCVX_SETUP_NOT_READY; /* no log since setup or the last update */
     if (k < 0 || k >= ws->log_cap || k > ws->info.iterations) return TSCVX_SETUP_BAD_INDEX;
     *row = ws->log[k];
     return TSCVX_SETUP_OK;

@@ -29,9 +29,13 @@
  * (H_g or Y of an infeasible problem's diverging scaling; a singular P_gg). Dynamic
  * regularization, as QDLDL and Clarabel do, replaces it by DYN_DELTA a_jj and leaves the
  * difference to the refinement; the semidefinite factor of P_gg drops the column instead
- * (P_gg = F'F exactly, F with a zero row). A non-finite pivot is a failure. */
+ * (P_gg = F'F exactly, F with a zero row). A non-finite pivot is a failure.
+ * Only an indefinite P_gg leaves a dropped column more than SEMIDEF_TOL |P|_max away from
+ * zero (pivot or entries below it): a semidefinite one has |S_ij| <= sqrt(S_ii S_jj), at most
+ * sqrt(DYN_EPS) |P|_max for a dropped pivot S_jj <= DYN_EPS a_jj. */
 #define DYN_EPS 1e-13
 #define DYN_DELTA 1e-7
+#define SEMIDEF_TOL 1e-5
 enum { PIVOT_OK, PIVOT_DROP, PIVOT_FAIL };
 
 static int fix_pivot(tscvx_float *d, tscvx_float ajj, int semidefinite) {
@@ -42,26 +46,35 @@ static int fix_pivot(tscvx_float *d, tscvx_float ajj, int semidefinite) {
     return PIVOT_OK;
 }
 
+/* Entry (i, j), i >= j, of the Schur complement left after the first j columns of L:
+ * M_ij - sum_{k<j} L_ik L_jk */
+static inline tscvx_float schur_entry(const tscvx_float *M, tscvx_int s, tscvx_int i,
+                                      tscvx_int j) {
+    tscvx_float v = M[j * s + i];
+    for (tscvx_int k = 0; k < j; k++) v -= M[k * s + i] * M[k * s + j];
+    return v;
+}
+
 /* Cholesky L L' of the s x s column-major matrix whose lower part is in M (in place; entry
- * (i, k) at M[k s + i]); zero pivots as fix_pivot. Returns -1 on a non-finite pivot. */
-static int chol(tscvx_float *M, tscvx_int s, int semidefinite) {
+ * (i, k) at M[k s + i]); zero pivots as fix_pivot. `semidefinite`: a positive semidefinite
+ * matrix of largest |entry| `scale` (P_gg), its zero pivots dropped. Returns -1 on a
+ * non-finite pivot, or a dropped column that shows the semidefinite matrix indefinite. */
+static int chol(tscvx_float *M, tscvx_int s, int semidefinite, tscvx_float scale) {
     for (tscvx_int j = 0; j < s; j++) {
         const tscvx_float ajj = M[j * s + j];
-        tscvx_float d = ajj;
-        for (tscvx_int k = 0; k < j; k++) d -= M[k * s + j] * M[k * s + j];
+        tscvx_float d = schur_entry(M, s, j, j);
         const int fix = fix_pivot(&d, ajj, semidefinite);
         if (fix == PIVOT_FAIL) return -1;
-        if (fix == PIVOT_DROP) {
+        if (fix == PIVOT_DROP) { /* checked only here: the normal path costs nothing more */
+            if (d < -SEMIDEF_TOL * scale) return -1;
+            for (tscvx_int i = j + 1; i < s; i++)
+                if (fabs(schur_entry(M, s, i, j)) > SEMIDEF_TOL * scale) return -1;
             for (tscvx_int i = j; i < s; i++) M[j * s + i] = 0.0;
             continue;
         }
         d = sqrt(d);
         M[j * s + j] = d;
-        for (tscvx_int i = j + 1; i < s; i++) {
-            tscvx_float v = M[j * s + i];
-            for (tscvx_int k = 0; k < j; k++) v -= M[k * s + i] * M[k * s + j];
-            M[j * s + i] = v / d;
-        }
+        for (tscvx_int i = j + 1; i < s; i++) M[j * s + i] = schur_entry(M, s, i, j) / d;
     }
     return 0;
 }
@@ -803,7 +816,7 @@ static int form_border(tscvx_workspace *ws) {
             bd->S[c * nb + r] = v;
         }
     }
-    return chol(bd->S, nb, 0);
+    return chol(bd->S, nb, 0, 0.0);
 }
 
 /* The banded method's static regularization: TSCVX_BANDED_REG_SCALE times the IPM's delta.
@@ -814,8 +827,8 @@ static tscvx_float banded_reg(const tscvx_workspace *ws) {
 }
 
 /* New data: the factors of the groups' P blocks (P_gg = L_P L_P') and the largest |entry| of
- * P, A, G. */
-static void banded_load(tscvx_workspace *ws) {
+ * P, A, G. Returns -1 when a P block is found indefinite (or its factor not finite). */
+static int banded_load(tscvx_workspace *ws) {
     tscvx_banded *bd = &ws->bd;
     for (tscvx_int g = 0; g < bd->ngroup; g++) {
         if (!bd->hasP[g]) continue;
@@ -823,14 +836,20 @@ static void banded_load(tscvx_workspace *ws) {
         tscvx_float *F = bd->PF + bd->hp[g];
         for (tscvx_int t = 0; t < s * s; t++) F[t] = 0.0;
     }
-    for (tscvx_int k = 0; k < ws->P.nnz; k++) bd->PF[bd->mapP[k]] += ws->P.x[k];
+    tscvx_float pmax = 0.0;
+    for (tscvx_int k = 0; k < ws->P.nnz; k++) {
+        bd->PF[bd->mapP[k]] += ws->P.x[k];
+        pmax = fmax(pmax, fabs(ws->P.x[k]));
+    }
+    int status = 0;
     for (tscvx_int g = 0; g < bd->ngroup; g++)
-        if (bd->hasP[g]) chol(bd->PF + bd->hp[g], bd->gp[g + 1] - bd->gp[g], 1);
-    tscvx_float kmax = banded_reg(ws);
-    for (tscvx_int k = 0; k < ws->P.nnz; k++) kmax = fmax(kmax, fabs(ws->P.x[k]));
+        if (bd->hasP[g] && chol(bd->PF + bd->hp[g], bd->gp[g + 1] - bd->gp[g], 1, pmax) != 0)
+            status = -1;
+    tscvx_float kmax = fmax(banded_reg(ws), pmax);
     for (tscvx_int k = 0; k < ws->A.nnz; k++) kmax = fmax(kmax, fabs(ws->A.x[k]));
     for (tscvx_int k = 0; k < ws->G.nnz; k++) kmax = fmax(kmax, fabs(ws->G.x[k]));
     ws->bd.kmax_data = kmax;
+    return status;
 }
 
 static int banded_factor(tscvx_workspace *ws) {

@@ -185,7 +185,7 @@ static int factor(tscvx_workspace *ws) {
         ws->info.factorizations++;
         if (ws->method->factor(ws) == 0) return 0;
         ws->delta *= 100.0;
-        ws->method->load(ws);
+        if (ws->method->load(ws) != 0) return -1;
     }
     return -1;
 }
@@ -392,8 +392,8 @@ tscvx_solve_status tscvx_ipm(tscvx_workspace *ws) {
     ws->best_iter = -1;
     ws->info.factorizations = 0;
     ws->refine_now = ws->st.refine_iters;
-    ws->method->load(ws);
-    if (initialize(ws) != 0) {
+    if (ws->method->load(ws) != 0 || initialize(ws) != 0) {
+        log_row(ws, 0, &r, 0.0); /* row 0 of the log, as the info says: no iterate */
         finish_info(ws, TSCVX_NUMERICAL_ERROR, 0, &r);
         return TSCVX_NUMERICAL_ERROR;
     }

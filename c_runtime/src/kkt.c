@@ -349,7 +349,10 @@ int tscvx_kkt_solve(tscvx_kkt *kk, tscvx_int n, tscvx_int p, tscvx_int m,
 
 /* ---- the sparse KKT method --------------------------------------------------------------- */
 
-static void sparse_load(tscvx_workspace *ws) { tscvx_kkt_data_values(ws, ws->delta); }
+static int sparse_load(tscvx_workspace *ws) {
+    tscvx_kkt_data_values(ws, ws->delta);
+    return 0; /* an indefinite P shows, if at all, in the factorization's inertia check */
+}
 
 static int sparse_factor(tscvx_workspace *ws) {
     tscvx_kkt_cone_values(&ws->kkt, &ws->K, &ws->W, ws->delta);

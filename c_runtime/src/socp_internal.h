@@ -3,6 +3,7 @@
 #define TSCVX_SOCP_INTERNAL_H
 
 #include <stddef.h>
+#include <stdint.h>
 
 #include "tscvx_socp.h"
 
@@ -238,8 +239,9 @@ int tscvx_banded_analyse(tscvx_workspace *ws, tscvx_arena *a);
 typedef struct {
     const char *name;
     tscvx_int id;                         /* TSCVX_KKT_STATIC, _LDL or _BANDED */
-    /* the data or ws->delta changed */
-    void (*load)(tscvx_workspace *ws);
+    /* the data or ws->delta changed; 0, or -1 when P is found indefinite (banded: the
+     * factors of its diagonal blocks) */
+    int (*load)(tscvx_workspace *ws);
     /* the NT scaling ws->W changed: factor with regularization ws->delta; 0 or -1 */
     int (*factor)(tscvx_workspace *ws);
     /* solve the unregularized system for (rx, ry, rz) (original order) by the factored one
@@ -268,7 +270,13 @@ void tscvx_spmv_sym(const tscvx_csc *P, const tscvx_float *x, tscvx_float *y);
 
 /* ---- workspace --------------------------------------------------------------------------- */
 
+/* Set as the last step of a successful setup and cleared by tscvx_cleanup: every public call
+ * checks it first, so a workspace whose arena was reused or overwritten is refused instead of
+ * having its (garbage) pointers followed. */
+#define TSCVX_WS_MAGIC 0x54534F43u /* "TSOC" */
+
 struct tscvx_workspace {
+    uint32_t magic; /* TSCVX_WS_MAGIC while set up */
     tscvx_settings st;
     tscvx_int n, p, m;
     tscvx_cones K;

@@ -80,7 +80,7 @@ static void check_against_dense(tscvx_workspace *ws, int backend, int dense_max,
         return;
     }
     ws->delta = 1e-9;
-    ws->method->load(ws);
+    CHECK(ws->method->load(ws) == 0, "load (%s)", ws->method->name);
     CHECK(ws->method->factor(ws) == 0, "factorization (%s, backend %d, dense_max %d, P %d, n %d)",
           ws->method->name, backend, dense_max, with_P, n);
     memset(Kd, 0, sizeof(double) * dim * dim);

@@ -6,11 +6,12 @@
  * - each given model: validated, sized, built in an arena of exactly the reported size (so
  *   valgrind sees any overrun), its recorded probes reproduced (self-test), deterministic,
  *   the same numbers with the weights copied into the arena or read in place;
- * - synthetic networks of both token modes, several heads and layers, against a naive
- *   reference written here from the documented blob layout (full L x L attention);
+ * - synthetic networks of both kinds and token modes, several heads and layers, against a
+ *   naive reference written here from the documented blob layout (full L x L attention);
  * - every refusal: NULL pointers, bad magic, version, truncated / trailing bytes, CRC, bad
- *   dimensions, NaN / inf weights, non-positive scales, misalignment, small arena, unknown
- *   flags, wrong sizes, NaN / inf inputs, an uninitialized net, a failing self-test.
+ *   dimensions (sizes that do not fit the kind and N included), NaN / inf weights,
+ *   non-positive scales, misalignment, small arena, unknown flags, wrong sizes, NaN / inf
+ *   inputs, an uninitialized net, a failing self-test.
  */
 #include <math.h>
 #include <stdint.h>
@@ -109,8 +110,9 @@ static tscvx_nn_status try_init(const unsigned char *blob, size_t len, unsigned 
 
 /* ---- synthetic networks and a naive reference -------------------------------------------- */
 
+/* d_in and d_out as the kind fixes them for N (nn_internal.h) */
 typedef struct {
-    int kind, tokens, d_in, d_out, d, H, layers, ff, n_probes;
+    int kind, tokens, d_in, d_out, d, H, layers, ff, n_probes, N;
 } arch;
 
 static size_t n_weights_of(const arch *a)
@@ -142,7 +144,7 @@ static unsigned char *make_blob(const arch *a, size_t *len)
     wr_u32(b + 40, (uint32_t)a->layers);
     wr_u32(b + 44, (uint32_t)a->ff);
     wr_u32(b + 48, (uint32_t)L);
-    wr_u32(b + 52, 50);
+    wr_u32(b + 52, (uint32_t)a->N);
     wr_u32(b + 56, (uint32_t)a->n_probes);
     wr_f64(b + 64, 1e-5);
     wr_f64(b + 72, a->kind == TSCVX_NN_KIND_CONSTRAINT ? 0.25 : 0.5);
@@ -273,12 +275,12 @@ static void reference(const arch *a, const unsigned char *blob, const double *x,
 static void test_synthetic(void)
 {
     static const arch archs[] = {
-        {TSCVX_NN_KIND_SOLUTION, TSCVX_NN_TOKENS_SCALAR, 5, 7, 8, 2, 2, 12, 0},
-        {TSCVX_NN_KIND_CONSTRAINT, TSCVX_NN_TOKENS_SCALAR, 6, 9, 12, 3, 1, 5, 0},
-        {TSCVX_NN_KIND_SOLUTION, TSCVX_NN_TOKENS_SCALAR, 3, 4, 4, 4, 3, 8, 0},
-        {TSCVX_NN_KIND_CONSTRAINT, TSCVX_NN_TOKENS_SINGLE, 17, 21, 16, 2, 2, 24, 0},
-        {TSCVX_NN_KIND_SOLUTION, TSCVX_NN_TOKENS_SINGLE, 4, 3, 9, 1, 0, 3, 0},
-        {TSCVX_NN_KIND_SOLUTION, TSCVX_NN_TOKENS_SCALAR, 1, 1, 1, 1, 1, 1, 0},
+        {TSCVX_NN_KIND_SOLUTION, TSCVX_NN_TOKENS_SCALAR, 16, 18, 8, 2, 2, 12, 0, 1},
+        {TSCVX_NN_KIND_CONSTRAINT, TSCVX_NN_TOKENS_SCALAR, 17, 14, 12, 3, 1, 5, 0, 2},
+        {TSCVX_NN_KIND_SOLUTION, TSCVX_NN_TOKENS_SCALAR, 16, 35, 4, 4, 3, 8, 0, 2},
+        {TSCVX_NN_KIND_CONSTRAINT, TSCVX_NN_TOKENS_SINGLE, 17, 21, 16, 2, 2, 24, 0, 3},
+        {TSCVX_NN_KIND_SOLUTION, TSCVX_NN_TOKENS_SINGLE, 16, 18, 9, 1, 0, 3, 0, 1},
+        {TSCVX_NN_KIND_CONSTRAINT, TSCVX_NN_TOKENS_SCALAR, 17, 7, 1, 1, 1, 1, 0, 1},
     };
     size_t k;
     for (k = 0; k < sizeof archs / sizeof archs[0]; ++k) {
@@ -287,7 +289,7 @@ static void test_synthetic(void)
         unsigned char *blob = make_blob(a, &len);
         void *arena;
         tscvx_nn *net = NULL;
-        double x[32], y[32], yr[32], worst = 0;
+        double x[64], y[64], yr[64], worst = 0;
         int trial, i;
         CHECK_ST(tscvx_nn_arena_size(blob, len, 0, &need), TSCVX_NN_OK);
         arena = malloc(need);
@@ -397,6 +399,21 @@ static void test_model(const char *path)
         }
     }
     CHECK_ST(tscvx_nn_get_info(net, NULL), TSCVX_NN_NULL_ARGUMENT);
+    { /* the kind or N edited and the CRC recomputed: the sizes no longer fit */
+        unsigned char *b = dup_blob(blob, len);
+        CHECK(b != NULL);
+        if (b) {
+            const int other = TSCVX_NN_KIND_CONSTRAINT + TSCVX_NN_KIND_SOLUTION - info.kind;
+            wr_u32(b + 16, (uint32_t)other); /* the other kind */
+            reseal(b, len);
+            CHECK_ST(try_init(b, len, 0), TSCVX_NN_BAD_DIMENSIONS);
+            memcpy(b, blob, len);
+            wr_u32(b + 52, (uint32_t)info.N + 1);
+            reseal(b, len);
+            CHECK_ST(try_init(b, len, 0), TSCVX_NN_BAD_DIMENSIONS);
+            free(b);
+        }
+    }
     memset(arena, 0, need); /* an overwritten arena is noticed */
     for (i = 0; i < info.d_in; ++i) x[i] = i < 17 ? theta[i] : 0.0;
     CHECK_ST(tscvx_nn_run(net, x, info.d_in, y, info.d_out), TSCVX_NN_NOT_READY);
@@ -411,13 +428,14 @@ static void test_model(const char *path)
 
 static void test_bad_blobs(void)
 {
-    static const arch a = {TSCVX_NN_KIND_CONSTRAINT, TSCVX_NN_TOKENS_SCALAR, 4, 6, 8, 2, 1, 10, 2};
+    static const arch a = {TSCVX_NN_KIND_CONSTRAINT, TSCVX_NN_TOKENS_SCALAR, 17, 7, 8, 2, 1, 10, 2,
+                           1};
     size_t len = 0, need = 0;
     unsigned char *good = make_blob(&a, &len), *b, *big;
     tscvx_nn *net = NULL;
     void *arena;
     const size_t w0 = TSCVX_NN_HEADER_BYTES;
-    double x[4] = {0.1, 0.2, 0.3, 0.4}, y[6], err;
+    double x[17] = {0.1, 0.2, 0.3, 0.4}, y[7], err;
 
     CHECK(good != NULL);
     if (!good) return;
@@ -472,11 +490,12 @@ static void test_bad_blobs(void)
         CHECK_ST(try_init(b, len, 0), TSCVX_NN_BAD_DIMENSIONS);    \
     } while (0)
     BAD_DIM(16, 3);         /* kind */
+    BAD_DIM(16, TSCVX_NN_KIND_SOLUTION); /* kind: 16 inputs and 17N + 1 outputs */
     BAD_DIM(20, 2);         /* token mode */
     BAD_DIM(20, 0);         /* single tokens: other weight count and seq_len */
     BAD_DIM(24, 5);         /* d_in: weight count no longer matches */
     BAD_DIM(24, 0);         /* d_in = 0 */
-    BAD_DIM(28, 7);         /* d_out */
+    BAD_DIM(28, 8);         /* d_out */
     BAD_DIM(32, 9);         /* d_model */
     BAD_DIM(36, 3);         /* heads do not divide d_model */
     BAD_DIM(36, 0);         /* no heads */
@@ -485,6 +504,7 @@ static void test_bad_blobs(void)
     BAD_DIM(44, 11);        /* d_ff */
     BAD_DIM(48, 1);         /* seq_len of scalar tokens is d_in */
     BAD_DIM(52, 0);         /* N */
+    BAD_DIM(52, 2);         /* N: 7N outputs */
     BAD_DIM(56, 3);         /* probes */
     BAD_DIM(44, 0x7FFFFFFF);/* d_ff beyond the limit */
     memcpy(b, good, len);
@@ -502,9 +522,9 @@ static void test_bad_blobs(void)
     } while (0)
     BAD_VAL(w0 + 8 * 40, NAN, TSCVX_NN_BAD_WEIGHTS);              /* a weight */
     BAD_VAL(len - 8, INFINITY, TSCVX_NN_BAD_WEIGHTS);             /* last probe value */
-    BAD_VAL(w0 + 8 * (4 + 1), 0.0, TSCVX_NN_BAD_WEIGHTS);         /* in_scale = 0 */
-    BAD_VAL(w0 + 8 * (4 + 2), -0.0, TSCVX_NN_BAD_WEIGHTS);        /* in_scale = -0 */
-    BAD_VAL(w0 + 8 * (8 + 6 + 5), -1.0, TSCVX_NN_BAD_WEIGHTS);    /* out_std < 0 */
+    BAD_VAL(w0 + 8 * (a.d_in + 1), 0.0, TSCVX_NN_BAD_WEIGHTS);    /* in_scale = 0 */
+    BAD_VAL(w0 + 8 * (a.d_in + 2), -0.0, TSCVX_NN_BAD_WEIGHTS);   /* in_scale = -0 */
+    BAD_VAL(w0 + 8 * (2 * a.d_in + a.d_out + 5), -1.0, TSCVX_NN_BAD_WEIGHTS); /* out_std < 0 */
     BAD_VAL(w0 + 8 * 2, -1.0, TSCVX_NN_OK);                       /* in_mean may be negative */
     BAD_VAL(64, 0.0, TSCVX_NN_BAD_WEIGHTS);                       /* LayerNorm epsilon */
     BAD_VAL(72, 1.5, TSCVX_NN_BAD_WEIGHTS);                       /* threshold */
@@ -520,7 +540,7 @@ static void test_bad_blobs(void)
     arena = malloc(need + 3);
     CHECK_ST(tscvx_nn_init(&net, arena, need - 1, good, len, 0), TSCVX_NN_ARENA_TOO_SMALL);
     CHECK_ST(tscvx_nn_init(&net, (char *)arena + 3, need, good, len, 0), TSCVX_NN_OK);
-    CHECK_ST(tscvx_nn_run(net, x, 4, y, 6), TSCVX_NN_OK);
+    CHECK_ST(tscvx_nn_run(net, x, a.d_in, y, a.d_out), TSCVX_NN_OK);
     /* the synthetic probes record zeros: the self-test must fail */
     CHECK_ST(tscvx_nn_self_test(net, &err), TSCVX_NN_SELF_TEST_FAILED);
     CHECK(err > 1e-4);
