@@ -24,11 +24,25 @@ static tscvx_solve_status solve(const tscvx_data *d, tscvx_float *x, tscvx_info 
     return s;
 }
 
-/* min -x1 - x2 s.t. |(x1, x2)| <= 1 */
+/* min -x1 - x2 s.t. |(x1, x2)| <= 1 (one second-order cone of 3 rows): x = (1, 1)/sqrt(2).
+ * The arrays live in *p, which must outlive the data. */
+typedef struct {
+    tscvx_int Gp[3], Gi[2], q[1];
+    tscvx_float Gx[2], h[3], c[2];
+} small_soc;
+
+static tscvx_data small_soc_data(small_soc *p) {
+    const small_soc v = {{0, 1, 2}, {1, 2}, {3}, {-1, -1}, {1, 0, 0}, {-1, -1}};
+    *p = v;
+    const tscvx_data d = {2,    0,    3,     NULL,  NULL,  NULL, p->c, NULL, NULL,
+                          NULL, NULL, p->Gp, p->Gi, p->Gx, p->h, 0,    1,    p->q};
+    return d;
+}
+
 static void test_soc(void) {
-    tscvx_int Gp[] = {0, 1, 2}, Gi[] = {1, 2}, q[] = {3};
-    tscvx_float Gx[] = {-1, -1}, h[] = {1, 0, 0}, c[] = {-1, -1}, x[2];
-    tscvx_data d = {2, 0, 3, NULL, NULL, NULL, c, NULL, NULL, NULL, NULL, Gp, Gi, Gx, h, 0, 1, q};
+    small_soc p;
+    const tscvx_data d = small_soc_data(&p);
+    tscvx_float x[2];
     tscvx_info info;
     CHECK(solve(&d, x, &info) == TSCVX_SOLVED, "soc status");
     CHECK(fabs(x[0] - sqrt(0.5)) < 1e-7 && fabs(x[1] - sqrt(0.5)) < 1e-7, "soc x %g %g", x[0], x[1]);
@@ -123,9 +137,9 @@ static void test_bad_input(void) {
  * an update takes the same steps as one after a fresh setup with those numbers (the
  * equilibration is redone, the kept numbers recovered from their scaled copies) */
 static void test_update(void) {
-    tscvx_int Gp[] = {0, 1, 2}, Gi[] = {1, 2}, q[] = {3};
-    tscvx_float Gx[] = {-1, -1}, h[] = {1, 0, 0}, c[] = {-1, -1}, x[2];
-    tscvx_data d = {2, 0, 3, NULL, NULL, NULL, c, NULL, NULL, NULL, NULL, Gp, Gi, Gx, h, 0, 1, q};
+    small_soc p;
+    const tscvx_data d = small_soc_data(&p);
+    tscvx_float x[2];
     tscvx_settings st;
     tscvx_default_settings(&st);
     tscvx_workspace *ws = NULL;
@@ -172,9 +186,9 @@ static void test_update(void) {
 /* Every call on a stale workspace (arena overwritten after setup, or cleaned up) is refused
  * before any of its pointers is followed; so is one whose KKT method pointer is not ours. */
 static void test_stale_workspace(void) {
-    tscvx_int Gp[] = {0, 1, 2}, Gi[] = {1, 2}, q[] = {3};
-    tscvx_float Gx[] = {-1, -1}, h[] = {1, 0, 0}, c[] = {-1, -1}, x[2];
-    tscvx_data d = {2, 0, 3, NULL, NULL, NULL, c, NULL, NULL, NULL, NULL, Gp, Gi, Gx, h, 0, 1, q};
+    small_soc p;
+    const tscvx_data d = small_soc_data(&p);
+    tscvx_float x[2];
     tscvx_settings st;
     tscvx_default_settings(&st);
     tscvx_workspace *ws = NULL;
@@ -184,7 +198,7 @@ static void test_stale_workspace(void) {
     CHECK(tscvx_solve(ws) == TSCVX_SOLVED, "solve");
     memset(arena2, 0x5A, sizeof arena2);
     CHECK(tscvx_solve(ws) == TSCVX_INVALID_INPUT, "solve on an overwritten arena");
-    CHECK(tscvx_update_data(ws, NULL, c, NULL, NULL, NULL, NULL) == TSCVX_SETUP_NOT_READY,
+    CHECK(tscvx_update_data(ws, NULL, p.c, NULL, NULL, NULL, NULL) == TSCVX_SETUP_NOT_READY,
           "update on an overwritten arena");
     CHECK(tscvx_update_settings(ws, &st) == TSCVX_SETUP_NOT_READY, "settings, overwritten");
     CHECK(tscvx_get_solution(ws, x, NULL, NULL, NULL) == TSCVX_SETUP_NOT_READY, "solution");
