@@ -32,6 +32,8 @@ $(BUILD)/ctest/test_nn: c_runtime/nn/tests/test_nn.c c_runtime/examples/host_io.
 
 nn-models: $(NN_MODELS)
 lib: nn-models
+# the card's C inference figures (guidance export) need the driver after a plain `make lib`
+lib: $(BUILD)/nn_budget_driver
 
 ctest-nn: lib $(BUILD)/ctest/test_nn $(BUILD)/nn_budget_driver
 	@echo "== test_nn (valgrind)"
