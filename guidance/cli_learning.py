@@ -15,6 +15,13 @@ import json
 import os
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+from guidance.errors import InputError
+
+if TYPE_CHECKING:
+    from guidance.dataset import Dataset
+    from guidance.nn.train import TrainConfig
 
 # Sizes trained by ``guidance train`` (label -> architecture). "flight" sizes are meant to fit
 # DESIGN.md's budget (<= 5 million host instructions per inference, see INSTR_PER_MAC);
@@ -69,7 +76,7 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
     d.add_argument("--no-progress", action="store_true")
     d.set_defaults(func=cmd_dataset, ranges=SamplingRanges())
 
-    t = sub.add_parser("train", help="train the constraint and solution transformers")
+    t = sub.add_parser("train", help="train the constraint and solution transformers (resumable)")
     t.add_argument("--dataset", default=DEFAULT_DATASET)
     t.add_argument("--train-dir", default=DEFAULT_TRAIN_DIR, help="checkpoints and report")
     t.add_argument("--kind", choices=["constraint", "solution", "both"], default="both")
@@ -97,6 +104,13 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
     t.add_argument("--max-minutes", type=float, default=0.0, help="cap per model (0: none)")
     t.add_argument("--threads", type=int, default=0, help="torch threads (0: default)")
     t.add_argument("--seed", type=int, default=0, help="split and initialization seed")
+    t.add_argument(
+        "--restart",
+        action="store_true",
+        help="delete the networks and run states in TRAIN_DIR and start over (default: resume "
+        "the interrupted run, keep the finished networks)",
+    )
+    t.add_argument("--no-progress", action="store_true")
     t.set_defaults(func=cmd_train)
 
     e = sub.add_parser("export", help="export the best flight-size networks to ONNX")
@@ -184,50 +198,137 @@ def _sizes(spec: str) -> list[str]:
 
 def cmd_train(args: argparse.Namespace) -> int:
     from guidance.dataset import load_dataset
-    from guidance.nn.train import TrainConfig, summarize, train
+    from guidance.nn.train import dataset_digest
 
     ds = load_dataset(args.dataset)
     out = Path(args.train_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    if args.restart:
+        _clear_train_dir(out)
+    digest = dataset_digest(ds)
+    _claim_train_dir(out, args.dataset, digest)
     kinds = ["constraint", "solution"] if args.kind == "both" else [args.kind]
-    for kind in kinds:
-        for size in _sizes(args.sizes):
-            arch = REFERENCE_SIZES[kind] if size == "reference" else FLIGHT_SIZES[size]
-            epochs = args.epochs if kind == "constraint" else args.solution_epochs
-            if size == "reference":
-                epochs = args.reference_epochs
-            cfg = TrainConfig(
-                epochs=epochs,
-                lr=args.lr if size != "reference" else min(args.lr, 3e-4),
-                split_seed=args.seed,
-                threads=args.threads,
-                max_seconds=60 * args.max_minutes if args.max_minutes > 0 else float("inf"),
+    jobs = [(kind, size) for kind in kinds for size in _sizes(args.sizes)]
+    for n_done, (kind, size) in enumerate(jobs):
+        try:
+            _train_one(ds, kind, size, args, out, digest)
+        except KeyboardInterrupt as exc:  # Ctrl-C: the finished epochs are checkpointed
+            how_far = f" after {exc.done} of {exc.total} epochs" if hasattr(exc, "done") else ""
+            print(
+                f"\ninterrupted: {kind}-{size}{how_far} ({n_done} of {len(jobs)} models "
+                f"finished); the progress is kept in {out}: run the same command again to "
+                "resume",
+                file=sys.stderr,
             )
-            res = train(ds, kind, arch, cfg)
-            res.metrics["size"] = size
-            res.metrics["dataset"] = {
-                "path": str(args.dataset),
-                "n_base": ds.header["n_base"],
-                "n_samples": ds.header["n_samples"],
-                "created_utc": ds.header["created_utc"],
-                "feasible_fraction": ds.header["feasible_fraction"],
-            }
-            res.save(out / f"{kind}-{size}.pt")
-            est = est_instructions(res.metrics["macs"])
-            entry = {
-                "kind": kind,
-                "size": size,
-                "arch": res.arch.to_dict(),
-                "est_instructions": est,
-                "fits_budget": fits_budget(res.metrics["macs"]),
-                "final_val_loss": res.metrics["history"][-1]["val"],
-                "heldout_val_loss": _fold1_val(res.metrics["history"]),
-                **{k: v for k, v in res.metrics.items() if k not in ("history", "test_bases")},
-            }
-            (out / f"{kind}-{size}.json").write_text(json.dumps(entry, indent=1, default=float))
-            print(summarize(res), flush=True)
+            return 130
     print(f"wrote checkpoints and reports to {out}")
     return 0
+
+
+TRAIN_DATASET_FILE = "dataset.json"  # in the train dir: the data all its checkpoints are from
+
+
+def _model_files(out: Path) -> list[Path]:
+    """What ``guidance train`` wrote in ``out``: checkpoints, run states, reports."""
+    return [
+        p
+        for p in out.glob("*")
+        if p.name == TRAIN_DATASET_FILE or (p.name.split("-")[0] in ("constraint", "solution"))
+    ]
+
+
+def _clear_train_dir(out: Path) -> None:
+    # only our own files: --train-dir may name a folder that holds other things
+    for p in _model_files(out):
+        p.unlink()
+
+
+def _claim_train_dir(out: Path, dataset: str, digest: str) -> None:
+    """Records the dataset of a new train dir; refuses one trained on other data."""
+    from guidance.provenance import file_digest
+
+    record = out / TRAIN_DATASET_FILE
+    if record.exists():
+        old = json.loads(record.read_text())
+        if old["content_sha256"] != digest:
+            raise InputError(
+                f"{out} holds networks trained on another dataset ({old['path']}, content "
+                f"sha256 {old['content_sha256'][:12]}; {dataset} is {digest[:12]}): rerun with "
+                "--restart (deletes them) or use another --train-dir"
+            )
+        return
+    out.mkdir(parents=True, exist_ok=True)
+    entry = {"path": str(dataset), "content_sha256": digest, "sha256": file_digest(dataset)}
+    _write_atomic(record, json.dumps(entry, indent=1))
+
+
+def _write_atomic(path: Path, text: str) -> None:
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(text)
+    os.replace(tmp, path)
+
+
+def _train_config(args: argparse.Namespace, kind: str, size: str) -> TrainConfig:
+    from guidance.nn.train import TrainConfig
+
+    epochs = args.epochs if kind == "constraint" else args.solution_epochs
+    return TrainConfig(
+        epochs=args.reference_epochs if size == "reference" else epochs,
+        lr=args.lr if size != "reference" else min(args.lr, 3e-4),
+        split_seed=args.seed,
+        threads=args.threads,
+        max_seconds=60 * args.max_minutes if args.max_minutes > 0 else float("inf"),
+    )
+
+
+def _train_one(
+    ds: Dataset, kind: str, size: str, args: argparse.Namespace, out: Path, digest: str
+) -> None:
+    """Trains (or resumes, or keeps when finished) one network and writes its checkpoint and
+    report; the run state is dropped once they are written."""
+    from tqdm import tqdm
+
+    from guidance.nn.train import identity_mismatch, run_identity, summarize, train
+
+    name = f"{kind}-{size}"
+    arch = REFERENCE_SIZES[kind] if size == "reference" else FLIGHT_SIZES[size]
+    cfg = _train_config(args, kind, size)
+    report, state = out / f"{name}.json", out / f"{name}.state.pt"
+    if report.exists():  # written last: the model is finished
+        why = identity_mismatch(json.loads(report.read_text()).get("identity"),
+                                run_identity(kind, arch, cfg, digest))  # fmt: skip
+        if why:
+            raise InputError(
+                f"{report} was trained with another {why}: rerun with --restart (deletes "
+                "the trained networks) or use another --train-dir"
+            )
+        print(f"{name}: already trained ({report}), kept")
+        state.unlink(missing_ok=True)
+        return
+    res = train(ds, kind, arch, cfg, log=tqdm.write, state_path=state, dataset=digest,
+                progress=not args.no_progress)  # fmt: skip
+    res.metrics["size"] = size
+    res.metrics["dataset"] = {
+        "path": str(args.dataset),
+        "content_sha256": digest,
+        "n_base": ds.header["n_base"],
+        "n_samples": ds.header["n_samples"],
+        "created_utc": ds.header["created_utc"],
+        "feasible_fraction": ds.header["feasible_fraction"],
+    }
+    res.save(out / f"{name}.pt")
+    entry = {
+        "kind": kind,
+        "size": size,
+        "arch": res.arch.to_dict(),
+        "est_instructions": est_instructions(res.metrics["macs"]),
+        "fits_budget": fits_budget(res.metrics["macs"]),
+        "final_val_loss": res.metrics["history"][-1]["val"],
+        "heldout_val_loss": _fold1_val(res.metrics["history"]),
+        **{k: v for k, v in res.metrics.items() if k not in ("history", "test_bases")},
+    }
+    _write_atomic(report, json.dumps(entry, indent=1, default=float))
+    state.unlink(missing_ok=True)
+    print(summarize(res), flush=True)
 
 
 def sweep_report(train_dir: Path) -> dict[str, dict]:
