@@ -56,6 +56,7 @@ DEFAULT_MODELS_DIR = "models"
 
 def add_commands(sub: argparse._SubParsersAction) -> None:
     """Registers the learning subcommands on the main parser."""
+    from guidance.cli import _count
     from guidance.dataset import SamplingRanges
 
     d = sub.add_parser(
@@ -86,17 +87,20 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
         help="comma list of flight-s, flight-m, flight-mlp, reference; or 'flight' / 'all'",
     )
     t.add_argument(
-        "--epochs", type=int, default=TRAIN_DEFAULTS["epochs"], help="per fold, constraint net"
+        "--epochs",
+        type=_count(1),
+        default=TRAIN_DEFAULTS["epochs"],
+        help="per fold, constraint net",
     )
     t.add_argument(
         "--solution-epochs",
-        type=int,
+        type=_count(1),
         default=TRAIN_DEFAULTS["solution_epochs"],
         help="per fold, solution net",
     )
     t.add_argument(
         "--reference-epochs",
-        type=int,
+        type=_count(1),
         default=TRAIN_DEFAULTS["reference_epochs"],
         help="per fold, for the paper-size reference (the paper: 2)",
     )

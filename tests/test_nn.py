@@ -353,3 +353,14 @@ def test_train_command_resumes_after_ctrl_c(tmp_path: Path, monkeypatch, capsys)
     assert _train_cli(other, out, "--solution-epochs", "2") == 2
     assert "trained on another dataset" in capsys.readouterr().err
     assert _train_cli(other, out, "--solution-epochs", "2", "--restart") == 0
+
+
+def test_train_refuses_zero_epochs_and_too_few_landings(tmp_path: Path, capsys) -> None:
+    data = _write_dataset(random_dataset(n_base=12, seed=1), tmp_path / "a.npz")
+    with pytest.raises(SystemExit) as exc:
+        _train_cli(data, tmp_path / "t", "--solution-epochs", "0")
+    assert exc.value.code == 2 and "must be >= 1, got 0" in capsys.readouterr().err
+    # 3 landings: 1 for the test split leaves 2 for K = 3 folds, one fold with no validation
+    small = _write_dataset(random_dataset(n_base=3, seed=1), tmp_path / "small.npz")
+    assert _train_cli(small, tmp_path / "t") == 2
+    assert "need at least K = 3 base landings" in capsys.readouterr().err
