@@ -172,9 +172,12 @@ def _run_method(spec: dict[str, Any]) -> dict[str, Any]:
         table = PCALinearTable(d["X_tr"], d["Y_tr"])
         predict = table.predict
     else:
+        from guidance.dataset import _params_from_json
         from guidance.nn.infer import load_model
 
-        model = load_model(spec["model"], spec["kind"])
+        # the problem of the data it is measured on (a model for another one is refused)
+        params = _params_from_json(spec["params"]) if spec.get("params") else None
+        model = load_model(spec["model"], spec["kind"], params)
         predict = model.run
     build_s = time.perf_counter() - t0
     X = d["X_query"]
@@ -212,7 +215,10 @@ def evaluate_task(
     interp_test: int = 100,
     max_queries: int = 2000,
     seed: int = 0,
+    params: dict[str, Any] | None = None,
 ) -> dict[str, dict[str, Any]]:
+    """Scores the tables and, when ``model_path`` is a file, the network (for the problem
+    ``params``, the data's: default Params when None)."""
     rng = np.random.default_rng(seed)
     q = np.sort(rng.permutation(len(td.X_te))[:max_queries])
     # the constraint tables store bits as bytes, not doubles
@@ -237,7 +243,7 @@ def evaluate_task(
             path = Path(tmp) / "nn.npz"
             np.savez(path, X_query=td.X_te_raw[q].astype(np.float32))
             spec = {"method": "T-SCvx", "data": str(path), "model": str(model_path)}
-            spec["kind"] = td.kind
+            spec.update(kind=td.kind, params=params)
             r = _in_fresh_process(spec)
             raw = r["pred"]
             if td.kind == "constraint":
@@ -302,7 +308,9 @@ def run_baselines(
     for kind in kinds:
         td = task_data(ds, kind, seed=seed)
         model = Path(models_dir) / f"{kind}.onnx" if models_dir else None
-        out[kind] = evaluate_task(td, model, interp_train, interp_test, max_queries, seed)
+        out[kind] = evaluate_task(
+            td, model, interp_train, interp_test, max_queries, seed, ds.header.get("params")
+        )
     return out
 
 

@@ -119,7 +119,13 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
 
     e = sub.add_parser("export", help="export the best flight-size networks to ONNX")
     e.add_argument("--train-dir", default=DEFAULT_TRAIN_DIR)
-    e.add_argument("--dataset", default=DEFAULT_DATASET, help="for the inference measurements")
+    e.add_argument(
+        "--dataset",
+        default=DEFAULT_DATASET,
+        help="the dataset the networks were trained on (checked): its problem parameters go "
+        "into the ONNX files, its header into the card's Data section, its test split into "
+        "the inference measurements",
+    )
     e.add_argument("--models-dir", default=DEFAULT_MODELS_DIR)
     e.set_defaults(func=cmd_export)
 
@@ -378,29 +384,39 @@ def cmd_export(args: argparse.Namespace) -> int:
     from guidance.dataset import load_dataset
     from guidance.nn.card import measure_onnx, write_card
     from guidance.nn.export import export_onnx
-    from guidance.nn.train import load_checkpoint
-    from guidance.params import Params
+    from guidance.nn.train import dataset_digest, load_checkpoint
 
     train_dir, models = Path(args.train_dir), Path(args.models_dir)
-    models.mkdir(parents=True, exist_ok=True)
     best = best_checkpoints(train_dir)
     if not best:
         print(f"no flight-size checkpoint in {train_dir}: run `guidance train`", file=sys.stderr)
         return 1
     ds = load_dataset(args.dataset)
+    if "params" not in ds.header:
+        raise InputError(f"{args.dataset} records no problem parameters (header 'params')")
+    digest = dataset_digest(ds)
     report = sweep_report(train_dir)
+    for name in best.values():
+        _check_trained_on(report[name], name, args.dataset, digest)
+    models.mkdir(parents=True, exist_ok=True)
     metrics: dict = {"sweep": report, "shipped": {}, "dataset_header": ds.header}
     for kind, name in sorted(best.items()):
         res = load_checkpoint(train_dir / f"{name}.pt")
         path = models / f"{kind}.onnx"
+        split_seed = int(res.metrics["train_config"]["split_seed"])
         export_onnx(
             res,
             path,
-            Params().to_json_dict(),
-            extra={"checkpoint": name, "metrics": _brief(res.metrics)},
+            ds.header["params"],  # the problem the training data were solved for
+            extra={
+                "checkpoint": name,
+                "metrics": _brief(res.metrics),
+                "dataset_content_sha256": digest,
+                "split_seed": split_seed,
+            },
         )
-        td = task_data(ds, kind, seed=int(res.metrics["train_config"]["split_seed"]))
-        ort = measure_onnx(path, kind, td.X_te_raw[:500])
+        td = task_data(ds, kind, seed=split_seed)
+        ort = measure_onnx(path, kind, td.X_te_raw[:500], ds.header["params"])
         metrics["shipped"][kind] = {
             "checkpoint": name,
             "file": path.name,
@@ -414,6 +430,21 @@ def cmd_export(args: argparse.Namespace) -> int:
     write_card(models)
     print(f"wrote {models / 'metrics.json'} and {models / 'MODEL_CARD.md'}")
     return 0
+
+
+def _check_trained_on(entry: dict, name: str, dataset: str, digest: str) -> None:
+    """Refuses to export (and describe in the card) a network with a dataset it was not
+    trained on: the card's data section and the test split would be another data's."""
+    trained = entry.get("identity", {}).get("dataset")
+    if trained is None:
+        print(f"warning: {name} records no dataset (trained before this check); assuming "
+              f"{dataset}", file=sys.stderr)  # fmt: skip
+    elif trained != digest:
+        raise InputError(
+            f"{name} was trained on another dataset (content sha256 {trained[:12]}, "
+            f"{entry.get('dataset', {}).get('path')}) than {dataset} ({digest[:12]}): "
+            "give the dataset it was trained on"
+        )
 
 
 def _brief(m: dict) -> dict:

@@ -310,7 +310,7 @@ def test_interrupted_training_resumes_to_the_same_weights(tmp_path: Path) -> Non
 def _write_dataset(ds, path: Path, **header) -> Path:
     """``ds`` as a dataset file of ``guidance dataset``'s layout."""
     head = {**ds.header, "n_samples": len(ds.theta), "created_utc": "2026-01-01T00:00:00Z"}
-    head.update(feasible_fraction=1.0, params=Params().to_json_dict(), **header)
+    head.update({"feasible_fraction": 1.0, "params": Params().to_json_dict(), **header})
     arrays = {f.name: getattr(ds, f.name) for f in dataclasses.fields(ds) if f.name != "header"}
     np.savez(path, header=np.array(json.dumps(head)), **arrays)
     return path
@@ -364,3 +364,27 @@ def test_train_refuses_zero_epochs_and_too_few_landings(tmp_path: Path, capsys) 
     small = _write_dataset(random_dataset(n_base=3, seed=1), tmp_path / "small.npz")
     assert _train_cli(small, tmp_path / "t") == 2
     assert "need at least K = 3 base landings" in capsys.readouterr().err
+
+
+def test_export_takes_the_training_datasets_params_and_refuses_another(
+    tmp_path: Path, capsys
+) -> None:
+    from guidance.cli import main
+
+    params = Params(T_max=4.5).to_json_dict()
+    a = _write_dataset(random_dataset(n_base=12, seed=1), tmp_path / "a.npz", params=params)
+    b = _write_dataset(random_dataset(n_base=12, seed=2), tmp_path / "b.npz", params=params)
+    out, models = tmp_path / "train", tmp_path / "models"
+    assert _train_cli(a, out, "--solution-epochs", "1") == 0
+
+    def export(data: Path) -> int:
+        return main(["export", "--train-dir", str(out), "--dataset", str(data),
+                     "--models-dir", str(models)])  # fmt: skip
+
+    assert export(b) == 2
+    assert "trained on another dataset" in capsys.readouterr().err and not models.exists()
+    assert export(a) == 0
+    meta = load_model(models / "solution.onnx", "solution", Params(T_max=4.5)).meta
+    assert meta["params"] == params and meta["split_seed"] == 0
+    with pytest.raises(ModelMismatchError, match="T_max"):
+        load_model(models / "solution.onnx", "solution")  # trained for T_max 4.5, not default

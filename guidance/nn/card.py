@@ -17,15 +17,19 @@ import numpy as np
 from guidance.cli_learning import INSTR_BUDGET, INSTR_PER_MAC, est_instructions, fits_budget
 
 
-def measure_onnx(path: Path, kind: str, inputs: np.ndarray) -> dict[str, float]:
-    """Mean single-query time and peak-memory rise in a fresh process (as the baselines)."""
+def measure_onnx(
+    path: Path, kind: str, inputs: np.ndarray, params: dict[str, Any] | None = None
+) -> dict[str, float]:
+    """Mean single-query time and peak-memory rise in a fresh process (as the baselines), the
+    model checked against the problem ``params`` (JSON form; None: the default problem)."""
     from guidance.baselines import _in_fresh_process
 
     with tempfile.TemporaryDirectory() as tmp:
         data = Path(tmp) / "q.npz"
         np.savez(data, X_query=np.asarray(inputs, np.float32))
         r = _in_fresh_process(
-            {"method": "T-SCvx", "data": str(data), "model": str(path)} | {"kind": kind}
+            {"method": "T-SCvx", "data": str(data), "model": str(path)}
+            | {"kind": kind, "params": params}
         )
     return {
         "time_ms": r["time_ms"],
