@@ -416,4 +416,14 @@ def _baseline_table(kind: str, res: dict) -> str:
         + " | ".join(f"{res[c]['rows_train']} / {res[c]['rows_test']}" for c in cols)
         + " |"
     )
+    li = res.get("Linear Interpolation")
+    if li and "outside_hull" in li:
+        lines += [
+            "",
+            f"Linear interpolation: {li['outside_hull']} of {li['rows_test']} test points "
+            f"({_pct(li['outside_hull'] / max(li['rows_test'], 1))}) outside the hull of its "
+            "table, answered by the nearest neighbour.",
+        ]
+    if res.get("T-SCvx", {}).get("data_warning"):
+        lines += ["", f"**{res['T-SCvx']['data_warning']}**"]
     return "\n".join(lines)
