@@ -370,6 +370,8 @@ def test_export_takes_the_training_datasets_params_and_refuses_another(
     tmp_path: Path, capsys
 ) -> None:
     from guidance.cli import main
+    from guidance.dataset import load_dataset
+    from guidance.nn.train import dataset_digest
 
     params = Params(T_max=4.5).to_json_dict()
     a = _write_dataset(random_dataset(n_base=12, seed=1), tmp_path / "a.npz", params=params)
@@ -386,5 +388,23 @@ def test_export_takes_the_training_datasets_params_and_refuses_another(
     assert export(a) == 0
     meta = load_model(models / "solution.onnx", "solution", Params(T_max=4.5)).meta
     assert meta["params"] == params and meta["split_seed"] == 0
+    assert meta["dataset_content_sha256"] == dataset_digest(load_dataset(a))
     with pytest.raises(ModelMismatchError, match="T_max"):
         load_model(models / "solution.onnx", "solution")  # trained for T_max 4.5, not default
+
+
+def test_an_interrupted_export_leaves_the_previous_file(trained, monkeypatch) -> None:
+    res, paths = trained
+    before = paths["solution"].read_bytes()
+
+    def broken_save(proto, path: str, **kwargs) -> None:
+        Path(path).write_bytes(b"half a model")
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(onnx, "save_model", broken_save)
+    with pytest.raises(KeyboardInterrupt):
+        export_onnx(res["solution"], paths["solution"], Params().to_json_dict())
+    assert paths["solution"].read_bytes() == before
+    assert list(paths["solution"].parent.glob("*.tmp")) == []
+    meta = load_model(paths["solution"], "solution").meta
+    assert meta["code_version"].startswith("guidance ")
