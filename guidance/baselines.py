@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 
 from guidance.dataset import Dataset
-from guidance.nn.train import KINDS, ood_flags, split_bases, standardization, xy
+from guidance.nn.train import KINDS, dataset_digest, ood_flags, split_bases, standardization, xy
 
 METHODS = ("Linear Interpolation", "KDTree", "T-SCvx")
 
@@ -172,9 +172,12 @@ def _run_method(spec: dict[str, Any]) -> dict[str, Any]:
         table = PCALinearTable(d["X_tr"], d["Y_tr"])
         predict = table.predict
     else:
+        from guidance.dataset import _params_from_json
         from guidance.nn.infer import load_model
 
-        model = load_model(spec["model"], spec["kind"])
+        # the problem of the data it is measured on (a model for another one is refused)
+        params = _params_from_json(spec["params"]) if spec.get("params") else None
+        model = load_model(spec["model"], spec["kind"], params)
         predict = model.run
     build_s = time.perf_counter() - t0
     X = d["X_query"]
@@ -212,7 +215,10 @@ def evaluate_task(
     interp_test: int = 100,
     max_queries: int = 2000,
     seed: int = 0,
+    params: dict[str, Any] | None = None,
 ) -> dict[str, dict[str, Any]]:
+    """Scores the tables and, when ``model_path`` is a file, the network (for the problem
+    ``params``, the data's: default Params when None)."""
     rng = np.random.default_rng(seed)
     q = np.sort(rng.permutation(len(td.X_te))[:max_queries])
     # the constraint tables store bits as bytes, not doubles
@@ -237,7 +243,7 @@ def evaluate_task(
             path = Path(tmp) / "nn.npz"
             np.savez(path, X_query=td.X_te_raw[q].astype(np.float32))
             spec = {"method": "T-SCvx", "data": str(path), "model": str(model_path)}
-            spec["kind"] = td.kind
+            spec.update(kind=td.kind, params=params)
             r = _in_fresh_process(spec)
             raw = r["pred"]
             if td.kind == "constraint":
@@ -280,6 +286,8 @@ def format_table(kind: str, res: dict[str, dict[str, Any]]) -> str:
         else:
             cells = [fmt.format(res[c][key]) for c in cols]
         lines.append(name.ljust(w) + "".join(x.rjust(w) for x in cells))
+    if res.get("T-SCvx", {}).get("data_warning"):
+        lines.append(res["T-SCvx"]["data_warning"])
     li = res.get("Linear Interpolation", {})
     if li.get("outside_hull"):
         lines.append(
@@ -299,11 +307,37 @@ def run_baselines(
     kinds: tuple[str, ...] = KINDS,
 ) -> dict[str, dict[str, dict[str, Any]]]:
     out = {}
+    digest = dataset_digest(ds)
     for kind in kinds:
         td = task_data(ds, kind, seed=seed)
         model = Path(models_dir) / f"{kind}.onnx" if models_dir else None
-        out[kind] = evaluate_task(td, model, interp_train, interp_test, max_queries, seed)
+        out[kind] = evaluate_task(
+            td, model, interp_train, interp_test, max_queries, seed, ds.header.get("params")
+        )
+        if "T-SCvx" in out[kind]:
+            out[kind]["T-SCvx"]["data_warning"] = training_data_warning(model, digest, seed)
     return out
+
+
+def training_data_warning(model: Path, digest: str, seed: int) -> str | None:
+    """Why the network may have trained on the test rows it is scored on here (None when its
+    export records this dataset, by :func:`dataset_digest`, and this split seed)."""
+    import onnx
+
+    props = {p.key: p.value for p in onnx.load(str(model)).metadata_props}
+    meta = json.loads(props.get("tscvx", "{}"))
+    trained, split = meta.get("dataset_content_sha256"), meta.get("split_seed")
+    reasons = []
+    if trained != digest:
+        reasons.append("was trained on another dataset" if trained else "records no dataset")
+    if split != seed:
+        reasons.append(f"was split with seed {split}, not {seed}")
+    if not reasons:
+        return None
+    return (
+        f"WARNING: the T-SCvx network {model.name} {' and '.join(reasons)}: its rows are "
+        "scored on test rows it may have trained on"
+    )
 
 
 def results_json(res: dict) -> str:

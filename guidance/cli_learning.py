@@ -15,6 +15,13 @@ import json
 import os
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+from guidance.errors import InputError
+
+if TYPE_CHECKING:
+    from guidance.dataset import Dataset
+    from guidance.nn.train import TrainConfig
 
 # Sizes trained by ``guidance train`` (label -> architecture). "flight" sizes are meant to fit
 # DESIGN.md's budget (<= 5 million host instructions per inference, see INSTR_PER_MAC);
@@ -49,6 +56,7 @@ DEFAULT_MODELS_DIR = "models"
 
 def add_commands(sub: argparse._SubParsersAction) -> None:
     """Registers the learning subcommands on the main parser."""
+    from guidance.cli import _count
     from guidance.dataset import SamplingRanges
 
     d = sub.add_parser(
@@ -69,7 +77,7 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
     d.add_argument("--no-progress", action="store_true")
     d.set_defaults(func=cmd_dataset, ranges=SamplingRanges())
 
-    t = sub.add_parser("train", help="train the constraint and solution transformers")
+    t = sub.add_parser("train", help="train the constraint and solution transformers (resumable)")
     t.add_argument("--dataset", default=DEFAULT_DATASET)
     t.add_argument("--train-dir", default=DEFAULT_TRAIN_DIR, help="checkpoints and report")
     t.add_argument("--kind", choices=["constraint", "solution", "both"], default="both")
@@ -79,17 +87,20 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
         help="comma list of flight-s, flight-m, flight-mlp, reference; or 'flight' / 'all'",
     )
     t.add_argument(
-        "--epochs", type=int, default=TRAIN_DEFAULTS["epochs"], help="per fold, constraint net"
+        "--epochs",
+        type=_count(1),
+        default=TRAIN_DEFAULTS["epochs"],
+        help="per fold, constraint net",
     )
     t.add_argument(
         "--solution-epochs",
-        type=int,
+        type=_count(1),
         default=TRAIN_DEFAULTS["solution_epochs"],
         help="per fold, solution net",
     )
     t.add_argument(
         "--reference-epochs",
-        type=int,
+        type=_count(1),
         default=TRAIN_DEFAULTS["reference_epochs"],
         help="per fold, for the paper-size reference (the paper: 2)",
     )
@@ -97,11 +108,24 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
     t.add_argument("--max-minutes", type=float, default=0.0, help="cap per model (0: none)")
     t.add_argument("--threads", type=int, default=0, help="torch threads (0: default)")
     t.add_argument("--seed", type=int, default=0, help="split and initialization seed")
+    t.add_argument(
+        "--restart",
+        action="store_true",
+        help="delete the networks and run states in TRAIN_DIR and start over (default: resume "
+        "the interrupted run, keep the finished networks)",
+    )
+    t.add_argument("--no-progress", action="store_true")
     t.set_defaults(func=cmd_train)
 
     e = sub.add_parser("export", help="export the best flight-size networks to ONNX")
     e.add_argument("--train-dir", default=DEFAULT_TRAIN_DIR)
-    e.add_argument("--dataset", default=DEFAULT_DATASET, help="for the inference measurements")
+    e.add_argument(
+        "--dataset",
+        default=DEFAULT_DATASET,
+        help="the dataset the networks were trained on (checked): its problem parameters go "
+        "into the ONNX files, its header into the card's Data section, its test split into "
+        "the inference measurements",
+    )
     e.add_argument("--models-dir", default=DEFAULT_MODELS_DIR)
     e.set_defaults(func=cmd_export)
 
@@ -184,50 +208,137 @@ def _sizes(spec: str) -> list[str]:
 
 def cmd_train(args: argparse.Namespace) -> int:
     from guidance.dataset import load_dataset
-    from guidance.nn.train import TrainConfig, summarize, train
+    from guidance.nn.train import dataset_digest
 
     ds = load_dataset(args.dataset)
     out = Path(args.train_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    if args.restart:
+        _clear_train_dir(out)
+    digest = dataset_digest(ds)
+    _claim_train_dir(out, args.dataset, digest)
     kinds = ["constraint", "solution"] if args.kind == "both" else [args.kind]
-    for kind in kinds:
-        for size in _sizes(args.sizes):
-            arch = REFERENCE_SIZES[kind] if size == "reference" else FLIGHT_SIZES[size]
-            epochs = args.epochs if kind == "constraint" else args.solution_epochs
-            if size == "reference":
-                epochs = args.reference_epochs
-            cfg = TrainConfig(
-                epochs=epochs,
-                lr=args.lr if size != "reference" else min(args.lr, 3e-4),
-                split_seed=args.seed,
-                threads=args.threads,
-                max_seconds=60 * args.max_minutes if args.max_minutes > 0 else float("inf"),
+    jobs = [(kind, size) for kind in kinds for size in _sizes(args.sizes)]
+    for n_done, (kind, size) in enumerate(jobs):
+        try:
+            _train_one(ds, kind, size, args, out, digest)
+        except KeyboardInterrupt as exc:  # Ctrl-C: the finished epochs are checkpointed
+            how_far = f" after {exc.done} of {exc.total} epochs" if hasattr(exc, "done") else ""
+            print(
+                f"\ninterrupted: {kind}-{size}{how_far} ({n_done} of {len(jobs)} models "
+                f"finished); the progress is kept in {out}: run the same command again to "
+                "resume",
+                file=sys.stderr,
             )
-            res = train(ds, kind, arch, cfg)
-            res.metrics["size"] = size
-            res.metrics["dataset"] = {
-                "path": str(args.dataset),
-                "n_base": ds.header["n_base"],
-                "n_samples": ds.header["n_samples"],
-                "created_utc": ds.header["created_utc"],
-                "feasible_fraction": ds.header["feasible_fraction"],
-            }
-            res.save(out / f"{kind}-{size}.pt")
-            est = est_instructions(res.metrics["macs"])
-            entry = {
-                "kind": kind,
-                "size": size,
-                "arch": res.arch.to_dict(),
-                "est_instructions": est,
-                "fits_budget": fits_budget(res.metrics["macs"]),
-                "final_val_loss": res.metrics["history"][-1]["val"],
-                "heldout_val_loss": _fold1_val(res.metrics["history"]),
-                **{k: v for k, v in res.metrics.items() if k not in ("history", "test_bases")},
-            }
-            (out / f"{kind}-{size}.json").write_text(json.dumps(entry, indent=1, default=float))
-            print(summarize(res), flush=True)
+            return 130
     print(f"wrote checkpoints and reports to {out}")
     return 0
+
+
+TRAIN_DATASET_FILE = "dataset.json"  # in the train dir: the data all its checkpoints are from
+
+
+def _model_files(out: Path) -> list[Path]:
+    """What ``guidance train`` wrote in ``out``: checkpoints, run states, reports."""
+    return [
+        p
+        for p in out.glob("*")
+        if p.name == TRAIN_DATASET_FILE or (p.name.split("-")[0] in ("constraint", "solution"))
+    ]
+
+
+def _clear_train_dir(out: Path) -> None:
+    # only our own files: --train-dir may name a folder that holds other things
+    for p in _model_files(out):
+        p.unlink()
+
+
+def _claim_train_dir(out: Path, dataset: str, digest: str) -> None:
+    """Records the dataset of a new train dir; refuses one trained on other data."""
+    from guidance.provenance import file_digest
+
+    record = out / TRAIN_DATASET_FILE
+    if record.exists():
+        old = json.loads(record.read_text())
+        if old["content_sha256"] != digest:
+            raise InputError(
+                f"{out} holds networks trained on another dataset ({old['path']}, content "
+                f"sha256 {old['content_sha256'][:12]}; {dataset} is {digest[:12]}): rerun with "
+                "--restart (deletes them) or use another --train-dir"
+            )
+        return
+    out.mkdir(parents=True, exist_ok=True)
+    entry = {"path": str(dataset), "content_sha256": digest, "sha256": file_digest(dataset)}
+    _write_atomic(record, json.dumps(entry, indent=1))
+
+
+def _write_atomic(path: Path, text: str) -> None:
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(text)
+    os.replace(tmp, path)
+
+
+def _train_config(args: argparse.Namespace, kind: str, size: str) -> TrainConfig:
+    from guidance.nn.train import TrainConfig
+
+    epochs = args.epochs if kind == "constraint" else args.solution_epochs
+    return TrainConfig(
+        epochs=args.reference_epochs if size == "reference" else epochs,
+        lr=args.lr if size != "reference" else min(args.lr, 3e-4),
+        split_seed=args.seed,
+        threads=args.threads,
+        max_seconds=60 * args.max_minutes if args.max_minutes > 0 else float("inf"),
+    )
+
+
+def _train_one(
+    ds: Dataset, kind: str, size: str, args: argparse.Namespace, out: Path, digest: str
+) -> None:
+    """Trains (or resumes, or keeps when finished) one network and writes its checkpoint and
+    report; the run state is dropped once they are written."""
+    from tqdm import tqdm
+
+    from guidance.nn.train import identity_mismatch, run_identity, summarize, train
+
+    name = f"{kind}-{size}"
+    arch = REFERENCE_SIZES[kind] if size == "reference" else FLIGHT_SIZES[size]
+    cfg = _train_config(args, kind, size)
+    report, state = out / f"{name}.json", out / f"{name}.state.pt"
+    if report.exists():  # written last: the model is finished
+        why = identity_mismatch(json.loads(report.read_text()).get("identity"),
+                                run_identity(kind, arch, cfg, digest))  # fmt: skip
+        if why:
+            raise InputError(
+                f"{report} was trained with another {why}: rerun with --restart (deletes "
+                "the trained networks) or use another --train-dir"
+            )
+        print(f"{name}: already trained ({report}), kept")
+        state.unlink(missing_ok=True)
+        return
+    res = train(ds, kind, arch, cfg, log=tqdm.write, state_path=state, dataset=digest,
+                progress=not args.no_progress)  # fmt: skip
+    res.metrics["size"] = size
+    res.metrics["dataset"] = {
+        "path": str(args.dataset),
+        "content_sha256": digest,
+        "n_base": ds.header["n_base"],
+        "n_samples": ds.header["n_samples"],
+        "created_utc": ds.header["created_utc"],
+        "feasible_fraction": ds.header["feasible_fraction"],
+    }
+    res.save(out / f"{name}.pt")
+    entry = {
+        "kind": kind,
+        "size": size,
+        "arch": res.arch.to_dict(),
+        "est_instructions": est_instructions(res.metrics["macs"]),
+        "fits_budget": fits_budget(res.metrics["macs"]),
+        "final_val_loss": res.metrics["history"][-1]["val"],
+        "heldout_val_loss": _fold1_val(res.metrics["history"]),
+        **{k: v for k, v in res.metrics.items() if k not in ("history", "test_bases")},
+    }
+    _write_atomic(report, json.dumps(entry, indent=1, default=float))
+    state.unlink(missing_ok=True)
+    print(summarize(res), flush=True)
 
 
 def sweep_report(train_dir: Path) -> dict[str, dict]:
@@ -273,29 +384,39 @@ def cmd_export(args: argparse.Namespace) -> int:
     from guidance.dataset import load_dataset
     from guidance.nn.card import measure_onnx, write_card
     from guidance.nn.export import export_onnx
-    from guidance.nn.train import load_checkpoint
-    from guidance.params import Params
+    from guidance.nn.train import dataset_digest, load_checkpoint
 
     train_dir, models = Path(args.train_dir), Path(args.models_dir)
-    models.mkdir(parents=True, exist_ok=True)
     best = best_checkpoints(train_dir)
     if not best:
         print(f"no flight-size checkpoint in {train_dir}: run `guidance train`", file=sys.stderr)
         return 1
     ds = load_dataset(args.dataset)
+    if "params" not in ds.header:
+        raise InputError(f"{args.dataset} records no problem parameters (header 'params')")
+    digest = dataset_digest(ds)
     report = sweep_report(train_dir)
+    for name in best.values():
+        _check_trained_on(report[name], name, args.dataset, digest)
+    models.mkdir(parents=True, exist_ok=True)
     metrics: dict = {"sweep": report, "shipped": {}, "dataset_header": ds.header}
     for kind, name in sorted(best.items()):
         res = load_checkpoint(train_dir / f"{name}.pt")
         path = models / f"{kind}.onnx"
+        split_seed = int(res.metrics["train_config"]["split_seed"])
         export_onnx(
             res,
             path,
-            Params().to_json_dict(),
-            extra={"checkpoint": name, "metrics": _brief(res.metrics)},
+            ds.header["params"],  # the problem the training data were solved for
+            extra={
+                "checkpoint": name,
+                "metrics": _brief(res.metrics),
+                "dataset_content_sha256": digest,
+                "split_seed": split_seed,
+            },
         )
-        td = task_data(ds, kind, seed=int(res.metrics["train_config"]["split_seed"]))
-        ort = measure_onnx(path, kind, td.X_te_raw[:500])
+        td = task_data(ds, kind, seed=split_seed)
+        ort = measure_onnx(path, kind, td.X_te_raw[:500], ds.header["params"])
         metrics["shipped"][kind] = {
             "checkpoint": name,
             "file": path.name,
@@ -309,6 +430,21 @@ def cmd_export(args: argparse.Namespace) -> int:
     write_card(models)
     print(f"wrote {models / 'metrics.json'} and {models / 'MODEL_CARD.md'}")
     return 0
+
+
+def _check_trained_on(entry: dict, name: str, dataset: str, digest: str) -> None:
+    """Refuses to export (and describe in the card) a network with a dataset it was not
+    trained on: the card's data section and the test split would be another data's."""
+    trained = entry.get("identity", {}).get("dataset")
+    if trained is None:
+        print(f"warning: {name} records no dataset (trained before this check); assuming "
+              f"{dataset}", file=sys.stderr)  # fmt: skip
+    elif trained != digest:
+        raise InputError(
+            f"{name} was trained on another dataset (content sha256 {trained[:12]}, "
+            f"{entry.get('dataset', {}).get('path')}) than {dataset} ({digest[:12]}): "
+            "give the dataset it was trained on"
+        )
 
 
 def _brief(m: dict) -> dict:

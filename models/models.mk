@@ -1,7 +1,9 @@
 # Shipped networks: `make models` reproduces data generation, training, export, baselines and
 # the mask ceiling of the model card.
 # Included from the top Makefile (uses $(VENV) and the `setup` target).
-# The dataset step is resumable: an interrupted `make models` continues where it stopped.
+# The dataset and training steps are resumable: an interrupted `make models` continues where
+# it stopped. Training refuses a MODELS_TRAIN trained on other data or settings (it records
+# both); `rm -rf $(MODELS_TRAIN)` (or `guidance train --restart`) starts it over.
 # Override for a quicker run, e.g. `make models MODELS_N_BASE=400`. The default is 2.5 times
 # the paper's 1,592 landings: the constraint network's precision at recall 0.99 grows with the
 # number of distinct landings (0.53 on 1,592, 0.60 on 4,000). Each model's training is capped
@@ -18,7 +20,6 @@ MODELS_TRAIN   ?= data/train
 
 models: setup lib $(BUILD)/nn_budget_driver
 	nice $(GUIDANCE) dataset --n-base $(MODELS_N_BASE) --run-dir $(MODELS_RUN_DIR) --output $(MODELS_DATA)
-	rm -rf $(MODELS_TRAIN)
 	nice $(GUIDANCE) train --dataset $(MODELS_DATA) --train-dir $(MODELS_TRAIN) --sizes flight-m,flight-mlp,flight-s,reference \
 	  --max-minutes $(MODELS_TRAIN_MINUTES)
 	$(GUIDANCE) export --train-dir $(MODELS_TRAIN) --dataset $(MODELS_DATA) --models-dir models

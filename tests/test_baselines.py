@@ -10,6 +10,7 @@ from guidance.baselines import (
     PCALinearTable,
     format_table,
     run_baselines,
+    training_data_warning,
 )
 from guidance.dataset import random_dataset
 from guidance.nn.train import mahalanobis, ood_flags
@@ -58,3 +59,35 @@ def test_both_tables_from_one_run() -> None:
             assert m["time_ms"] > 0 and np.isfinite(m["mse"]) and m["peak_mb"] >= 0
         text = format_table(kind, r)
         assert "Inference Time (ms)" in text and "OOD MSE" in text and "Peak Memory" in text
+
+
+def test_networks_trained_on_other_data_or_split_are_flagged(tmp_path) -> None:
+    pytest.importorskip("torch")
+    from guidance.nn.export import export_onnx
+    from guidance.nn.train import TrainConfig, dataset_digest, train
+    from guidance.params import Params
+
+    ds = random_dataset(n_base=10, seed=3)
+    cfg = TrainConfig(epochs=1, batch_size=64, threads=1)
+    res = train(ds, "solution", dict(d_model=16, n_heads=2, n_layers=1, d_ff=32), cfg, str)
+    digest = dataset_digest(ds)
+    model = tmp_path / "solution.onnx"
+    extra = {"dataset_content_sha256": digest, "split_seed": 0}
+    export_onnx(res, model, Params().to_json_dict(), extra)
+    assert training_data_warning(model, digest, 0) is None
+    assert "split with seed 0, not 1" in training_data_warning(model, digest, 1)
+    other = dataset_digest(random_dataset(n_base=10, seed=4))
+    assert "trained on another dataset" in training_data_warning(model, other, 0)
+    out = run_baselines(ds, tmp_path, interp_train=20, interp_test=3, max_queries=10, seed=1,
+                        kinds=("solution",))  # fmt: skip
+    assert "WARNING: the T-SCvx network solution.onnx was split with seed 0, not 1" in format_table(
+        "solution", out["solution"]
+    )
+
+
+def test_card_states_the_outside_hull_fraction() -> None:
+    from guidance.nn.card import _baseline_table
+
+    row = dict(time_ms=1.0, mse=0.1, ood_mse=0.2, peak_mb=3.0, rows_train=40, rows_test=8)
+    text = _baseline_table("solution", {"Linear Interpolation": {**row, "outside_hull": 2}})
+    assert "2 of 8 test points (25.00 %) outside the hull" in text

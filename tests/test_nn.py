@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from pathlib import Path
 
@@ -266,3 +267,144 @@ def test_projected_guess_meets_boundary_conditions_and_convex_constraints() -> N
     assert h[:, :6].max() <= 1e-9  # every convex path constraint
     assert h[:, 6].max() <= 1e-9  # and the lower thrust bound
     assert gt == t_f
+
+
+def _interrupt_after(n_epochs: int):
+    """A log that raises KeyboardInterrupt (as Ctrl-C would) after n_epochs epoch lines."""
+    seen: list[str] = []
+
+    def log(line: str) -> None:
+        seen.append(line)
+        if sum(" epoch " in s for s in seen) >= n_epochs:
+            raise KeyboardInterrupt
+
+    return log
+
+
+def test_interrupted_training_resumes_to_the_same_weights(tmp_path: Path) -> None:
+    from guidance.errors import InputError
+    from guidance.nn.train import TrainingInterrupted, dataset_digest
+
+    ds = random_dataset(n_base=12, seed=1)
+    digest = dataset_digest(ds)
+    cfg = TrainConfig(epochs=2, batch_size=64, threads=1)
+    whole = train(ds, "solution", TINY, cfg, log=lambda _: None)
+    state = tmp_path / "solution.state.pt"
+    with pytest.raises(TrainingInterrupted) as exc:
+        train(ds, "solution", TINY, cfg, _interrupt_after(3), state, digest)
+    assert (exc.value.done, exc.value.total) == (3, 6)
+    lines: list[str] = []
+    resumed = train(ds, "solution", TINY, cfg, lines.append, state, digest)
+    assert sum(" epoch " in s for s in lines) == 3  # only the three epochs not done before
+    assert resumed.metrics["history"] == whole.metrics["history"]
+    for name, w in whole.net.state_dict().items():
+        torch.testing.assert_close(resumed.net.state_dict()[name], w, rtol=0, atol=0)
+    # the checkpoint is refused for another configuration or other data
+    with pytest.raises(InputError, match=r"config.lr 0.001 -> 0.002"):
+        train(ds, "solution", TINY, dataclasses.replace(cfg, lr=2e-3), print, state, digest)
+    other = random_dataset(n_base=12, seed=2)
+    with pytest.raises(InputError, match="dataset"):
+        train(other, "solution", TINY, cfg, print, state, dataset_digest(other))
+
+
+def _write_dataset(ds, path: Path, **header) -> Path:
+    """``ds`` as a dataset file of ``guidance dataset``'s layout."""
+    head = {**ds.header, "n_samples": len(ds.theta), "created_utc": "2026-01-01T00:00:00Z"}
+    head.update({"feasible_fraction": 1.0, "params": Params().to_json_dict(), **header})
+    arrays = {f.name: getattr(ds, f.name) for f in dataclasses.fields(ds) if f.name != "header"}
+    np.savez(path, header=np.array(json.dumps(head)), **arrays)
+    return path
+
+
+def _train_cli(data: Path, train_dir: Path, *extra: str) -> int:
+    from guidance.cli import main
+
+    fixed = ["--kind", "solution", "--sizes", "flight-s", "--threads", "1", "--no-progress"]
+    return main(["train", "--dataset", str(data), "--train-dir", str(train_dir), *fixed, *extra])
+
+
+def test_train_command_resumes_after_ctrl_c(tmp_path: Path, monkeypatch, capsys) -> None:
+    import tqdm
+
+    data = _write_dataset(random_dataset(n_base=12, seed=1), tmp_path / "a.npz")
+    out = tmp_path / "train"
+    epoch_lines: list[str] = []
+
+    def ctrl_c_after_first_epoch(line: str, *args, **kwargs) -> None:
+        if " epoch " in line:
+            epoch_lines.append(line)
+            if len(epoch_lines) == 1:
+                raise KeyboardInterrupt
+
+    monkeypatch.setattr(tqdm.tqdm, "write", ctrl_c_after_first_epoch)
+    assert _train_cli(data, out, "--solution-epochs", "2") == 130
+    err = capsys.readouterr().err
+    assert "after 1 of 6 epochs" in err and "run the same command again" in err
+    assert (out / "solution-flight-s.state.pt").exists()
+    assert _train_cli(data, out, "--solution-epochs", "2") == 0
+    assert len(epoch_lines) == 6  # the first epoch was not redone
+    report = json.loads((out / "solution-flight-s.json").read_text())
+    assert report["final_val_loss"] > 0 and not (out / "solution-flight-s.state.pt").exists()
+    assert _train_cli(data, out, "--solution-epochs", "2") == 0
+    assert "already trained" in capsys.readouterr().out
+    assert _train_cli(data, out, "--solution-epochs", "3") == 2
+    assert "config.epochs 2 -> 3" in capsys.readouterr().err
+    other = _write_dataset(random_dataset(n_base=12, seed=2), tmp_path / "b.npz")
+    assert _train_cli(other, out, "--solution-epochs", "2") == 2
+    assert "trained on another dataset" in capsys.readouterr().err
+    assert _train_cli(other, out, "--solution-epochs", "2", "--restart") == 0
+
+
+def test_train_refuses_zero_epochs_and_too_few_landings(tmp_path: Path, capsys) -> None:
+    data = _write_dataset(random_dataset(n_base=12, seed=1), tmp_path / "a.npz")
+    with pytest.raises(SystemExit) as exc:
+        _train_cli(data, tmp_path / "t", "--solution-epochs", "0")
+    assert exc.value.code == 2 and "must be >= 1, got 0" in capsys.readouterr().err
+    # 3 landings: 1 for the test split leaves 2 for K = 3 folds, one fold with no validation
+    small = _write_dataset(random_dataset(n_base=3, seed=1), tmp_path / "small.npz")
+    assert _train_cli(small, tmp_path / "t") == 2
+    assert "need at least K = 3 base landings" in capsys.readouterr().err
+
+
+def test_export_takes_the_training_datasets_params_and_refuses_another(
+    tmp_path: Path, capsys
+) -> None:
+    from guidance.cli import main
+    from guidance.dataset import load_dataset
+    from guidance.nn.train import dataset_digest
+
+    params = Params(T_max=4.5).to_json_dict()
+    a = _write_dataset(random_dataset(n_base=12, seed=1), tmp_path / "a.npz", params=params)
+    b = _write_dataset(random_dataset(n_base=12, seed=2), tmp_path / "b.npz", params=params)
+    out, models = tmp_path / "train", tmp_path / "models"
+    assert _train_cli(a, out, "--solution-epochs", "1") == 0
+
+    def export(data: Path) -> int:
+        return main(["export", "--train-dir", str(out), "--dataset", str(data),
+                     "--models-dir", str(models)])  # fmt: skip
+
+    assert export(b) == 2
+    assert "trained on another dataset" in capsys.readouterr().err and not models.exists()
+    assert export(a) == 0
+    meta = load_model(models / "solution.onnx", "solution", Params(T_max=4.5)).meta
+    assert meta["params"] == params and meta["split_seed"] == 0
+    assert meta["dataset_content_sha256"] == dataset_digest(load_dataset(a))
+    with pytest.raises(ModelMismatchError, match="T_max"):
+        load_model(models / "solution.onnx", "solution")  # trained for T_max 4.5, not default
+
+
+def test_an_interrupted_export_leaves_the_previous_file(trained, monkeypatch) -> None:
+    res, paths = trained
+    before = paths["solution"].read_bytes()
+
+    def broken_save(proto, path: str, **kwargs) -> None:
+        Path(path).write_bytes(b"half a model")
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(onnx, "save_model", broken_save)
+    with pytest.raises(KeyboardInterrupt):
+        export_onnx(res["solution"], paths["solution"], Params().to_json_dict())
+    assert paths["solution"].read_bytes() == before
+    assert list(paths["solution"].parent.glob("*.tmp")) == []
+    meta = load_model(paths["solution"], "solution").meta
+    assert meta["code_version"].startswith("guidance ")

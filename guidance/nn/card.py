@@ -17,15 +17,19 @@ import numpy as np
 from guidance.cli_learning import INSTR_BUDGET, INSTR_PER_MAC, est_instructions, fits_budget
 
 
-def measure_onnx(path: Path, kind: str, inputs: np.ndarray) -> dict[str, float]:
-    """Mean single-query time and peak-memory rise in a fresh process (as the baselines)."""
+def measure_onnx(
+    path: Path, kind: str, inputs: np.ndarray, params: dict[str, Any] | None = None
+) -> dict[str, float]:
+    """Mean single-query time and peak-memory rise in a fresh process (as the baselines), the
+    model checked against the problem ``params`` (JSON form; None: the default problem)."""
     from guidance.baselines import _in_fresh_process
 
     with tempfile.TemporaryDirectory() as tmp:
         data = Path(tmp) / "q.npz"
         np.savez(data, X_query=np.asarray(inputs, np.float32))
         r = _in_fresh_process(
-            {"method": "T-SCvx", "data": str(data), "model": str(path)} | {"kind": kind}
+            {"method": "T-SCvx", "data": str(data), "model": str(path)}
+            | {"kind": kind, "params": params}
         )
     return {
         "time_ms": r["time_ms"],
@@ -412,4 +416,14 @@ def _baseline_table(kind: str, res: dict) -> str:
         + " | ".join(f"{res[c]['rows_train']} / {res[c]['rows_test']}" for c in cols)
         + " |"
     )
+    li = res.get("Linear Interpolation")
+    if li and "outside_hull" in li:
+        lines += [
+            "",
+            f"Linear interpolation: {li['outside_hull']} of {li['rows_test']} test points "
+            f"({_pct(li['outside_hull'] / max(li['rows_test'], 1))}) outside the hull of its "
+            "table, answered by the nearest neighbour.",
+        ]
+    if res.get("T-SCvx", {}).get("data_warning"):
+        lines += ["", f"**{res['T-SCvx']['data_warning']}**"]
     return "\n".join(lines)

@@ -3,15 +3,17 @@
 The graph maps raw inputs to raw outputs: theta (16) [+ k] -> 7N tight logits, or
 theta (16) -> (x (N*14, node-major), u (N*3), t_f). The metadata property ``tscvx`` (JSON)
 carries what a loader needs to refuse a model that does not fit the problem: kind, input and
-output sizes, theta names, the problem parameters the model was trained for, the
-normalization statistics (also folded into the graph), the decision threshold, and a probe
-(inputs and the outputs the exported graph must reproduce).
+output sizes, theta names, the problem parameters the model was trained for, the code
+version that exported it (and, from ``guidance export``, its training data's content digest
+and split seed), the normalization statistics (also folded into the graph), the decision
+threshold, and a probe (inputs and the outputs the exported graph must reproduce).
 """
 
 from __future__ import annotations
 
 import json
 import logging
+import os
 import warnings
 from pathlib import Path
 from typing import Any
@@ -22,6 +24,7 @@ import torch
 from guidance.dataset import THETA_NAMES
 from guidance.nn.model import Normalized
 from guidance.nn.train import TrainResult
+from guidance.provenance import code_version
 
 META_KEY = "tscvx"
 META_FORMAT = "tscvx-onnx"
@@ -78,6 +81,7 @@ def export_onnx(
     meta = {
         "format": META_FORMAT,
         "format_version": META_VERSION,
+        "code_version": code_version(),
         "kind": res.kind,
         "d_in": res.arch.d_in,
         "d_out": res.arch.d_out,
@@ -102,5 +106,11 @@ def export_onnx(
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     onnx.checker.check_model(proto)
-    onnx.save_model(proto, str(path), save_as_external_data=False)
+    # through a temporary file: an interrupted export leaves the previous model whole
+    tmp = path.with_name(path.name + ".tmp")
+    try:
+        onnx.save_model(proto, str(tmp), save_as_external_data=False)
+        os.replace(tmp, path)
+    finally:
+        tmp.unlink(missing_ok=True)
     return meta

@@ -31,9 +31,12 @@
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 import json
 import math
+import os
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -43,6 +46,7 @@ import torch
 from torch import nn
 
 from guidance.dataset import Dataset
+from guidance.errors import InputError
 from guidance.nn.model import ArchConfig, Transformer, n_params
 from guidance.params import CONSTRAINT_NAMES
 
@@ -209,7 +213,7 @@ class TrainResult:
     metrics: dict[str, Any]
 
     def save(self, path: str | Path) -> None:
-        torch.save(
+        save_atomic(
             {
                 "kind": self.kind,
                 "arch": self.arch.to_dict(),
@@ -221,8 +225,72 @@ class TrainResult:
                 "threshold": self.threshold,
                 "metrics": self.metrics,
             },
-            path,
+            Path(path),
         )
+
+
+def save_atomic(obj: Any, path: Path) -> None:
+    """torch.save through a temporary file: an interruption leaves the old file or the new."""
+    tmp = path.with_name(path.name + ".tmp")
+    torch.save(obj, tmp)
+    os.replace(tmp, path)
+
+
+# ---- resumable runs -----------------------------------------------------------------------
+# Header entries that say when and by which commit a dataset was packed, not what it holds:
+# `guidance dataset` re-packs the same samples on every run.
+_PACKING_KEYS = ("created_utc", "code_version")
+
+
+def dataset_digest(ds: Dataset) -> str:
+    """sha256 of what a dataset holds (its arrays and defining header), not of its file: the
+    packed file's bytes change with every re-pack of the same samples."""
+    h = hashlib.sha256()
+    header = {k: v for k, v in ds.header.items() if k not in _PACKING_KEYS}
+    h.update(json.dumps(header, sort_keys=True, default=str).encode())
+    for f in sorted(dataclasses.fields(ds), key=lambda f: f.name):
+        if f.name != "header":
+            a = np.ascontiguousarray(getattr(ds, f.name))
+            h.update(f"{f.name} {a.dtype.str} {a.shape}".encode())
+            h.update(a.tobytes())
+    return h.hexdigest()
+
+
+def run_identity(
+    kind: str, arch: dict[str, Any] | None, cfg: TrainConfig, dataset: str | None
+) -> dict[str, Any]:
+    """What a training run computes from: a checkpoint is resumed only under the same one.
+    Torch threads only change the speed, so they are left out."""
+    config = {k: v for k, v in dataclasses.asdict(cfg).items() if k != "threads"}
+    return {"kind": kind, "arch": dict(arch or {}), "config": config, "dataset": dataset}
+
+
+def identity_mismatch(saved: dict[str, Any] | None, wanted: dict[str, Any]) -> str | None:
+    """Which part of a saved run's identity differs from ``wanted`` (None when none does)."""
+    if not saved:
+        return "run (the file records no dataset and configuration)"
+    if saved.get("dataset") != wanted["dataset"]:
+        return (
+            f"dataset (content sha256 {str(saved.get('dataset'))[:12]}, "
+            f"now {str(wanted['dataset'])[:12]})"
+        )
+    diffs = [
+        f"{part}.{k} {saved.get(part, {}).get(k)!r} -> {wanted[part].get(k)!r}"
+        for part in ("arch", "config")
+        for k in sorted(set(saved.get(part, {})) | set(wanted[part]))
+        if saved.get(part, {}).get(k) != wanted[part].get(k)
+    ]
+    if saved.get("kind") != wanted["kind"]:
+        diffs.insert(0, f"kind {saved.get('kind')!r} -> {wanted['kind']!r}")
+    return "configuration: " + ", ".join(diffs) if diffs else None
+
+
+class TrainingInterrupted(KeyboardInterrupt):
+    """Ctrl-C during training; the epochs before it are in the run's checkpoint."""
+
+    def __init__(self, done: int, total: int) -> None:
+        super().__init__(f"{done} of {total} epochs done")
+        self.done, self.total = done, total
 
 
 def load_checkpoint(path: str | Path) -> TrainResult:
@@ -249,16 +317,28 @@ def train(
     kind: str,
     arch: dict[str, Any] | None = None,
     cfg: TrainConfig | None = None,
-    log=print,
+    log: Callable[[str], object] = print,
+    state_path: str | Path | None = None,
+    dataset: str | None = None,
+    progress: bool = False,
 ) -> TrainResult:
+    """Trains one network through the K folds.
+
+    With ``state_path``, the run is checkpointed there after every epoch (model, optimizer,
+    schedule, random states) and resumed from it, provided it was written for the same
+    configuration and ``dataset`` (its :func:`dataset_digest`); otherwise InputError.
+    Ctrl-C raises :class:`TrainingInterrupted`.
+    """
     cfg = cfg or TrainConfig()
+    if cfg.epochs < 1:
+        raise InputError(f"epochs per fold must be at least 1, got {cfg.epochs}")
     if cfg.threads:
         torch.set_num_threads(cfg.threads)
     torch.manual_seed(cfg.split_seed)
     t_start = time.perf_counter()
     solved = ds.solved()
     if len(solved.theta) == 0:
-        raise ValueError("the dataset has no solved samples to train on")
+        raise InputError("the dataset has no solved samples to train on")
     X, Y, bid, theta = xy(solved, kind)
     trainval_b, test_b = split_bases(solved.base_id, cfg.test_fraction, cfg.split_seed)
     tv = np.isin(bid, trainval_b)
@@ -272,16 +352,7 @@ def train(
     Ys = ((Y - out_mean) / out_std).astype(np.float32)
     a = ArchConfig(d_in=X.shape[1], d_out=Y.shape[1], **(arch or {}))
     net = Transformer(a)
-    if kind == "constraint":
-        loss_fn = nn.BCEWithLogitsLoss()
-    else:
-        w = torch.ones(Y.shape[1])
-        w[-1] = float(ds.N)  # t_f weighs as much as N outputs
-        w = w * (len(w) / w.sum())
-
-        def loss_fn(pred: torch.Tensor, target: torch.Tensor) -> torch.Tensor:
-            return torch.mean(w * (pred - target) ** 2)
-
+    loss_fn = _loss(kind, Y.shape[1], ds.N)
     opt = torch.optim.AdamW(net.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay)
     rng = np.random.default_rng(cfg.split_seed + 1)
     calib_b = np.zeros(0, trainval_b.dtype)
@@ -289,12 +360,19 @@ def train(
         n_cal = max(1, round(cfg.calibration_fraction * len(trainval_b)))
         calib_b = np.sort(rng.permutation(trainval_b)[:n_cal])
     fit_b = np.setdiff1d(trainval_b, calib_b)
+    if len(fit_b) < cfg.folds:
+        raise InputError(
+            f"need at least K = {cfg.folds} base landings for the folds (each fold validates "
+            f"on its own landings), have {len(fit_b)}: the dataset has "
+            f"{len(np.unique(solved.base_id))} solved base landings, {len(test_b)} go to the "
+            f"test split and {len(calib_b)} to calibration; make a larger dataset"
+        )
     cal = np.isin(bid, calib_b)
     fold_of_base = dict(zip(fit_b.tolist(), rng.permutation(len(fit_b)) % cfg.folds, strict=True))
     fold = np.array([fold_of_base.get(int(b), -1) for b in bid])
     fit = tv & ~cal
-    rows_per_fold = [int(np.sum(fit & (fold != f))) for f in range(cfg.folds)]
-    total = sum(math.ceil(r / cfg.batch_size) for r in rows_per_fold) * cfg.epochs
+    steps = [math.ceil(int(np.sum(fit & (fold != f))) / cfg.batch_size) for f in range(cfg.folds)]
+    total = sum(steps) * cfg.epochs
     warmup = max(1, min(cfg.warmup_steps, total // 10))
     sched = torch.optim.lr_scheduler.LambdaLR(opt, _lr_lambda(warmup, total))
     log(
@@ -304,43 +382,48 @@ def train(
         f"{int(te.sum())} test rows ({len(test_b)} base landings); {total} steps, "
         f"warm-up {warmup}"
     )
-    history = []
-    stopped_early = False
-    for f in range(cfg.folds):
-        tr = np.flatnonzero(fit & (fold != f))
-        va = np.flatnonzero(fit & (fold == f))
-        for ep in range(cfg.epochs):
-            net.train()
-            perm = rng.permutation(tr)
-            running, nb = 0.0, 0
-            for i in range(0, len(perm), cfg.batch_size):
-                b = perm[i : i + cfg.batch_size]
-                xb, yb = torch.from_numpy(Xs[b]), torch.from_numpy(Ys[b])
-                loss = loss_fn(net(xb), yb)
-                opt.zero_grad()
-                loss.backward()
-                opt.step()
-                sched.step()
-                running += loss.item()
-                nb += 1
-                if time.perf_counter() - t_start > cfg.max_seconds:
-                    break
-            train_loss = running / max(nb, 1)
+    identity = run_identity(kind, arch, cfg, dataset)
+    state_path = Path(state_path) if state_path else None
+    n_epochs = cfg.folds * cfg.epochs
+    run = {"epochs_done": 0, "history": [], "seconds": 0.0, "stopped_early": False}
+    if state_path and state_path.exists():
+        run = _resume(state_path, identity, net, opt, sched, rng)
+        log(f"[{kind}] resumed from {state_path}: {run['epochs_done']} of {n_epochs} epochs done")
+    t_start = time.perf_counter() - run["seconds"]  # the wall-clock cap spans the resumes
+    history: list[dict[str, Any]] = run["history"]
+    stopped_early = run["stopped_early"]
+    done_steps = sum(steps[e // cfg.epochs] for e in range(run["epochs_done"]))
+    bar = _bar(total, done_steps, f"{kind} {a.label()}", progress)
+    e = run["epochs_done"]
+    try:
+        while e < n_epochs and not stopped_early:
+            f, ep = divmod(e, cfg.epochs)
+            bar.set_description(f"{kind} fold {f + 1}/{cfg.folds} epoch {ep + 1}/{cfg.epochs}")
+            tr = rng.permutation(np.flatnonzero(fit & (fold != f)))
+            va = np.flatnonzero(fit & (fold == f))
+            deadline = t_start + cfg.max_seconds
+            train_loss = _epoch(net, opt, sched, loss_fn, Xs, Ys, tr, cfg.batch_size, deadline, bar)
             val_loss = float(
                 loss_fn(torch.from_numpy(_predict(net, Xs[va])), torch.from_numpy(Ys[va]))
             )
             history.append({"fold": f + 1, "epoch": ep + 1, "train": train_loss, "val": val_loss})
+            stopped_early = time.perf_counter() > deadline
+            e += 1
+            if state_path:
+                _checkpoint(state_path, identity, net, opt, sched, rng, e, history,
+                            time.perf_counter() - t_start, stopped_early)  # fmt: skip
             log(f"[{kind}] fold {f + 1} epoch {ep + 1}: train {train_loss:.4f} val {val_loss:.4f}")
-            if time.perf_counter() - t_start > cfg.max_seconds:
-                stopped_early = True
-                break
-        if stopped_early:
-            log(f"[{kind}] stopped at the wall-clock cap of {cfg.max_seconds:.0f} s")
-            break
+    except KeyboardInterrupt:
+        raise TrainingInterrupted(e, n_epochs) from None
+    finally:
+        bar.close()
+    if stopped_early:
+        log(f"[{kind}] stopped at the wall-clock cap of {cfg.max_seconds:.0f} s")
     net.eval()
     threshold = 0.5
     if kind == "constraint":
-        rows = np.flatnonzero(cal) if cal.any() else np.flatnonzero(fit & (fold == f))
+        last_fold = history[-1]["fold"] - 1
+        rows = np.flatnonzero(cal) if cal.any() else np.flatnonzero(fit & (fold == last_fold))
         p_cal = 1 / (1 + np.exp(-_predict(net, Xs[rows])))
         threshold = prob_threshold(
             Ys[rows], p_cal, cfg.target_recall, bid[rows], cfg.recall_confidence
@@ -354,12 +437,115 @@ def train(
         n_params=n_params(net),
         macs=a.macs(),
         train_config=dataclasses.asdict(cfg),
+        identity=identity,
         n_trainval_bases=len(trainval_b),
         n_calibration_bases=len(calib_b),
         n_test_bases=len(test_b),
         test_bases=[int(b) for b in test_b],
     )
     return TrainResult(kind, a, net, in_mean, in_std, out_mean, out_std, threshold, metrics)
+
+
+def _loss(kind: str, d_out: int, N: int) -> Callable[[torch.Tensor, torch.Tensor], torch.Tensor]:
+    if kind == "constraint":
+        return nn.BCEWithLogitsLoss()
+    w = torch.ones(d_out)
+    w[-1] = float(N)  # t_f weighs as much as N outputs
+    w = w * (len(w) / w.sum())
+
+    def loss_fn(pred: torch.Tensor, target: torch.Tensor) -> torch.Tensor:
+        return torch.mean(w * (pred - target) ** 2)
+
+    return loss_fn
+
+
+def _epoch(
+    net: nn.Module,
+    opt: torch.optim.Optimizer,
+    sched: torch.optim.lr_scheduler.LRScheduler,
+    loss_fn: Callable[[torch.Tensor, torch.Tensor], torch.Tensor],
+    Xs: np.ndarray,
+    Ys: np.ndarray,
+    perm: np.ndarray,
+    batch_size: int,
+    deadline: float,
+    bar: Any,
+) -> float:
+    """One pass over the rows ``perm`` (in that order), or fewer past ``deadline``; the mean
+    batch loss."""
+    net.train()
+    running, nb = 0.0, 0
+    for i in range(0, len(perm), batch_size):
+        b = perm[i : i + batch_size]
+        loss = loss_fn(net(torch.from_numpy(Xs[b])), torch.from_numpy(Ys[b]))
+        opt.zero_grad()
+        loss.backward()
+        opt.step()
+        sched.step()
+        running += loss.item()
+        nb += 1
+        bar.update(1)
+        if time.perf_counter() > deadline:
+            break
+    return running / max(nb, 1)
+
+
+def _bar(total: int, initial: int, desc: str, enabled: bool) -> Any:
+    from tqdm import tqdm
+
+    return tqdm(total=total, initial=initial, desc=desc, unit="step", disable=not enabled)
+
+
+def _checkpoint(
+    path: Path,
+    identity: dict[str, Any],
+    net: nn.Module,
+    opt: torch.optim.Optimizer,
+    sched: torch.optim.lr_scheduler.LRScheduler,
+    rng: np.random.Generator,
+    epochs_done: int,
+    history: list[dict[str, Any]],
+    seconds: float,
+    stopped_early: bool,
+) -> None:
+    """Everything the rest of the run depends on, so that a resumed run equals an unbroken one
+    (the torch random state drives dropout, the numpy one the batch order)."""
+    state = {
+        "identity": identity,
+        "net": net.state_dict(),
+        "opt": opt.state_dict(),
+        "sched": sched.state_dict(),
+        "numpy_rng": rng.bit_generator.state,
+        "torch_rng": torch.get_rng_state(),
+        "epochs_done": epochs_done,
+        "history": history,
+        "seconds": seconds,
+        "stopped_early": stopped_early,
+    }
+    save_atomic(state, path)
+
+
+def _resume(
+    path: Path,
+    identity: dict[str, Any],
+    net: nn.Module,
+    opt: torch.optim.Optimizer,
+    sched: torch.optim.lr_scheduler.LRScheduler,
+    rng: np.random.Generator,
+) -> dict[str, Any]:
+    state = torch.load(path, weights_only=False)
+    why = identity_mismatch(state.get("identity"), identity)
+    if why:
+        raise InputError(
+            f"{path} is a checkpoint of another {why}: rerun with --restart (or delete it) "
+            "to start over"
+        )
+    net.load_state_dict(state["net"])
+    opt.load_state_dict(state["opt"])
+    sched.load_state_dict(state["sched"])
+    rng.bit_generator.state = state["numpy_rng"]
+    torch.set_rng_state(state["torch_rng"])
+    return state
 
 
 def evaluate(
