@@ -55,6 +55,8 @@ def callgrind_instructions(models: Path) -> dict[str, int]:
     out: dict[str, int] = {}
     with tempfile.TemporaryDirectory() as tmp:
         for kind in ("constraint", "solution"):
+            if not (models / f"{kind}.onnx").is_file():  # a folder may hold one network
+                continue
             tnn = Path(tmp) / f"{kind}.tnn"
             write_tnn(models / f"{kind}.onnx", tnn)
             cmd = [str(NN_DRIVER), str(tnn), "--repeat", "1"]
