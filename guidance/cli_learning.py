@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import sys
 from pathlib import Path
@@ -63,11 +64,11 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
         "dataset",
         help="sample landings, solve them with SCvx (all cores, resumable), rotate, pack",
     )
-    d.add_argument("--n-base", type=int, default=1592, help="base samples (before rotation)")
-    d.add_argument("--seed", type=int, default=0)
+    d.add_argument("--n-base", type=_count(1), default=1592, help="base samples (before rotation)")
+    d.add_argument("--seed", type=_count(0), default=0)
     d.add_argument("--run-dir", default=DEFAULT_RUN_DIR, help="per-sample files (resumable)")
     d.add_argument("--output", default=DEFAULT_DATASET, help="packed dataset (.npz)")
-    d.add_argument("--workers", type=int, default=0, help="worker processes (0: all cores)")
+    d.add_argument("--workers", type=_count(0), default=0, help="worker processes (0: all cores)")
     d.add_argument(
         "--backend",
         choices=["c", "clarabel", "c-socp"],
@@ -143,18 +144,25 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
         "mask-ceiling",
         help="how well any (theta, k) -> tight-mask predictor can do: masks of near landings",
     )
-    c.add_argument("--landings", type=int, default=20)
-    c.add_argument("--neighbours", type=int, default=9, help="solved landings per eps (>= 3)")
-    c.add_argument("--eps", default="0.005,0.02,0.1", help="neighbourhood radii, in std units")
+    c.add_argument("--landings", type=_count(1), default=20)
+    c.add_argument(
+        "--neighbours",
+        type=_count(3),  # one predicted from the votes of two
+        default=9,
+        help="solved landings per eps (>= 3)",
+    )
+    c.add_argument(
+        "--eps", type=_radii, default="0.005,0.02,0.1", help="neighbourhood radii, in std units"
+    )
     c.add_argument("--backend", choices=["c", "clarabel", "c-socp"], help="default: as dataset")
     c.add_argument(
         "--train-landings",
-        type=int,
+        type=_count(1),
         help="for the data spacing (default: the shipped constraint network's, models/)",
     )
     c.add_argument("--models-dir", default=DEFAULT_MODELS_DIR)
-    c.add_argument("--seed", type=int, default=7)
-    c.add_argument("--workers", type=int, default=0, help="worker processes (0: all cores)")
+    c.add_argument("--seed", type=_count(0), default=7)
+    c.add_argument("--workers", type=_count(0), default=0, help="worker processes (0: all cores)")
     c.add_argument(
         "--run-dir",
         default="data/runs/mask_ceiling",
@@ -166,7 +174,7 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
 
 # ---- dataset ------------------------------------------------------------------------------
 def cmd_dataset(args: argparse.Namespace) -> int:
-    from guidance.dataset import generate, pack, summary
+    from guidance.dataset import WorkerDiedError, generate, pack, summary
 
     if not args.pack_only:
         try:
@@ -186,6 +194,9 @@ def cmd_dataset(args: argparse.Namespace) -> int:
                 file=sys.stderr,
             )
             return 130
+        except WorkerDiedError as exc:
+            print(f"error: {exc}", file=sys.stderr)
+            return 1
         print(f"solved this run: {counts}")
     header = pack(args.run_dir, args.output, n_base=args.n_base)
     print(summary(header))
@@ -482,8 +493,21 @@ def cmd_baselines(args: argparse.Namespace) -> int:
 
 
 # ---- mask ceiling -------------------------------------------------------------------------
+def _radii(text: str) -> list[float]:
+    """argparse type of --eps: a comma list of radii >= 0."""
+    try:
+        eps = [float(e) for e in text.split(",") if e.strip()]
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected numbers separated by commas, got {text!r}"
+        ) from None
+    if not eps or min(eps) < 0 or not all(map(math.isfinite, eps)):
+        raise argparse.ArgumentTypeError(f"expected radii >= 0, got {text!r}")
+    return eps
+
+
 def cmd_mask_ceiling(args: argparse.Namespace) -> int:
-    from guidance.dataset import default_backend
+    from guidance.dataset import WorkerDiedError, default_backend
     from guidance.mask_ceiling import (
         data_spacing,
         format_table,
@@ -493,9 +517,7 @@ def cmd_mask_ceiling(args: argparse.Namespace) -> int:
     )
     from guidance.nn.card import write_card
 
-    if args.neighbours < 3:
-        raise SystemExit("--neighbours must be at least 3 (one predicted from two)")
-    eps = [float(e) for e in args.eps.split(",") if e.strip()]
+    eps = args.eps
     n_train = args.train_landings
     metrics = Path(args.models_dir) / "metrics.json"
     if n_train is None and metrics.exists():
@@ -511,6 +533,9 @@ def cmd_mask_ceiling(args: argparse.Namespace) -> int:
         print(f"\ninterrupted: solved neighbourhoods are kept in {args.run_dir}; "
               "run the same command again to resume", file=sys.stderr)  # fmt: skip
         return 130
+    except WorkerDiedError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 1
     spacing = data_spacing(n_train, std) if n_train else None
     print(format_table(scores, args.neighbours, spacing, n_train))
     models = Path(args.models_dir)

@@ -12,8 +12,9 @@ Pipeline (paper, "Data Sampling Strategy"):
    loses at most the solves in flight.
 3. Augment and pack. The solved base samples are rotated about the up axis by 0, 45, ..., 315
    degrees (``guidance.symmetry``: rotated r, v and q; same omega_B, T_B, m, t_f and masks) and
-   written as one versioned ``.npz`` with a JSON header (ranges, seed, code version, SCvx
-   settings, parameters, creation time).
+   written as one versioned ``.npz`` with a JSON header (ranges, seed, SCvx settings,
+   parameters, provenance: the code versions that solved the samples and the one that packed
+   them, solver package versions, host, creation time).
 
 theta (16) = r0 (3), v0 (3), q0 (4), w0 (3, rad/U_T), m0, glideslope_deg, tilt_max_deg.
 """
@@ -21,13 +22,15 @@ theta (16) = r0 (3), v0 (3), q0 (4), w0 (3, rad/U_T), m0, glideslope_deg, tilt_m
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import json
 import math
 import os
 import signal
 import sys
 import time
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterator, Sequence
+from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -36,7 +39,7 @@ import numpy as np
 
 from guidance.errors import InputError
 from guidance.params import NC, NU, NX, InitialState, Params, Scenario, SCvxSettings
-from guidance.provenance import code_version
+from guidance.provenance import code_version, provenance
 from guidance.scenario import ScenarioError, validate
 
 FORMAT = "tscvx-dataset"
@@ -267,19 +270,58 @@ def _run_config_path(out_dir: Path) -> Path:
     return out_dir / "run.json"
 
 
+RUN_KEYS = ("seed", "ranges", "params", "scvx_settings", "backend")
+
+
 def _check_run_config(out_dir: Path, config: dict) -> None:
-    """A restart must use the same seed, ranges, parameters and settings."""
+    """A restart must use the same seed, ranges, parameters, settings and backend. The code
+    versions that solved into the run are listed in run.json ("code_versions")."""
     path = _run_config_path(out_dir)
-    if path.exists():
-        old = json.loads(path.read_text())
-        for key in ("seed", "ranges", "params", "scvx_settings", "backend"):
-            if old.get(key) != config[key]:
-                raise ValueError(
-                    f"{out_dir} holds samples made with a different {key}; "
-                    "use another output directory"
-                )
-    else:
-        path.write_text(json.dumps(config, indent=2))
+    version = code_version()
+    if not path.exists():
+        _write_json(path, {**config, "code_versions": [version]})
+        return
+    old = json.loads(path.read_text())
+    for key in RUN_KEYS:
+        if old.get(key) != config[key]:
+            new = config[key]
+            given = "" if isinstance(new, dict) else f" ({old.get(key)!r}, not {new!r})"
+            raise InputError(
+                f"{out_dir} holds samples made with a different {key}{given}; rerun with the "
+                "options that made it to resume, or use another --run-dir"
+            )
+    versions = old.get("code_versions", [])
+    if version not in versions:
+        # Not refused: each version's solves are sound, but the data then mixes versions.
+        print(
+            f"warning: {out_dir} holds samples solved by {', '.join(versions) or 'an older code'}"
+            f"; this code is {version}. The packed header lists every version.",
+            file=sys.stderr,
+        )
+        _write_json(path, {**old, "code_versions": [*versions, version]})
+
+
+def _write_json(path: Path, obj: dict) -> None:
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(json.dumps(obj, indent=2))
+    os.replace(tmp, path)
+
+
+class WorkerDiedError(RuntimeError):
+    """A worker process died (killed by a signal: a crash in a C solver, out of memory)."""
+
+
+def worker_died(kept: int, total: int, run_dir: Path | None) -> WorkerDiedError:
+    """The error of a run stopped by a dead worker: what is kept and how to go on."""
+    where = (
+        f"{kept} of {total} are kept in {run_dir}; run the same command again to resume"
+        if run_dir is not None
+        else "nothing is kept without a run directory"
+    )
+    return WorkerDiedError(
+        "a worker process died (killed by a signal: a crash in the solver or out of memory); "
+        + where
+    )
 
 
 def generate(
@@ -307,6 +349,7 @@ def generate(
         "backend": backend or default_backend(),
     }
     _check_run_config(out, config)
+    version = code_version()
     todo = [i for i in range(n_base) if i not in done_ids(out)]
     jobs = [
         (i, seed, config["ranges"], config["params"], config["scvx_settings"], config["backend"])
@@ -317,13 +360,18 @@ def generate(
     bar = _progress(len(jobs), progress, n_base - len(jobs))
     _limit_threads()
     previous = signal.signal(signal.SIGTERM, _raise_interrupt)
+    results = imap_pool(solve_sample, jobs, workers)
     try:
-        for rec in imap_pool(solve_sample, jobs, workers):
-            write_sample(out, rec)
+        for rec in results:
+            write_sample(out, {**rec, "code_version": version})
             counts[str(rec["status"])] = counts.get(str(rec["status"]), 0) + 1
             bar.update(1)
             bar.set_postfix(counts)
+    except BrokenProcessPool as exc:
+        kept = len([i for i in done_ids(out) if i < n_base])
+        raise worker_died(kept, n_base, out) from exc
     finally:
+        results.close()  # stops the pool now, also when this loop fails
         bar.close()
         signal.signal(signal.SIGTERM, previous)
     return counts
@@ -333,25 +381,56 @@ def _raise_interrupt(signum: int, frame: object) -> None:
     raise KeyboardInterrupt  # SIGTERM stops the pool like Ctrl-C: solved samples are kept
 
 
-def imap_pool(fn: Callable[[Any], Any], jobs: Sequence, workers: int) -> Iterable[Any]:
+def imap_pool(fn: Callable[[Any], Any], jobs: Sequence, workers: int) -> Iterator[Any]:
     """fn over jobs in a pool of single-threaded worker processes, results as they finish (in
     this process when workers <= 1). An exception in the caller (Ctrl-C) stops the pool;
-    results already yielded are the caller's to keep."""
+    results already yielded are the caller's to keep. A worker killed by a signal (a crash in
+    a C solver, out of memory) raises BrokenProcessPool once the results finished before it
+    are yielded."""
     if workers <= 1 or len(jobs) <= 1:
         yield from map(fn, jobs)
         return
     import multiprocessing as mp
+    from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 
     ctx = mp.get_context("spawn")  # CasADi/Clarabel state is not fork-safe
-    pool = ctx.Pool(workers, initializer=_limit_threads)
+    pool = ProcessPoolExecutor(workers, mp_context=ctx, initializer=_worker_init)
+    todo = iter(jobs)
+    running: set[Future] = set()
+
+    def submit(n: int) -> None:
+        for job in itertools.islice(todo, n):
+            running.add(pool.submit(fn, job))
+
     try:
-        yield from pool.imap_unordered(fn, jobs)
-        pool.close()
+        submit(2 * workers)  # a few queued per worker, not every job at once
+        while running:
+            done, running = wait(running, return_when=FIRST_COMPLETED)
+            submit(len(done))
+            failed = [f for f in done if f.exception() is not None]
+            for f in done:
+                if f.exception() is None:
+                    yield f.result()
+            if failed:
+                raise failed[0].exception()  # type: ignore[misc]
     except BaseException:
-        pool.terminate()
+        _stop(pool)
         raise
-    finally:
-        pool.join()
+    pool.shutdown()
+
+
+def _worker_init() -> None:
+    _limit_threads()
+    # Ctrl-C reaches the whole process group: the parent stops the workers, which would
+    # otherwise each print a KeyboardInterrupt traceback.
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def _stop(pool: Any) -> None:
+    """Ends the workers now, not after their current solve (no public API before 3.14)."""
+    for proc in list((pool._processes or {}).values()):
+        proc.terminate()
+    pool.shutdown(wait=True, cancel_futures=True)
 
 
 def _progress(total: int, enabled: bool, already: int):
@@ -382,12 +461,17 @@ def pack(out_dir: str | Path, dataset_path: str | Path, n_base: int | None = Non
     from guidance.symmetry import rotate_states
 
     out = Path(out_dir)
+    if not _run_config_path(out).is_file():
+        raise InputError(
+            f"{out} is not a dataset run directory (no run.json): run `guidance dataset` "
+            "without --pack-only to make one"
+        )
     config = json.loads(_run_config_path(out).read_text())
     ids = sorted(done_ids(out))
     if n_base is not None:
         ids = [i for i in ids if i < n_base]
     if not ids:
-        raise ValueError(f"no solved samples in {out}")
+        raise InputError(f"no solved samples in {out}: run `guidance dataset` to solve some")
     recs = [read_sample(sample_path(out, i)) for i in ids]
     N = int(config["params"]["N"])
     it_max = int(config["scvx_settings"]["iter_max"])
@@ -422,12 +506,16 @@ def pack(out_dir: str | Path, dataset_path: str | Path, n_base: int | None = Non
             base_id[m] = rec["id"]
             rot[m] = j
     base_status = [str(r["status"]) for r in recs]
+    # samples solved before the code version was recorded with each one say so
+    versions = sorted({str(r.get("code_version", "unrecorded")) for r in recs})
     counts = {s: base_status.count(s) for s in sorted(set(base_status))}
     header = {
         "format": FORMAT,
         "format_version": FORMAT_VERSION,
         "created_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
-        "code_version": code_version(),
+        "code_version": code_version(),  # of the packing; guidance.nn.card reads it
+        "code_versions": versions,  # of the solves in this file
+        "provenance": provenance(),
         "seed": config["seed"],
         "sampling_ranges": config["ranges"],
         "params": config["params"],

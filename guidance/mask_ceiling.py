@@ -22,6 +22,7 @@ import dataclasses
 import json
 import time
 from collections.abc import Callable, Sequence
+from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -37,7 +38,9 @@ from guidance.dataset import (
     scenario_of,
     scvx_solver,
     theta_of,
+    worker_died,
 )
+from guidance.errors import InputError
 from guidance.params import Scenario, SCvxSettings
 from guidance.provenance import code_version
 from guidance.scenario import ScenarioError, validate
@@ -150,8 +153,13 @@ def _cache_file(run_dir: Path, eps: float, i: int) -> Path:
 def _check_run(run_dir: Path, config: dict[str, Any]) -> None:
     path = run_dir / "run.json"
     if path.exists():
-        if json.loads(path.read_text()) != config:
-            raise ValueError(f"{run_dir} holds neighbours of another run; use another directory")
+        old = json.loads(path.read_text())
+        if old != config:
+            differ = ", ".join(k for k in config if old.get(k) != config[k])
+            raise InputError(
+                f"{run_dir} holds neighbours of another run (different {differ}); rerun with "
+                "the options that made it to resume, or use another --run-dir"
+            )
     else:
         run_dir.mkdir(parents=True, exist_ok=True)
         path.write_text(json.dumps(config, indent=1))
@@ -193,13 +201,19 @@ def measure(
                 jobs.append((eps, i, theta, std, n_neighbours, backend, seed))
     with tqdm(total=len(jobs), disable=not progress, unit="landing",
               desc=f"neighbourhoods ({len(found)} done before)") as bar:  # fmt: skip
-        for eps, i, masks in imap_pool(neighbour_masks, jobs, workers):
-            found[eps, i] = masks
-            if cache is not None:
-                tmp = cache / f".tmp{eps:g}_{i}.npz"
-                np.savez(tmp, *masks)
-                tmp.replace(_cache_file(cache, eps, i))
-            bar.update()
+        results = imap_pool(neighbour_masks, jobs, workers)
+        try:
+            for eps, i, masks in results:
+                found[eps, i] = masks
+                if cache is not None:
+                    tmp = cache / f".tmp{eps:g}_{i}.npz"
+                    np.savez(tmp, *masks)
+                    tmp.replace(_cache_file(cache, eps, i))
+                bar.update()
+        except BrokenProcessPool as exc:
+            raise worker_died(len(found), len(eps_values) * n_landings, cache) from exc
+        finally:
+            results.close()  # stops the pool now, also when this loop fails
     scores = []
     for eps in eps_values:
         groups = [found[eps, i] for i in range(n_landings) if len(found[eps, i]) >= 3]

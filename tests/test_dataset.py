@@ -4,10 +4,17 @@ from __future__ import annotations
 
 import json
 import math
+import os
+import shutil
+import signal
+import time
+from concurrent.futures.process import BrokenProcessPool
 
 import numpy as np
 import pytest
 
+from guidance import dataset
+from guidance.cli import main
 from guidance.dataset import (
     N_ROTATIONS,
     ROTATION_DEG,
@@ -15,15 +22,20 @@ from guidance.dataset import (
     base_scenario,
     done_ids,
     generate,
+    imap_pool,
     load_dataset,
     pack,
+    read_sample,
     rotate_theta,
     sample_path,
     scenario_of,
     scvx_solver,
     theta_of,
+    write_sample,
 )
+from guidance.errors import InputError
 from guidance.params import NC
+from guidance.provenance import code_version
 from guidance.scenario import validate
 from guidance.symmetry import rotate_scenario
 
@@ -83,8 +95,76 @@ def test_generation_resumes_without_redoing_samples(tiny_run) -> None:
     assert sum(second.values()) == 1
     assert done_ids(run) == {0, 1}
     assert sample_path(run, 1).exists()
-    with pytest.raises(ValueError, match="different seed"):
+    with pytest.raises(InputError, match=r"different seed \(11, not 12\)"):
         generate(run, 2, seed=12, ranges=EASY, workers=1, progress=False, backend="clarabel")
+    with pytest.raises(InputError, match=r"different backend \('clarabel', not 'c'\)"):
+        generate(run, 2, seed=11, ranges=EASY, workers=1, progress=False, backend="c")
+
+
+def test_cli_refuses_a_resume_with_other_options(tiny_run, tmp_path, capsys) -> None:
+    argv = ["dataset", "--run-dir", str(tiny_run[0]), "--output", str(tmp_path / "d.npz")]
+    assert main([*argv, "--n-base", "60", "--seed", "1", "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: ") and "different seed (11, not 1)" in err
+
+
+@pytest.mark.parametrize(
+    "option", [("--n-base", "0"), ("--n-base", "-3"), ("--workers", "-1"), ("--seed", "-1")]
+)
+def test_cli_refuses_bad_counts_up_front(option, tmp_path, capsys) -> None:
+    with pytest.raises(SystemExit) as exc:
+        out = ["--run-dir", str(tmp_path / "run"), "--output", str(tmp_path / "d.npz")]
+        main(["dataset", *out, *option])
+    assert exc.value.code == 2
+    assert f"argument {option[0]}: must be >= " in capsys.readouterr().err
+    assert not (tmp_path / "run").exists()
+
+
+def test_pack_only_without_a_run_is_bad_input(tmp_path, capsys) -> None:
+    run = tmp_path / "no_such_run"
+    argv = ["dataset", "--pack-only", "--run-dir", str(run), "--output", str(tmp_path / "d.npz")]
+    assert main(argv) == 2
+    assert "is not a dataset run directory (no run.json)" in capsys.readouterr().err
+
+
+def die_on_job_1(job):
+    """A worker that dies on job 1 as a segfault or the OOM killer would end it."""
+    i = job if isinstance(job, int) else job[0]
+    if i == 1:
+        os.kill(os.getpid(), signal.SIGKILL)
+    return i if isinstance(job, int) else {"id": i, "status": "solved"}
+
+
+def sleep_after_job_0(i: int) -> int:
+    if i > 0:
+        time.sleep(60)
+    return i
+
+
+def test_a_dead_worker_stops_the_pool_instead_of_hanging(deadline) -> None:
+    got = []
+    with pytest.raises(BrokenProcessPool):
+        for i in imap_pool(die_on_job_1, list(range(8)), 2):
+            got.append(i)
+    assert 1 not in got
+
+
+def test_stopping_the_caller_stops_the_pool_now(deadline) -> None:
+    t0 = time.monotonic()
+    with pytest.raises(KeyboardInterrupt):
+        for _ in imap_pool(sleep_after_job_0, list(range(4)), 2):
+            raise KeyboardInterrupt  # as Ctrl-C in the loop body
+    assert time.monotonic() - t0 < 10  # the 60 s solves in flight were not waited for
+
+
+def test_cli_reports_a_dead_worker_and_how_to_resume(tmp_path, monkeypatch, capsys, deadline):
+    monkeypatch.setattr(dataset, "solve_sample", die_on_job_1)
+    argv = ["dataset", "--run-dir", str(tmp_path), "--output", str(tmp_path / "d.npz")]
+    assert main([*argv, "--n-base", "6", "--workers", "2", "--backend", "c", "--no-progress"]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith("error: a worker process died")
+    kept = len(done_ids(tmp_path))
+    assert f"{kept} of 6 are kept in {tmp_path}; run the same command again to resume" in err
 
 
 def test_packed_dataset_layout_and_provenance(tiny_run) -> None:
@@ -97,6 +177,10 @@ def test_packed_dataset_layout_and_provenance(tiny_run) -> None:
     assert set(ds.rotation.tolist()) == set(range(N_ROTATIONS))
     for key in ("seed", "sampling_ranges", "code_version", "scvx_settings", "params"):
         assert key in header
+    assert header["code_versions"] == [code_version()]  # solved by this code
+    prov = header["provenance"]
+    assert prov["generator"] == code_version() and "numpy" in prov["packages"]
+    assert {"host", "python", "created_utc"} <= set(prov)
     assert header["n_base"] == 2 and header["format_version"] == 1
     assert 0.0 <= header["feasible_fraction"] <= 1.0
     json.dumps(ds.header)
@@ -121,10 +205,26 @@ def test_rotated_samples_are_the_solutions_of_the_rotated_scenarios(tiny_run) ->
 
 
 def test_cli_packs_a_run(tiny_run, tmp_path, capsys) -> None:
-    from guidance.cli import main
-
     run = tiny_run[0]
     out = tmp_path / "d.npz"
     assert main(["dataset", "--pack-only", "--run-dir", str(run), "--output", str(out)]) == 0
     assert "feasible fraction" in capsys.readouterr().out
     assert load_dataset(out).header["n_base"] == 2
+
+
+def test_resume_by_other_code_warns_and_the_header_lists_every_version(tiny_run, tmp_path, capsys):
+    run = tmp_path / "run"
+    shutil.copytree(tiny_run[0], run)
+    config = json.loads((run / "run.json").read_text())
+    assert config["code_versions"] == [code_version()]
+    (run / "run.json").write_text(json.dumps({**config, "code_versions": ["guidance 0.0 old"]}))
+    rec = read_sample(sample_path(run, 0))
+    write_sample(run, {**rec, "code_version": "guidance 0.0 old"})
+    # nothing left to solve: the resume only checks the run
+    generate(run, 2, seed=11, ranges=EASY, workers=1, progress=False, backend="clarabel")
+    err = capsys.readouterr().err
+    assert "warning:" in err and "guidance 0.0 old" in err and code_version() in err
+    config = json.loads((run / "run.json").read_text())
+    assert config["code_versions"] == ["guidance 0.0 old", code_version()]
+    header = pack(run, tmp_path / "d.npz")
+    assert header["code_versions"] == sorted(["guidance 0.0 old", code_version()])

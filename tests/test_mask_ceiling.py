@@ -3,10 +3,16 @@ perturbations of the requested size, data spacing, and a deterministic solve sco
 
 from __future__ import annotations
 
+import os
+import signal
+
 import numpy as np
 import pytest
 
-from guidance import cguidance
+from guidance import cguidance, mask_ceiling
+from guidance.cli import main
+from guidance.dataset import WorkerDiedError
+from guidance.errors import InputError
 from guidance.mask_ceiling import (
     PERTURBED,
     data_spacing,
@@ -54,8 +60,6 @@ def test_more_training_landings_are_never_farther() -> None:
 def test_identical_neighbours_score_one_and_a_rerun_solves_nothing(tmp_path, monkeypatch) -> None:
     """eps = 0: every neighbour is the landing itself, and the C solve is deterministic. The
     neighbour masks are kept in the run directory: a rerun reads them instead of solving."""
-    from guidance import mask_ceiling
-
     std = theta_spread(200)
     scores = measure(1, 3, [0.0], backend="c", std=std, progress=False, run_dir=tmp_path)
     for s in scores:
@@ -69,5 +73,50 @@ def test_identical_neighbours_score_one_and_a_rerun_solves_nothing(tmp_path, mon
     monkeypatch.setattr(mask_ceiling, "neighbour_masks", no_solving)
     again = measure(1, 3, [0.0], backend="c", std=std, progress=False, run_dir=tmp_path)
     assert again == scores
-    with pytest.raises(ValueError, match="another run"):
+    with pytest.raises(InputError, match="another run"):
         measure(1, 4, [0.0], backend="c", std=std, progress=False, run_dir=tmp_path)
+
+
+def test_a_resume_with_other_options_is_bad_input(tmp_path) -> None:
+    config = dict(seed=7, neighbours=9, backend="c")
+    mask_ceiling._check_run(tmp_path, config)
+    mask_ceiling._check_run(tmp_path, config)  # the same run resumes
+    with pytest.raises(InputError, match=r"another run \(different neighbours, backend\)"):
+        mask_ceiling._check_run(tmp_path, {**config, "neighbours": 4, "backend": "clarabel"})
+
+
+@pytest.mark.parametrize(
+    "option",
+    [
+        ("--landings", "0"),
+        ("--neighbours", "2"),
+        ("--workers", "-1"),
+        ("--train-landings", "0"),
+        ("--seed", "-2"),
+        ("--eps", "0.1,x"),
+        ("--eps", "-0.1"),
+        ("--eps", ","),
+    ],
+)
+def test_cli_refuses_bad_numbers_up_front(option, tmp_path, capsys) -> None:
+    with pytest.raises(SystemExit) as exc:
+        # every output in tmp_path: a regression must not write the shipped models/
+        out = ["--json", str(tmp_path / "m.json"), "--models-dir", str(tmp_path / "models")]
+        main(["mask-ceiling", "--run-dir", str(tmp_path / "run"), *out, *option])
+    assert exc.value.code == 2
+    assert f"argument {option[0]}: " in capsys.readouterr().err
+    assert not (tmp_path / "run").exists()
+
+
+def die_on_landing_1(job):
+    """A worker that dies on landing 1 as a segfault or the OOM killer would end it."""
+    eps, i = job[:2]
+    if i == 1:
+        os.kill(os.getpid(), signal.SIGKILL)
+    return eps, i, []
+
+
+def test_a_dead_worker_stops_the_run_with_how_to_resume(tmp_path, monkeypatch, deadline):
+    monkeypatch.setattr(mask_ceiling, "neighbour_masks", die_on_landing_1)
+    with pytest.raises(WorkerDiedError, match=r"worker process died.* of 3 are kept in .*resume"):
+        measure(3, 3, [0.0], std=np.ones(16), progress=False, workers=2, run_dir=tmp_path)

@@ -1,0 +1,25 @@
+"""Shared fixtures."""
+
+from __future__ import annotations
+
+import signal
+from collections.abc import Iterator
+
+import pytest
+
+
+@pytest.fixture
+def deadline() -> Iterator[None]:
+    """Fails a test that would otherwise hang (a pool waiting for a dead worker) after 20 s.
+    An alarm, not a thread: the code under test installs signal handlers (main thread only)."""
+
+    def expired(signum: int, frame: object) -> None:
+        raise TimeoutError("still running after 20 s: hung")
+
+    previous = signal.signal(signal.SIGALRM, expired)
+    signal.alarm(20)
+    try:
+        yield
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, previous)
