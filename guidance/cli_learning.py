@@ -57,8 +57,9 @@ DEFAULT_MODELS_DIR = "models"
 
 def add_commands(sub: argparse._SubParsersAction) -> None:
     """Registers the learning subcommands on the main parser."""
-    from guidance.cli import _count
+    from guidance.cli import _count, _setting
     from guidance.dataset import SamplingRanges
+    from guidance.params import SCvxSettings
 
     d = sub.add_parser(
         "dataset",
@@ -73,6 +74,13 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
         "--backend",
         choices=["c", "clarabel", "c-socp"],
         help="SCvx that solves the samples (default: the C library when built, else clarabel)",
+    )
+    d.add_argument(
+        "--prox-u",
+        type=_setting("prox_u"),
+        default=SCvxSettings().prox_u,
+        help="weight of the subproblems' proximal term on the thrust (0: the paper's objective, "
+        "with which the shipped networks' data were solved)",
     )
     d.add_argument("--pack-only", action="store_true", help="pack the samples solved so far")
     d.add_argument("--no-progress", action="store_true")
@@ -175,6 +183,7 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
 # ---- dataset ------------------------------------------------------------------------------
 def cmd_dataset(args: argparse.Namespace) -> int:
     from guidance.dataset import WorkerDiedError, generate, pack, summary
+    from guidance.params import SCvxSettings
 
     if not args.pack_only:
         try:
@@ -183,6 +192,7 @@ def cmd_dataset(args: argparse.Namespace) -> int:
                 args.n_base,
                 seed=args.seed,
                 ranges=args.ranges,
+                settings=SCvxSettings(prox_u=args.prox_u),
                 workers=args.workers or None,
                 progress=not args.no_progress,
                 backend=args.backend,

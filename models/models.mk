@@ -12,6 +12,8 @@
 
 MODELS_N_BASE  ?= 4000
 MODELS_TRAIN_MINUTES ?= 15
+# Subproblem proximal weight of the data (SCvxSettings.prox_u; the shipped networks' data: 0)
+MODELS_PROX_U  ?= 0.02
 MODELS_DATA    ?= data/dataset.npz
 MODELS_RUN_DIR ?= data/runs/default
 MODELS_TRAIN   ?= data/train
@@ -19,7 +21,8 @@ MODELS_TRAIN   ?= data/train
 .PHONY: models
 
 models: setup lib $(BUILD)/nn_budget_driver
-	nice $(GUIDANCE) dataset --n-base $(MODELS_N_BASE) --run-dir $(MODELS_RUN_DIR) --output $(MODELS_DATA)
+	nice $(GUIDANCE) dataset --n-base $(MODELS_N_BASE) --prox-u $(MODELS_PROX_U) \
+	  --run-dir $(MODELS_RUN_DIR) --output $(MODELS_DATA)
 	nice $(GUIDANCE) train --dataset $(MODELS_DATA) --train-dir $(MODELS_TRAIN) --sizes flight-m,flight-mlp,flight-s,reference \
 	  --max-minutes $(MODELS_TRAIN_MINUTES)
 	$(GUIDANCE) export --train-dir $(MODELS_TRAIN) --dataset $(MODELS_DATA) --models-dir models

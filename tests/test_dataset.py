@@ -18,6 +18,7 @@ from guidance.cli import main
 from guidance.dataset import (
     N_ROTATIONS,
     ROTATION_DEG,
+    RUN_KEYS,
     SamplingRanges,
     base_scenario,
     done_ids,
@@ -34,7 +35,7 @@ from guidance.dataset import (
     write_sample,
 )
 from guidance.errors import InputError
-from guidance.params import NC
+from guidance.params import NC, SCvxSettings
 from guidance.provenance import code_version
 from guidance.scenario import validate
 from guidance.symmetry import rotate_scenario
@@ -228,3 +229,23 @@ def test_resume_by_other_code_warns_and_the_header_lists_every_version(tiny_run,
     assert config["code_versions"] == ["guidance 0.0 old", code_version()]
     header = pack(run, tmp_path / "d.npz")
     assert header["code_versions"] == sorted(["guidance 0.0 old", code_version()])
+
+
+def test_cli_prox_u_reaches_the_solves(tmp_path, monkeypatch) -> None:
+    """`guidance dataset --prox-u 0` solves with the paper's objective (the shipped networks'
+    data); the weight is part of the run's settings, so a resume with another is refused."""
+    import guidance.dataset as dataset
+
+    seen = {}
+
+    def fake_generate(*args, settings=None, **kwargs):
+        seen["settings"] = settings
+        raise KeyboardInterrupt  # stop before any solve
+
+    monkeypatch.setattr(dataset, "generate", fake_generate)
+    out = ["--run-dir", str(tmp_path / "run"), "--output", str(tmp_path / "d.npz")]
+    assert main(["dataset", *out, "--prox-u", "0"]) == 130
+    assert seen["settings"] == SCvxSettings(prox_u=0.0)
+    assert main(["dataset", *out]) == 130
+    assert seen["settings"] == SCvxSettings()
+    assert "scvx_settings" in RUN_KEYS

@@ -330,9 +330,13 @@ def write_card(models: Path) -> Path:
     add("")
     add("## Limits")
     add("")
+    scvx = h.get("scvx_settings", {})
+    prox = float(scvx.get("prox_u", 0.0))
     add(
-        f"- Trained on {h.get('n_base')} base landings (`make models MODELS_N_BASE="
-        f"{h.get('n_base')}`); the numbers above are for this data."
+        f"- Trained on {h.get('n_base')} base landings solved with {_objective(scvx)} "
+        f"(`make models MODELS_N_BASE={h.get('n_base')} MODELS_PROX_U={prox:g}`; the epochs, "
+        "sizes and threads each network was trained with are its `train_config` in "
+        "`metrics.json`); the numbers above are for this data."
     )
     add("- The ranges are narrower than the paper's Table 5 (chosen so that most landings are")
     add("  feasible for this fuel-tight vehicle); outside them the networks extrapolate and")
