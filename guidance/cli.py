@@ -104,6 +104,17 @@ def _setting(name: str, cast: Callable[[str], float] = float) -> Callable[[str],
     return parse
 
 
+def add_prox_u(parser: argparse.ArgumentParser, about_zero: str) -> None:
+    """--prox-u: SCvxSettings.prox_u, the weight of the subproblems' proximal term."""
+    parser.add_argument(
+        "--prox-u",
+        type=_setting("prox_u"),
+        default=SCvxSettings().prox_u,
+        help="weight of the subproblems' proximal term on the scaled thrust (0: the paper's "
+        f"linear objective, {about_zero})",
+    )
+
+
 def _count(minimum: int) -> Callable[[str], int]:
     """argparse type of an integer count >= minimum."""
 
@@ -286,13 +297,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="T-SCvx trust radius: tau_r = Algorithm 2's update (paper), eq13 = Algorithm 1's "
         "Eq. (13) with the masks as well",
     )
-    s.add_argument(
-        "--prox-u",
-        type=_setting("prox_u"),
-        default=SCvxSettings().prox_u,
-        help="weight of the subproblem's proximal term on the scaled thrust (0: the paper's "
-        "linear objective, whose answer depends on the conic solver)",
-    )
+    add_prox_u(s, "whose answer depends on the conic solver")
     s.add_argument(
         "--eta-init",
         type=_setting("eta_init"),
@@ -341,12 +346,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     a.add_argument("--landings", type=_count(0), help="fresh sampled landings to add (default: 20)")
     a.add_argument("--workers", type=_count(1), default=os.cpu_count() or 1)
-    a.add_argument(
-        "--prox-u",
-        type=_setting("prox_u"),
-        default=SCvxSettings().prox_u,
-        help="weight of the subproblems' proximal term (0: the paper's objective)",
-    )
+    add_prox_u(a, "on which the solvers part")
     a.set_defaults(func=cmd_agreement)
 
     g = sub.add_parser("budget", help="RAD750 time and memory budget of one C guidance call")

@@ -57,9 +57,8 @@ DEFAULT_MODELS_DIR = "models"
 
 def add_commands(sub: argparse._SubParsersAction) -> None:
     """Registers the learning subcommands on the main parser."""
-    from guidance.cli import _count, _setting
+    from guidance.cli import _count, add_prox_u
     from guidance.dataset import SamplingRanges
-    from guidance.params import SCvxSettings
 
     d = sub.add_parser(
         "dataset",
@@ -75,13 +74,7 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
         choices=["c", "clarabel", "c-socp"],
         help="SCvx that solves the samples (default: the C library when built, else clarabel)",
     )
-    d.add_argument(
-        "--prox-u",
-        type=_setting("prox_u"),
-        default=SCvxSettings().prox_u,
-        help="weight of the subproblems' proximal term on the thrust (0: the paper's objective, "
-        "with which the shipped networks' data were solved)",
-    )
+    add_prox_u(d, "with which the shipped networks' data were solved")
     d.add_argument("--pack-only", action="store_true", help="pack the samples solved so far")
     d.add_argument("--no-progress", action="store_true")
     d.set_defaults(func=cmd_dataset, ranges=SamplingRanges())
