@@ -115,7 +115,7 @@ def add_prox_u(parser: argparse.ArgumentParser, about_zero: str) -> None:
     )
 
 
-def _count(minimum: int) -> Callable[[str], int]:
+def at_least(minimum: int) -> Callable[[str], int]:
     """argparse type of an integer count >= minimum."""
 
     def parse(text: str) -> int:
@@ -322,12 +322,12 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument(
         "--backend", nargs="+", default=["clarabel"], choices=["clarabel", "c-socp", "c"]
     )
-    b.add_argument("--repeats", type=_count(1), default=1)
+    b.add_argument("--repeats", type=at_least(1), default=1)
     b.add_argument("--method", choices=["scvx", "tscvx"], default="scvx")
     b.add_argument("--skip-socp", action="store_true", help="skip the conic solver benchmark")
     b.add_argument(
         "--tscvx-landings",
-        type=_count(0),
+        type=at_least(0),
         default=0,
         help="also compare SCvx and T-SCvx on this many fresh sampled landings",
     )
@@ -344,8 +344,10 @@ def build_parser() -> argparse.ArgumentParser:
     a.add_argument(
         "--catalog", nargs="+", help="catalog landings to include, or all (default: all)"
     )
-    a.add_argument("--landings", type=_count(0), help="fresh sampled landings to add (default: 20)")
-    a.add_argument("--workers", type=_count(1), default=os.cpu_count() or 1)
+    a.add_argument(
+        "--landings", type=at_least(0), help="fresh sampled landings to add (default: 20)"
+    )
+    a.add_argument("--workers", type=at_least(1), default=os.cpu_count() or 1)
     add_prox_u(a, "on which the solvers part")
     a.set_defaults(func=cmd_agreement)
 

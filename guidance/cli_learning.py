@@ -57,18 +57,20 @@ DEFAULT_MODELS_DIR = "models"
 
 def add_commands(sub: argparse._SubParsersAction) -> None:
     """Registers the learning subcommands on the main parser."""
-    from guidance.cli import _count, add_prox_u
+    from guidance.cli import add_prox_u, at_least
     from guidance.dataset import SamplingRanges
 
     d = sub.add_parser(
         "dataset",
         help="sample landings, solve them with SCvx (all cores, resumable), rotate, pack",
     )
-    d.add_argument("--n-base", type=_count(1), default=1592, help="base samples (before rotation)")
-    d.add_argument("--seed", type=_count(0), default=0)
+    d.add_argument(
+        "--n-base", type=at_least(1), default=1592, help="base samples (before rotation)"
+    )
+    d.add_argument("--seed", type=at_least(0), default=0)
     d.add_argument("--run-dir", default=DEFAULT_RUN_DIR, help="per-sample files (resumable)")
     d.add_argument("--output", default=DEFAULT_DATASET, help="packed dataset (.npz)")
-    d.add_argument("--workers", type=_count(0), default=0, help="worker processes (0: all cores)")
+    d.add_argument("--workers", type=at_least(0), default=0, help="worker processes (0: all cores)")
     d.add_argument(
         "--backend",
         choices=["c", "clarabel", "c-socp"],
@@ -90,19 +92,19 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
     )
     t.add_argument(
         "--epochs",
-        type=_count(1),
+        type=at_least(1),
         default=TRAIN_DEFAULTS["epochs"],
         help="per fold, constraint net",
     )
     t.add_argument(
         "--solution-epochs",
-        type=_count(1),
+        type=at_least(1),
         default=TRAIN_DEFAULTS["solution_epochs"],
         help="per fold, solution net",
     )
     t.add_argument(
         "--reference-epochs",
-        type=_count(1),
+        type=at_least(1),
         default=TRAIN_DEFAULTS["reference_epochs"],
         help="per fold, for the paper-size reference (the paper: 2)",
     )
@@ -145,10 +147,10 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
         "mask-ceiling",
         help="how well any (theta, k) -> tight-mask predictor can do: masks of near landings",
     )
-    c.add_argument("--landings", type=_count(1), default=20)
+    c.add_argument("--landings", type=at_least(1), default=20)
     c.add_argument(
         "--neighbours",
-        type=_count(3),  # one predicted from the votes of two
+        type=at_least(3),  # one predicted from the votes of two
         default=9,
         help="solved landings per eps (>= 3)",
     )
@@ -158,12 +160,12 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
     c.add_argument("--backend", choices=["c", "clarabel", "c-socp"], help="default: as dataset")
     c.add_argument(
         "--train-landings",
-        type=_count(1),
+        type=at_least(1),
         help="for the data spacing (default: the shipped constraint network's, models/)",
     )
     c.add_argument("--models-dir", default=DEFAULT_MODELS_DIR)
-    c.add_argument("--seed", type=_count(0), default=7)
-    c.add_argument("--workers", type=_count(0), default=0, help="worker processes (0: all cores)")
+    c.add_argument("--seed", type=at_least(0), default=7)
+    c.add_argument("--workers", type=at_least(0), default=0, help="worker processes (0: all cores)")
     c.add_argument(
         "--run-dir",
         default="data/runs/mask_ceiling",
