@@ -7,7 +7,7 @@ import pytest
 
 from guidance.catalog import SCENARIOS
 from guidance.params import NC, SCvxSettings
-from guidance.scvx import SCvxResult, SCvxSolver, solve_scvx
+from guidance.scvx import SCvxResult, SCvxSolver, format_log, solve_scvx
 from guidance.tscvx import solve_tscvx
 from guidance.verify import audit
 
@@ -44,6 +44,27 @@ def test_dropped_tight_constraints_are_put_back(reference: SCvxResult) -> None:
     a = audit(r.x, r.u, r.t_f, scenario.params)
     assert a.max_path_violation <= 1e-6
     assert abs(r.m_f - reference.m_f) <= 1e-3
+    # the log tells a guard rejection (same radius, constraints put back) from a rho one
+    guarded = [i for i, h in enumerate(r.history) if h.restored]
+    assert guarded, "the empty mask must have been repaired"
+    for i in guarded:
+        h = r.history[i]
+        assert not h.accepted and r.history[i + 1].eta == h.eta
+        assert format_log(r.history)[i + 1].endswith(f"rej, {h.restored} put back")
+    assert all(h.restored == 0 for h in r.history if h.accepted)
+
+
+def test_guard_rejections_are_logged_alike_in_c() -> None:
+    """The flight library's log counts the constraints its guard put back as Python's does."""
+    cguidance = pytest.importorskip("guidance.cguidance")
+    if not cguidance.LIB_PATH.exists():
+        pytest.skip("run `make lib` first")
+    scenario = SCENARIOS["north"]
+    empty = np.zeros(NC * scenario.params.N)
+    c = cguidance.solve_c(scenario, masks=lambda k: empty)
+    py = SCvxSolver(scenario, backend="c").solve(masks=lambda k: empty)
+    assert [h.restored for h in c.history] == [h.restored for h in py.history]
+    assert any(h.restored for h in c.history)
 
 
 def test_reference_masks_without_warm_start_match_in_c_and_python(
