@@ -39,7 +39,7 @@ import numpy as np
 
 from guidance.errors import InputError
 from guidance.params import NC, NU, NX, InitialState, Params, Scenario, SCvxSettings
-from guidance.provenance import code_version, provenance
+from guidance.provenance import code_version, provenance, record_code_version
 from guidance.scenario import ScenarioError, validate
 
 FORMAT = "tscvx-dataset"
@@ -277,9 +277,8 @@ def _check_run_config(out_dir: Path, config: dict) -> None:
     """A restart must use the same seed, ranges, parameters, settings and backend. The code
     versions that solved into the run are listed in run.json ("code_versions")."""
     path = _run_config_path(out_dir)
-    version = code_version()
     if not path.exists():
-        _write_json(path, {**config, "code_versions": [version]})
+        record_code_version(path, config)
         return
     old = json.loads(path.read_text())
     for key in RUN_KEYS:
@@ -290,21 +289,7 @@ def _check_run_config(out_dir: Path, config: dict) -> None:
                 f"{out_dir} holds samples made with a different {key}{given}; rerun with the "
                 "options that made it to resume, or use another --run-dir"
             )
-    versions = old.get("code_versions", [])
-    if version not in versions:
-        # Not refused: each version's solves are sound, but the data then mixes versions.
-        print(
-            f"warning: {out_dir} holds samples solved by {', '.join(versions) or 'an older code'}"
-            f"; this code is {version}. The packed header lists every version.",
-            file=sys.stderr,
-        )
-        _write_json(path, {**old, "code_versions": [*versions, version]})
-
-
-def _write_json(path: Path, obj: dict) -> None:
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(json.dumps(obj, indent=2))
-    os.replace(tmp, path)
+    record_code_version(path, old)
 
 
 class WorkerDiedError(RuntimeError):

@@ -42,7 +42,7 @@ from guidance.dataset import (
 )
 from guidance.errors import InputError
 from guidance.params import Scenario, SCvxSettings
-from guidance.provenance import code_version
+from guidance.provenance import code_version, record_code_version
 from guidance.scenario import ScenarioError, validate
 
 # theta components moved by a perturbation: r0, v0, the pitch and yaw rates, m0, glideslope
@@ -150,19 +150,20 @@ def _cache_file(run_dir: Path, eps: float, i: int) -> Path:
     return run_dir / f"eps{eps:g}_landing{i:04d}.npz"
 
 
-def _check_run(run_dir: Path, config: dict[str, Any]) -> None:
+def _check_run(run_dir: Path, config: dict[str, Any]) -> list[str]:
+    """A resume must use the run's options; returns the code versions that worked on it."""
     path = run_dir / "run.json"
-    if path.exists():
-        old = json.loads(path.read_text())
-        if old != config:
-            differ = ", ".join(k for k in config if old.get(k) != config[k])
-            raise InputError(
-                f"{run_dir} holds neighbours of another run (different {differ}); rerun with "
-                "the options that made it to resume, or use another --run-dir"
-            )
-    else:
+    if not path.exists():
         run_dir.mkdir(parents=True, exist_ok=True)
-        path.write_text(json.dumps(config, indent=1))
+        return record_code_version(path, config)
+    old = json.loads(path.read_text())
+    differ = ", ".join(k for k in config if old.get(k) != config[k])
+    if differ:
+        raise InputError(
+            f"{run_dir} holds neighbours of another run (different {differ}); rerun with "
+            "the options that made it to resume, or use another --run-dir"
+        )
+    return record_code_version(path, old)
 
 
 def measure(

@@ -4,8 +4,11 @@ the model files a result depended on. One definition for every file this package
 from __future__ import annotations
 
 import hashlib
+import json
+import os
 import platform
 import subprocess
+import sys
 from datetime import datetime, timezone
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
@@ -36,6 +39,31 @@ def code_version() -> str:
     except (OSError, subprocess.SubprocessError):
         rev, dirty = "", ""
     return f"guidance {pkg}" + (f" git {rev}{'+dirty' if dirty else ''}" if rev else "")
+
+
+def write_json_atomic(path: Path, obj: dict) -> None:
+    """JSON through a temporary file: an interruption leaves the old file or the new."""
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(json.dumps(obj, indent=2))
+    os.replace(tmp, path)
+
+
+def record_code_version(run_json: Path, record: dict) -> list[str]:
+    """Adds this code's version to a resumable run's record (``code_versions`` in run.json)
+    and returns every version that worked on the run. A resume by another version is not
+    refused (each version's results are sound) but warned about: the run then mixes them."""
+    version = code_version()
+    versions = list(record.get("code_versions", []))
+    if version not in versions:
+        if versions:
+            print(
+                f"warning: {run_json.parent} holds results of {', '.join(versions)}; this code "
+                f"is {version}. The run records every version.",
+                file=sys.stderr,
+            )
+        versions.append(version)
+        write_json_atomic(run_json, {**record, "code_versions": versions})
+    return versions
 
 
 def file_digest(path: Path) -> str:

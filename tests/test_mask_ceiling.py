@@ -3,6 +3,7 @@ perturbations of the requested size, data spacing, and a deterministic solve sco
 
 from __future__ import annotations
 
+import json
 import os
 import signal
 
@@ -83,6 +84,20 @@ def test_a_resume_with_other_options_is_bad_input(tmp_path) -> None:
     mask_ceiling._check_run(tmp_path, config)  # the same run resumes
     with pytest.raises(InputError, match=r"another run \(different neighbours, backend\)"):
         mask_ceiling._check_run(tmp_path, {**config, "neighbours": 4, "backend": "clarabel"})
+
+
+def test_run_records_every_code_version(tmp_path, capsys) -> None:
+    """run.json lists the code versions that solved into the run; a resume by another warns."""
+    from guidance.provenance import code_version
+
+    config = {"seed": 1, "neighbours": 3, "backend": "c"}
+    assert mask_ceiling._check_run(tmp_path, config) == [code_version()]
+    record = json.loads((tmp_path / "run.json").read_text())
+    (tmp_path / "run.json").write_text(json.dumps({**record, "code_versions": ["guidance old"]}))
+    assert mask_ceiling._check_run(tmp_path, config) == ["guidance old", code_version()]
+    assert "warning: " in capsys.readouterr().err
+    assert mask_ceiling._check_run(tmp_path, config) == ["guidance old", code_version()]
+    assert capsys.readouterr().err == ""
 
 
 @pytest.mark.parametrize(
