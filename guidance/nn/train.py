@@ -383,12 +383,12 @@ def train(
         f"warm-up {warmup}"
     )
     identity = run_identity(kind, arch, cfg, dataset)
-    state_path = Path(state_path) if state_path else None
+    saved = _RunState(Path(state_path), identity, net, opt, sched, rng) if state_path else None
     n_epochs = cfg.folds * cfg.epochs
     run = {"epochs_done": 0, "history": [], "seconds": 0.0, "stopped_early": False}
-    if state_path and state_path.exists():
-        run = _resume(state_path, identity, net, opt, sched, rng)
-        log(f"[{kind}] resumed from {state_path}: {run['epochs_done']} of {n_epochs} epochs done")
+    if saved and saved.path.exists():
+        run = saved.load()
+        log(f"[{kind}] resumed from {saved.path}: {run['epochs_done']} of {n_epochs} epochs done")
     t_start = time.perf_counter() - run["seconds"]  # the wall-clock cap spans the resumes
     history: list[dict[str, Any]] = run["history"]
     stopped_early = run["stopped_early"]
@@ -409,9 +409,10 @@ def train(
             history.append({"fold": f + 1, "epoch": ep + 1, "train": train_loss, "val": val_loss})
             stopped_early = time.perf_counter() > deadline
             e += 1
-            if state_path:
-                _checkpoint(state_path, identity, net, opt, sched, rng, e, history,
-                            time.perf_counter() - t_start, stopped_early)  # fmt: skip
+            if saved:
+                seconds = time.perf_counter() - t_start
+                saved.save({"epochs_done": e, "history": history, "seconds": seconds,
+                            "stopped_early": stopped_early})  # fmt: skip
             log(f"[{kind}] fold {f + 1} epoch {ep + 1}: train {train_loss:.4f} val {val_loss:.4f}")
     except KeyboardInterrupt:
         raise TrainingInterrupted(e, n_epochs) from None
@@ -496,56 +497,47 @@ def _bar(total: int, initial: int, desc: str, enabled: bool) -> Any:
     return tqdm(total=total, initial=initial, desc=desc, unit="step", disable=not enabled)
 
 
-def _checkpoint(
-    path: Path,
-    identity: dict[str, Any],
-    net: nn.Module,
-    opt: torch.optim.Optimizer,
-    sched: torch.optim.lr_scheduler.LRScheduler,
-    rng: np.random.Generator,
-    epochs_done: int,
-    history: list[dict[str, Any]],
-    seconds: float,
-    stopped_early: bool,
-) -> None:
-    """Everything the rest of the run depends on, so that a resumed run equals an unbroken one
-    (the torch random state drives dropout, the numpy one the batch order)."""
-    state = {
-        "identity": identity,
-        "net": net.state_dict(),
-        "opt": opt.state_dict(),
-        "sched": sched.state_dict(),
-        "numpy_rng": rng.bit_generator.state,
-        "torch_rng": torch.get_rng_state(),
-        "epochs_done": epochs_done,
-        "history": history,
-        "seconds": seconds,
-        "stopped_early": stopped_early,
-    }
-    save_atomic(state, path)
+@dataclass
+class _RunState:
+    """The checkpoint of a resumable run: everything the rest of the run depends on, so that a
+    resumed run equals an unbroken one (the torch random state drives dropout, the numpy one
+    the batch order), tied to the run's identity (configuration and dataset)."""
 
+    path: Path
+    identity: dict[str, Any]
+    net: nn.Module
+    opt: torch.optim.Optimizer
+    sched: torch.optim.lr_scheduler.LRScheduler
+    rng: np.random.Generator
 
-def _resume(
-    path: Path,
-    identity: dict[str, Any],
-    net: nn.Module,
-    opt: torch.optim.Optimizer,
-    sched: torch.optim.lr_scheduler.LRScheduler,
-    rng: np.random.Generator,
-) -> dict[str, Any]:
-    state = torch.load(path, weights_only=False)
-    why = identity_mismatch(state.get("identity"), identity)
-    if why:
-        raise InputError(
-            f"{path} is a checkpoint of another {why}: rerun with --restart (or delete it) "
-            "to start over"
-        )
-    net.load_state_dict(state["net"])
-    opt.load_state_dict(state["opt"])
-    sched.load_state_dict(state["sched"])
-    rng.bit_generator.state = state["numpy_rng"]
-    torch.set_rng_state(state["torch_rng"])
-    return state
+    def save(self, progress: dict[str, Any]) -> None:
+        """``progress``: epochs_done, history, seconds, stopped_early."""
+        state = {
+            "identity": self.identity,
+            "net": self.net.state_dict(),
+            "opt": self.opt.state_dict(),
+            "sched": self.sched.state_dict(),
+            "numpy_rng": self.rng.bit_generator.state,
+            "torch_rng": torch.get_rng_state(),
+            **progress,
+        }
+        save_atomic(state, self.path)
+
+    def load(self) -> dict[str, Any]:
+        """Restores the saved state into the run's objects; returns the saved progress."""
+        state = torch.load(self.path, weights_only=False)
+        why = identity_mismatch(state.get("identity"), self.identity)
+        if why:
+            raise InputError(
+                f"{self.path} is a checkpoint of another {why}: rerun with --restart (or delete "
+                "it) to start over"
+            )
+        self.net.load_state_dict(state["net"])
+        self.opt.load_state_dict(state["opt"])
+        self.sched.load_state_dict(state["sched"])
+        self.rng.bit_generator.state = state["numpy_rng"]
+        torch.set_rng_state(state["torch_rng"])
+        return state
 
 
 def evaluate(
