@@ -6,7 +6,7 @@ plain SCvx (cubic guess, eta_init 2) and by two T-SCvx variants with the shipped
 
   warm start   the solution network's trajectory as the initial guess, eta_reduced,init 0.01
   Algorithm 2  the same plus the constraint network's per-iteration tight masks
-  Algorithm 2 with the Eq. (13) radius
+  Algorithm 2 with Algorithm 1's radius update (Eq. (15))
                the same, the trust radius updated as in Algorithm 1 (tau_r_update off)
 
 Subproblems solved (accepted and rejected) is the figure that flight time follows; the final
@@ -78,7 +78,7 @@ def run(n: int, backend: str = "c", models_dir: Path | None = None, progress: bo
     solve = _solver(backend)
     full = SCvxSettings()
     variants = [Variant("SCvx"), Variant("T-SCvx warm start"), Variant("T-SCvx (Algorithm 2)"),
-                Variant("Alg. 2, Eq. 13 radius")]  # fmt: skip
+                Variant("Alg. 2, Alg. 1 radius")]  # fmt: skip
     reduced = full.replace(eta_init=REDUCED_ETA_INIT)
     # (settings, masks) of each T-SCvx variant
     tscvx_runs = ((reduced, False), (reduced, True), (reduced.replace(tau_r_update=False), True))

@@ -15,7 +15,7 @@ from guidance.errors import InputError
 from guidance.params import IM, Scenario, SCvxSettings
 from guidance.scenario import load_scenario, scenario_to_dict
 from guidance.scvx import SCvxResult, SCvxSolver, format_log
-from guidance.tscvx import REDUCED_ETA_INIT
+from guidance.tscvx import REDUCED_ETA_INIT, solve_tscvx
 
 EXIT_BAD_INPUT = 2
 
@@ -66,21 +66,25 @@ def run_solve(
             for line in format_log(result.history):
                 log(line)
         return result
-    guess = mask_fn = None
     if method == "tscvx":
         from guidance.dataset import theta_of
-        from guidance.guess import project_guess
         from guidance.nn.infer import ConstraintModel, SolutionModel
 
-        theta = theta_of(scenario)
         sol_model = SolutionModel(models_dir / SOLUTION_MODEL, scenario.params)
         con_model = ConstraintModel(models_dir / CONSTRAINT_MODEL, scenario.params)
-        guess = project_guess(scenario, *sol_model.solution(theta))
-        mask_fn = con_model.mask_fn(theta)
+        return solve_tscvx(
+            scenario,
+            lambda s: sol_model.solution(theta_of(s)),
+            lambda s, k: con_model.mask(theta_of(s), k),
+            settings,
+            "c" if backend == "c-socp" else backend,
+            log,
+            eta_init=settings.eta_init,
+        )
     if backend == "c":
         from guidance.cguidance import solve_c
 
-        result = solve_c(scenario, settings, guess=guess, masks=mask_fn)
+        result = solve_c(scenario, settings)
         if log:
             for line in format_log(result.history):
                 log(line)
@@ -88,7 +92,7 @@ def run_solve(
     solver = SCvxSolver(
         scenario, settings, backend="c" if backend == "c-socp" else backend, log=log
     )
-    return solver.solve(guess=guess, masks=mask_fn)
+    return solver.solve()
 
 
 def _setting(name: str, cast: Callable[[str], float] = float) -> Callable[[str], float]:
@@ -292,10 +296,10 @@ def build_parser() -> argparse.ArgumentParser:
     )
     s.add_argument(
         "--trust-update",
-        choices=["tau_r", "eq13"],
+        choices=["tau_r", "alg1"],
         default="tau_r",
-        help="T-SCvx trust radius: tau_r = Algorithm 2's update (paper), eq13 = Algorithm 1's "
-        "Eq. (13) with the masks as well",
+        help="T-SCvx trust radius: tau_r = Algorithm 2's update (paper), alg1 = Algorithm 1's "
+        "Eq. (15) with the masks as well",
     )
     add_prox_u(s, "whose answer depends on the conic solver")
     s.add_argument(

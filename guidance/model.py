@@ -4,7 +4,7 @@ Every function takes the physical parameters as a numeric input vector ``p`` (se
 :func:`param_vector`) instead of baking them in, so the same expressions serve every scenario
 and can be generated once as C (``codegen/``).
 
-Equations (DESIGN.md; paper Eq. (3)), with sigma = t_f and normalized time tau in [0, 1]:
+Equations (DESIGN.md; paper Eq. (4)), with sigma = t_f and normalized time tau in [0, 1]:
     dm/dt = -alpha |T_B| - beta
     dr/dt = v
     dv/dt = C_IB(q) (T_B + A_B) / m + g_I,        A_B = -c_A |v_B| v_B,  v_B = C_BI(q) v_I
@@ -193,7 +193,8 @@ def _pack_aug(parts: tuple[ca.SX, ...]) -> ca.SX:
 
 @lru_cache(maxsize=1)
 def foh_step_function() -> ca.Function:
-    """One classic RK4 step, from s to s + h, of the augmented FOH system (paper Eq. (5)):
+    """One classic RK4 step, from s to s + h, of the augmented FOH system (the
+    discretization behind the linearized dynamics, paper Eq. (10)):
 
         x'     = sigma f(x, u(s)),              u(s) = l_m(s) u_k + l_p(s) u_k1
         Phi_A' = sigma A Phi_A                  Phi_A(0) = I
@@ -249,7 +250,7 @@ def foh_step_function() -> ca.Function:
 
 @lru_cache(maxsize=8)
 def discretization_function(substeps: int) -> ca.Function:
-    """FOH discretization of one interval of normalized length dtau (paper Eq. (5)).
+    """FOH discretization of one interval of normalized length dtau (paper Eq. (10)).
 
     ``substeps`` RK4 steps of :func:`foh_step_function` from the initial augmented state;
     returns x(dtau), A_k = Phi_A, B-_k = Phi_m, B+_k = Phi_p, Sigma_k = Phi_s and the defect term

@@ -150,7 +150,7 @@ class SCvxSettings:
     discretization: str = "auto"
     tight_tol: float = 1e-6  # slack threshold of the tight-constraint labelling
     # Beyond the paper: weight w of the proximal term (w/2) |u_hat - u_hat_ref|^2 on the
-    # scaled thrust, added to the subproblem objective (not to L, Eq. (11)). The paper's
+    # scaled thrust, added to the subproblem objective (not to L, Eq. (13)). The paper's
     # linear objective leaves the subproblem's optimal set flat in the thrust history, so two
     # correct conic solvers stop at different points of it and SCvx follows them apart (final
     # masses 1e-4 apart); with w = 2e-2 the answer is unique and the solvers agree to about
@@ -161,8 +161,9 @@ class SCvxSettings:
     socp_tol: float = 1e-9
     socp_max_iter: int = 200
     # T-SCvx trust radius: True is Algorithm 2's update (alpha^tau_r, beta^(1 - tau_r), tau_r
-    # the fraction of mask bits changed since the last subproblem); False keeps Eq. (13) of
-    # Algorithm 1 with the masks as well (`guidance bench` compares the two).
+    # the fraction of bits in which the predicted masks of successions k+1 and k differ);
+    # False keeps Eq. (15) of Algorithm 1 with the masks as well (`guidance bench` compares
+    # the two).
     tau_r_update: bool = True
 
     def __post_init__(self) -> None:

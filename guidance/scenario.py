@@ -229,6 +229,12 @@ def _validate_terminal(p: Params) -> None:
             f"omega_max_deg = {p.omega_max_deg:g}",
         )
     tilt_q = float(np.linalg.norm(p.q_f[2:4]))
+    if p.final_roll_free and tilt_q > 1e-12:
+        raise ScenarioError(
+            "q_f",
+            f"a roll-free landing ends upright (q2 = q3 = 0), but q_f is tilted "
+            f"{_tilt_deg(tilt_q):.3f} deg; set final_roll_free to false to pin it",
+        )
     if not p.final_roll_free and tilt_q > p.tilt_q_max + 1e-12:
         raise ScenarioError(
             "q_f",

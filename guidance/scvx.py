@@ -6,8 +6,8 @@ variables of ``guidance.subproblem``:
     J(z) = -m_hat(t_f) + lambda * ( sum_k |Sx^-1 (x_{k+1} - F(x_k, u_k, u_{k+1}, sigma))|_1
                                     + sum_{k,c} max(0, h_c(x_k, u_k)) / scale_c )
 
-and the subproblem's optimal value is the predicted cost L (Eq. (11)). A step is accepted when
-rho = dJ / dL >= rho0; the trust radius follows Eq. (13), or its tau_r-scaled form in T-SCvx.
+and the subproblem's optimal value is the predicted cost L (Eq. (13)). A step is accepted when
+rho = dJ / dL >= rho0; the trust radius follows Eq. (15), or its tau_r-scaled form in T-SCvx.
 """
 
 from __future__ import annotations
@@ -135,7 +135,7 @@ class SCvxSolver:
         return J, float(np.abs(defect).max()), float(h.max())
 
     def linear_cost(self, prob: ConicProblem, z: np.ndarray) -> float:
-        """L (paper Eq. (11)): the subproblem objective without any proximal term."""
+        """L (paper Eq. (13)): the subproblem objective without any proximal term."""
         L = self.lay
         return float(-z[L.x_index(self.p.N - 1, IM)] + self.st.lam * z[L.ivc :].sum())
 
@@ -176,7 +176,9 @@ class SCvxSolver:
         mask_log: list[np.ndarray] = []
         subproblems: list[ConicProblem] = []
         status, reason = "max_iterations", "iteration limit reached"
-        prev_mask: np.ndarray | None = None
+        # tau_r (Algorithm 2, step 4) compares the predicted masks of successions k+1 and k:
+        # prev_pred is the prediction of the last accepted succession (a retry keeps it).
+        prev_pred: np.ndarray | None = None
         forced = np.zeros(NC * p.N, dtype=bool)  # constraints put back by the full check
         vc = float("inf")
         self.trace: list[np.ndarray] = []
@@ -187,9 +189,8 @@ class SCvxSolver:
         for _ in range(st.max_subproblems):
             if k >= st.iter_max:
                 break
-            mask = _mask_for(masks, k + 1)
-            if mask is not None:
-                mask = np.asarray(mask, dtype=bool) | forced
+            pred = _mask_for(masks, k + 1)
+            mask = None if pred is None else np.asarray(pred, dtype=bool) | forced
             tpl = self.template(mask)
             prob = tpl.assemble(disc, z, eta, st.lam, self.scn, self.sc, st.prox_u)
             if self.record:
@@ -216,9 +217,13 @@ class SCvxSolver:
             rho = dJ / dL if dL != 0.0 else float("nan")
             step = float(np.abs(z_new[: self.lay.n_traj] - z[: self.lay.n_traj]).max())
             tr_step = tpl.trust_norm(z_new - z)
+            # dL <= 0 only when the subproblem gives the reference back (to the solver's
+            # tolerance: the reference is feasible and the proximal term is >= 0). Algorithm 1
+            # stops there (dJ = 0); here the step is accepted with rho = 1 and the convergence
+            # test below ends the solve, or not if the reference is still infeasible.
             accepted = dJ == 0.0 or dL <= 0.0 or rho >= st.rho0
             use_tau = masks is not None and st.tau_r_update
-            tau_r = _changed_fraction(prev_mask, mask) if use_tau else None
+            tau_r = _changed_fraction(prev_pred, pred) if use_tau else None
             eta_new = _trust_update(eta, rho if dL > 0 else 1.0, accepted, tr_step, st, tau_r)
             newly_forced, restored = False, 0
             if mask is not None:
@@ -226,7 +231,8 @@ class SCvxSolver:
                 # dropped is rejected, and the constraint is put back for the rest of the solve.
                 # The retry starts from the same reference (which meets every convex
                 # constraint, so the subproblem stays feasible) with the same radius.
-                dropped = (h.reshape(-1) > st.defect_tol) & ~mask
+                # T_min is never dropped (tpl.mask keeps it): its buffer is penalized instead.
+                dropped = (h.reshape(-1) > st.defect_tol) & ~tpl.mask.reshape(-1)
                 if dropped.any():
                     forced |= dropped
                     newly_forced, accepted, eta_new = True, False, eta
@@ -250,9 +256,9 @@ class SCvxSolver:
             )
             if self.log:
                 self.log(_format(history[-1]))
-            prev_mask = mask
             if accepted:
                 k += 1
+                prev_pred = pred
                 mask_log.append(tmask)
                 z, disc, J, defect, viol = z_new, disc_new, J_new, defect_new, viol_new
                 self.trace.append(z.copy())
@@ -355,14 +361,16 @@ def _mask_for(
 
 
 def _changed_fraction(prev: np.ndarray | None, cur: np.ndarray | None) -> float:
-    """tau_r of Algorithm 2: fraction of mask bits that changed since the last iteration."""
+    """tau_r of Algorithm 2: the fraction of bits in which the predicted masks of two
+    successive successions differ (0 at the first, or without a prediction)."""
     if prev is None or cur is None:
         return 0.0
     return float(np.mean(np.asarray(prev, bool) != np.asarray(cur, bool)))
 
 
-# _retry_radius: radii within RETRY_MARGIN of the rejected step count as holding it; at most
-# RETRY_SKIP_MAX of them are skipped (a bound for alpha near 1). The C library has the same.
+# _retry_radius: a radius more than RETRY_MARGIN above the rejected step counts as holding it
+# and is skipped (one within the margin is solved: the safe side); at most RETRY_SKIP_MAX are
+# skipped (a bound for alpha near 1). The C library has the same.
 RETRY_MARGIN = 1.001
 RETRY_SKIP_MAX = 64
 
@@ -371,7 +379,7 @@ def _retry_radius(eta: float, tr_step: float, st: SCvxSettings) -> float:
     """The radius after a rejection. The retry has the same reference and data, only a smaller
     radius: every radius eta / alpha^j that still holds the rejected step (tr_step, in the
     trust region's norm) gives the same step back and is rejected again, so those solves are
-    skipped. Eq. (13)'s radius sequence is unchanged."""
+    skipped. Eq. (15)'s radius sequence is unchanged."""
     eta = eta / st.alpha
     for _ in range(RETRY_SKIP_MAX):
         if not (eta > st.eta_lb and eta > RETRY_MARGIN * tr_step):
@@ -388,7 +396,7 @@ def _trust_update(
     st: SCvxSettings,
     tau_r: float | None,
 ) -> float:
-    """Eq. (13); with tau_r (T-SCvx) the factors become alpha^tau_r and beta^(1 - tau_r)."""
+    """Eq. (15); with tau_r (T-SCvx) the factors become alpha^tau_r and beta^(1 - tau_r)."""
     shrink = st.alpha if tau_r is None else st.alpha**tau_r
     grow = st.beta if tau_r is None else st.beta ** (1.0 - tau_r)
     if not accepted:

@@ -23,7 +23,6 @@ from guidance.params import Scenario, SCvxSettings
 from guidance.scvx import SCvxResult, SCvxSolver
 
 REDUCED_ETA_INIT = 0.01  # Table 1: eta_reduced,init
-MASK_THRESHOLD = 0.5
 
 SolutionPredictor = Callable[[Scenario], tuple[np.ndarray, np.ndarray, float]]
 MaskPredictor = Callable[[Scenario, int], np.ndarray]
@@ -36,21 +35,29 @@ def solve_tscvx(
     settings: SCvxSettings | None = None,
     backend: str = "clarabel",
     log: Callable[[str], None] | None = None,
+    eta_init: float = REDUCED_ETA_INIT,
 ) -> SCvxResult:
-    """Algorithm 2. Without a solution predictor the cubic guess is used (and the full-problem
-    initial trust radius); without a mask predictor every subproblem is the full one."""
+    """Algorithm 2, orchestrated in Python (the flight library's is pdg_solve_tscvx).
+
+    The predicted solution, projected as on board, starts the solve at the trust radius
+    ``eta_init`` (Table 1's reduced one); without a solution predictor the cubic guess starts it
+    at ``settings.eta_init``. ``predict_mask(scenario, k)`` gives the 7N mask bits of
+    succession k (a network's probabilities thresholded by the caller, at the threshold its
+    model card states); without it every subproblem is the full one."""
     st = settings or SCvxSettings()
     guess = None
     if predict_solution is not None:
         x, u, t_f = predict_solution(scenario)
         guess = project_guess(scenario, x, u, t_f)
-        if settings is None:
-            st = st.replace(eta_init=REDUCED_ETA_INIT)
+        st = st.replace(eta_init=eta_init)
     masks = None
     if predict_mask is not None:
 
         def masks(k: int) -> np.ndarray:
-            return np.asarray(predict_mask(scenario, k), dtype=float) >= MASK_THRESHOLD
+            bits = np.asarray(predict_mask(scenario, k))
+            if bits.dtype != bool and not np.isin(bits, (0, 1)).all():
+                raise ValueError("predict_mask must give 0/1 bits (threshold probabilities first)")
+            return bits.astype(bool)
 
     solver = SCvxSolver(scenario, st, backend=backend, log=log)
     return solver.solve(guess=guess, masks=masks)

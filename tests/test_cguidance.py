@@ -114,7 +114,7 @@ def test_c_subproblem_equals_python_subproblem(name: str) -> None:
 def test_c_solve_is_the_python_solve(pairs, name: str) -> None:
     c, ref = pairs[name]
     assert_same_solve(c, ref)
-    # the same radii, rejected steps' retries included (Eq. (13) and the skipped retries)
+    # the same radii, rejected steps' retries included (Eq. (15) and the skipped retries)
     c_eta, ref_eta = [h.eta for h in c.history], [h.eta for h in ref.history]
     n = min(len(c_eta), len(ref_eta))
     np.testing.assert_allclose(c_eta[:n], ref_eta[:n], rtol=1e-12)
@@ -337,6 +337,7 @@ BAD_DICTS = [
     # terminal states that break the path constraints they are held to at the last node
     ({"omega_f": [0.0, 0.0, 5.0]}, "omega_f"),
     ({"q_f": [0.0, 0.0, 1.0, 0.0], "final_roll_free": False}, "q_f"),
+    ({"q_f": [math.cos(0.1), 0.0, math.sin(0.1), 0.0]}, "q_f"),  # roll-free ends upright
     ({"r_f": [0.0, 1.0, 0.0]}, "r_f"),
 ]
 

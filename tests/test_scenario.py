@@ -46,6 +46,7 @@ BAD = [
     # terminal states outside the path constraints of the last node
     ({"omega_f": [0, 0, 2.0]}, "omega_f"),
     ({"q_f": [0, 0, 1, 0], "final_roll_free": False}, "q_f"),
+    ({"q_f": [0.9800665778412416, 0, 0.19866933079506122, 0]}, "q_f"),  # roll-free but tilted
     ({"r_f": [0, 1, 0]}, "r_f"),
 ]
 

@@ -160,7 +160,7 @@ def test_proximal_term_is_on_the_thrust_only() -> None:
 def test_a_rejection_skips_the_radii_that_hold_the_step() -> None:
     """After a rejection only the radius changes. A radius that still holds the rejected step
     gives the same step back (Clarabel solves one here), so SCvx goes straight to the first
-    radius of Eq. (13)'s sequence that cuts into the step."""
+    radius of Eq. (15)'s sequence that cuts into the step."""
     from guidance.conic import solve
     from guidance.guess import initial_guess
     from guidance.model import discretize
@@ -201,7 +201,7 @@ def test_retry_radius_follows_the_sequence_and_its_bounds() -> None:
     from guidance.scvx import _retry_radius
 
     st = SCvxSettings()  # alpha = 2, eta_lb = 1e-3
-    assert _retry_radius(2.0, 1.5, st) == 1.0  # the step is cut at once: Eq. (13)
+    assert _retry_radius(2.0, 1.5, st) == 1.0  # the step is cut at once: Eq. (15)
     assert _retry_radius(2.0, 0.3, st) == 0.25  # 1 and 0.5 hold the step: skipped
     assert _retry_radius(2.0, 0.2502, st) == 0.25  # within the margin: not skipped
     assert _retry_radius(2.0, 0.0, st) == st.eta_lb

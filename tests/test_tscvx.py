@@ -89,9 +89,9 @@ def test_reference_masks_without_warm_start_match_in_c_and_python(
 
 
 @pytest.mark.parametrize("where", ["python", "c"])
-def test_full_masks_with_the_eq13_radius_are_plain_scvx(where: str) -> None:
+def test_full_masks_with_the_algorithm_1_radius_are_plain_scvx(where: str) -> None:
     """Masks that keep every constraint change nothing but the trust radius: with
-    tau_r_update off (Eq. 13) the solve is plain SCvx's, step for step; with Algorithm 2's
+    tau_r_update off (Eq. (15)) the solve is plain SCvx's, step for step; with Algorithm 2's
     update (tau_r = 0: a poor accepted step no longer shrinks the radius) it is not."""
     scenario = SCENARIOS["default"]
     ones = np.ones(NC * scenario.params.N, dtype=bool)
@@ -108,12 +108,66 @@ def test_full_masks_with_the_eq13_radius_are_plain_scvx(where: str) -> None:
             return SCvxSolver(scenario, st).solve(masks=(lambda k: ones) if masked else None)
 
     plain = solve(SCvxSettings(), False)
-    eq13 = solve(SCvxSettings(tau_r_update=False), True)
+    alg1 = solve(SCvxSettings(tau_r_update=False), True)
     paper = solve(SCvxSettings(), True)
-    radii = [[h.eta for h in r.history] for r in (plain, eq13, paper)]
+    radii = [[h.eta for h in r.history] for r in (plain, alg1, paper)]
     assert radii[1] == radii[0]
-    assert eq13.m_f == plain.m_f and eq13.iterations == plain.iterations
+    assert alg1.m_f == plain.m_f and alg1.iterations == plain.iterations
     assert radii[2] != radii[0]
+    # T_min is always kept (its buffer is penalized), so a mask without its bits is the full
+    # one too: the guard must not "put back" a T_min the subproblem never dropped
+    ones.reshape(-1, NC)[:, 6] = False
+    no_tmin = solve(SCvxSettings(tau_r_update=False), True)
+    assert [h.eta for h in no_tmin.history] == radii[0] and no_tmin.m_f == plain.m_f
+
+
+def _alternating_masks(N: int):
+    """Masks that change every succession but drop only the mass bound at early nodes (never
+    near m_dry, so the guard never acts): tau_r = 15/7N between successive successions."""
+
+    def mask(k: int) -> np.ndarray:
+        m = np.ones((N, NC), dtype=bool)
+        m[: (25 if k % 2 == 0 else 10), 0] = False
+        return m.reshape(-1)
+
+    return mask
+
+
+@pytest.mark.parametrize("where", ["python", "c"])
+def test_tau_r_compares_the_predictions_of_successive_successions(where: str) -> None:
+    """Algorithm 2, steps 4-5: after an accepted step at succession k the radius is updated
+    with alpha^tau_r / beta^(1 - tau_r), tau_r the fraction of bits in which the predicted masks
+    of successions k and k-1 differ. A retry of k does not reset it to 0 (the masks compared
+    are still those of k and k-1), so the rule is re-derived here from the masks alone."""
+    scenario = SCENARIOS["default"]
+    N, st = scenario.params.N, SCvxSettings()
+    mask = _alternating_masks(N)
+    if where == "c":
+        cguidance = pytest.importorskip("guidance.cguidance")
+        if not cguidance.LIB_PATH.exists():
+            pytest.skip("run `make lib` first")
+        r = cguidance.solve_c(scenario, st, masks=mask)
+    else:
+        r = SCvxSolver(scenario, st).solve(masks=mask)
+    assert r.status == "solved", r.reason
+    hist = r.history
+    after_rejection = 0
+    for i, h in enumerate(hist[:-1]):
+        if not h.accepted:
+            assert not h.restored  # the mass bound is never violated at early nodes
+            continue
+        tau = 0.0 if h.k == 1 else float(np.mean(mask(h.k) != mask(h.k - 1)))
+        rho = h.rho if h.dL > 0 else 1.0
+        if rho < st.rho1:
+            want = h.eta / st.alpha**tau
+        elif rho >= st.rho2:
+            want = h.eta * st.beta ** (1.0 - tau)
+        else:
+            want = h.eta
+        want = min(max(want, st.eta_lb), st.eta_ub)
+        assert hist[i + 1].eta == pytest.approx(want, rel=1e-12), (i, h)
+        after_rejection += i > 0 and not hist[i - 1].accepted and want != h.eta
+    assert after_rejection > 0, "no accepted step after a rejection changed the radius"
 
 
 def test_speed_up_interval_covers_the_ratio_and_narrows_with_landings() -> None:
@@ -144,7 +198,7 @@ def test_tscvx_benchmark_landings_are_fresh_and_each_variant_is_audited() -> Non
         assert tuple(theta_of(s)) not in trained
     variants = bench_tscvx.run(1, backend="c", progress=False)
     assert [v.name for v in variants] == [
-        "SCvx", "T-SCvx warm start", "T-SCvx (Algorithm 2)", "Alg. 2, Eq. 13 radius"]  # fmt: skip
+        "SCvx", "T-SCvx warm start", "T-SCvx (Algorithm 2)", "Alg. 2, Alg. 1 radius"]  # fmt: skip
     for v in variants:
         r = v.results[0]
         assert r.status == "solved", (v.name, r.reason)

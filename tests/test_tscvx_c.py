@@ -66,7 +66,8 @@ def nets():
 
 
 def _python_tscvx(scn: Scenario, sm, cm, masks: bool):
-    """guidance.cli.run_solve's T-SCvx on the C solver, given the predictions of sm / cm."""
+    """Python-orchestrated T-SCvx (guidance.tscvx's steps) on the C solver, given the
+    predictions of sm / cm."""
     from guidance.dataset import theta_of
     from guidance.guess import project_guess
 
@@ -193,23 +194,23 @@ def test_cli_tscvx_on_the_c_backend_runs_the_networks_in_c(nets) -> None:
 
 
 def test_cli_trust_update_reaches_the_c_loop(tmp_path: Path, nets) -> None:
-    """`guidance solve --method tscvx --backend c --trust-update eq13` is the on-board call with
+    """`guidance solve --method tscvx --backend c --trust-update alg1` is the on-board call with
     tau_r_update off (the file records the solve)."""
     from guidance.cli import main
     from guidance.trajectory_io import read_trajectory
 
-    out = tmp_path / "eq13.npz"
-    args = ["solve", "--method", "tscvx", "--backend", "c", "--trust-update", "eq13"]
+    out = tmp_path / "alg1.npz"
+    args = ["solve", "--method", "tscvx", "--backend", "c", "--trust-update", "alg1"]
     assert main([*args, "--out", str(out)]) == 0
-    eq13 = cguidance.solve_tscvx_c(
+    alg1 = cguidance.solve_tscvx_c(
         SCENARIOS["default"], SCvxSettings(tau_r_update=False), nets=nets
     )
     paper = cguidance.solve_tscvx_c(SCENARIOS["default"], nets=nets)
     written = read_trajectory(out)
-    assert int(written["iterations"]) == eq13.iterations
-    # the two radius rules take different paths here, so matching eq13 is not matching both
-    assert [h.eta for h in eq13.history] != [h.eta for h in paper.history]
-    assert abs(eq13.m_f - paper.m_f) > 1e-9 * paper.m_f
+    assert int(written["iterations"]) == alg1.iterations
+    # the two radius rules take different paths here, so matching alg1 is not matching both
+    assert [h.eta for h in alg1.history] != [h.eta for h in paper.history]
+    assert abs(alg1.m_f - paper.m_f) > 1e-9 * paper.m_f
     recorded = written["settings"]
     assert recorded["tau_r_update"] is False and recorded["eta_init"] == 0.01
     # the networks the solve used, by path and content
@@ -220,7 +221,7 @@ def test_cli_trust_update_reaches_the_c_loop(tmp_path: Path, nets) -> None:
     assert set(files) == {"constraint", "solution"}
     onnx = MODELS_DIR / "solution.onnx"
     assert files["solution"] == {"path": str(onnx), "sha256": file_digest(onnx)}
-    np.testing.assert_allclose(written["x"][-1], eq13.x[-1], rtol=1e-12, atol=0)
+    np.testing.assert_allclose(written["x"][-1], alg1.x[-1], rtol=1e-12, atol=0)
 
 
 def test_cli_initial_radius_reaches_the_c_loop(tmp_path: Path, nets) -> None:

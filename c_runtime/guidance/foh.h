@@ -3,7 +3,7 @@
  *
  * The augmented state P = (x, Phi_A, Phi_m, Phi_p, Phi_s) (14 + 196 + 42 + 42 + 14 = 308
  * numbers, matrices column-major) is advanced by `substeps` RK4 steps of the CasADi-generated
- * tscvx_foh_step (paper Eq. (5); see guidance/model.py). Then
+ * tscvx_foh_step (paper Eq. (10)'s discretization; see guidance/model.py). Then
  *     A_k = Phi_A, B-_k = Phi_m, B+_k = Phi_p, Sigma_k = Phi_s,
  *     z_k = x(dtau) - A_k x_k - B-_k u_k - B+_k u_k1 - Sigma_k sigma.
  */

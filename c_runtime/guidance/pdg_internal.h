@@ -92,7 +92,10 @@ struct pdg_workspace {
     double *z, *znew, *zdual;
     double *disc, *disc_new, *aug, *augw;
     double *x, *u, *xn, *un, *hval; /* physical iterate, candidate, path constraint values */
-    unsigned char *mask, *prev_mask, *forced, *tight, *keep;
+    /* masks (7N): pred, the prediction for this succession; prev_mask, that of the last
+     * accepted one (tau_r); mask = pred | forced (put back by the guard); keep = mask with
+     * T_min; tight, the candidate's tight constraints */
+    unsigned char *mask, *prev_mask, *pred, *forced, *tight, *keep;
     double *gwork;                  /* guess work space */
     double *nn_out, *nn_logits;     /* T-SCvx: solution-network output, constraint logits */
     /* record of the last solve */

@@ -237,6 +237,13 @@ static int check_terminal(const pdg_params *p, char *msg)
                  wn / DEG, p->omega_max_deg);
         return fail(msg, "omega_f", text);
     }
+    if (p->final_roll_free && tilt_q > 1e-12) {
+        snprintf(text, sizeof text,
+                 "a roll-free landing ends upright (q2 = q3 = 0), but q_f is tilted %.3f deg; "
+                 "set final_roll_free to false to pin it",
+                 tilt_deg(tilt_q));
+        return fail(msg, "q_f", text);
+    }
     if (!p->final_roll_free && tilt_q > pdg_tilt_q_max(p) + 1e-12) {
         snprintf(text, sizeof text, "pinned final tilt %.3f deg exceeds tilt_max_deg = %g",
                  tilt_deg(tilt_q), p->tilt_max_deg);

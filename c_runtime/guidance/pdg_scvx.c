@@ -343,6 +343,7 @@ static void claim_arrays(pdg_workspace *t, arena *a)
     t->nn_logits = (double *)take(a, N * NC, sizeof(double));
     t->mask = (unsigned char *)take(a, N * NC, 1);
     t->prev_mask = (unsigned char *)take(a, N * NC, 1);
+    t->pred = (unsigned char *)take(a, N * NC, 1);
     t->forced = (unsigned char *)take(a, N * NC, 1);
     t->tight = (unsigned char *)take(a, N * NC, 1);
     t->keep = (unsigned char *)take(a, N * NC, 1);
@@ -649,8 +650,9 @@ static int label_tight(pdg_workspace *ws, const double *h, const unsigned char *
     return count;
 }
 
-/* retry_radius: radii within RETRY_MARGIN of the rejected step count as holding it; at most
- * RETRY_SKIP_MAX of them skipped (a bound for alpha near 1) */
+/* retry_radius: a radius more than RETRY_MARGIN above the rejected step counts as holding it
+ * and is skipped (one within the margin is solved: the safe side); at most RETRY_SKIP_MAX are
+ * skipped (a bound for alpha near 1) */
 #define RETRY_MARGIN 1.001
 #define RETRY_SKIP_MAX 64
 
@@ -683,7 +685,7 @@ static double trust_norm_step(const pdg_workspace *ws)
 /* The radius after a rejection. The retry has the same reference and data, only a smaller
  * radius: every radius eta / alpha^j that still holds the rejected step (tr_step, with a
  * margin for the solver's tolerance) gives the same step back and is rejected again, so
- * those solves are skipped. Eq. (13)'s radius sequence is unchanged. */
+ * those solves are skipped. Eq. (15)'s radius sequence is unchanged. */
 static double retry_radius(const pdg_settings *st, double eta, double tr_step)
 {
     int j;
@@ -916,7 +918,7 @@ static pdg_status start(pdg_workspace *ws, const pdg_scenario *scn, const pdg_op
 }
 
 /* Discretizes about z_new and evaluates it: J, defects, predicted cost L, virtual control,
- * step and tight labels (paper Eq. (11), (12)). Returns 0, or -1 if the model fails. */
+ * step and tight labels (paper Eq. (12), (13)). Returns 0, or -1 if the model fails. */
 static int evaluate(pdg_workspace *ws, const unsigned char *keep, candidate *cd)
 {
     const pdg_layout *L = &ws->lay;
@@ -955,13 +957,13 @@ static void accept(pdg_workspace *ws, int k)
     ws->disc_new = swap;
 }
 
-/* Puts back (forces) every constraint the mask dropped that the candidate violates; returns
- * the number put back. */
+/* Puts back (forces) every constraint the subproblem dropped that the candidate violates;
+ * returns the number put back. T_min is always kept (its buffer is penalized instead). */
 static int put_back_dropped(pdg_workspace *ws)
 {
     int i, dropped = 0;
     for (i = 0; i < NC * ws->N; ++i) {
-        if (ws->hval[i] > ws->st.defect_tol && !ws->mask[i]) {
+        if (ws->hval[i] > ws->st.defect_tol && !ws->keep[i]) {
             ws->forced[i] = 1;
             dropped++;
         }
@@ -969,12 +971,13 @@ static int put_back_dropped(pdg_workspace *ws)
     return dropped;
 }
 
-/* tau_r of Algorithm 2: fraction of mask entries changed since the previous subproblem. */
+/* tau_r of Algorithm 2 (step 4): the fraction of bits in which the predicted masks of
+ * successions k+1 (pred) and k (prev_mask, kept from the last accepted step) differ. */
 static double changed_fraction(const pdg_workspace *ws)
 {
     int i, changed = 0;
     for (i = 0; i < NC * ws->N; ++i) {
-        changed += ws->prev_mask[i] != ws->mask[i];
+        changed += ws->prev_mask[i] != ws->pred[i];
     }
     return (double)changed / (NC * ws->N);
 }
@@ -1045,6 +1048,10 @@ pdg_status pdg_solve_from(pdg_workspace *ws, const pdg_scenario *scenario,
 
         /* 1. mask (T-SCvx): the caller's, plus what the full-constraint guard put back */
         if (has_mask) {
+            memcpy(ws->pred, ws->mask, (size_t)NC * ws->N);
+            if (prev_has_mask) {
+                tau_r = changed_fraction(ws);
+            }
             for (i = 0; i < NC * ws->N; ++i) {
                 ws->mask[i] |= ws->forced[i];
                 ws->keep[i] = (i % NC == 6) ? 1 : ws->mask[i]; /* T_min always kept */
@@ -1084,15 +1091,15 @@ pdg_status pdg_solve_from(pdg_workspace *ws, const pdg_scenario *scenario,
                      "iteration %d: model evaluation failed at the subproblem solution", k + 1);
             break;
         }
-        /* 4. rho = actual / predicted change; acceptance and trust radius, Eq. (13) */
+        /* 4. rho = actual / predicted change; acceptance and trust radius, Eq. (15) */
         dJ = J - cd.J;
         dL = J - cd.L;
         vc = cd.vc;
         rho = dL != 0.0 ? dJ / dL : NAN;
+        /* dL <= 0 only when the subproblem gives the reference back (to the solver's
+         * tolerance); Algorithm 1 stops there (dJ = 0), here the step is accepted with rho = 1
+         * and the convergence test decides (as the Python reference) */
         accepted = dJ == 0.0 || dL <= 0.0 || rho >= st->rho0;
-        if (have_masks && prev_has_mask && has_mask) {
-            tau_r = changed_fraction(ws);
-        }
         eta_new = trust_update(st, eta, dL > 0 ? rho : 1.0, accepted, cd.tr_step,
                                have_masks && st->tau_r_update, tau_r);
         /* Full-constraint guard of T-SCvx: a candidate that violates a constraint the mask
@@ -1113,11 +1120,11 @@ pdg_status pdg_solve_from(pdg_workspace *ws, const pdg_scenario *scenario,
         r->n_tight = cd.n_tight;
         r->accepted = accepted;
         r->restored = restored;
-        prev_has_mask = has_mask;
-        if (has_mask) {
-            memcpy(ws->prev_mask, ws->mask, (size_t)NC * ws->N);
-        }
         if (accepted) {
+            prev_has_mask = has_mask;
+            if (has_mask) {
+                memcpy(ws->prev_mask, ws->pred, (size_t)NC * ws->N);
+            }
             accept(ws, k);
             ws->n_masks_out = ++k;
             J = cd.J;

@@ -136,10 +136,11 @@ typedef struct {
     double socp_tol;        /* gap and feasibility tolerances (the reference uses 1e-9) */
     int socp_max_iter;      /* IPM iteration limit, 1..500 */
     /* T-SCvx only: 1 = Algorithm 2's radius update (alpha^tau_r, beta^(1 - tau_r), tau_r the
-     * fraction of mask bits changed); 0 = Eq. (13) of Algorithm 1 with the masks as well */
+     * fraction of bits in which the predicted masks of successions k+1 and k differ);
+     * 0 = Eq. (15) of Algorithm 1 with the masks as well */
     int tau_r_update;
     /* Beyond the paper: weight w >= 0 of (w/2)|u_hat - u_hat_ref|^2 on the scaled thrust in
-     * the subproblem objective (not in L, Eq. (11)); it makes the subproblem's answer unique,
+     * the subproblem objective (not in L, Eq. (13)); it makes the subproblem's answer unique,
      * so that conic solvers agree. 0: the paper's linear objective. Fixed at pdg_setup. */
     double prox_u;
 } pdg_settings;

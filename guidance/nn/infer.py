@@ -3,9 +3,8 @@ that does not fit the problem (input/output size, trained parameters, normalizat
 
     cm = load_model("models/constraint.onnx", "constraint", scenario.params)
     sm = load_model("models/solution.onnx", "solution", scenario.params)
-    guess = sm.warm_start(scenario)  # prediction made a valid reference (guess.project_guess)
-    SCvxSolver(scenario, SCvxSettings(eta_init=0.01)).solve(
-        guess=guess, masks=cm.mask_fn(theta_of(scenario)))
+    theta = theta_of(scenario)
+    solve_tscvx(scenario, lambda s: sm.solution(theta), lambda s, k: cm.mask(theta, k))
 """
 
 from __future__ import annotations
