@@ -136,3 +136,37 @@ def test_discretization_matches_solve_ivp(samples) -> None:
         # the affine model reproduces the propagation at the linearization point
         lin = A @ x + Bm @ u + Bp @ uk1 + S.ravel() * sigma + z.ravel()
         np.testing.assert_allclose(lin, xn.ravel(), atol=1e-12)
+
+
+def test_foh_interval_sensitivities_match_scipy(samples) -> None:
+    """discretize (Python engine) on a 3-node grid against scipy: the first interval's end state
+    (interval length sigma / (N - 1) in physical time), A_k, B-_k, B+_k and Sigma_k against
+    central differences of a 1e-12 integration under the FOH thrust between u_k and u_k1."""
+    from guidance.model import discretize
+
+    x, u = samples[0]
+    uk1 = u + np.array([0.4, -0.3, 0.2])
+    N, sigma = 3, 0.3  # interval of 0.15 time units
+    xs = np.vstack([x, x, x])
+    us = np.vstack([u, uk1, u])
+    d = discretize(xs, us, sigma, P, substeps=16, engine="casadi")
+    t1 = sigma / (N - 1)
+    ref = _integrate(x, u, uk1, t1)
+    np.testing.assert_allclose(d["x_next"][0], ref, atol=1e-9)
+    # an interval of sigma / N would end elsewhere: the check above tells them apart
+    assert np.abs(_integrate(x, u, uk1, sigma / N) - ref).max() > 1e-3
+    eps = 1e-5
+
+    def fd(fun, n: int) -> np.ndarray:
+        return np.column_stack([(fun(eps * e) - fun(-eps * e)) / (2 * eps) for e in np.eye(n)])
+
+    A_fd = fd(lambda dx: _integrate(x + dx, u, uk1, t1), 14)
+    Bm_fd = fd(lambda du: _integrate(x, u + du, uk1, t1), 3)
+    Bp_fd = fd(lambda du: _integrate(x, u, uk1 + du, t1), 3)
+    S_fd = fd(lambda ds: _integrate(x, u, uk1, (sigma + ds[0]) / (N - 1)), 1).ravel()
+    np.testing.assert_allclose(d["A"][0] @ tangent(x), A_fd @ tangent(x), atol=1e-7)
+    np.testing.assert_allclose(d["Bm"][0], Bm_fd, atol=1e-7)
+    np.testing.assert_allclose(d["Bp"][0], Bp_fd, atol=1e-7)
+    np.testing.assert_allclose(d["Sigma"][0], S_fd, atol=1e-7)
+    # B-_k and B+_k weigh the two ends differently (the hold is not symmetric in time)
+    assert np.abs(d["Bm"][0] - d["Bp"][0]).max() > 1e-4
