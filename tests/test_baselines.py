@@ -91,3 +91,13 @@ def test_card_states_the_outside_hull_fraction() -> None:
     row = dict(time_ms=1.0, mse=0.1, ood_mse=0.2, peak_mb=3.0, rows_train=40, rows_test=8)
     text = _baseline_table("solution", {"Linear Interpolation": {**row, "outside_hull": 2}})
     assert "2 of 8 test points (25.00 %) outside the hull" in text
+
+
+def test_ood_flags_five_percent_of_the_training_set_itself() -> None:
+    """The cut is the 95th percentile of the training distances: 5 % of the training points
+    lie beyond it (not 10 %)."""
+    rng = np.random.default_rng(5)
+    train = rng.standard_normal((2000, 4)) @ np.diag([1.0, 2.0, 0.5, 3.0])
+    flags, cut = ood_flags(train, train)
+    assert flags.mean() == pytest.approx(0.05, abs=0.01)
+    assert cut == pytest.approx(np.percentile(mahalanobis(train, train), 95.0))

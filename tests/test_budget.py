@@ -160,3 +160,32 @@ def test_network_memory_and_no_allocation(nets: list[budget.NetBudget]) -> None:
         assert n.weights_bytes == budget.NN_MODELS[n.name].stat().st_size
         # weights in place + arena + stack, well within the 60 MB of the whole flight image
         assert n.memory_bytes < budget.MEMORY_BUDGET_B / 4
+
+
+def _budget_with_memory(total: int) -> budget.Budget:
+    """A report whose memory parts add up to ``total`` bytes."""
+    parts = {
+        "code_bytes": 3_000_000,
+        "const_data_bytes": 200_000,
+        "arena_high_water": 0,
+        "stack_high_water": 50_000,
+        "nn_weights_bytes": 400_000,
+        "nn_arena_bytes": 10_000,
+    }
+    parts["arena_high_water"] = total - sum(parts.values())
+    return budget.Budget(
+        status="solved", iterations=10, subproblems=12, socp_iterations=200, m_f=2.2,
+        instructions=50_000_000, instructions_by_part={}, rad750_s=0.65,
+        arena_bytes=parts["arena_high_water"], heap_allocations_in_solve=0, host_wall_s=0.1,
+        **parts,
+    )  # fmt: skip
+
+
+def test_memory_budget_is_60_mb() -> None:
+    """DESIGN.md: 60 MB = 60 x 2^20 bytes, all memory parts counted."""
+    limit = 60 * 1024 * 1024
+    at = _budget_with_memory(limit)
+    assert at.memory_bytes == limit and at.within_memory()
+    assert _budget_with_memory(limit - 1).within_memory()
+    assert not _budget_with_memory(limit + 1).within_memory()
+    assert not _budget_with_memory(limit + limit // 2).within_memory()  # 90 MB

@@ -249,3 +249,26 @@ def test_cli_prox_u_reaches_the_solves(tmp_path, monkeypatch) -> None:
     assert main(["dataset", *out]) == 130
     assert seen["settings"] == SCvxSettings()
     assert "scvx_settings" in RUN_KEYS
+
+
+def test_constraint_pairs_number_the_iterations_from_one() -> None:
+    """The flight code feeds k = 1 at the first SCvx iteration: the pair of mask row j of a
+    sample has k = j + 1, and there is one pair per recorded mask."""
+    ds = dataset.random_dataset(n_base=2, iters=4)
+    ds.n_masks[3] = 2  # samples may record fewer iterations
+    X, Y, idx = ds.constraint_pairs()
+    assert len(X) == int(ds.n_masks.sum()) == 2 * N_ROTATIONS * 4 - 2
+    for m in range(len(ds.theta)):
+        rows = np.flatnonzero(idx == m)
+        np.testing.assert_array_equal(X[rows, -1], np.arange(1, ds.n_masks[m] + 1))
+        np.testing.assert_array_equal(X[rows, :-1], np.repeat(ds.theta[m][None], len(rows), 0))
+        np.testing.assert_array_equal(Y[rows], ds.masks[m, : ds.n_masks[m]])
+
+
+def test_feasible_fraction_counts_base_samples(tiny_run) -> None:
+    """Both base landings of the tiny run solve: the feasible fraction is exactly 1 (a
+    fraction of base samples, not of the 2 x 8 rotated rows)."""
+    _, _, _, header, ds = tiny_run
+    assert header["base_status_counts"] == {"solved": 2}
+    assert np.all(ds.status == "solved")
+    assert header["feasible_fraction"] == 1.0

@@ -176,3 +176,42 @@ def test_bad_initial_radius_exits_2(radius: str, capsys: pytest.CaptureFixture[s
     assert "--eta-init" in capsys.readouterr().err
     with pytest.raises(ValueError, match=r"eta_init must (lie within \[eta_lb, eta_ub\]|be fin)"):
         SCvxSettings(eta_init=float("nan") if radius == "wide" else float(radius))
+
+
+# Limits of _validate_params (scenario.py) and SCvxSettings.__post_init__ (params.py): the
+# first value past each limit is refused naming the field, the last one inside is accepted.
+OVER_THE_LIMIT = [
+    ({"N": 401}, "N"),
+    ({"T_min": 5.0, "T_max": 5.0}, "T_min"),
+    ({"tilt_max_deg": 181.0}, "tilt_max_deg"),
+    ({"gimbal_max_deg": 90.0}, "gimbal_max_deg"),
+]
+JUST_INSIDE = [{"N": 400}, {"N": 3}, {"T_min": 4.999, "T_max": 5.0}, {"tilt_max_deg": 180.0},
+               {"gimbal_max_deg": 89.9}]  # fmt: skip
+
+
+@pytest.mark.parametrize(("change", "field"), OVER_THE_LIMIT)
+def test_parameter_past_its_limit_is_refused_naming_it(change: dict, field: str) -> None:
+    with pytest.raises(ScenarioError) as err:
+        scenario_from_dict(_with(change))
+    assert err.value.field == field
+    assert f"'{field}'" in str(err.value)
+
+
+@pytest.mark.parametrize("change", JUST_INSIDE)
+def test_parameter_just_inside_its_limit_is_accepted(change: dict) -> None:
+    scn = scenario_from_dict(_with(change))
+    for key, value in change.items():
+        assert getattr(scn.params, key) == value
+
+
+def test_trust_region_factors_and_ratio_thresholds_are_checked() -> None:
+    with pytest.raises(ValueError, match="beta"):
+        SCvxSettings(beta=0.5)
+    with pytest.raises(ValueError, match="rho1 <= rho2"):
+        SCvxSettings(rho1=0.8, rho2=0.7)
+    with pytest.raises(ValueError, match="rho0 <= rho1"):
+        SCvxSettings(rho0=0.2, rho1=0.1)
+    # the limits themselves are allowed
+    assert SCvxSettings(alpha=1.0, beta=1.0).beta == 1.0
+    assert SCvxSettings(rho0=0.7, rho1=0.7, rho2=0.7).rho1 == 0.7

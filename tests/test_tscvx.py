@@ -206,3 +206,45 @@ def test_tscvx_benchmark_landings_are_fresh_and_each_variant_is_audited() -> Non
         assert a.max_path_violation <= 1e-6 and a.landing_position_error <= 1e-3, v.name
     lines = bench_tscvx.report(variants, "c")
     assert len(lines) == 2 + len(variants) + 1
+
+
+def test_a_predicted_start_takes_the_reduced_radius_not_the_settings_one(
+    reference: SCvxResult,
+) -> None:
+    """Algorithm 2 / Table 1: a predicted solution starts at eta_reduced,init = 0.01 (or the
+    eta_init argument), whatever the settings' full-problem eta_init."""
+    scenario = SCENARIOS["north"]
+    st = SCvxSettings(eta_init=1.0, iter_max=1)
+
+    def predict(s):  # type: ignore[no-untyped-def]
+        return reference.x, reference.u, reference.t_f
+
+    assert solve_tscvx(scenario, predict, None, settings=st).history[0].eta == 0.01
+    assert solve_tscvx(scenario, predict, None, st, eta_init=0.05).history[0].eta == 0.05
+
+
+def test_without_a_predicted_solution_the_settings_radius_starts() -> None:
+    st = SCvxSettings(eta_init=1.0, iter_max=1)
+    r = solve_tscvx(SCENARIOS["north"], None, None, settings=st)
+    assert r.history[0].eta == 1.0
+
+
+def test_a_prediction_off_the_boundary_conditions_is_projected(reference: SCvxResult) -> None:
+    """A warm start 1 above the true altitude at every node misses x(0) = x0 and r(t_f) = r_f
+    by 1, far beyond the 0.01 radius: unprojected, the first subproblem would be infeasible."""
+    scenario = SCENARIOS["north"]
+    x = reference.x.copy()
+    x[:, 0] += 1.0
+    r = solve_tscvx(scenario, lambda s: (x, reference.u, reference.t_f), None)
+    assert r.history[0].solver_status == "solved"
+    assert r.status == "solved", r.reason
+    np.testing.assert_allclose(r.x[0], scenario.x0, atol=1e-9)
+    a = audit(r.x, r.u, r.t_f, scenario.params)
+    assert a.max_path_violation <= 1e-6 and a.landing_position_error <= 1e-3
+
+
+def test_mask_probabilities_are_refused() -> None:
+    scenario = SCENARIOS["north"]
+    probs = np.full(NC * scenario.params.N, 0.7)
+    with pytest.raises(ValueError, match="0/1 bits"):
+        solve_tscvx(scenario, None, lambda s, k: probs)

@@ -1,0 +1,145 @@
+"""SCvx termination: the dL <= 0 branch, the convergence test, and the iteration-limit
+diagnosis (guidance/scvx.py)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from guidance.catalog import SCENARIOS
+from guidance.params import IM, SCvxSettings
+from guidance.scvx import SCvxResult, SCvxSolver
+from guidance.subproblem import scaled
+from guidance.verify import audit
+
+SCN = SCENARIOS["default"]
+
+
+@pytest.fixture(scope="module")
+def solved() -> tuple[SCvxSolver, SCvxResult]:
+    """The default landing solved from the cubic guess with the default settings."""
+    solver = SCvxSolver(SCN)
+    return solver, solver.solve()
+
+
+class _NoPredictedDecrease(SCvxSolver):
+    """A solver whose subproblem predicts no decrease of the cost: L is far above J, so
+    dL = J - L < 0 at every step (the case of a subproblem that gives the reference back)."""
+
+    def linear_cost(self, prob, z):  # type: ignore[no-untyped-def]
+        return 1e6
+
+
+def test_no_predicted_decrease_accepts_the_step_and_does_not_shrink_the_radius(
+    solved: tuple[SCvxSolver, SCvxResult],
+) -> None:
+    """scvx.py: with dL <= 0 the step is accepted and the radius is updated as for rho = 1
+    (>= rho2: grown by beta), never shrunk -- even where dJ / dL < rho0.
+
+    From the default landing's SCvx solution as a warm start, dL stays about 0.094 > 0 (the
+    subproblem removes the solution's remaining defects), and a longer solve from there with
+    step_tol = 0 brings dL down only slowly (5.7e-6 after 40 iterations), so the branch is not
+    reached naturally; the predicted cost is forced instead. A small radius makes the real
+    step lower the penalty (dJ > 0), so rho = dJ / dL is negative."""
+    _, ref = solved
+    st = SCvxSettings(iter_max=2, eta_init=0.004, step_tol=0.0)
+    r = _NoPredictedDecrease(SCN, st).solve(guess=(ref.x, ref.u, ref.t_f))
+    first = r.history[0]
+    assert first.dL < 0.0
+    assert first.dJ > 0.0 and first.rho < st.rho0
+    assert first.accepted
+    assert r.history[1].k == 2  # the next record is the next succession
+    assert r.history[1].eta == pytest.approx(st.eta_init * st.beta, rel=1e-12)  # not / alpha
+
+
+@pytest.mark.parametrize(
+    ("name", "loose"),
+    [("default", {}), ("tilted", {}), ("tilted", {"defect_tol": 0.1})],
+    ids=["default", "tilted", "tilted-loose-defect_tol"],
+)
+def test_step_tolerance_alone_does_not_end_the_solve(name: str, loose: dict) -> None:
+    """With a huge step_tol the step test passes at once: "solved" must still mean virtual
+    control, defects and path violations within their tolerances. With defect_tol = 0.1 the
+    tilted landing's defects fall below it (3.9e-2) at the 2nd accepted step while the virtual
+    control is still 7.1e-3: only the virtual-control test keeps the solve going there."""
+    scn = SCENARIOS[name]
+    st = SCvxSettings(step_tol=1e3, **loose)
+    r = SCvxSolver(scn, st).solve()
+    assert r.status == "solved", r.reason
+    assert r.history[-1].vc_norm1 <= st.vc_tol
+    assert r.max_defect <= st.defect_tol
+    assert r.max_violation <= st.defect_tol
+    if not loose:
+        a = audit(r.x, r.u, r.t_f, scn.params)
+        assert a.max_path_violation <= 1e-6
+        assert a.landing_position_error <= 1e-3
+        assert a.landing_velocity_error <= 1e-3
+
+
+class _ViolatedPath(SCvxSolver):
+    """Every candidate reports a path-constraint value of 1 (> defect_tol)."""
+
+    def penalty(self, z, disc):  # type: ignore[no-untyped-def]
+        J, defect, _ = super().penalty(z, disc)
+        return J, defect, 1.0
+
+
+def test_a_violated_path_constraint_is_never_solved(solved: tuple[SCvxSolver, SCvxResult]) -> None:
+    """Injected: the real subproblem keeps every convex path constraint hard and the T_min
+    linearization is conservative, so with settings alone (tried: step_tol 1e3, vc_tol up to
+    1e3, defect_tol 1e-5..1e-2, lam 0.3..30, T_min up to 2.8) no accepted iterate had a
+    violation above defect_tol while its defects were within it."""
+    _, ref = solved
+    st = SCvxSettings(step_tol=1e3, iter_max=2)
+    r = _ViolatedPath(SCN, st).solve(guess=(ref.x, ref.u, ref.t_f))
+    assert r.iterations == 2
+    assert r.status != "solved"
+    assert r.max_violation == 1.0
+
+
+@pytest.mark.parametrize(("name", "step_tol"), [("north", 7e-3), ("overhead", 1.2e-2)])
+def test_last_accepted_step_over_states_thrust_and_time_is_within_step_tol(
+    name: str, step_tol: float
+) -> None:
+    """The convergence step is the largest change of x_hat, u_hat AND sigma_hat. On these
+    landings some accepted steps move the thrust more than the states, across step_tol."""
+    solver = SCvxSolver(SCENARIOS[name], SCvxSettings(step_tol=step_tol))
+    r = solver.solve()
+    assert r.status == "solved", r.reason
+    assert len(solver.trace) == r.iterations >= 2
+    lay = solver.lay
+    dz = solver.trace[-1] - solver.trace[-2]
+    assert float(np.abs(dz[: lay.iu]).max()) <= step_tol  # states
+    assert float(np.abs(dz[lay.iu : lay.n_traj]).max()) <= step_tol  # u and sigma
+
+
+def test_iteration_limit_with_zero_virtual_control_is_not_infeasible(
+    solved: tuple[SCvxSolver, SCvxResult],
+) -> None:
+    _, ref = solved
+    st = SCvxSettings(iter_max=1, step_tol=0.0)
+    r = SCvxSolver(SCN, st).solve(guess=(ref.x, ref.u, ref.t_f))
+    assert r.iterations == 1
+    assert r.history[-1].vc_norm1 <= st.vc_tol
+    assert r.status == "max_iterations", r.reason
+    assert "virtual control is zero" in r.reason
+
+
+def _diagnose_with_final_mass(solver: SCvxSolver, ref: SCvxResult, m_f: float) -> tuple:
+    x = ref.x.copy()
+    x[-1, IM] = m_f
+    z = scaled(x, ref.u, ref.t_f, solver.lay, solver.sc)
+    return solver._diagnose(z, 1.0, 1e-3, 0.0, 7)  # vc = 1 > vc_tol: infeasible
+
+
+def test_mass_floor_is_named_only_at_the_floor(solved: tuple[SCvxSolver, SCvxResult]) -> None:
+    solver, ref = solved
+    m_dry = SCN.params.m_dry
+    assert solver.sc.Sx[IM] == pytest.approx(1.0)  # m0 - m_dry: the margin is 1e-6
+    status, reason = _diagnose_with_final_mass(solver, ref, m_dry + 0.05)
+    assert status == "infeasible"
+    assert "virtual control 1 > 1e-06" in reason
+    assert "mass at the floor" not in reason
+    status, reason = _diagnose_with_final_mass(solver, ref, m_dry)
+    assert status == "infeasible"
+    assert "mass at the floor" in reason
