@@ -311,9 +311,9 @@ class SCvxSolver:
         x, _, _ = physical(z, self.lay, self.sc)
         disc = self._discretize(z)
         rel = np.abs((x[1:] - disc["x_next"]) / self.sc.Sx[None, :])
-        k, i = np.unravel_index(int(np.argmax(rel)), rel.shape)
+        interval, i = np.unravel_index(int(np.argmax(rel)), rel.shape)
         parts = [f"virtual control {vc:.3g} > {st.vc_tol:g} after {k} iterations"]
-        parts.append(f"largest defect {defect:.3g} at interval {k}, state {STATE_NAMES[i]}")
+        parts.append(f"largest defect {defect:.3g} at interval {interval}, state {STATE_NAMES[i]}")
         if x[-1, IM] <= self.p.m_dry + 1e-6 * self.sc.Sx[IM]:
             parts.append(f"mass at the floor (m_f = {x[-1, IM]:.6f} = m_dry): not enough fuel")
         return "infeasible", "; ".join(parts)
