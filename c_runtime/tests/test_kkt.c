@@ -71,18 +71,30 @@ static void random_csc(int nrow, int ncol, double density, int upper, tscvx_int 
 
 /* Factor ws with its method at the current NT scaling (delta 1e-9) and solve a random
  * right-hand side with refinement; compare with the dense unregularized solution. */
+static double dense_error(tscvx_workspace *ws, double delta, int refine, double *scale_out);
+
 static void check_against_dense(tscvx_workspace *ws, int backend, int dense_max, int with_P) {
+    double scale;
+    const double err = dense_error(ws, 1e-9, 5, &scale);
+    CHECK(err < 1e-8 * scale, "%s (backend %d, dense_max %d, P %d): |x - x_ref| = %g (scale %g)",
+          ws->method->name, backend, dense_max, with_P, err, scale);
+}
+
+/* |x - x_ref|_inf of the method's solve (static regularization delta, `refine` refinement
+ * steps) against the dense solution of the UNREGULARIZED system; the scale max(1, |x_ref|). */
+static double dense_error(tscvx_workspace *ws, double delta, int refine, double *scale_out) {
     const int n = ws->n, p = ws->p, m = ws->m, dim = n + p + m;
     static double Kd[DMAX * DMAX];
     static double rhs[DMAX], ref[DMAX], sol[DMAX];
+    *scale_out = 1.0;
     if (dim > DMAX) {
         CHECK(0, "reference too small for dim %d", dim);
-        return;
+        return INFINITY;
     }
-    ws->delta = 1e-9;
+    ws->delta = delta;
     CHECK(ws->method->load(ws) == 0, "load (%s)", ws->method->name);
-    CHECK(ws->method->factor(ws) == 0, "factorization (%s, backend %d, dense_max %d, P %d, n %d)",
-          ws->method->name, backend, dense_max, with_P, n);
+    CHECK(ws->method->factor(ws) == 0, "factorization (%s, n %d, delta %g)", ws->method->name, n,
+          delta);
     memset(Kd, 0, sizeof(double) * dim * dim);
     csc_to_dense(&ws->P, Kd, dim, 0, 0, 1);
     csc_to_dense(&ws->A, Kd, dim, n, 0, 0);
@@ -98,14 +110,17 @@ static void check_against_dense(tscvx_workspace *ws, int backend, int dense_max,
     }
     for (int i = 0; i < dim; i++) rhs[i] = ref[i] = ct_randn();
     CHECK(dense_solve(Kd, ref, dim) == 0, "dense solve");
-    CHECK(ws->method->solve(ws, rhs, rhs + n, rhs + n + p, sol, sol + n, sol + n + p, t1, 5) >= 0,
+    CHECK(ws->method->solve(ws, rhs, rhs + n, rhs + n + p, sol, sol + n, sol + n + p, t1,
+                            refine) >= 0,
           "kkt solve");
     double err = 0.0, scale = 1.0;
     for (int i = 0; i < dim; i++) err = fmax(err, fabs(sol[i] - ref[i]));
     for (int i = 0; i < dim; i++) scale = fmax(scale, fabs(ref[i]));
-    CHECK(err < 1e-8 * scale, "%s (backend %d, dense_max %d, P %d): |x - x_ref| = %g (scale %g)",
-          ws->method->name, backend, dense_max, with_P, err, scale);
+    *scale_out = scale;
+    return err;
 }
+
+static tscvx_workspace *last_ws; /* the workspace of the last run() */
 
 static void run(int dense_max, int with_P, int backend) {
     tscvx_int Pp[N + 1], Pi[N * N], Ap[N + 1], Ai[N * P_], Gp[N + 1], Gi[N * M];
@@ -144,6 +159,25 @@ static void run(int dense_max, int with_P, int backend) {
     s[L] = 3.0, z[L] = 2.5, s[L + 3] = 4.0, z[L + 3] = 3.0;
     CHECK(tscvx_nt_scaling(&ws->K, s, z, &ws->W, lam) == 0, "scaling");
     check_against_dense(ws, backend, dense_max, with_P);
+    last_ws = ws;
+}
+
+/* A large static regularization (1e-4): the refinement, which measures the residual of the
+ * UNREGULARIZED system, still recovers its solution (a wrong sign on the z rows' removed
+ * regularization would leave an error ~ delta |dz|); each refinement step counts (0 steps
+ * leave the O(delta) error, 1 step reduces it; each solve has a new random right-hand side). */
+static void run_refinement(int dense_max, int backend) {
+    run(dense_max, 1, backend);
+    tscvx_workspace *ws = last_ws;
+    if (!ws) return;
+    double scale, e[3];
+    const int steps[3] = {0, 1, 20};
+    for (int k = 0; k < 3; k++) e[k] = dense_error(ws, 1e-4, steps[k], &scale) / scale;
+    CHECK(e[2] <= 1e-10, "backend %d: refined error %g with delta 1e-4", backend, e[2]);
+    /* the sparse method regularizes by delta (error ~1e-4 here); the banded one less */
+    CHECK(e[0] > (backend == TSCVX_KKT_BANDED ? 1e-9 : 1e-6),
+          "backend %d: unrefined error %g: no regularization seen?", backend, e[0]);
+    CHECK(e[1] < 0.1 * e[0], "backend %d: one refinement step %g vs none %g", backend, e[1], e[0]);
 }
 
 /* ---- the static-pattern backend alone, on random quasi-definite matrices ---------------- */
@@ -380,5 +414,9 @@ int main(void) {
     }
     run_stages(0, TSCVX_KKT_BANDED, 1, 0);
     run_stages(0, TSCVX_KKT_AUTO, 1, 0);
+    for (int backend = TSCVX_KKT_LDL; backend <= TSCVX_KKT_BANDED; backend++) {
+        run_refinement(16, backend);
+        run_refinement(1, backend);
+    }
     return ct_report("test_kkt");
 }

@@ -124,6 +124,23 @@ static void test_bad_input(void) {
     tscvx_workspace *ws = NULL;
     CHECK(tscvx_setup(&ws, arena, sizeof arena, &ok, &st) == TSCVX_SETUP_BAD_SETTINGS,
           "bad settings accepted");
+    /* the documented bounds: max_iter <= 500, step_fraction < 1 */
+    tscvx_default_settings(&st);
+    st.max_iter = 500;
+    CHECK(tscvx_setup(&ws, arena, sizeof arena, &ok, &st) == TSCVX_SETUP_OK, "max_iter 500");
+    st.max_iter = 501;
+    CHECK(tscvx_setup(&ws, arena, sizeof arena, &ok, &st) == TSCVX_SETUP_BAD_SETTINGS,
+          "max_iter 501 accepted");
+    tscvx_default_settings(&st);
+    st.step_fraction = 1.0;
+    CHECK(tscvx_setup(&ws, arena, sizeof arena, &ok, &st) == TSCVX_SETUP_BAD_SETTINGS,
+          "step_fraction 1 accepted");
+    /* a row index repeated in a column of G */
+    d = ok;
+    tscvx_int Gp4[] = {0, 2, 3}, Gi4[] = {1, 1, 2};
+    tscvx_float Gx4[] = {-1, -1, -1};
+    d.Gp = Gp4, d.Gi = Gi4, d.Gx = Gx4;
+    CHECK(try_setup(&d) == TSCVX_SETUP_BAD_SPARSITY, "duplicate row index accepted");
     tscvx_default_settings(&st);
     CHECK(tscvx_setup(&ws, arena, 64, &ok, &st) == TSCVX_SETUP_ARENA_TOO_SMALL, "tiny arena");
     CHECK(tscvx_solve(NULL) == TSCVX_INVALID_INPUT, "solve(NULL)");
@@ -284,6 +301,26 @@ static void test_indefinite_banded(void) {
               row.pcost == info.pcost, "log row 0 after a failed start");
 }
 
+/* An indefinite P = [1 .9 -.9; .9 1 .9; -.9 .9 1] (determinant -3.3) whose 2 x 2 minors are
+ * all 0.19 > 0: its factor meets a negative last pivot with nothing below it, which must end
+ * in a numerical error under the banded method, not a solution. */
+static void test_indefinite_banded_last_pivot(void) {
+    tscvx_int Pp[] = {0, 1, 3, 6}, Pi[] = {0, 0, 1, 0, 1, 2};
+    tscvx_int Gp[] = {0, 2, 4, 6}, Gi[] = {0, 3, 1, 4, 2, 5};
+    tscvx_float Px[] = {1, 0.9, 1, -0.9, 0.9, 1}, c[] = {1, -1, 1}, Gx[] = {1, -1, 1, -1, 1, -1};
+    tscvx_float h[] = {1, 1, 1, 1, 1, 1};
+    tscvx_data d = {3, 0, 6, Pp, Pi, Px, c, NULL, NULL, NULL, NULL, Gp, Gi, Gx, h, 6, 0, NULL};
+    tscvx_settings st;
+    tscvx_default_settings(&st);
+    st.kkt_backend = TSCVX_KKT_BANDED;
+    tscvx_workspace *ws = NULL;
+    const tscvx_setup_status ss = tscvx_setup(&ws, arena2, sizeof arena2, &d, &st);
+    CHECK(ss == TSCVX_SETUP_OK || ss == TSCVX_SETUP_P_NOT_PSD, "banded setup %d", (int)ss);
+    if (ss != TSCVX_SETUP_OK || ws == NULL) return;
+    const tscvx_solve_status s = tscvx_solve(ws);
+    CHECK(s == TSCVX_NUMERICAL_ERROR, "indefinite P (last pivot) gave status %d", (int)s);
+}
+
 int main(void) {
     test_soc();
     test_qp();
@@ -293,5 +330,6 @@ int main(void) {
     test_stale_workspace();
     test_psd_check();
     test_indefinite_banded();
+    test_indefinite_banded_last_pivot();
     return ct_report("test_solver");
 }

@@ -527,6 +527,8 @@ static void test_bad_blobs(void)
     BAD_VAL(w0 + 8 * (2 * a.d_in + a.d_out + 5), -1.0, TSCVX_NN_BAD_WEIGHTS); /* out_std < 0 */
     BAD_VAL(w0 + 8 * 2, -1.0, TSCVX_NN_OK);                       /* in_mean may be negative */
     BAD_VAL(64, 0.0, TSCVX_NN_BAD_WEIGHTS);                       /* LayerNorm epsilon */
+    BAD_VAL(64, 1.0, TSCVX_NN_BAD_WEIGHTS);                       /* epsilon < 1 */
+    BAD_VAL(64, 0.5, TSCVX_NN_OK);
     BAD_VAL(72, 1.5, TSCVX_NN_BAD_WEIGHTS);                       /* threshold */
     BAD_VAL(72, NAN, TSCVX_NN_BAD_WEIGHTS);
 
