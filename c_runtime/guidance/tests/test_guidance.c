@@ -164,6 +164,16 @@ static void test_settings_and_sizes(void)
         CHECK(pdg_check_settings(&st, msg) == PDG_SETUP_BAD_SETTINGS);
         CHECK(strstr(msg, "settings.defect_tol: must be finite") == msg);
         CHECK(pdg_check_settings(&st, NULL) == PDG_SETUP_BAD_SETTINGS);
+        /* trust-region factors >= 1 (SCvxSettings: "alpha and beta ... must be >= 1") */
+        pdg_default_settings(&st);
+        st.alpha = 0.5;
+        CHECK(pdg_check_settings(&st, msg) == PDG_SETUP_BAD_SETTINGS);
+        CHECK(strstr(msg, "alpha") != NULL);
+        st.alpha = 1.0; /* the boundary is valid */
+        CHECK(pdg_check_settings(&st, msg) == PDG_SETUP_OK);
+        st.beta = 0.999;
+        CHECK(pdg_check_settings(&st, msg) == PDG_SETUP_BAD_SETTINGS);
+        CHECK(strstr(msg, "beta") != NULL);
     }
 }
 
