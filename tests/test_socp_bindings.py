@@ -162,3 +162,85 @@ def test_session_reuses_the_workspace() -> None:
         assert sol.status == "solved"
         assert abs(sol.obj - ref.obj) <= 1e-6 * max(1, abs(ref.obj))
     assert session.setups == 1
+
+
+# ---- status logic against Clarabel and hand-checked bounds ----------------------------------
+
+
+def _c_defaults() -> dict[str, float]:
+    import ctypes as ct
+
+    st = csocp._Settings()
+    csocp.load_library().tscvx_default_settings(ct.byref(st))
+    return {name: getattr(st, name) for name, _ in csocp._SETTING_FIELDS}
+
+
+def test_reduced_tolerances_default_to_clarabels() -> None:
+    """The 'solved_inaccurate' bars are Clarabel's reduced tolerances (DefaultSettings)."""
+    clarabel = pytest.importorskip("clarabel")
+    ref = clarabel.DefaultSettings()
+    d = _c_defaults()
+    assert d["tol_feas_inacc"] == ref.reduced_tol_feas
+    assert d["tol_gap_abs_inacc"] == ref.reduced_tol_gap_abs
+    assert d["tol_gap_rel_inacc"] == ref.reduced_tol_gap_rel
+
+
+def test_iteration_limit_feasibility_above_the_reduced_tolerance_is_not_inaccurate() -> None:
+    """Two iterations leave residuals of ~1e-3 (> 1e-4, the default reduced feasibility
+    tolerance); with the gap bars opened up only that tolerance decides: max_iterations by
+    default, solved_inaccurate once tol_feas_inacc is raised above the residuals."""
+    prob = random_feasible(0, n=20)
+    loose = {"max_iter": 2, "tol_gap_abs_inacc": 1e3, "tol_gap_rel_inacc": 1.0}
+    sol = csocp.solve(prob, **loose)
+    worst = max(sol.info["pres"], sol.info["dres"])
+    assert 1e-4 < worst < 1e-2, worst
+    assert sol.status == "max_iterations"
+    assert csocp.solve(prob, tol_feas_inacc=1e-2, **loose).status == "solved_inaccurate"
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_iteration_limit_returns_the_best_iterate(seed: int) -> None:
+    """Stopped one or two iterations short, the solver hands back its best iterate: residuals
+    no worse than the last logged iterate's, x close to Clarabel's, solved_inaccurate."""
+    prob = random_feasible(seed, n=20)
+    ref = solve_clarabel(prob)
+    full = csocp.solve(prob)
+    assert ref.status == full.status == "solved"
+    for short in (1, 2):
+        sol = csocp.solve(prob, log=True, max_iter=full.iterations - short)
+        assert sol.status == "solved_inaccurate", (short, sol.status)
+        scale = max(1.0, float(np.abs(ref.x).max()))
+        assert float(np.abs(sol.x - ref.x).max()) <= 1e-3 * scale
+        log = sol.info["log"]
+        assert max(sol.info["pres"], sol.info["dres"]) <= max(log[-1]["pres"], log[-1]["dres"])
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_cost_scaled_by_1e6_still_solves(seed: int) -> None:
+    """Cost x 1e6: the relative gap still stops the solver (the absolute one cannot); the
+    objective is Clarabel's x 1e6."""
+    prob = random_feasible(seed, n=20)
+    ref = solve_clarabel(prob)
+    P = None if prob.P is None else prob.P * 1e6
+    big = ConicProblem(P=P, q=prob.q * 1e6, A=prob.A, b=prob.b, cones=prob.cones)
+    sol = csocp.solve(big)
+    base = csocp.solve(prob)
+    assert sol.status == "solved", sol.status
+    assert abs(sol.obj / 1e6 - ref.obj) <= 1e-6 * max(1.0, abs(ref.obj))
+    assert sol.iterations <= base.iterations + 6
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_feasibility_problem_is_solved(seed: int) -> None:
+    """c = 0, P = 0 on strictly feasible constraints: solved (as Clarabel), with a feasible
+    point (Clarabel's primal residual), never declared infeasible."""
+    prob = random_feasible(seed, n=20)
+    feas = ConicProblem(P=None, q=np.zeros(prob.n), A=prob.A, b=prob.b, cones=prob.cones)
+    ref = solve_clarabel(feas)
+    sol = csocp.solve(feas)
+    assert ref.status == "solved"
+    assert sol.status == "solved", sol.status
+    pres = np.linalg.norm(feas.A @ sol.x + sol.s - feas.b, np.inf) / (
+        1.0 + np.linalg.norm(feas.b, np.inf)
+    )
+    assert pres <= 1e-7
