@@ -244,3 +244,22 @@ def test_feasibility_problem_is_solved(seed: int) -> None:
         1.0 + np.linalg.norm(feas.b, np.inf)
     )
     assert pres <= 1e-7
+
+
+@pytest.mark.parametrize("c", [0.0, 1.0])
+def test_weakly_infeasible_soc_is_not_solved(c: float) -> None:
+    """x1 = x2 with (x1, x2, 1) in a second-order cone: infeasible, yet at distance 0 from
+    feasibility (no certificate). Clarabel ends it numerical_error; so must the runtime,
+    well within max_iter, and never report it solved."""
+    A = sp.csc_matrix(np.array([[1.0, -1.0], [-1.0, 0.0], [0.0, -1.0], [0.0, 0.0]]))
+    prob = ConicProblem(
+        P=None,
+        q=np.array([c, 0.0]),
+        A=A,
+        b=np.array([0.0, 0.0, 0.0, 1.0]),
+        cones=[("zero", 1), ("soc", 3)],
+    )
+    ref = solve_clarabel(prob)
+    sol = csocp.solve(prob)
+    assert ref.status == sol.status == "numerical_error"
+    assert sol.iterations < 100
