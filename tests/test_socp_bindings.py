@@ -263,3 +263,21 @@ def test_weakly_infeasible_soc_is_not_solved(c: float) -> None:
     sol = csocp.solve(prob)
     assert ref.status == sol.status == "numerical_error"
     assert sol.iterations < 100
+
+
+def test_initial_mu_by_hand() -> None:
+    """min x1 + 2 x2 s.t. x >= 0, no equilibration (ruiz_iters = 0). By hand: cost scaling
+    cs = 1/|c|_inf = 1/2, so c_s = (1/2, 1). Initial primal point: x = 0, s = h - G x = 0,
+    shifted so its smallest entry is 1: s = (1, 1). Dual: z = c_s = (1/2, 1), shifted by
+    1 - 1/2: z = (1, 3/2). tau = kappa = 1. mu = (s'z + tau kappa) / (degree + 1)
+    = (1 + 3/2 + 1) / 3 = 7/6."""
+    prob = ConicProblem(
+        P=None,
+        q=np.array([1.0, 2.0]),
+        A=sp.csc_matrix(-np.eye(2)),
+        b=np.zeros(2),
+        cones=[("nonneg", 2)],
+    )
+    sol = csocp.solve(prob, log=True, ruiz_iters=0)
+    assert sol.status == "solved"
+    assert sol.info["log"][0]["mu"] == pytest.approx(7.0 / 6.0, rel=1e-9)
