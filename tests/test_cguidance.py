@@ -528,29 +528,17 @@ def test_stall_at_the_smallest_radius_is_pythons(kw: dict) -> None:
         py.subproblems_solved,
     )
     assert c.subproblems_solved < st.max_subproblems
-    if py.status == "max_iterations":
-        assert c.reason.startswith("step rejected at the smallest trust radius"), c.reason
+    assert c.reason == py.reason
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="BUG c_runtime/guidance/pdg_scvx.c diagnose(): the infeasible branch drops the "
-    "'step rejected at the smallest trust radius' prefix that guidance/scvx.py adds",
-)
-def test_stall_with_virtual_control_left_names_the_stall_in_c() -> None:
+def test_stall_with_virtual_control_left_gives_pythons_reason() -> None:
+    """Stalled at eta_lb with virtual control left: "infeasible", the stall named with its
+    radius and the iteration count (not the defect's interval) -- the same words in C."""
     scn = SCENARIOS["default"]
-    c = cguidance.solve_c(scn, SCvxSettings(**STALL_VC_LEFT))
-    assert c.status == "infeasible"
-    assert c.reason.startswith("step rejected at the smallest trust radius"), c.reason
-
-
-@pytest.mark.xfail(
-    strict=True,
-    reason="BUG guidance/scvx.py _diagnose: `k, i = np.unravel_index(...)` overwrites the "
-    "iteration count k, so the infeasible reason says 'after <interval> iterations'",
-)
-def test_python_infeasible_reason_counts_iterations() -> None:
-    scn = SCENARIOS["default"]
-    py = SCvxSolver(scn, SCvxSettings(**STALL_VC_LEFT), backend="c").solve()
-    assert py.status == "infeasible" and py.iterations > 0
+    st = SCvxSettings(**STALL_VC_LEFT)
+    c = cguidance.solve_c(scn, st)
+    py = SCvxSolver(scn, st, backend="c").solve()
+    assert py.status == c.status == "infeasible" and py.iterations > 0
+    assert py.reason.startswith(f"step rejected at the smallest trust radius {st.eta_lb:g}; ")
     assert f"after {py.iterations} iterations" in py.reason, py.reason
+    assert c.reason == py.reason

@@ -785,13 +785,19 @@ static pdg_status diagnose(pdg_workspace *ws, double vc, double defect, double v
 {
     const pdg_settings *st = &ws->st;
     double best = -1.0;
-    int k, i, bk = 0, bi = 0, len;
+    int k, i, bk = 0, bi = 0, len = 0, written;
+    if (stalled) { /* the same prefix on both verdicts, as guidance/scvx.py */
+        len = snprintf(msg, PDG_MESSAGE_LEN, "step rejected at the smallest trust radius %g; ",
+                       st->eta_lb);
+        if (len < 0 || len >= PDG_MESSAGE_LEN) {
+            len = 0;
+        }
+    }
     if (vc <= st->vc_tol) {
-        snprintf(msg, PDG_MESSAGE_LEN,
-                 "%snot converged after %d iterations; virtual control is zero, largest "
+        snprintf(msg + len, (size_t)(PDG_MESSAGE_LEN - len),
+                 "not converged after %d iterations; virtual control is zero, largest "
                  "defect %.2e, largest path-constraint value %.2e",
-                 stalled ? "step rejected at the smallest trust radius; " : "", iterations,
-                 defect, viol);
+                 iterations, defect, viol);
         return PDG_MAX_ITERATIONS;
     }
     for (k = 0; k < ws->N - 1; ++k) { /* disc holds the current iterate's discretization */
@@ -806,11 +812,12 @@ static pdg_status diagnose(pdg_workspace *ws, double vc, double defect, double v
             }
         }
     }
-    len = snprintf(msg, PDG_MESSAGE_LEN,
-                   "virtual control %.3g > %g after %d iterations; largest defect %.3g at "
-                   "interval %d, state %s",
-                   vc, st->vc_tol, iterations, defect, bk, state_names[bi]);
-    if (len > 0 && len < PDG_MESSAGE_LEN &&
+    written = snprintf(msg + len, (size_t)(PDG_MESSAGE_LEN - len),
+                       "virtual control %.3g > %g after %d iterations; largest defect %.3g at "
+                       "interval %d, state %s",
+                       vc, st->vc_tol, iterations, defect, bk, state_names[bi]);
+    len = written > 0 ? len + written : PDG_MESSAGE_LEN;
+    if (len < PDG_MESSAGE_LEN &&
         ws->x[NX * (ws->N - 1) + IM] <= ws->scn.params.m_dry + 1e-6 * ws->sc.Sx[IM]) {
         snprintf(msg + len, (size_t)(PDG_MESSAGE_LEN - len),
                  "; mass at the floor (m_f = %.6f = m_dry): not enough fuel",
