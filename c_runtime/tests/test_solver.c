@@ -301,7 +301,7 @@ static void test_indefinite_banded(void) {
               row.pcost == info.pcost, "log row 0 after a failed start");
 }
 
-/* An indefinite P = [1 .9 -.9; .9 1 .9; -.9 .9 1] (determinant -3.3) whose 2 x 2 minors are
+/* An indefinite P = [1 .9 -.9; .9 1 .9; -.9 .9 1] (determinant -2.888) whose 2 x 2 minors are
  * all 0.19 > 0: its factor meets a negative last pivot with nothing below it, which must end
  * in a numerical error under the banded method, not a solution. */
 static void test_indefinite_banded_last_pivot(void) {
