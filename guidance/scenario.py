@@ -179,8 +179,8 @@ def validate(scenario: Scenario) -> None:
             f"omega_max_deg = {p.omega_max_deg:g}",
         )
     if p.roll_decoupled and w0[0] != p.omega_f[0]:
-        raise ScenarioError(
-            "w0",
+        raise ScenarioError(  # named after the field moved from its default 0
+            "omega_f" if p.omega_f[0] != 0.0 else "w0",
             "the engine cannot make roll torque (J2 = J3, r_T on the body axis), so the roll "
             f"rate is constant: w0[0] = {w0[0]:g} cannot reach omega_f[0] = {p.omega_f[0]:g}",
         )

@@ -325,6 +325,7 @@ BAD_DICTS = [
     ({"q0": [math.cos(0.8), 0, math.sin(0.8), 0], "tilt_max_deg": 60.0}, "q0"),
     ({"w0": [0.0, 3.0, 0.0]}, "w0"),
     ({"w0": [0.1, 0.0, 0.0]}, "w0"),  # roll rate: the engine cannot make roll torque
+    ({"omega_f": [0.1, 0.0, 0.0]}, "omega_f"),  # ... nor end with one it did not start with
     ({"T_min": 6.0}, "T_min"),
     ({"T_max": -1.0}, "T_max"),
     ({"T_min": 4.0, "T_max": 4.0}, "T_min"),  # T_min == T_max: no throttle range

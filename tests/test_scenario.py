@@ -35,6 +35,7 @@ BAD = [
     ({"tilt_max_deg": 10.0, "q0": [0.9659258262890683, 0, 0.25881904510252074, 0]}, "q0"),
     ({"w0": [0, 2.0, 0]}, "w0"),  # |w0| above 90 deg/U_T
     ({"w0": [0.1, 0, 0]}, "w0"),  # roll rate cannot change
+    ({"omega_f": [0.1, 0, 0]}, "omega_f"),  # the same conflict, caused by the terminal rate
     ({"T_min": 6.0}, "T_min"),
     ({"N": 2}, "N"),
     ({"final_roll_free": "yes"}, "final_roll_free"),

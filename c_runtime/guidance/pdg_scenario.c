@@ -359,7 +359,8 @@ int pdg_check_scenario(const pdg_scenario *s, char *msg)
                  "the engine cannot make roll torque (J2 = J3, r_T on the body axis), so the "
                  "roll rate is constant: w0[0] = %g cannot reach omega_f[0] = %g",
                  s->w0[0], p->omega_f[0]);
-        return fail(msg, "w0", text);
+        /* the field the user moved from its default (0): a rolling start or a rolling end */
+        return fail(msg, p->omega_f[0] != 0.0 ? "omega_f" : "w0", text);
     }
     return 0;
 }
