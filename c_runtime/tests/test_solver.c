@@ -277,23 +277,32 @@ static void test_psd_check(void) {
     CHECK(tscvx_solve(ws) == TSCVX_SOLVED, "solve after a good P update");
 }
 
+/* min 1/2 x'Px + c'x over the box |x_i| <= 1 (G = [I; -I]), set up under the banded method in
+ * arena2: the problem of the indefinite-P tests below. */
+static tscvx_setup_status setup_banded_box(tscvx_workspace **ws, tscvx_int *Pp, tscvx_int *Pi,
+                                           tscvx_float *Px) {
+    static tscvx_int Gp[] = {0, 2, 4, 6}, Gi[] = {0, 3, 1, 4, 2, 5};
+    static tscvx_float c[] = {1, -1, 1}, Gx[] = {1, -1, 1, -1, 1, -1};
+    static tscvx_float h[] = {1, 1, 1, 1, 1, 1};
+    tscvx_data d = {3, 0, 6, Pp, Pi, Px, c, NULL, NULL, NULL, NULL, Gp, Gi, Gx, h, 6, 0, NULL};
+    tscvx_settings st;
+    tscvx_default_settings(&st);
+    st.kkt_backend = TSCVX_KKT_BANDED;
+    *ws = NULL;
+    return tscvx_setup(ws, arena2, sizeof arena2, &d, &st);
+}
+
 /* An indefinite P that passes the 2 x 2 check, [1 1 0; 1 1 1; 0 1 1] (eigenvalue 1 - sqrt 2),
  * seen by the banded method's factor of the P block: a numerical error with a defined log,
  * not a solution of the problem with that block replaced by a semidefinite one. */
 static void test_indefinite_banded(void) {
     tscvx_int Pp[] = {0, 1, 3, 5}, Pi[] = {0, 0, 1, 1, 2};
-    tscvx_int Gp[] = {0, 2, 4, 6}, Gi[] = {0, 3, 1, 4, 2, 5};
-    tscvx_float Px[] = {1, 1, 1, 1, 1}, c[] = {1, -1, 1}, Gx[] = {1, -1, 1, -1, 1, -1};
-    tscvx_float h[] = {1, 1, 1, 1, 1, 1};
-    tscvx_data d = {3, 0, 6, Pp, Pi, Px, c, NULL, NULL, NULL, NULL, Gp, Gi, Gx, h, 6, 0, NULL};
-    tscvx_settings st;
-    tscvx_default_settings(&st);
-    st.kkt_backend = TSCVX_KKT_BANDED;
-    tscvx_workspace *ws = NULL;
+    tscvx_float Px[] = {1, 1, 1, 1, 1};
+    tscvx_workspace *ws;
     tscvx_info info;
     tscvx_iter_log row;
     memset(arena2, 0x5A, sizeof arena2); /* the log rows start as garbage */
-    CHECK(tscvx_setup(&ws, arena2, sizeof arena2, &d, &st) == TSCVX_SETUP_OK, "banded setup");
+    CHECK(setup_banded_box(&ws, Pp, Pi, Px) == TSCVX_SETUP_OK, "banded setup");
     if (ws == NULL) return;
     CHECK(tscvx_solve(ws) == TSCVX_NUMERICAL_ERROR, "indefinite P block not noticed");
     CHECK(tscvx_get_info(ws, &info) == TSCVX_SETUP_OK && info.iterations == 0, "info");
@@ -306,15 +315,9 @@ static void test_indefinite_banded(void) {
  * in a numerical error under the banded method, not a solution. */
 static void test_indefinite_banded_last_pivot(void) {
     tscvx_int Pp[] = {0, 1, 3, 6}, Pi[] = {0, 0, 1, 0, 1, 2};
-    tscvx_int Gp[] = {0, 2, 4, 6}, Gi[] = {0, 3, 1, 4, 2, 5};
-    tscvx_float Px[] = {1, 0.9, 1, -0.9, 0.9, 1}, c[] = {1, -1, 1}, Gx[] = {1, -1, 1, -1, 1, -1};
-    tscvx_float h[] = {1, 1, 1, 1, 1, 1};
-    tscvx_data d = {3, 0, 6, Pp, Pi, Px, c, NULL, NULL, NULL, NULL, Gp, Gi, Gx, h, 6, 0, NULL};
-    tscvx_settings st;
-    tscvx_default_settings(&st);
-    st.kkt_backend = TSCVX_KKT_BANDED;
-    tscvx_workspace *ws = NULL;
-    const tscvx_setup_status ss = tscvx_setup(&ws, arena2, sizeof arena2, &d, &st);
+    tscvx_float Px[] = {1, 0.9, 1, -0.9, 0.9, 1};
+    tscvx_workspace *ws;
+    const tscvx_setup_status ss = setup_banded_box(&ws, Pp, Pi, Px);
     CHECK(ss == TSCVX_SETUP_OK || ss == TSCVX_SETUP_P_NOT_PSD, "banded setup %d", (int)ss);
     if (ss != TSCVX_SETUP_OK || ws == NULL) return;
     const tscvx_solve_status s = tscvx_solve(ws);
