@@ -48,14 +48,20 @@ def dynamics_numpy(x: np.ndarray, u: np.ndarray, p: Params) -> np.ndarray:
     )
 
 
-def foh_control(u: np.ndarray, t_f: float):
-    N = u.shape[0]
-    grid = np.linspace(0.0, t_f, N)
-
-    def control(t: float) -> np.ndarray:
-        return np.array([np.interp(t, grid, u[:, i]) for i in range(3)])
-
-    return control
+def integrate_interval(
+    x0: np.ndarray, u_k: np.ndarray, u_k1: np.ndarray, dt: float, p: Params, rtol: float
+) -> np.ndarray:
+    """x(dt) from x0 under the first-order hold from u_k (t = 0) to u_k1 (t = dt)."""
+    du = u_k1 - u_k
+    sol = solve_ivp(
+        lambda t, x: dynamics_numpy(x, u_k + (t / dt) * du, p),
+        (0.0, dt),
+        x0,
+        rtol=rtol,
+        atol=rtol,
+        method="DOP853",
+    )
+    return sol.y[:, -1]
 
 
 def propagate(
@@ -71,16 +77,7 @@ def propagate(
     xs = np.empty((N, len(x0)))
     xs[0] = x0
     for k in range(N - 1):
-        u_k, du = u[k], u[k + 1] - u[k]
-        sol = solve_ivp(
-            lambda t, x, u_k=u_k, du=du: dynamics_numpy(x, u_k + (t / dt) * du, p),
-            (0.0, dt),
-            xs[k],
-            rtol=rtol,
-            atol=rtol,
-            method="DOP853",
-        )
-        xs[k + 1] = sol.y[:, -1]
+        xs[k + 1] = integrate_interval(xs[k], u[k], u[k + 1], dt, p, rtol)
     return xs
 
 

@@ -7,6 +7,19 @@ from collections.abc import Iterator
 
 import pytest
 
+from guidance.catalog import SCENARIOS
+from guidance.scvx import SCvxResult, SCvxSolver
+
+
+@pytest.fixture(scope="session")
+def default_solved() -> tuple[SCvxSolver, SCvxResult]:
+    """The default landing solved by the reference SCvx (cubic guess, default settings), once
+    for every test module that starts from it."""
+    solver = SCvxSolver(SCENARIOS["default"])
+    result = solver.solve()
+    assert result.status == "solved", result.reason
+    return solver, result
+
 
 @pytest.fixture
 def deadline() -> Iterator[None]:

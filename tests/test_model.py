@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from scipy.integrate import solve_ivp
 
 from guidance.constraints import path_constraint_values
 from guidance.model import (
@@ -15,7 +14,7 @@ from guidance.model import (
     param_vector,
 )
 from guidance.params import Params, SCvxSettings
-from guidance.verify import dynamics_numpy, foh_control
+from guidance.verify import dynamics_numpy, integrate_interval
 
 P = Params()
 
@@ -91,17 +90,8 @@ def test_path_constraints_match_numpy(samples) -> None:
 
 
 def _integrate(x0: np.ndarray, uk: np.ndarray, uk1: np.ndarray, t1: float) -> np.ndarray:
-    u = np.vstack([uk, uk1])
-    control = foh_control(u, t1)
-    sol = solve_ivp(
-        lambda t, x: dynamics_numpy(x, control(t), P),
-        (0, t1),
-        x0,
-        rtol=1e-12,
-        atol=1e-12,
-        method="DOP853",
-    )
-    return sol.y[:, -1]
+    """scipy at 1e-12 of the plain-numpy dynamics (guidance.verify), not of CasADi."""
+    return integrate_interval(x0, uk, uk1, t1, P, rtol=1e-12)
 
 
 def test_discretization_matches_solve_ivp(samples) -> None:

@@ -15,13 +15,6 @@ from guidance.verify import audit
 SCN = SCENARIOS["default"]
 
 
-@pytest.fixture(scope="module")
-def solved() -> tuple[SCvxSolver, SCvxResult]:
-    """The default landing solved from the cubic guess with the default settings."""
-    solver = SCvxSolver(SCN)
-    return solver, solver.solve()
-
-
 class _NoPredictedDecrease(SCvxSolver):
     """A solver whose subproblem predicts no decrease of the cost: L is far above J, so
     dL = J - L < 0 at every step (the case of a subproblem that gives the reference back)."""
@@ -31,7 +24,7 @@ class _NoPredictedDecrease(SCvxSolver):
 
 
 def test_no_predicted_decrease_accepts_the_step_and_does_not_shrink_the_radius(
-    solved: tuple[SCvxSolver, SCvxResult],
+    default_solved: tuple[SCvxSolver, SCvxResult],
 ) -> None:
     """scvx.py: with dL <= 0 the step is accepted and the radius is updated as for rho = 1
     (>= rho2: grown by beta), never shrunk -- even where dJ / dL < rho0.
@@ -41,7 +34,7 @@ def test_no_predicted_decrease_accepts_the_step_and_does_not_shrink_the_radius(
     step_tol = 0 brings dL down only slowly (5.7e-6 after 40 iterations), so the branch is not
     reached naturally; the predicted cost is forced instead. A small radius makes the real
     step lower the penalty (dJ > 0), so rho = dJ / dL is negative."""
-    _, ref = solved
+    _, ref = default_solved
     st = SCvxSettings(iter_max=2, eta_init=0.004, step_tol=0.0)
     r = _NoPredictedDecrease(SCN, st).solve(guess=(ref.x, ref.u, ref.t_f))
     first = r.history[0]
@@ -84,12 +77,14 @@ class _ViolatedPath(SCvxSolver):
         return J, defect, 1.0
 
 
-def test_a_violated_path_constraint_is_never_solved(solved: tuple[SCvxSolver, SCvxResult]) -> None:
+def test_a_violated_path_constraint_is_never_solved(
+    default_solved: tuple[SCvxSolver, SCvxResult],
+) -> None:
     """Injected: the real subproblem keeps every convex path constraint hard and the T_min
     linearization is conservative, so with settings alone (tried: step_tol 1e3, vc_tol up to
     1e3, defect_tol 1e-5..1e-2, lam 0.3..30, T_min up to 2.8) no accepted iterate had a
     violation above defect_tol while its defects were within it."""
-    _, ref = solved
+    _, ref = default_solved
     st = SCvxSettings(step_tol=1e3, iter_max=2)
     r = _ViolatedPath(SCN, st).solve(guess=(ref.x, ref.u, ref.t_f))
     assert r.iterations == 2
@@ -114,9 +109,9 @@ def test_last_accepted_step_over_states_thrust_and_time_is_within_step_tol(
 
 
 def test_iteration_limit_with_zero_virtual_control_is_not_infeasible(
-    solved: tuple[SCvxSolver, SCvxResult],
+    default_solved: tuple[SCvxSolver, SCvxResult],
 ) -> None:
-    _, ref = solved
+    _, ref = default_solved
     st = SCvxSettings(iter_max=1, step_tol=0.0)
     r = SCvxSolver(SCN, st).solve(guess=(ref.x, ref.u, ref.t_f))
     assert r.iterations == 1
@@ -132,8 +127,10 @@ def _diagnose_with_final_mass(solver: SCvxSolver, ref: SCvxResult, m_f: float) -
     return solver._diagnose(z, 1.0, 1e-3, 0.0, 7)  # vc = 1 > vc_tol: infeasible
 
 
-def test_mass_floor_is_named_only_at_the_floor(solved: tuple[SCvxSolver, SCvxResult]) -> None:
-    solver, ref = solved
+def test_mass_floor_is_named_only_at_the_floor(
+    default_solved: tuple[SCvxSolver, SCvxResult],
+) -> None:
+    solver, ref = default_solved
     m_dry = SCN.params.m_dry
     assert solver.sc.Sx[IM] == pytest.approx(1.0)  # m0 - m_dry: the margin is 1e-6
     status, reason = _diagnose_with_final_mass(solver, ref, m_dry + 0.05)

@@ -13,7 +13,6 @@ from scipy.integrate import solve_ivp
 from guidance.catalog import SCENARIOS
 from guidance.model import dynamics_functions, param_vector
 from guidance.params import IR, IV
-from guidance.scvx import solve_scvx
 from guidance.verify import audit, propagate
 
 SCN = SCENARIOS["default"]
@@ -21,9 +20,8 @@ P = SCN.params
 
 
 @pytest.fixture(scope="module")
-def landing() -> tuple[np.ndarray, np.ndarray, float]:
-    r = solve_scvx(SCN)
-    assert r.status == "solved"
+def landing(default_solved) -> tuple[np.ndarray, np.ndarray, float]:
+    _, r = default_solved
     return r.x, r.u, r.t_f
 
 
