@@ -8,9 +8,11 @@ from pathlib import Path
 
 import numpy as np
 
+from guidance.errors import ModelEvaluationError
 from guidance.model import N_AUG, NP
 from guidance.params import NU, NX
 
+FOH_NOT_FINITE = -2  # pdg_foh_interval's status for a non-finite model evaluation (foh.h)
 LIB_PATH = Path(__file__).resolve().parent.parent / "build" / "libtscvx_gnc.so"
 _dp = ctypes.POINTER(ctypes.c_double)
 
@@ -92,6 +94,8 @@ def discretize_all(x: np.ndarray, u: np.ndarray, sigma: float, p: np.ndarray,
         N, _ptr(xs), _ptr(us), float(sigma), _ptr(ps), int(substeps), _ptr(aug), _ptr(z),
         _ptr(work),
     )  # fmt: skip
+    if status == FOH_NOT_FINITE:
+        raise ModelEvaluationError("the FOH discretization is not finite")
     if status != 0:
         raise ValueError(f"pdg_foh_all returned {status}")
     i = np.cumsum([0, NX, NX * NX, NX * NU, NX * NU, NX])

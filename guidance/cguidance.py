@@ -251,6 +251,15 @@ def _dptr(a: np.ndarray) -> _dp:
     return a.ctypes.data_as(_dp)
 
 
+def _result_buffers(N: int) -> tuple[np.ndarray, np.ndarray, _Result]:
+    """x, u and the pdg_result that points at them. NaN stays where the solve stops before
+    its first subproblem: C then leaves x, u untouched (and t_f NaN)."""
+    x, u = np.full((N, NX), np.nan), np.full((N, NU), np.nan)
+    res = _Result()
+    res.x, res.u = _dptr(x), _dptr(u)
+    return x, u, res
+
+
 def solve_c(
     scenario: Scenario,
     settings: SCvxSettings | None = None,
@@ -294,9 +303,7 @@ def solve_c(
             opt.masks = table.ctypes.data_as(_ucp)
             opt.n_masks = len(masks)
     opt.clock_s = _CLOCK
-    x, u = np.zeros((N, NX)), np.zeros((N, NU))
-    res = _Result()
-    res.x, res.u = _dptr(x), _dptr(u)
+    x, u, res = _result_buffers(N)
     t_start = time.perf_counter()  # the guidance call only (set-up is a one-time init)
     status = lib.pdg_solve(ws.ws, ct.byref(cs), ct.byref(opt), ct.byref(res))
     solve_time = time.perf_counter() - t_start
@@ -474,9 +481,7 @@ def solve_tscvx_c(
     opt.constraint = con._net if (con is not None and masks) else None
     opt.eta_init = float(eta_init)
     opt.clock_s = _CLOCK
-    x, u = np.zeros((N, NX)), np.zeros((N, NU))
-    res = _Result()
-    res.x, res.u = _dptr(x), _dptr(u)
+    x, u, res = _result_buffers(N)
     rep = _TscvxReport()
     t_start = time.perf_counter()  # the whole guidance call, network inference included
     status = lib.pdg_solve_tscvx(ws.ws, ct.byref(cs), ct.byref(opt), ct.byref(res),

@@ -18,6 +18,7 @@ from guidance.scvx import SCvxResult, SCvxSolver, format_log
 from guidance.tscvx import REDUCED_ETA_INIT, solve_tscvx
 
 EXIT_BAD_INPUT = 2
+EXIT_NOT_SOLVED = 3  # as build/pdg_example: the status line says why
 
 
 def _load(path: str | None, pin_final_attitude: bool) -> Scenario:
@@ -169,12 +170,15 @@ def cmd_solve(args: argparse.Namespace) -> int:
         scenario, args.method, args.backend, settings, Path(args.models), print, args.eta_init
     )
     p = scenario.params
-    fuel = scenario.initial.m0 - result.x[-1, IM]
-    propellant = scenario.initial.m0 - p.m_dry
-    sub_times = [h.subproblem_time_s for h in result.history]
     print()
     print(f"status        {result.status} ({result.reason})")
     print(f"iterations    {result.iterations} (subproblems solved: {result.subproblems_solved})")
+    if not np.isfinite(result.t_f):  # stopped before its first subproblem
+        print("no trajectory: nothing written")
+        return EXIT_NOT_SOLVED
+    fuel = scenario.initial.m0 - result.x[-1, IM]
+    propellant = scenario.initial.m0 - p.m_dry
+    sub_times = [h.subproblem_time_s for h in result.history]
     print(f"t_f           {result.t_f:.6f} U_T")
     print(f"final mass    {result.m_f:.6f} U_M")
     print(f"fuel          {fuel:.6f} U_M ({100 * fuel / propellant:.1f} % of the propellant)")
@@ -198,7 +202,7 @@ def cmd_solve(args: argparse.Namespace) -> int:
         )
         landing_figure(result.x, result.u, result.t_f, p, args.plot, title)
         print(f"wrote {args.plot}")
-    return 0
+    return 0 if result.status == "solved" else EXIT_NOT_SOLVED
 
 
 def _network_files(models: Path, backend: str) -> dict[str, Path]:

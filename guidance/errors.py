@@ -1,7 +1,10 @@
-"""Bad user input: a scenario, setting, model or data file that must not be used.
+"""The errors the guidance code raises on purpose.
 
-Every such refusal is an :class:`InputError` (a ``ValueError``) whose message says what is wrong;
-the command line prints it and exits with code 2, before anything is written.
+Bad user input (a scenario, setting, model or data file that must not be used) is an
+:class:`InputError` (a ``ValueError``) whose message says what is wrong; the command line prints
+it and exits with code 2, before anything is written. A trajectory at which the dynamics cannot
+be evaluated is a :class:`ModelEvaluationError`; the SCvx loop turns it into a solver_error
+status, as the C library does.
 """
 
 from __future__ import annotations
@@ -9,3 +12,8 @@ from __future__ import annotations
 
 class InputError(ValueError):
     """Input that cannot be used as given; the message names it and says why."""
+
+
+class ModelEvaluationError(ArithmeticError):
+    """The dynamics or their discretization are not finite at a trajectory (an iterate or a
+    guess far outside the range the model is meant for, e.g. r0 = 1e6)."""

@@ -145,6 +145,9 @@ def _omega_from_quaternions(q: np.ndarray, t: np.ndarray) -> np.ndarray:
     return w
 
 
+# A landing far outside the model's range (r0 = 1e6) overflows here; the discretization then
+# refuses the guess (ModelEvaluationError), so the overflow needs no warning of its own.
+@np.errstate(over="ignore", invalid="ignore")
 def initial_guess(scenario: Scenario) -> tuple[np.ndarray, np.ndarray, float]:
     p, st = scenario.params, scenario.initial
     N = p.N

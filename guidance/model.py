@@ -19,6 +19,7 @@ from functools import lru_cache
 import casadi as ca
 import numpy as np
 
+from guidance.errors import ModelEvaluationError
 from guidance.params import NU, NX, Params
 
 # Parameter vector layout for the CasADi functions.
@@ -294,7 +295,7 @@ def discretize(
     expressions (build/libtscvx_gnc.so, equal to 1e-10 and about ten times faster).
 
     Returns x_next (N-1, 14), A (N-1, 14, 14), Bm (N-1, 14, 3), Bp (N-1, 14, 3),
-    Sigma (N-1, 14), z (N-1, 14).
+    Sigma (N-1, 14), z (N-1, 14). Raises ModelEvaluationError if any of them is not finite.
     """
     if engine == "c":
         from guidance import cgnc
@@ -304,6 +305,8 @@ def discretize(
     fun = _mapped_discretization(substeps, N - 1)
     out = fun(x[:-1].T, u[:-1].T, u[1:].T, sigma, 1.0 / (N - 1), param_vector(params))
     xn, A, Bm, Bp, S, z = (np.asarray(o) for o in out)
+    if not all(np.isfinite(o).all() for o in (xn, A, Bm, Bp, S, z)):
+        raise ModelEvaluationError("the FOH discretization is not finite")
     return {
         "x_next": xn.T,
         # CasADi stacks the mapped matrix outputs side by side (column-major blocks).

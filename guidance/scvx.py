@@ -21,9 +21,10 @@ import numpy as np
 from guidance import conic
 from guidance.conic import ConicProblem
 from guidance.constraints import constraint_scales, path_constraint_values, tight_mask
+from guidance.errors import ModelEvaluationError
 from guidance.guess import initial_guess
 from guidance.model import discretize
-from guidance.params import IM, NC, NX, Scenario, SCvxSettings
+from guidance.params import IM, NC, NU, NX, Scenario, SCvxSettings
 from guidance.subproblem import (
     TR_PAIRS,
     TR_SCALAR_STATES,
@@ -169,7 +170,11 @@ class SCvxSolver:
         self.scales = constraint_scales(p, self.sc.Sx, self.sc.Su)
         self.lay = self.template(None).lay
         z = scaled(x, u, t_f, self.lay, self.sc)
-        disc = self._discretize(z)
+        try:
+            disc = self._discretize(z)
+        except ModelEvaluationError:
+            # No trajectory to return (the C library leaves x, u as given and t_f NaN).
+            return self._no_trajectory("model evaluation failed at the initial guess", t_start)
         J, defect, viol = self.penalty(z, disc)
         eta = st.eta_init
         history: list[IterationRecord] = []
@@ -206,7 +211,13 @@ class SCvxSolver:
                     self.log(f"{k + 1:3d}  subproblem failed: {sol.status}")
                 break
             z_new = sol.x.copy()
-            disc_new = self._discretize(z_new)
+            try:
+                disc_new = self._discretize(z_new)
+            except ModelEvaluationError:
+                status = "solver_error"
+                reason = f"iteration {k + 1}: model evaluation failed at the subproblem solution"
+                history.append(_failed_record(k + 1, J, eta, sol))
+                break
             J_new, defect_new, viol_new = self.penalty(z_new, disc_new)
             L = self.linear_cost(prob, sol.x)
             dJ, dL = J - J_new, J - L
@@ -296,6 +307,23 @@ class SCvxSolver:
             max_violation=viol,
             subproblems=subproblems,
             settings=st,
+        )
+
+    def _no_trajectory(self, reason: str, t_start: float) -> SCvxResult:
+        """The result of a solve that stopped before its first subproblem."""
+        nan = float("nan")
+        N = self.p.N
+        return SCvxResult(
+            status="solver_error",
+            reason=reason,
+            x=np.full((N, NX), nan),
+            u=np.full((N, NU), nan),
+            t_f=nan,
+            iterations=0,
+            subproblems_solved=0,
+            solve_time_s=time.perf_counter() - t_start,
+            masks=np.zeros((0, NC * N), np.uint8),
+            settings=self.st,
         )
 
     def _diagnose(

@@ -1,13 +1,22 @@
-"""SCvx termination: the dL <= 0 branch, the convergence test, and the iteration-limit
-diagnosis (guidance/scvx.py)."""
+"""SCvx termination: the dL <= 0 branch, the convergence test, the iteration-limit
+diagnosis, and a model that cannot be evaluated (guidance/scvx.py)."""
 
 from __future__ import annotations
+
+import dataclasses
+import json
+import warnings
 
 import numpy as np
 import pytest
 
 from guidance.catalog import SCENARIOS
+from guidance.cli import main
+from guidance.errors import ModelEvaluationError
+from guidance.guess import initial_guess
+from guidance.model import discretize
 from guidance.params import IM, SCvxSettings
+from guidance.scenario import scenario_to_dict
 from guidance.scvx import SCvxResult, SCvxSolver
 from guidance.subproblem import scaled
 from guidance.verify import audit
@@ -140,3 +149,67 @@ def test_mass_floor_is_named_only_at_the_floor(
     status, reason = _diagnose_with_final_mass(solver, ref, m_dry)
     assert status == "infeasible"
     assert "mass at the floor" in reason
+
+
+# ---- a model that cannot be evaluated -------------------------------------------------------
+FAR = dataclasses.replace(SCN, initial=dataclasses.replace(SCN.initial, r0=(1e6, 4.0, 0.0)))
+
+
+def test_a_landing_far_outside_the_model_range_stops_before_its_first_subproblem() -> None:
+    """r0 = 1e6: the guess's dynamics overflow. The solve stops with solver_error and no
+    trajectory (NaN, as the C library leaves it), without a traceback or a numpy warning."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        r = SCvxSolver(FAR).solve()
+    assert (r.status, r.reason) == ("solver_error", "model evaluation failed at the initial guess")
+    assert r.subproblems_solved == 0 and r.iterations == 0
+    assert np.isnan(r.t_f) and np.isnan(r.x).all() and np.isnan(r.u).all()
+
+
+def test_the_casadi_discretization_refuses_a_non_finite_result() -> None:
+    """The CasADi engine (independent of the generated C) raises as the C engine does."""
+    x, u, t_f = initial_guess(SCN)
+    x = x.copy()
+    x[3, 4] = 1e300  # a velocity whose drag overflows
+    for engine in ("casadi", "c"):
+        with pytest.raises(ModelEvaluationError):
+            discretize(x, u, t_f, SCN.params, 2, engine)
+
+
+class _FailsAfterTheGuess(SCvxSolver):
+    """The model fails at every subproblem solution (the guess evaluates)."""
+
+    def _discretize(self, z):  # type: ignore[no-untyped-def]
+        self.calls = getattr(self, "calls", 0) + 1
+        if self.calls > 1:
+            raise ModelEvaluationError("injected")
+        return super()._discretize(z)
+
+
+def test_a_model_failure_at_the_subproblem_solution_ends_with_the_last_reference() -> None:
+    """The solve stops at once with the C library's reason and returns the reference it
+    started the failed step from (here the initial guess)."""
+    r = _FailsAfterTheGuess(SCN).solve()
+    x, u, t_f = initial_guess(SCN)
+    assert r.status == "solver_error"
+    assert r.reason == "iteration 1: model evaluation failed at the subproblem solution"
+    assert r.iterations == 0 and r.subproblems_solved == 1 and not r.history[0].accepted
+    assert r.t_f == pytest.approx(t_f, rel=1e-12)
+    np.testing.assert_allclose(r.x, x, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(r.u, u, rtol=1e-12, atol=1e-12)
+
+
+def test_cli_solve_without_a_trajectory_exits_3_and_writes_nothing(
+    tmp_path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """`guidance solve` on the far landing: the status line, no trajectory, nothing written,
+    exit 3 (not solved), for the reference and for the C library."""
+    scn_file = tmp_path / "far.json"
+    scn_file.write_text(json.dumps(scenario_to_dict(FAR)))
+    for backend in ("clarabel", "c"):
+        out = tmp_path / f"{backend}.npz"
+        assert main(["solve", str(scn_file), "--backend", backend, "--out", str(out)]) == 3
+        text = capsys.readouterr().out
+        assert "solver_error (model evaluation failed at the initial guess)" in text
+        assert "no trajectory: nothing written" in text and "final mass" not in text
+        assert not out.exists()

@@ -172,7 +172,8 @@ typedef struct {
                                       error as "scenario field 'q0': ..." */
     double *x;                /* caller array N x 14 (node-major): the trajectory */
     double *u;                /* caller array N x 3: thrust T_B at the nodes (FOH) */
-    double t_f;
+    double t_f;               /* NaN, x and u untouched: the solve stopped before its first
+                                 subproblem (invalid input, the model failing at the guess) */
     int iterations;           /* accepted steps */
     int subproblems_solved;   /* convex subproblems solved, rejections included */
     double max_defect;        /* max |x_{k+1} - F(x_k, u_k, u_k+1, t_f)|, physical units */
