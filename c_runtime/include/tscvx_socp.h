@@ -8,13 +8,12 @@
  *                 G x + s = h,   s in K      (m cone rows)
  *
  *   x in R^n.  P (n x n) must be positive semidefinite (a convex objective) and is given by its
- *   UPPER triangle only (it may be absent: Pp == NULL). Setup and tscvx_update_data check a
- *   necessary condition only (TSCVX_SETUP_P_NOT_PSD): every P_jj >= 0 and every entry
- *   P_ij^2 <= P_ii P_jj (to 1e-12 relative, plus entries below 1e-12 max P_jj). An indefinite P
- *   can pass it (a negative 3 x 3 or larger principal minor): the banded method then finds it
- *   in its factors of P's diagonal blocks (tscvx_solve: TSCVX_NUMERICAL_ERROR); the sparse
- *   method cannot tell (its pivots mix P with the constraint terms) and its result is
- *   meaningless (at best a stationary point of a nonconvex problem).
+ *   UPPER triangle only (it may be absent: Pp == NULL). Setup and tscvx_update_data (when
+ *   given P) refuse an indefinite P (TSCVX_SETUP_P_NOT_PSD) by a cheap necessary test (every
+ *   P_jj >= 0, every P_ij^2 <= P_ii P_jj to 1e-12 relative) and then a factorization of P:
+ *   the sparse method factors P + 1e-9 |P|_max I and checks its inertia, the banded method
+ *   factors P's diagonal blocks, dropping zero pivots. A negative eigenvalue above about
+ *   -1e-9 |P|_max (sparse method) or -1e-5 |P|_max (banded) passes as rounding.
  *   K = R_+^l  x  Q^{q_1} x ... x Q^{q_nsoc}: the first l rows of G are the nonnegative
  *   orthant, the following rows are second-order cones Q^q = {(t, u) in R x R^{q-1}: |u|_2 <= t}
  *   in the order given by q[]; l + sum(q) = m.

@@ -25,8 +25,8 @@ static const char *const setup_messages[TSCVX_SETUP_NSTATUS] = {
     "the problem has no structure for the banded KKT method (variable groups larger than 32, "
     "more than 8 border variables, a variable in no cone and not on P's diagonal, an equality "
     "row of border variables only, or too wide a profile)",
-    "P is not positive semidefinite (a negative diagonal entry, or an entry with "
-    "P_ij^2 > P_ii P_jj)",
+    "P is not positive semidefinite (a negative diagonal entry, an entry with "
+    "P_ij^2 > P_ii P_jj, or a factorization of P that shows a negative eigenvalue)",
 };
 
 static const char *const solve_messages[TSCVX_NSTATUS] = {
@@ -434,6 +434,7 @@ static tscvx_setup_status build(const tscvx_data *d, const tscvx_settings *st, t
 
     data_norms(ws, d->Pp ? d->Px : NULL, d->c, d->b, d->h);
     tscvx_equilibrate(ws);
+    if (ws->P.nnz > 0 && ws->method->check_p(ws) != 0) return TSCVX_SETUP_P_NOT_PSD;
     ws->arena_used = a->top, ws->arena_high = a->high;
     ws->info.status = TSCVX_UNSOLVED;
     ws->info.kkt_backend = ws->method->id == TSCVX_KKT_BANDED ? TSCVX_KKT_BANDED
@@ -522,6 +523,11 @@ tscvx_setup_status tscvx_update_data(tscvx_workspace *ws, const tscvx_float *Px,
     }
     data_norms(ws, Px, c, b, h);
     tscvx_update_equilibrate(ws, Px, c, Ax, b, Gx, h);
+    if (Px && ws->P.nnz > 0 && ws->method->check_p(ws) != 0) { /* not ready, as above */
+        ws->ready = 0;
+        ws->info.status = TSCVX_INVALID_INPUT;
+        return TSCVX_SETUP_P_NOT_PSD;
+    }
     ws->ready = 1;
     ws->info.status = TSCVX_UNSOLVED;
     return TSCVX_SETUP_OK;

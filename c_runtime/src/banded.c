@@ -1031,5 +1031,7 @@ static int banded_solve(tscvx_workspace *ws, const tscvx_float *rx, const tscvx_
     return steps;
 }
 
+/* P is block diagonal over the groups (a P entry joins its variables' groups): the
+ * semidefinite factors of the blocks that banded_load makes are the full test. */
 const tscvx_kkt_method tscvx_method_banded = {"banded", TSCVX_KKT_BANDED, banded_load,
-                                              banded_factor, banded_solve};
+                                              banded_load, banded_factor, banded_solve};

@@ -354,6 +354,31 @@ static int sparse_load(tscvx_workspace *ws) {
     return 0; /* an indefinite P shows, if at all, in the factorization's inertia check */
 }
 
+/* Whether P is positive semidefinite to PSD_FACTOR_TOL of its largest entry. The IPM's
+ * pivots mix P with the constraint terms (P + G'W^-2 G + ...), so an indefinite P need not
+ * show in them; this factors the KKT pattern with A = G = 0 and unit NT scaling,
+ *   [P + eps I, 0; 0, -(I + eps I)]   (cone expansions: one +1 and one -1 pivot each),
+ * whose inertia check (n + nexp positive pivots) holds iff P + eps I is positive definite
+ * (Sylvester's law of inertia). eps = PSD_FACTOR_TOL |P|_max keeps the factor's rounding
+ * below its pivots (condition <= 1 / PSD_FACTOR_TOL). Overwrites ws->W and the KKT values:
+ * the IPM sets both before it uses them. Returns 0 or -1. */
+#define PSD_FACTOR_TOL 1e-9
+static int sparse_check_p(tscvx_workspace *ws) {
+    tscvx_float pmax = 0.0;
+    for (tscvx_int k = 0; k < ws->P.nnz; k++) pmax = fmax(pmax, fabs(ws->P.x[k]));
+    if (pmax == 0.0) return 0;
+    tscvx_kkt *kk = &ws->kkt;
+    const tscvx_float eps = PSD_FACTOR_TOL * pmax;
+    tscvx_kkt_data_values(ws, eps);
+    for (tscvx_int k = 0; k < ws->A.nnz; k++) kk->Kx[kk->mapA[k]] = 0.0;
+    for (tscvx_int k = 0; k < ws->G.nnz; k++) kk->Kx[kk->mapG[k]] = 0.0;
+    for (tscvx_int i = 0; i < ws->m; i++) ws->W.w[i] = 0.0;
+    tscvx_cone_add_identity(&ws->K, ws->W.w, 1.0); /* w = e: W = I */
+    for (tscvx_int k = 0; k < ws->K.nsoc; k++) ws->W.eta[k] = 1.0;
+    tscvx_kkt_cone_values(kk, &ws->K, &ws->W, eps);
+    return kk->backend->numeric(kk);
+}
+
 static int sparse_factor(tscvx_workspace *ws) {
     tscvx_kkt_cone_values(&ws->kkt, &ws->K, &ws->W, ws->delta);
     return ws->kkt.backend->numeric(&ws->kkt);
@@ -369,4 +394,4 @@ static int sparse_solve(tscvx_workspace *ws, const tscvx_float *rx, const tscvx_
 }
 
 const tscvx_kkt_method tscvx_method_sparse = {"sparse-ldl", TSCVX_KKT_STATIC, sparse_load,
-                                              sparse_factor, sparse_solve};
+                                              sparse_check_p, sparse_factor, sparse_solve};

@@ -242,6 +242,9 @@ typedef struct {
     /* the data or ws->delta changed; 0, or -1 when P is found indefinite (banded: the
      * factors of its diagonal blocks) */
     int (*load)(tscvx_workspace *ws);
+    /* setup and data updates: 0 when P is positive semidefinite, -1 when a factorization of
+     * P shows it indefinite (the full test behind the cheap necessary one in api.c) */
+    int (*check_p)(tscvx_workspace *ws);
     /* the NT scaling ws->W changed: factor with regularization ws->delta; 0 or -1 */
     int (*factor)(tscvx_workspace *ws);
     /* solve the unregularized system for (rx, ry, rz) (original order) by the factored one

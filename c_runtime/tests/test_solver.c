@@ -277,51 +277,59 @@ static void test_psd_check(void) {
     CHECK(tscvx_solve(ws) == TSCVX_SOLVED, "solve after a good P update");
 }
 
-/* min 1/2 x'Px + c'x over the box |x_i| <= 1 (G = [I; -I]), set up under the banded method in
- * arena2: the problem of the indefinite-P tests below. */
-static tscvx_setup_status setup_banded_box(tscvx_workspace **ws, tscvx_int *Pp, tscvx_int *Pi,
-                                           tscvx_float *Px) {
+/* min 1/2 x'Px + c'x over the box |x_i| <= 1 (G = [I; -I]), set up in arena2 under the
+ * given KKT method: the problem of the indefinite-P test below. */
+static tscvx_setup_status setup_box(tscvx_workspace **ws, tscvx_int *Pp, tscvx_int *Pi,
+                                    const tscvx_float *Px, tscvx_int kkt_backend) {
     static tscvx_int Gp[] = {0, 2, 4, 6}, Gi[] = {0, 3, 1, 4, 2, 5};
     static tscvx_float c[] = {1, -1, 1}, Gx[] = {1, -1, 1, -1, 1, -1};
     static tscvx_float h[] = {1, 1, 1, 1, 1, 1};
     tscvx_data d = {3, 0, 6, Pp, Pi, Px, c, NULL, NULL, NULL, NULL, Gp, Gi, Gx, h, 6, 0, NULL};
     tscvx_settings st;
     tscvx_default_settings(&st);
-    st.kkt_backend = TSCVX_KKT_BANDED;
+    st.kkt_backend = kkt_backend;
     *ws = NULL;
     return tscvx_setup(ws, arena2, sizeof arena2, &d, &st);
 }
 
-/* An indefinite P that passes the 2 x 2 check, [1 1 0; 1 1 1; 0 1 1] (eigenvalue 1 - sqrt 2),
- * seen by the banded method's factor of the P block: a numerical error with a defined log,
- * not a solution of the problem with that block replaced by a semidefinite one. */
-static void test_indefinite_banded(void) {
-    tscvx_int Pp[] = {0, 1, 3, 5}, Pi[] = {0, 0, 1, 1, 2};
-    tscvx_float Px[] = {1, 1, 1, 1, 1};
-    tscvx_workspace *ws;
-    tscvx_info info;
-    tscvx_iter_log row;
-    memset(arena2, 0x5A, sizeof arena2); /* the log rows start as garbage */
-    CHECK(setup_banded_box(&ws, Pp, Pi, Px) == TSCVX_SETUP_OK, "banded setup");
-    if (ws == NULL) return;
-    CHECK(tscvx_solve(ws) == TSCVX_NUMERICAL_ERROR, "indefinite P block not noticed");
-    CHECK(tscvx_get_info(ws, &info) == TSCVX_SETUP_OK && info.iterations == 0, "info");
-    CHECK(tscvx_get_iter_log(ws, 0, &row) == TSCVX_SETUP_OK && row.iter == 0 &&
-              row.pcost == info.pcost, "log row 0 after a failed start");
-}
-
-/* An indefinite P = [1 .9 -.9; .9 1 .9; -.9 .9 1] (determinant -2.888) whose 2 x 2 minors are
- * all 0.19 > 0: its factor meets a negative last pivot with nothing below it, which must end
- * in a numerical error under the banded method, not a solution. */
-static void test_indefinite_banded_last_pivot(void) {
-    tscvx_int Pp[] = {0, 1, 3, 6}, Pi[] = {0, 0, 1, 0, 1, 2};
-    tscvx_float Px[] = {1, 0.9, 1, -0.9, 0.9, 1};
-    tscvx_workspace *ws;
-    const tscvx_setup_status ss = setup_banded_box(&ws, Pp, Pi, Px);
-    CHECK(ss == TSCVX_SETUP_OK || ss == TSCVX_SETUP_P_NOT_PSD, "banded setup %d", (int)ss);
-    if (ss != TSCVX_SETUP_OK || ws == NULL) return;
-    const tscvx_solve_status s = tscvx_solve(ws);
-    CHECK(s == TSCVX_NUMERICAL_ERROR, "indefinite P (last pivot) gave status %d", (int)s);
+/* Indefinite P whose 2 x 2 minors all pass the cheap check are refused at setup and in
+ * updates by a factorization of P, under every KKT method (the sparse method's IPM pivots mix
+ * P with the constraint terms and would not show it):
+ *   tridiagonal [1 1 0; 1 1 1; 0 1 1] (eigenvalue 1 - sqrt 2),
+ *   full [1 .9 -.9; .9 1 .9; -.9 .9 1] (determinant -2.888, minors 0.19; the banded factor
+ *   meets its negative pivot last).
+ * Semidefinite P of the same patterns pass and solve: [1 1 0; 1 2 1; 0 1 1] (eigenvalues 0,
+ * 1, 3) and v v' in rounded numbers, v = (1, 1/3, -0.7). */
+static void test_indefinite_p_every_method(void) {
+    tscvx_int tri_p[] = {0, 1, 3, 5}, tri_i[] = {0, 0, 1, 1, 2};
+    tscvx_int full_p[] = {0, 1, 3, 6}, full_i[] = {0, 0, 1, 0, 1, 2};
+    const tscvx_float tri_bad[] = {1, 1, 1, 1, 1}, tri_good[] = {1, 1, 2, 1, 1};
+    const tscvx_float full_bad[] = {1, 0.9, 1, -0.9, 0.9, 1};
+    const tscvx_float v[] = {1.0, 1.0 / 3.0, -0.7};
+    const tscvx_float full_good[] = {v[0] * v[0], v[0] * v[1], v[1] * v[1],
+                                     v[0] * v[2], v[1] * v[2], v[2] * v[2]};
+    const tscvx_int methods[] = {TSCVX_KKT_STATIC, TSCVX_KKT_LDL, TSCVX_KKT_BANDED};
+    for (size_t k = 0; k < sizeof methods / sizeof methods[0]; k++) {
+        const tscvx_int mth = methods[k];
+        tscvx_workspace *ws;
+        CHECK(setup_box(&ws, tri_p, tri_i, tri_bad, mth) == TSCVX_SETUP_P_NOT_PSD,
+              "method %d: tridiagonal indefinite P accepted", (int)mth);
+        CHECK(setup_box(&ws, full_p, full_i, full_bad, mth) == TSCVX_SETUP_P_NOT_PSD,
+              "method %d: full indefinite P accepted", (int)mth);
+        CHECK(setup_box(&ws, tri_p, tri_i, tri_good, mth) == TSCVX_SETUP_OK && ws &&
+                  tscvx_solve(ws) == TSCVX_SOLVED,
+              "method %d: singular semidefinite P refused or unsolved", (int)mth);
+        CHECK(setup_box(&ws, full_p, full_i, full_good, mth) == TSCVX_SETUP_OK && ws &&
+                  tscvx_solve(ws) == TSCVX_SOLVED,
+              "method %d: rank-one P refused or unsolved", (int)mth);
+        if (ws == NULL) continue;
+        CHECK(tscvx_update_data(ws, full_bad, NULL, NULL, NULL, NULL, NULL) ==
+                  TSCVX_SETUP_P_NOT_PSD, "method %d: indefinite P update accepted", (int)mth);
+        CHECK(tscvx_solve(ws) == TSCVX_INVALID_INPUT, "method %d: solve after it", (int)mth);
+        CHECK(tscvx_update_data(ws, full_good, NULL, NULL, NULL, NULL, NULL) == TSCVX_SETUP_OK &&
+                  tscvx_solve(ws) == TSCVX_SOLVED,
+              "method %d: good P update", (int)mth);
+    }
 }
 
 int main(void) {
@@ -332,7 +340,6 @@ int main(void) {
     test_update();
     test_stale_workspace();
     test_psd_check();
-    test_indefinite_banded();
-    test_indefinite_banded_last_pivot();
+    test_indefinite_p_every_method();
     return ct_report("test_solver");
 }
