@@ -413,9 +413,14 @@ def cmd_export(args: argparse.Namespace) -> int:
     digest = dataset_digest(ds)
     report = sweep_report(train_dir)
     for name in best.values():
-        _check_trained_on(report[name], name, args.dataset, digest)
+        _check_trained_on(report[name], name, ds, args.dataset, digest)
     models.mkdir(parents=True, exist_ok=True)
-    metrics: dict = {"sweep": report, "shipped": {}, "dataset_header": ds.header}
+    metrics: dict = {
+        "sweep": report,
+        "shipped": {},
+        "dataset_header": ds.header,
+        "dataset_content_sha256": digest,
+    }
     for kind, name in sorted(best.items()):
         res = load_checkpoint(train_dir / f"{name}.pt")
         path = models / f"{kind}.onnx"
@@ -448,19 +453,35 @@ def cmd_export(args: argparse.Namespace) -> int:
     return 0
 
 
-def _check_trained_on(entry: dict, name: str, dataset: str, digest: str) -> None:
+def _check_trained_on(entry: dict, name: str, dataset: Dataset, path: str, digest: str) -> None:
     """Refuses to export (and describe in the card) a network with a dataset it was not
-    trained on: the card's data section and the test split would be another data's."""
+    trained on: the card's data section and the test split would be another data's.
+
+    A checkpoint from before the content digest was recorded is matched by the header fields
+    it did record (when the dataset was made, its size, its feasible fraction)."""
     trained = entry.get("identity", {}).get("dataset")
-    if trained is None:
-        print(f"warning: {name} records no dataset (trained before this check); assuming "
-              f"{dataset}", file=sys.stderr)  # fmt: skip
-    elif trained != digest:
+    if trained is not None:
+        if trained != digest:
+            raise InputError(
+                f"{name} was trained on another dataset (content sha256 {trained[:12]}, "
+                f"{entry.get('dataset', {}).get('path')}) than {path} ({digest[:12]}): "
+                "give the dataset it was trained on"
+            )
+        return
+    recorded = entry.get("dataset", {})
+    keys = ("created_utc", "n_base", "n_samples", "feasible_fraction")
+    if not all(k in recorded for k in keys):
+        print(f"warning: {name} records neither a dataset digest nor its header (trained "
+              f"before these checks); assuming {path}", file=sys.stderr)  # fmt: skip
+        return
+    differ = [k for k in keys if recorded[k] != dataset.header.get(k)]
+    if differ:
         raise InputError(
-            f"{name} was trained on another dataset (content sha256 {trained[:12]}, "
-            f"{entry.get('dataset', {}).get('path')}) than {dataset} ({digest[:12]}): "
-            "give the dataset it was trained on"
+            f"{name} was trained on another dataset ({', '.join(differ)} differ from {path}'s "
+            "header): give the dataset it was trained on"
         )
+    print(f"{name} records no dataset digest (trained before it was recorded); {path} has the "
+          f"header it recorded ({', '.join(keys)})")  # fmt: skip
 
 
 def _brief(m: dict) -> dict:

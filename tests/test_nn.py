@@ -393,6 +393,39 @@ def test_export_takes_the_training_datasets_params_and_refuses_another(
         load_model(models / "solution.onnx", "solution")  # trained for T_max 4.5, not default
 
 
+def test_export_matches_a_checkpoint_without_a_digest_by_its_recorded_header(
+    tmp_path: Path, capsys
+) -> None:
+    """Checkpoints trained before the content digest was recorded (the shipped ones) are
+    exported only with the dataset whose header fields they did record; the export then
+    records that dataset's digest."""
+    from guidance.cli import main
+    from guidance.dataset import load_dataset
+    from guidance.nn.train import dataset_digest
+
+    a = _write_dataset(random_dataset(n_base=12, seed=1), tmp_path / "a.npz")
+    b = _write_dataset(random_dataset(n_base=10, seed=2), tmp_path / "b.npz")
+    out, models = tmp_path / "train", tmp_path / "models"
+    assert _train_cli(a, out, "--solution-epochs", "1") == 0
+    for report in out.glob("solution-*.json"):  # as written before the digest was recorded
+        entry = json.loads(report.read_text())
+        entry.pop("identity", None)
+        entry["dataset"].pop("content_sha256")
+        report.write_text(json.dumps(entry))
+
+    def export(data: Path) -> int:
+        return main(["export", "--train-dir", str(out), "--dataset", str(data),
+                     "--models-dir", str(models)])  # fmt: skip
+
+    assert export(b) == 2
+    err = capsys.readouterr().err
+    assert "trained on another dataset (n_base, n_samples" in err and not models.exists()
+    assert export(a) == 0
+    assert "has the header it recorded" in capsys.readouterr().out
+    meta = load_model(models / "solution.onnx", "solution").meta
+    assert meta["dataset_content_sha256"] == dataset_digest(load_dataset(a))
+
+
 def test_an_interrupted_export_leaves_the_previous_file(trained, monkeypatch) -> None:
     res, paths = trained
     before = paths["solution"].read_bytes()

@@ -164,6 +164,14 @@ def write_card(models: Path) -> Path:
         f"Base status: {h.get('base_status_counts')}; feasible fraction "
         f"{_pct(h.get('feasible_fraction', 0))}. Only solved landings are used for training."
     )
+    if "dataset_content_sha256" in metrics:
+        add("")
+        add(
+            f"Content sha256 `{metrics['dataset_content_sha256']}` (its arrays and defining "
+            "header, `guidance.nn.train.dataset_digest`); each shipped ONNX file records it "
+            "and its split seed in its `tscvx` metadata, and `guidance baselines` warns when "
+            "it scores a network on other data."
+        )
     add("")
     add("Sampling ranges (uniform; positive east/north; draws rejected by `validate` redrawn):")
     add("")
