@@ -8,7 +8,7 @@ from collections.abc import Iterator
 import pytest
 
 from guidance.catalog import SCENARIOS
-from guidance.scvx import SCvxResult, SCvxSolver
+from guidance.scvx import SCvxResult, SCvxSolver, solve_scvx
 
 
 @pytest.fixture(scope="session")
@@ -19,6 +19,13 @@ def default_solved() -> tuple[SCvxSolver, SCvxResult]:
     result = solver.solve()
     assert result.status == "solved", result.reason
     return solver, result
+
+
+@pytest.fixture(scope="session")
+def catalog_solved() -> dict[str, SCvxResult]:
+    """Every catalog landing solved by the reference SCvx (Clarabel, default settings), once
+    for the modules that check it (test_scvx) or compare against it (test_cguidance)."""
+    return {name: solve_scvx(s) for name, s in SCENARIOS.items()}
 
 
 @pytest.fixture

@@ -50,9 +50,9 @@ def pairs() -> dict[str, tuple[SCvxResult, SCvxResult]]:
     }
 
 
-@pytest.fixture(scope="module")
-def clarabel_refs() -> dict[str, SCvxResult]:
-    return {name: solve_scvx(s) for name, s in SCENARIOS.items()}
+@pytest.fixture
+def clarabel_refs(catalog_solved: dict[str, SCvxResult]) -> dict[str, SCvxResult]:
+    return catalog_solved
 
 
 def assert_same_solve(c: SCvxResult, ref: SCvxResult) -> None:

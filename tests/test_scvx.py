@@ -18,9 +18,9 @@ from guidance.trajectory_io import read_trajectory
 from guidance.verify import audit
 
 
-@pytest.fixture(scope="module")
-def results() -> dict[str, SCvxResult]:
-    return {name: solve_scvx(s) for name, s in SCENARIOS.items()}
+@pytest.fixture
+def results(catalog_solved: dict[str, SCvxResult]) -> dict[str, SCvxResult]:
+    return catalog_solved
 
 
 @pytest.mark.parametrize("name", list(SCENARIOS))
