@@ -203,7 +203,8 @@ def test_cli_solve_without_a_trajectory_exits_3_and_writes_nothing(
     tmp_path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     """`guidance solve` on the far landing: the status line, no trajectory, nothing written,
-    exit 3 (not solved), for the reference and for the C library."""
+    exit 3, for the reference and for the C library. An infeasible landing is an answer:
+    exit 0, its trajectory written."""
     scn_file = tmp_path / "far.json"
     scn_file.write_text(json.dumps(scenario_to_dict(FAR)))
     for backend in ("clarabel", "c"):
@@ -213,3 +214,8 @@ def test_cli_solve_without_a_trajectory_exits_3_and_writes_nothing(
         assert "solver_error (model evaluation failed at the initial guess)" in text
         assert "no trajectory: nothing written" in text and "final mass" not in text
         assert not out.exists()
+    near = dataclasses.replace(FAR, initial=dataclasses.replace(FAR.initial, r0=(1e3, 4.0, 0.0)))
+    scn_file.write_text(json.dumps(scenario_to_dict(near)))
+    out = tmp_path / "near.npz"
+    assert main(["solve", str(scn_file), "--backend", "c", "--out", str(out)]) == 0
+    assert "status        infeasible" in capsys.readouterr().out and out.exists()
