@@ -434,10 +434,9 @@ def check_trained_params(models_dir: Path | str, kind: str, params: Params) -> N
     stat = path.stat()
     key = (str(path.resolve()), stat.st_mtime_ns, stat.st_size)
     if key not in _TRAINED:
-        import onnx
+        from guidance.nn.flight import load_onnx
 
-        props = {p.key: p.value for p in onnx.load(str(path), load_external_data=False)
-                 .metadata_props}  # fmt: skip
+        props = {p.key: p.value for p in load_onnx(path, load_external_data=False).metadata_props}
         _TRAINED[key] = json.loads(props.get(META_KEY, "{}")).get("params", {})
     diff = _params_diff(_TRAINED[key], params)
     if diff:

@@ -29,6 +29,7 @@ import os
 import signal
 import sys
 import time
+import zipfile
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
@@ -592,16 +593,32 @@ class Dataset:
 def load_dataset(path: str | Path) -> Dataset:
     if not Path(path).is_file():
         raise InputError(f"dataset {path}: no such file (`guidance dataset` makes one)")
-    with np.load(path, allow_pickle=False) as f:
-        header = json.loads(str(f["header"])) if "header" in f.files else {}
-        if header.get("format") != FORMAT:
+    try:
+        f = np.load(path, allow_pickle=False)
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
+        raise InputError(f"{path} is not a {FORMAT} file (not a readable .npz)") from exc
+    if not isinstance(f, np.lib.npyio.NpzFile):
+        raise InputError(f"{path} is not a {FORMAT} file (a single array, not an .npz)")
+    with f:
+        try:
+            header = json.loads(str(f["header"])) if "header" in f.files else {}
+        except json.JSONDecodeError as exc:
+            raise InputError(f"{path}: its header is not JSON ({exc})") from exc
+        if not isinstance(header, dict) or header.get("format") != FORMAT:
             raise InputError(f"{path} is not a {FORMAT} file")
         if header.get("format_version") != FORMAT_VERSION:
             raise InputError(
                 f"{path} has format version {header.get('format_version')}, "
                 f"this code reads version {FORMAT_VERSION}"
             )
-        arrays = {k: f[k] for k in f.files if k != "header"}
+        names = {fd.name for fd in dataclasses.fields(Dataset)} - {"header"}
+        if set(f.files) - {"header"} != names:
+            missing, extra = names - set(f.files), set(f.files) - names - {"header"}
+            raise InputError(
+                f"{path}: arrays do not match the {FORMAT} layout (missing "
+                f"{sorted(missing) or 'none'}, unknown {sorted(extra) or 'none'})"
+            )
+        arrays = {k: f[k] for k in names}
     return Dataset(header=header, **arrays)
 
 

@@ -147,6 +147,34 @@ def test_missing_models_and_data_exit_2(tmp_path: Path, capsys: pytest.CaptureFi
     assert "no such file" in capsys.readouterr().err
 
 
+def test_corrupt_models_and_data_exit_2(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    """Files that exist but are not what they are named: a message, not a trace."""
+    for kind in ("solution", "constraint"):
+        (tmp_path / f"{kind}.onnx").write_text("not a model")
+    for backend in ("clarabel", "c"):
+        code = main(["solve", "--method", "tscvx", "--backend", backend, "--models",
+                     str(tmp_path)])  # fmt: skip
+        assert code == 2, backend
+        err = capsys.readouterr().err
+        assert err.startswith("error: ") and "Traceback" not in err, err
+    (tmp_path / "text.npz").write_text("garbage")
+    (tmp_path / "empty.npz").write_bytes(b"")
+    np.save(tmp_path / "array.npy", np.zeros(3))
+    header = np.array(json.dumps({"format": "tscvx-dataset", "format_version": 1}))
+    np.savez(tmp_path / "layout.npz", header=header, theta=np.zeros(3))
+    expect = {
+        "text.npz": "not a readable .npz",
+        "empty.npz": "not a readable .npz",
+        "array.npy": "a single array",
+        "layout.npz": "arrays do not match the tscvx-dataset layout",
+    }
+    for name, words in expect.items():
+        for cmd in (["train", "--train-dir", str(tmp_path / "t")], ["baselines"]):
+            assert main([*cmd, "--dataset", str(tmp_path / name)]) == 2
+            err = capsys.readouterr().err
+            assert err.startswith("error: ") and words in err, (name, err)
+
+
 def test_parameter_override_and_defaults() -> None:
     s = scenario_from_dict({**GOOD, "T_max": 4.5, "final_roll_free": False, "N": 30})
     assert s.params.T_max == 4.5 and s.params.N == 30 and not s.params.final_roll_free

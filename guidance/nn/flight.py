@@ -37,8 +37,11 @@ import zlib
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
+from typing import Any
 
 import numpy as np
+
+from guidance.errors import InputError
 
 MAGIC = b"TSCVXNN\0"
 FORMAT_VERSION = 1
@@ -58,9 +61,9 @@ STATUS_NAMES = (
 )  # fmt: skip
 
 
-class OnnxLayoutError(ValueError):
-    """The ONNX graph is not the architecture of guidance/nn/model.py (or its weights do not
-    reproduce the recorded probes)."""
+class OnnxLayoutError(InputError):
+    """The file is not an ONNX model, or its graph is not the architecture of
+    guidance/nn/model.py (or its weights do not reproduce the recorded probes)."""
 
 
 # ---- ONNX -> arrays ---------------------------------------------------------------------------
@@ -126,11 +129,21 @@ ALLOWED_OPS = {
 }  # fmt: skip
 
 
-def read_onnx(path: str | Path) -> FlightWeights:
+def load_onnx(path: str | Path, load_external_data: bool = True) -> Any:
+    """The onnx.ModelProto of a file; OnnxLayoutError when the file is not one."""
     import onnx
+    from google.protobuf.message import DecodeError
+
+    try:
+        return onnx.load(str(path), load_external_data=load_external_data)
+    except DecodeError as exc:
+        raise OnnxLayoutError(f"{path}: not an ONNX model file ({exc})") from exc
+
+
+def read_onnx(path: str | Path) -> FlightWeights:
     from onnx import helper, numpy_helper
 
-    model = onnx.load(str(path))
+    model = load_onnx(path)
     graph = model.graph
     props = {p.key: p.value for p in model.metadata_props}
     if "tscvx" not in props:
