@@ -307,3 +307,15 @@ def test_example_program_refuses_swapped_networks_and_prints_nothing_else() -> N
     assert run.returncode == 2, run.stdout + run.stderr
     assert "refused: " in run.stderr and "solution network" in run.stderr
     assert "node" not in run.stdout and "m_f" not in run.stdout
+
+
+@pytest.mark.parametrize("args", [["--help"], ["a.tnn", "b.tnn", "c.tnn"], ["a.tnn", "-v"]])
+def test_example_program_refuses_a_bad_command_line_with_its_usage(args: list[str]) -> None:
+    """build/pdg_example: an option or a third file is a usage error (exit 2), not a file
+    name or an argument silently ignored."""
+    import subprocess
+
+    example = cguidance.LIB_PATH.parent / "pdg_example"
+    run = subprocess.run([str(example), *args], capture_output=True, text=True, check=False,
+                         timeout=60)  # fmt: skip
+    assert run.returncode == 2 and run.stderr.startswith("usage: ") and run.stdout == ""

@@ -14,7 +14,8 @@
  *      -lamd -lldl -lsuitesparseconfig -lm
  *
  * Exit status: 0 solved, 3 not solved (the status line says why), 2 input refused by the
- * library (nothing solved, nothing printed but the message), 1 set-up failure.
+ * library or a usage error (nothing solved, nothing printed but the message), 1 set-up
+ * failure (a file that cannot be read included).
  *
  * All memory comes from arenas obtained once before the solve (malloc here stands for the
  * flight computer's statically reserved SRAM blocks: the guidance arena, one per network, and
@@ -57,6 +58,10 @@ int main(int argc, char **argv)
     double x[PDG_N_MAX * PDG_NSTATE], u[PDG_N_MAX * PDG_NCTRL];
     int N, i, k, tries;
 
+    if (argc > 3 || (argc > 1 && argv[1][0] == '-') || (argc > 2 && argv[2][0] == '-')) {
+        fprintf(stderr, "usage: %s [SOLUTION.tnn [CONSTRAINT.tnn]]\n", argv[0]);
+        return 2;
+    }
     pdg_default_settings(&st);
     pdg_default_scenario(&scn);
     N = scn.params.N;
