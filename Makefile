@@ -69,8 +69,8 @@ demo: setup lib
 	./$(BUILD)/pdg_example $(BUILD)/models/solution.tnn $(BUILD)/models/constraint.tnn \
 	  > out/pdg_example_tscvx.txt && tail -n 3 out/pdg_example_tscvx.txt
 
-bench: setup lib
-	$(GUIDANCE) bench --backend clarabel c-socp c --tscvx-landings 24
+bench: setup lib $(BUILD)/ctest/bench_driver
+	$(GUIDANCE) bench --backend clarabel c-socp c --tscvx-landings 24 --callgrind
 	$(GUIDANCE) agreement --landings 20
 
 budget: setup lib

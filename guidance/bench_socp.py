@@ -301,8 +301,11 @@ def _callgrind(cmd: list[str], toggle: str) -> int | None:
     return None
 
 
+BENCH_DRIVER = ROOT / "build" / "ctest" / "bench_driver"  # `make bench` (or `make ctest`) builds it
+
+
 def instructions_ours(prob: ConicProblem, kkt_backend: int = 0) -> int | None:
-    driver = ROOT / "build" / "ctest" / "bench_driver"
+    driver = BENCH_DRIVER
     if not driver.exists():
         return None
     with tempfile.TemporaryDirectory() as tmp:
@@ -436,6 +439,8 @@ def main(argv: list[str] | None = None) -> int:
             print(line)
     if args.callgrind:
         print("instructions per solve (callgrind, first problem of each set):")
+        if not BENCH_DRIVER.exists():
+            print(f"  (tscvx: n/a, {BENCH_DRIVER.relative_to(ROOT)} is not built: make bench)")
         for name, probs in sets[:3]:
             ours = instructions_ours(probs[0])
             sparse = instructions_ours(probs[0], KKT_SPARSE)

@@ -238,7 +238,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
         except ImportError:
             print("\n(conic solver benchmark unavailable: guidance.bench_socp not found)")
         else:
-            bench_socp.main()
+            bench_socp.main(["--callgrind"] if args.callgrind else [])
     return 0
 
 
@@ -335,6 +335,11 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--repeats", type=at_least(1), default=1)
     b.add_argument("--method", choices=["scvx", "tscvx"], default="scvx")
     b.add_argument("--skip-socp", action="store_true", help="skip the conic solver benchmark")
+    b.add_argument(
+        "--callgrind",
+        action="store_true",
+        help="conic solver benchmark: also instructions per solve, ours against QOCO's (valgrind)",
+    )
     b.add_argument(
         "--tscvx-landings",
         type=at_least(0),

@@ -217,6 +217,8 @@ class SCvxSolver:
                 status = "solver_error"
                 reason = f"iteration {k + 1}: model evaluation failed at the subproblem solution"
                 history.append(_failed_record(k + 1, J, eta, sol))
+                if self.log:
+                    self.log(f"{k + 1:3d}  model evaluation failed at the subproblem solution")
                 break
             J_new, defect_new, viol_new = self.penalty(z_new, disc_new)
             L = self.linear_cost(prob, sol.x)
