@@ -3,10 +3,6 @@
  * by repeated division of each row/column by the square root of its infinity norm, followed
  * by a cost scaling cs (Clarabel's rule): Ps = cs D P D, cs = 1/max(mean |P col|, |D c|_inf).
  * EG is made constant on each SOC so that the scaling maps the cone onto itself.
- * Every factor is rounded to a power of two: scaling is then exact, so a data update brings
- * the kept arrays back to the caller's numbers bit for bit, and a solve gives the same answer
- * whatever updates came before it (with other factors each update's round trip rounded, and
- * the error built up over an SCvx run's updates).
  * Works in place: on entry P, A, G, c, b, h hold the caller's numbers. Computed at setup and
  * again on every data update (tscvx_update_equilibrate): O(ruiz_iters nnz), about 0.5 % of
  * a landing subproblem's solve.
@@ -19,16 +15,6 @@ static tscvx_float clamp_norm(tscvx_float v) {
     if (!(v > 1e-4)) return v > 0.0 ? 1e-4 : 1.0; /* empty rows/columns stay unscaled */
     return v > 1e4 ? 1e4 : v;
 }
-
-/* The power of two nearest to v > 0 on a log scale. */
-static tscvx_float pow2_near(tscvx_float v) {
-    int e;
-    const tscvx_float f = frexp(v, &e); /* v = f 2^e, 0.5 <= f < 1 */
-    return ldexp(1.0, f < 0.70710678118654752440 ? e - 1 : e);
-}
-
-/* The Ruiz factor of a row or column of infinity norm v: 1/sqrt(v) to a power of two. */
-static tscvx_float ruiz_factor(tscvx_float v) { return pow2_near(1.0 / sqrt(clamp_norm(v))); }
 
 void tscvx_equilibrate(tscvx_workspace *ws) {
     const tscvx_int n = ws->n, p = ws->p, m = ws->m;
@@ -65,11 +51,20 @@ void tscvx_equilibrate(tscvx_workspace *ws) {
             for (tscvx_int i = 0; i < q; i++) mx = rnG[o + i] > mx ? rnG[o + i] : mx;
             for (tscvx_int i = 0; i < q; i++) rnG[o + i] = mx;
         }
-        int changed = 0;
-        for (tscvx_int j = 0; j < n; j++) changed |= (cn[j] = ruiz_factor(cn[j])) != 1.0;
-        for (tscvx_int i = 0; i < p; i++) changed |= (rnA[i] = ruiz_factor(rnA[i])) != 1.0;
-        for (tscvx_int i = 0; i < m; i++) changed |= (rnG[i] = ruiz_factor(rnG[i])) != 1.0;
-        if (!changed) break; /* balanced to within the rounding to powers of two */
+        tscvx_float worst = 0.0;
+        for (tscvx_int j = 0; j < n; j++) {
+            worst = fmax(worst, fabs(1.0 - cn[j]));
+            cn[j] = 1.0 / sqrt(clamp_norm(cn[j]));
+        }
+        for (tscvx_int i = 0; i < p; i++) {
+            worst = fmax(worst, fabs(1.0 - rnA[i]));
+            rnA[i] = 1.0 / sqrt(clamp_norm(rnA[i]));
+        }
+        for (tscvx_int i = 0; i < m; i++) {
+            worst = fmax(worst, fabs(1.0 - rnG[i]));
+            rnG[i] = 1.0 / sqrt(clamp_norm(rnG[i]));
+        }
+        if (worst < 1e-3) break; /* already balanced */
         for (tscvx_int j = 0; j < n; j++) {
             for (tscvx_int k = P->p[j]; k < P->p[j + 1]; k++) P->x[k] *= cn[P->i[k]] * cn[j];
             for (tscvx_int k = A->p[j]; k < A->p[j + 1]; k++) A->x[k] *= rnA[A->i[k]] * cn[j];
@@ -94,7 +89,7 @@ void tscvx_equilibrate(tscvx_workspace *ws) {
         }
     for (tscvx_int j = 0; j < n; j++) pmean += cn[j] / n;
     const tscvx_float scale = fmax(pmean, cmax);
-    ws->cs = scale > 0.0 ? pow2_near(1.0 / fmin(fmax(scale, 1e-4), 1e4)) : 1.0;
+    ws->cs = scale > 0.0 ? 1.0 / fmin(fmax(scale, 1e-4), 1e4) : 1.0;
     for (tscvx_int k = 0; k < P->nnz; k++) P->x[k] *= ws->cs;
     for (tscvx_int j = 0; j < n; j++) ws->c[j] *= ws->cs;
     for (tscvx_int i = 0; i < p; i++) ws->b[i] *= ws->EA[i];
@@ -102,10 +97,9 @@ void tscvx_equilibrate(tscvx_workspace *ws) {
 }
 
 /* New numbers (NULL = unchanged), equilibrated afresh: the kept arrays are brought back to
- * the caller's units with the current scaling (exactly: powers of two), the new ones copied,
- * and the whole problem equilibrated again. A scaling computed for other numbers would make
- * the conditioning, and so the stopping point on a flat optimal face, depend on the history
- * of updates. */
+ * the caller's units with the current scaling, the new ones copied, and the whole problem
+ * equilibrated again. A scaling computed for other numbers would make the conditioning, and
+ * so the stopping point on a flat optimal face, depend on the history of updates. */
 void tscvx_update_equilibrate(tscvx_workspace *ws, const tscvx_float *Px, const tscvx_float *c,
                               const tscvx_float *Ax, const tscvx_float *b,
                               const tscvx_float *Gx, const tscvx_float *h) {
