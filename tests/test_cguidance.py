@@ -249,6 +249,20 @@ def test_model_failure_at_the_guess_is_the_same_status_and_reason() -> None:
     assert c.subproblems_solved == 0 and math.isnan(c.t_f) and np.isnan(c.x).all()
 
 
+def test_a_solve_does_not_depend_on_the_solves_before_it() -> None:
+    """The same landing solved before and after an infeasible one (other subproblem numbers
+    through the same workspace for 20 iterations) gives the same trajectory bit for bit: the
+    loop hands the SOCP every part of each subproblem (the constant P too)."""
+    scn = SCENARIOS["default"]
+    first = cguidance.solve_c(scn)
+    far = Scenario(InitialState(r0=(1e3, 4.0, 0.0)))
+    assert cguidance.solve_c(far).status == "infeasible"
+    again = cguidance.solve_c(scn)
+    assert again.m_f == first.m_f and again.iterations == first.iterations
+    np.testing.assert_array_equal(again.x, first.x)
+    np.testing.assert_array_equal(again.u, first.u)
+
+
 def test_pinned_final_attitude_in_c() -> None:
     base = SCENARIOS["north"]
     pinned = Scenario(base.initial, base.params.replace(final_roll_free=False))

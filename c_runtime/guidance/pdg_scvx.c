@@ -737,7 +737,9 @@ static int assemble(pdg_workspace *ws, const double *z, const double *disc,
     v.h = ws->h;
     v.c = ws->c;
     pdg_emit(&em, &ws->lay, ws->roll_free, &v);
-    return tscvx_update_data(ws->socp, NULL, ws->c, ws->Ax, ws->b, ws->Gx, ws->h) ==
+    /* every part, the constant P included: a part left out would come back from its scaled
+     * copy with a rounding error, and the solve would depend on the solves before it */
+    return tscvx_update_data(ws->socp, ws->Px, ws->c, ws->Ax, ws->b, ws->Gx, ws->h) ==
                    TSCVX_SETUP_OK
                ? 0
                : -1;

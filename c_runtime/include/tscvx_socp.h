@@ -215,8 +215,10 @@ tscvx_setup_status tscvx_setup(tscvx_workspace **ws, void *arena, size_t arena_b
 /* New values with the setup sparsity (same nnz arrays); NULL leaves that part unchanged;
  * new P values are checked as at setup (TSCVX_SETUP_P_NOT_PSD).
  * No symbolic work: the problem is equilibrated again with the new numbers (O(nnz) per Ruiz
- * pass) and written into the KKT matrix through the setup maps, so a solve after an update
- * takes the same steps as a solve after a fresh setup with the same numbers (to rounding).
+ * pass) and written into the KKT matrix through the setup maps. Given every part, a solve
+ * after any updates gives, bit for bit, what a solve after a fresh setup with those numbers
+ * gives. A part left NULL is recovered from its scaled copy to rounding (about an ulp per
+ * update), so the solve then depends slightly on the updates before it.
  * Non-finite values or a P that fails its check make the workspace not ready
  * (solve returns TSCVX_INVALID_INPUT) until a valid update. */
 tscvx_setup_status tscvx_update_data(tscvx_workspace *ws, const tscvx_float *Px,

@@ -152,7 +152,8 @@ static void test_bad_input(void) {
 
 /* update: same sparsity, new numbers; NaN update invalidates until a valid one; a solve after
  * an update takes the same steps as one after a fresh setup with those numbers (the
- * equilibration is redone, the kept numbers recovered from their scaled copies) */
+ * equilibration is redone, the kept numbers recovered from their scaled copies, to rounding),
+ * and after updates that resend every part gives the same bits */
 static void test_update(void) {
     small_soc p;
     const tscvx_data d = small_soc_data(&p);
@@ -198,6 +199,16 @@ static void test_update(void) {
     CHECK(tscvx_get_iter_log(ws, info.iterations, &row) == TSCVX_SETUP_OK, "log row");
     CHECK(row.iter == info.iterations && fabs(row.pcost - info.pcost) < 1e-12, "log content");
     CHECK(tscvx_get_iter_log(ws, info.iterations + 1, &row) == TSCVX_SETUP_BAD_INDEX, "log range");
+    /* 100 updates that resend every part (h alternating), ending on d2's numbers: the solve
+     * equals the fresh one bit for bit (what the guidance loop relies on) */
+    tscvx_float h3[] = {0.3, 0, 0};
+    for (int k = 0; k < 100; k++)
+        CHECK(tscvx_update_data(ws, NULL, d.c, NULL, NULL, Gx2, k % 2 ? h2 : h3) ==
+                  TSCVX_SETUP_OK, "full update %d", k);
+    CHECK(tscvx_solve(ws) == TSCVX_SOLVED, "solve after 100 full updates");
+    tscvx_get_solution(ws, x, NULL, NULL, NULL);
+    CHECK(x[0] == xf[0] && x[1] == xf[1], "full updates vs fresh x %.3g %.3g", x[0] - xf[0],
+          x[1] - xf[1]);
 }
 
 /* Every call on a stale workspace (arena overwritten after setup, or cleaned up) is refused
