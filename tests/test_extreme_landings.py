@@ -1,0 +1,46 @@
+"""Landings at the edges of what validation accepts (no fuel to spare, an engine too weak or
+too strong, a vehicle that is nearly weightless to torque, drag that overflows the model):
+each ends with a status and its reason, never an exception or a numpy warning, and the C
+library gives the Python reference's status.
+
+Infeasible ones are not compared further: their subproblems are ill-posed, and the C loop and
+the Python loop part ways within the conic solver's tolerance (at N = 3 the first candidate's
+penalty differs by 3e-7 relative; the Python loop hands the runtime a pattern without the C
+loop's explicit zeros), then stall after 17 and 13 iterations."""
+
+from __future__ import annotations
+
+import warnings
+
+import pytest
+
+from guidance import cguidance
+from guidance.params import InitialState, Params, Scenario
+from guidance.scvx import SCvxSolver
+from guidance.verify import audit
+
+# name -> (scenario, the status the 23 Nov probe found with Clarabel and with the C library)
+CASES = {
+    "no fuel to spare": (Scenario(InitialState(m0=2.0 + 1e-9)), "infeasible"),
+    "thrown upwards": (Scenario(InitialState(v0=(1000.0, 0.0, 0.0))), "solver_error"),
+    "drag overflows the model": (Scenario(params=Params(aero_coeff=1e3)), "solver_error"),
+    "three nodes": (Scenario(params=Params(N=3)), "infeasible"),
+    "weak engine": (Scenario(params=Params(T_max=1e-3, T_min=1e-4)), "infeasible"),
+    "tiny inertia": (Scenario(params=Params(J_B=(1e-9, 1e-8, 1e-8))), "solved"),
+}
+
+
+@pytest.mark.parametrize("name", list(CASES))
+def test_an_extreme_landing_ends_with_a_status_in_python_and_in_c(name: str) -> None:
+    scenario, expected = CASES[name]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        reference = SCvxSolver(scenario).solve()  # Clarabel
+        python_c = SCvxSolver(scenario, backend="c").solve()
+        c = cguidance.solve_c(scenario)
+    assert reference.status == python_c.status == c.status == expected, (
+        reference.reason, c.reason)  # fmt: skip
+    if expected == "solver_error":  # decided at the first subproblem or before it
+        assert c.reason == python_c.reason == reference.reason
+    if expected == "solved":
+        assert audit(c.x, c.u, c.t_f, scenario.params).max_path_violation <= 1e-6
