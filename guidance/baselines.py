@@ -322,9 +322,9 @@ def run_baselines(
 def training_data_warning(model: Path, digest: str, seed: int) -> str | None:
     """Why the network may have trained on the test rows it is scored on here (None when its
     export records this dataset, by :func:`dataset_digest`, and this split seed)."""
-    import onnx
+    from guidance.nn.flight import load_onnx
 
-    props = {p.key: p.value for p in onnx.load(str(model)).metadata_props}
+    props = {p.key: p.value for p in load_onnx(model, load_external_data=False).metadata_props}
     meta = json.loads(props.get("tscvx", "{}"))
     trained, split = meta.get("dataset_content_sha256"), meta.get("split_seed")
     reasons = []

@@ -203,14 +203,23 @@ class SCvxSolver:
             if id(tpl) not in self._sessions:
                 self._sessions[id(tpl)] = conic.session(self.backend, st.socp_tol, st.socp_max_iter)
             sol = self._sessions[id(tpl)].solve(prob)
-            failure = self._candidate_failure(sol, k + 1)
-            if isinstance(failure, str):  # the C library's reasons (pdg_scvx.c)
+            failure = None  # no candidate: the C library's reasons (pdg_scvx.c)
+            if not sol.ok:
+                failure = f"subproblem at iteration {k + 1}: conic solver returned {sol.status}"
+            else:
+                try:
+                    disc_new = self._discretize(sol.x)
+                except ModelEvaluationError:
+                    failure = (
+                        f"iteration {k + 1}: model evaluation failed at the subproblem solution"
+                    )
+            if failure is not None:
                 status, reason = "solver_error", failure
                 history.append(_failed_record(k + 1, J, eta, sol))
                 if self.log:
                     self.log(f"{k + 1:3d}  {reason}")
                 break
-            z_new, disc_new = sol.x.copy(), failure
+            z_new = sol.x.copy()
             J_new, defect_new, viol_new = self.penalty(z_new, disc_new)
             L = self.linear_cost(prob, sol.x)
             dJ, dL = J - J_new, J - L
@@ -301,15 +310,6 @@ class SCvxSolver:
             subproblems=subproblems,
             settings=st,
         )
-
-    def _candidate_failure(self, sol: conic.ConicSolution, k: int) -> str | dict[str, np.ndarray]:
-        """The discretization about the subproblem's solution, or why there is none."""
-        if not sol.ok:
-            return f"subproblem at iteration {k}: conic solver returned {sol.status}"
-        try:
-            return self._discretize(sol.x)
-        except ModelEvaluationError:
-            return f"iteration {k}: model evaluation failed at the subproblem solution"
 
     def _no_trajectory(self, reason: str, t_start: float) -> SCvxResult:
         """The result of a solve that stopped before its first subproblem."""

@@ -50,11 +50,6 @@ def pairs() -> dict[str, tuple[SCvxResult, SCvxResult]]:
     }
 
 
-@pytest.fixture
-def clarabel_refs(catalog_solved: dict[str, SCvxResult]) -> dict[str, SCvxResult]:
-    return catalog_solved
-
-
 def assert_same_solve(c: SCvxResult, ref: SCvxResult) -> None:
     """Issue 4's figure: same status, iterations within one, m_f within 1e-6 relative."""
     assert c.status == ref.status, (c.reason, ref.reason)
@@ -122,9 +117,9 @@ def test_c_solve_is_the_python_solve(pairs, name: str) -> None:
 
 
 @pytest.mark.parametrize("name", list(SCENARIOS))
-def test_c_solve_is_the_clarabel_reference(pairs, clarabel_refs, name: str) -> None:
+def test_c_solve_is_the_clarabel_reference(pairs, catalog_solved, name: str) -> None:
     """Issue 3's figure on the catalog: same status and iterations, 1e-6 in final mass."""
-    c, ref = pairs[name][0], clarabel_refs[name]
+    c, ref = pairs[name][0], catalog_solved[name]
     assert c.status == ref.status, (c.reason, ref.reason)
     rel = abs(c.m_f - ref.m_f) / ref.m_f
     assert rel <= STRICT_REL_MF, f"final mass differs by {rel:.2e} relative"
@@ -177,11 +172,11 @@ def test_twenty_more_scenarios(index: int) -> None:
     assert_same_solve(c, ref)
 
 
-def test_first_subproblem_matches_reference(pairs, clarabel_refs) -> None:
+def test_first_subproblem_matches_reference(pairs, catalog_solved) -> None:
     """Lockstep check of one SCvx step: same guess, same subproblem, same penalty (against
     the reference on Clarabel: the first candidate does not yet depend on earlier stops)."""
     for name, (c, _) in pairs.items():
-        ref = clarabel_refs[name]
+        ref = catalog_solved[name]
         h0, r0 = c.history[0], ref.history[0]
         assert h0.eta == r0.eta
         assert pytest.approx(r0.J, rel=1e-6) == h0.J, name

@@ -18,14 +18,9 @@ from guidance.trajectory_io import read_trajectory
 from guidance.verify import audit
 
 
-@pytest.fixture
-def results(catalog_solved: dict[str, SCvxResult]) -> dict[str, SCvxResult]:
-    return catalog_solved
-
-
 @pytest.mark.parametrize("name", list(SCENARIOS))
-def test_converges_and_lands_open_loop(results: dict[str, SCvxResult], name: str) -> None:
-    r = results[name]
+def test_converges_and_lands_open_loop(catalog_solved: dict[str, SCvxResult], name: str) -> None:
+    r = catalog_solved[name]
     p = SCENARIOS[name].params
     assert r.status == "solved", r.reason
     assert r.iterations <= 20
@@ -37,13 +32,13 @@ def test_converges_and_lands_open_loop(results: dict[str, SCvxResult], name: str
     assert r.masks.shape == (r.iterations, NC * p.N)
 
 
-def test_default_landing_burns_about_three_quarters(results: dict[str, SCvxResult]) -> None:
-    fuel = 3.0 - results["default"].m_f
+def test_default_landing_burns_about_three_quarters(catalog_solved: dict[str, SCvxResult]) -> None:
+    fuel = 3.0 - catalog_solved["default"].m_f
     assert 0.6 < fuel < 0.9  # DESIGN.md: about three quarters of the unit of propellant
 
 
-def test_rotation_about_up_axis_rotates_the_solution(results: dict[str, SCvxResult]) -> None:
-    base = results["default"]
+def test_rotation_about_up_axis_rotates_the_solution(catalog_solved: dict[str, SCvxResult]) -> None:
+    base = catalog_solved["default"]
     for j in range(1, 8):
         psi = j * math.pi / 4
         r = solve_scvx(rotate_scenario(SCENARIOS["default"], psi))

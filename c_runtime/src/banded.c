@@ -826,9 +826,11 @@ static tscvx_float banded_reg(const tscvx_workspace *ws) {
     return TSCVX_BANDED_REG_SCALE * ws->delta;
 }
 
-/* New data: the factors of the groups' P blocks (P_gg = L_P L_P') and the largest |entry| of
- * P, A, G. Returns -1 when a P block is found indefinite (or its factor not finite). */
-static int banded_load(tscvx_workspace *ws) {
+/* The factors of the groups' P blocks (P_gg = L_P L_P'); *pmax = the largest |entry| of P.
+ * P is block diagonal over the groups (a P entry joins its variables' groups), so this is
+ * also the full semidefiniteness test of P. Returns -1 when a block is found indefinite (or
+ * its factor not finite). */
+static int factor_p_blocks(tscvx_workspace *ws, tscvx_float *pmax) {
     tscvx_banded *bd = &ws->bd;
     for (tscvx_int g = 0; g < bd->ngroup; g++) {
         if (!bd->hasP[g]) continue;
@@ -836,15 +838,28 @@ static int banded_load(tscvx_workspace *ws) {
         tscvx_float *F = bd->PF + bd->hp[g];
         for (tscvx_int t = 0; t < s * s; t++) F[t] = 0.0;
     }
-    tscvx_float pmax = 0.0;
+    *pmax = 0.0;
     for (tscvx_int k = 0; k < ws->P.nnz; k++) {
         bd->PF[bd->mapP[k]] += ws->P.x[k];
-        pmax = fmax(pmax, fabs(ws->P.x[k]));
+        *pmax = fmax(*pmax, fabs(ws->P.x[k]));
     }
     int status = 0;
     for (tscvx_int g = 0; g < bd->ngroup; g++)
-        if (bd->hasP[g] && chol(bd->PF + bd->hp[g], bd->gp[g + 1] - bd->gp[g], 1, pmax) != 0)
+        if (bd->hasP[g] && chol(bd->PF + bd->hp[g], bd->gp[g + 1] - bd->gp[g], 1, *pmax) != 0)
             status = -1;
+    return status;
+}
+
+static int banded_check_p(tscvx_workspace *ws) {
+    tscvx_float pmax;
+    return factor_p_blocks(ws, &pmax);
+}
+
+/* New data: the P-block factors and the largest |entry| of P, A, G. Returns -1 when a P
+ * block is found indefinite. */
+static int banded_load(tscvx_workspace *ws) {
+    tscvx_float pmax;
+    const int status = factor_p_blocks(ws, &pmax);
     tscvx_float kmax = fmax(banded_reg(ws), pmax);
     for (tscvx_int k = 0; k < ws->A.nnz; k++) kmax = fmax(kmax, fabs(ws->A.x[k]));
     for (tscvx_int k = 0; k < ws->G.nnz; k++) kmax = fmax(kmax, fabs(ws->G.x[k]));
@@ -1031,7 +1046,5 @@ static int banded_solve(tscvx_workspace *ws, const tscvx_float *rx, const tscvx_
     return steps;
 }
 
-/* P is block diagonal over the groups (a P entry joins its variables' groups): the
- * semidefinite factors of the blocks that banded_load makes are the full test. */
 const tscvx_kkt_method tscvx_method_banded = {"banded", TSCVX_KKT_BANDED, banded_load,
-                                              banded_load, banded_factor, banded_solve};
+                                              banded_check_p, banded_factor, banded_solve};
