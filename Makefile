@@ -65,6 +65,7 @@ demo: setup lib
 	$(GUIDANCE) solve --method scvx --backend clarabel --out out/scvx.npz --plot out/scvx.png
 	$(GUIDANCE) solve --method scvx --backend c --out out/scvx_c.npz --plot out/scvx_c.png
 	$(GUIDANCE) solve --method tscvx --backend c --out out/tscvx_c.npz --plot out/tscvx_c.png
+	$(GUIDANCE) verify out/scvx.npz out/scvx_c.npz out/tscvx_c.npz
 	./$(BUILD)/pdg_example > out/pdg_example.txt && tail -n 3 out/pdg_example.txt
 	./$(BUILD)/pdg_example $(BUILD)/models/solution.tnn $(BUILD)/models/constraint.tnn \
 	  > out/pdg_example_tscvx.txt && tail -n 3 out/pdg_example_tscvx.txt

@@ -35,6 +35,7 @@ import numpy as np
 
 from guidance.dataset import Dataset
 from guidance.nn.train import KINDS, dataset_digest, ood_flags, split_bases, standardization, xy
+from guidance.scenario import params_from_dict
 
 METHODS = ("Linear Interpolation", "KDTree", "T-SCvx")
 
@@ -172,11 +173,10 @@ def _run_method(spec: dict[str, Any]) -> dict[str, Any]:
         table = PCALinearTable(d["X_tr"], d["Y_tr"])
         predict = table.predict
     else:
-        from guidance.dataset import _params_from_json
         from guidance.nn.infer import load_model
 
         # the problem of the data it is measured on (a model for another one is refused)
-        params = _params_from_json(spec["params"]) if spec.get("params") else None
+        params = params_from_dict(spec["params"]) if spec.get("params") else None
         model = load_model(spec["model"], spec["kind"], params)
         predict = model.run
     build_s = time.perf_counter() - t0

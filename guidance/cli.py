@@ -1,4 +1,5 @@
-"""Command line: ``guidance solve | bench | scenario``."""
+"""Command line: ``guidance solve | scenario | verify | bench | agreement | budget`` (the
+learning tools register theirs from ``guidance.cli_learning``)."""
 
 from __future__ import annotations
 
@@ -16,6 +17,7 @@ from guidance.params import IM, Scenario, SCvxSettings
 from guidance.scenario import load_scenario, scenario_to_dict
 from guidance.scvx import SCvxResult, SCvxSolver, format_log
 from guidance.tscvx import REDUCED_ETA_INIT, solve_tscvx
+from guidance.verify_file import Tolerances
 
 EXIT_BAD_INPUT = 2
 # No trajectory to write (the solve stopped before its first subproblem). Any status with a
@@ -120,6 +122,17 @@ def add_prox_u(parser: argparse.ArgumentParser, about_zero: str) -> None:
         help="weight of the subproblems' proximal term on the scaled thrust (0: the paper's "
         f"linear objective, {about_zero})",
     )
+
+
+def positive_float(text: str) -> float:
+    """argparse type of a tolerance: a finite number > 0."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not (np.isfinite(value) and value > 0.0):
+        raise argparse.ArgumentTypeError(f"expected a finite number > 0, got {text!r}")
+    return value
 
 
 def at_least(minimum: int) -> Callable[[str], int]:
@@ -269,6 +282,13 @@ def cmd_budget(args: argparse.Namespace) -> int:
     return int(budget.main() or 0)
 
 
+def cmd_verify(args: argparse.Namespace) -> int:
+    from guidance import verify_file
+
+    tol = Tolerances(landing=args.tol_landing, path=args.tol_path, node_deviation=args.tol_nodes)
+    return verify_file.main(args.files, tol)
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="guidance",
@@ -365,6 +385,32 @@ def build_parser() -> argparse.ArgumentParser:
     a.add_argument("--workers", type=at_least(1), default=os.cpu_count() or 1)
     add_prox_u(a, "on which the solvers part")
     a.set_defaults(func=cmd_agreement)
+
+    v = sub.add_parser(
+        "verify",
+        help="fly trajectory files open loop (scipy) and check landing and path constraints",
+    )
+    v.add_argument("files", nargs="+", help="trajectory .npz files (DESIGN.md contract)")
+    tol = Tolerances()
+    v.add_argument(
+        "--tol-landing",
+        type=positive_float,
+        default=tol.landing,
+        help=f"|r(t_f) - r_f| and |v(t_f) - v_f| of the propagation (default {tol.landing:g})",
+    )
+    v.add_argument(
+        "--tol-path",
+        type=positive_float,
+        default=tol.path,
+        help=f"largest path-constraint value h at the nodes (default {tol.path:g})",
+    )
+    v.add_argument(
+        "--tol-nodes",
+        type=positive_float,
+        default=tol.node_deviation,
+        help=f"node states against the propagation (default {tol.node_deviation:g})",
+    )
+    v.set_defaults(func=cmd_verify)
 
     g = sub.add_parser("budget", help="RAD750 time and memory budget of one C guidance call")
     g.set_defaults(func=cmd_budget)

@@ -41,7 +41,7 @@ import numpy as np
 from guidance.errors import InputError
 from guidance.params import NC, NU, NX, InitialState, Params, Scenario, SCvxSettings
 from guidance.provenance import code_version, provenance, record_code_version
-from guidance.scenario import ScenarioError, validate
+from guidance.scenario import ScenarioError, params_from_dict, validate
 
 FORMAT = "tscvx-dataset"
 FORMAT_VERSION = 1
@@ -187,7 +187,7 @@ def solve_sample(job: tuple[int, int, dict, dict, dict, str]) -> dict[str, Any]:
     i, seed, ranges_d, params_d, settings_d, backend = job
 
     ranges = SamplingRanges.from_json_dict(ranges_d)
-    params = _params_from_json(params_d)
+    params = params_from_dict(params_d)
     settings = SCvxSettings(**settings_d)
     scenario, rejected = base_scenario(seed, i, ranges, params)
     N = params.N
@@ -238,10 +238,6 @@ def scvx_solver(backend: str) -> Callable[[Scenario, SCvxSettings], Any]:
     from guidance.scvx import solve_scvx
 
     return lambda scenario, settings: solve_scvx(scenario, settings, backend)
-
-
-def _params_from_json(d: dict) -> Params:
-    return Params(**{k: tuple(v) if isinstance(v, list) else v for k, v in d.items()})
 
 
 def sample_path(out_dir: Path, i: int) -> Path:

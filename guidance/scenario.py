@@ -38,6 +38,7 @@ class ScenarioError(InputError):
         where = "scenario file" if field == "<file>" else f"scenario field '{field}'"
         super().__init__(f"{where}: {message}")
         self.field = field
+        self.reason = message
 
 
 def _shown(value: Any) -> str:
@@ -106,6 +107,19 @@ def scenario_from_dict(data: dict[str, Any]) -> Scenario:
     scenario = Scenario(InitialState(**initial_kwargs), Params(**param_kwargs))
     validate(scenario)
     return scenario
+
+
+def params_from_dict(data: dict[str, Any]) -> Params:
+    """Build and validate the parameters from a trajectory file's ``params`` dictionary (every
+    field given by name, as ``Params.to_json_dict`` writes them)."""
+    if not isinstance(data, dict):
+        raise ScenarioError("<root>", "the parameters are a JSON object")
+    unknown = sorted(set(data) - set(PARAM_NAMES))
+    if unknown:
+        raise ScenarioError(unknown[0], "unknown parameter")
+    params = Params(**{k: _parse_param(k, v) for k, v in data.items()})
+    _validate_params(params)
+    return params
 
 
 def load_scenario(path: str | Path) -> Scenario:

@@ -4,10 +4,12 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import zipfile
 from pathlib import Path
 
 import numpy as np
 
+from guidance.errors import InputError
 from guidance.params import Params
 from guidance.provenance import provenance
 from guidance.scenario import scenario_to_dict
@@ -57,12 +59,23 @@ def write_trajectory(
 
 
 def read_trajectory(path: str | Path) -> dict[str, object]:
-    with np.load(path, allow_pickle=False) as data:
-        missing = [k for k in REQUIRED_KEYS if k not in data]
-        if missing:
-            raise ValueError(f"{path}: not a trajectory file, missing {', '.join(missing)}")
-        out: dict[str, object] = {k: data[k] for k in data.files}
-    for key in JSON_KEYS:  # decoded to dictionaries
-        if key in out:
-            out[key] = json.loads(str(out[key]))
+    """The file's arrays, its JSON entries decoded to dictionaries. A file that is not a
+    trajectory file raises InputError saying why."""
+    if not Path(path).is_file():
+        raise InputError(f"{path}: no such file")
+    if not zipfile.is_zipfile(path):
+        raise InputError(f"{path}: not a trajectory file (not an .npz archive)")
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            missing = [k for k in REQUIRED_KEYS if k not in data]
+            if missing:
+                raise InputError(f"{path}: not a trajectory file, missing {', '.join(missing)}")
+            out: dict[str, object] = {k: data[k] for k in data.files}
+        for key in JSON_KEYS:  # decoded to dictionaries
+            if key in out:
+                out[key] = json.loads(str(out[key]))
+    except InputError:
+        raise
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
+        raise InputError(f"{path}: not a readable trajectory file ({exc})") from exc
     return out

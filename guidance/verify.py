@@ -48,37 +48,80 @@ def dynamics_numpy(x: np.ndarray, u: np.ndarray, p: Params) -> np.ndarray:
     )
 
 
-def integrate_interval(
-    x0: np.ndarray, u_k: np.ndarray, u_k1: np.ndarray, dt: float, p: Params, rtol: float
-) -> np.ndarray:
-    """x(dt) from x0 under the first-order hold from u_k (t = 0) to u_k1 (t = dt)."""
+def _interval(
+    x0: np.ndarray,
+    u_k: np.ndarray,
+    u_k1: np.ndarray,
+    dt: float,
+    p: Params,
+    rtol: float,
+    dense: bool,
+):  # -> scipy's OdeResult
     du = u_k1 - u_k
-    sol = solve_ivp(
+    return solve_ivp(
         lambda t, x: dynamics_numpy(x, u_k + (t / dt) * du, p),
         (0.0, dt),
         x0,
         rtol=rtol,
         atol=rtol,
         method="DOP853",
+        dense_output=dense,
     )
-    return sol.y[:, -1]
 
 
-def propagate(
-    x0: np.ndarray, u: np.ndarray, t_f: float, p: Params, rtol: float = 1e-10
+def integrate_interval(
+    x0: np.ndarray, u_k: np.ndarray, u_k1: np.ndarray, dt: float, p: Params, rtol: float
 ) -> np.ndarray:
-    """Open-loop integration from x0 under the FOH thrust; states at the N node times.
+    """x(dt) from x0 under the first-order hold from u_k (t = 0) to u_k1 (t = dt)."""
+    return _interval(x0, u_k, u_k1, dt, p, rtol, False).y[:, -1]
+
+
+@dataclass
+class Propagation:
+    nodes: np.ndarray  # (N, 14) propagated states at the node times
+    x_between: np.ndarray  # (N - 1, s, 14) at s equally spaced times inside each interval
+    u_between: np.ndarray  # (N - 1, s, 3) the first-order-hold thrust there
+
+
+def propagate_sampled(
+    x0: np.ndarray, u: np.ndarray, t_f: float, p: Params, between: int, rtol: float = 1e-10
+) -> Propagation:
+    """Open-loop integration from x0 under the FOH thrust: the states at the N node times and
+    at ``between`` times inside each interval (from the integrator's dense output, which
+    leaves its steps and so the node states unchanged).
 
     Each interval is integrated on its own, the state carried over: the thrust has a kink at
     every node, and a step across one leaves the error estimate blind to it: on the default
     landing, against an interval-wise integration at 1e-13, 1.5e-7 in one go, 1.4e-9 so."""
     N = u.shape[0]
     dt = t_f / (N - 1)
-    xs = np.empty((N, len(x0)))
-    xs[0] = x0
+    s = np.arange(1, between + 1) / (between + 1)  # fractions of the interval
+    nodes = np.empty((N, len(x0)))
+    xb = np.empty((N - 1, between, len(x0)))
+    ub = u[:-1, None, :] + s[None, :, None] * (u[1:] - u[:-1])[:, None, :]
+    nodes[0] = x0
     for k in range(N - 1):
-        xs[k + 1] = integrate_interval(xs[k], u[k], u[k + 1], dt, p, rtol)
-    return xs
+        sol = _interval(nodes[k], u[k], u[k + 1], dt, p, rtol, between > 0)
+        nodes[k + 1] = sol.y[:, -1]
+        if between > 0:
+            xb[k] = sol.sol(s * dt).T
+    return Propagation(nodes, xb, ub)
+
+
+def propagate(
+    x0: np.ndarray, u: np.ndarray, t_f: float, p: Params, rtol: float = 1e-10
+) -> np.ndarray:
+    """Open-loop integration from x0 under the FOH thrust; states at the N node times."""
+    return propagate_sampled(x0, u, t_f, p, 0, rtol).nodes
+
+
+def final_attitude_error(q: np.ndarray, p: Params) -> float:
+    """Roll-free touchdown: |(q2, q3)| (upright, any roll). Pinned: the distance to q_f or
+    -q_f, whichever is nearer (q and -q are the same attitude)."""
+    if p.final_roll_free:
+        return float(np.linalg.norm(q[2:4]))
+    q_f = np.asarray(p.q_f)
+    return float(min(np.linalg.norm(q - q_f), np.linalg.norm(q + q_f)))
 
 
 @dataclass
@@ -88,15 +131,34 @@ class Audit:
     final_tilt_q: float  # |(q2, q3)| at t_f, propagated
     max_path_violation: float  # max over nodes and constraints of h (<= 0 when met)
     max_node_deviation: float  # max |x_propagated - x| over nodes
+    final_attitude_error: float  # final_attitude_error() of the propagated q(t_f)
+    final_rate_error: float  # |omega(t_f) - omega_f|, propagated
+    path_at_nodes: np.ndarray  # (7,) max over the nodes of each constraint's h
+    # (7,) max of h on the propagated trajectory between the nodes (NaN when not sampled):
+    # the method imposes the constraints at the nodes only
+    path_between_nodes: np.ndarray
 
 
-def audit(x: np.ndarray, u: np.ndarray, t_f: float, p: Params) -> Audit:
-    xp = propagate(x[0], u, t_f, p)
+def audit(x: np.ndarray, u: np.ndarray, t_f: float, p: Params, between: int = 0) -> Audit:
+    """The open-loop check of a trajectory; ``between`` > 0 also samples the path constraints
+    at that many times inside each interval."""
+    prop = propagate_sampled(x[0], u, t_f, p, between)
+    xp = prop.nodes
     h = path_constraint_values(x, u, p)
+    if between > 0:
+        hb = path_constraint_values(
+            prop.x_between.reshape(-1, xp.shape[1]), prop.u_between.reshape(-1, u.shape[1]), p
+        ).max(axis=0)
+    else:
+        hb = np.full(h.shape[1], np.nan)
     return Audit(
         landing_position_error=float(np.linalg.norm(xp[-1, IR] - np.array(p.r_f))),
         landing_velocity_error=float(np.linalg.norm(xp[-1, IV] - np.array(p.v_f))),
         final_tilt_q=float(np.linalg.norm(xp[-1, 8:10])),
         max_path_violation=float(h.max()),
         max_node_deviation=float(np.abs(xp - x).max()),
+        final_attitude_error=final_attitude_error(xp[-1, IQ], p),
+        final_rate_error=float(np.linalg.norm(xp[-1, IW] - np.array(p.omega_f))),
+        path_at_nodes=h.max(axis=0),
+        path_between_nodes=hb,
     )

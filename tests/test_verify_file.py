@@ -1,0 +1,202 @@
+"""``guidance verify``: trajectory files flown open loop, checked against independent figures.
+
+References: the interval-wise scipy integration of the CasADi model in test_verify.py (not the
+numpy dynamics the command uses), path constraints written out by hand, and files broken on
+purpose.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+from test_verify import reference_propagation
+
+from guidance.catalog import SCENARIOS
+from guidance.cli import main
+from guidance.model import dynamics_functions, param_vector
+from guidance.params import IR, IV
+from guidance.trajectory_io import write_trajectory
+from guidance.verify import final_attitude_error
+from guidance.verify_file import SAMPLES_BETWEEN_NODES, Tolerances, verify_file
+
+SCN = SCENARIOS["default"]
+P = SCN.params
+
+
+@pytest.fixture(scope="module")
+def written(default_solved, tmp_path_factory) -> Path:
+    _, r = default_solved
+    path = tmp_path_factory.mktemp("verify") / "default.npz"
+    write_trajectory(path, r, P, SCN, "scvx", "clarabel")
+    return path
+
+
+def _edited(src: Path, dst: Path, **changes: object) -> Path:
+    with np.load(src) as f:
+        data = {k: f[k] for k in f.files}
+    data.update({k: np.asarray(v) for k, v in changes.items()})
+    np.savez(dst, **data)
+    return dst
+
+
+def test_the_reference_landing_passes(written: Path, capsys) -> None:
+    assert main(["verify", str(written)]) == 0
+    out = capsys.readouterr().out
+    assert "verdict: pass" in out and "FAIL" not in out
+
+
+def test_figures_match_an_independent_propagation(written: Path) -> None:
+    """The landing errors are those of a 1e-12 scipy integration of the CasADi model."""
+    v = verify_file(written)
+    with np.load(written) as f:
+        x, u, t_f = f["x"], f["u"], float(f["t_f"])
+    ref = reference_propagation(x[0], u, t_f)
+    figures = {c.name: c.value for c in v.checks}
+    want_r = np.linalg.norm(ref[-1, IR] - np.array(P.r_f))
+    want_v = np.linalg.norm(ref[-1, IV] - np.array(P.v_f))
+    assert figures["landing position |r(t_f) - r_f|"] == pytest.approx(want_r, rel=1e-4)
+    assert figures["landing velocity |v(t_f) - v_f|"] == pytest.approx(want_v, rel=1e-4)
+    assert figures["node states vs propagation"] == pytest.approx(np.abs(ref - x).max(), rel=1e-4)
+    assert figures["final attitude |(q2, q3)|"] == pytest.approx(
+        np.linalg.norm(ref[-1, 8:10]), rel=1e-3, abs=1e-9
+    )
+
+
+def test_between_node_samples_match_an_independent_integration(written: Path) -> None:
+    """Thrust-minimum and glideslope between the nodes, recomputed from the CasADi model
+    integrated to the sample times (restarted at the propagated node states)."""
+    v = verify_file(written)
+    with np.load(written) as f:
+        x, u, t_f = f["x"], f["u"], float(f["t_f"])
+    f_dyn, _ = dynamics_functions()
+    pv = param_vector(P)
+    nodes = reference_propagation(x[0], u, t_f)
+    dt = t_f / (P.N - 1)
+    s = np.arange(1, SAMPLES_BETWEEN_NODES + 1) / (SAMPLES_BETWEEN_NODES + 1)
+    worst_tmin, worst_gs = -np.inf, -np.inf
+    for k in range(P.N - 1):
+        uk, uk1 = u[k], u[k + 1]
+        sol = solve_ivp(
+            lambda t, z, uk=uk, uk1=uk1: np.asarray(
+                f_dyn(z, uk + (t / dt) * (uk1 - uk), pv)
+            ).ravel(),
+            (0.0, dt),
+            nodes[k],
+            t_eval=s * dt,
+            rtol=1e-12,
+            atol=1e-12,
+            method="DOP853",
+        )
+        thrust = np.linalg.norm(uk[None, :] + s[:, None] * (uk1 - uk)[None, :], axis=1)
+        worst_tmin = max(worst_tmin, float((P.T_min - thrust).max()))
+        r = sol.y[:3].T
+        gs = P.tan_glideslope * np.linalg.norm(r[:, 1:], axis=1) - r[:, 0]
+        worst_gs = max(worst_gs, float(gs.max()))
+    between = v.audit.path_between_nodes
+    assert between[6] == pytest.approx(worst_tmin, abs=1e-9)
+    assert between[1] == pytest.approx(worst_gs, abs=1e-7)
+
+
+def test_a_thrust_the_states_do_not_follow_fails(written: Path, tmp_path: Path, capsys) -> None:
+    with np.load(written) as f:
+        u = f["u"].copy()
+    u[:, 1] += 0.05  # lateral bias: node states untouched, the propagation drifts off
+    bad = _edited(written, tmp_path / "bias.npz", u=u)
+    assert main(["verify", str(written), str(bad)]) == 1
+    out = capsys.readouterr().out
+    assert out.count("verdict: pass") == 1 and out.count("verdict: FAIL") == 1
+    assert "landing position |r(t_f) - r_f|" in out
+
+
+def test_a_start_away_from_the_scenario_fails(written: Path, tmp_path: Path) -> None:
+    with np.load(written) as f:
+        x = f["x"].copy()
+    x[0, 0] += 1e-6
+    v = verify_file(_edited(written, tmp_path / "start.npz", x=x))
+    failed = [c.name for c in v.checks if not c.ok]
+    assert "initial state vs scenario" in failed
+
+
+def test_a_node_below_the_thrust_minimum_fails(written: Path, tmp_path: Path) -> None:
+    with np.load(written) as f:
+        u = f["u"].copy()
+    u[20] *= (P.T_min - 0.01) / np.linalg.norm(u[20])
+    v = verify_file(_edited(written, tmp_path / "tmin.npz", u=u))
+    check = next(c for c in v.checks if c.name == "path constraints at the nodes")
+    assert check.value == pytest.approx(0.01, abs=1e-9) and not check.ok
+    assert not v.ok
+
+
+def test_the_tolerances_come_from_the_command_line(written: Path, capsys) -> None:
+    """The reference landing lands 2.3e-4 off (the solvers' discretization error) and meets
+    its path constraints to Clarabel's 6e-11: tighter tolerances fail it."""
+    assert main(["verify", str(written), "--tol-landing", "1e-5"]) == 1
+    assert "landing position |r(t_f) - r_f|        2.28e-04      1e-05  FAIL" in (
+        capsys.readouterr().out
+    )
+    assert main(["verify", str(written), "--tol-nodes", "1e-5"]) == 1
+    assert main(["verify", str(written), "--tol-path", "1e-12"]) == 1
+    assert main(["verify", str(written), "--tol-path", "1e-9"]) == 0
+
+
+def test_a_pinned_attitude_is_measured_against_q_f_either_sign() -> None:
+    pinned = P.replace(final_roll_free=False, q_f=(0.0, 1.0, 0.0, 0.0))  # 180 deg of roll
+    q = np.array([0.0, -1.0, 0.0, 0.0])  # the same attitude
+    assert final_attitude_error(q, pinned) == 0.0
+    assert final_attitude_error(np.array([1.0, 0.0, 0.0, 0.0]), pinned) == pytest.approx(
+        np.sqrt(2.0)
+    )
+    # roll-free: any roll is upright
+    assert final_attitude_error(np.array([0.0, 1.0, 0.0, 0.0]), P) == 0.0
+
+
+def _params_json(written: Path) -> dict:
+    with np.load(written) as f:
+        return json.loads(str(f["params"]))
+
+
+@pytest.mark.parametrize(
+    ("case", "message"),
+    [
+        ("text", "not an .npz archive"),
+        ("missing", "no such file"),
+        ("short_x", "the params ask for (50, 14)"),
+        ("nan", "holds no trajectory"),
+        ("t_max", "params and scenario disagree on T_max"),
+        ("n", "params field 'N'"),
+    ],
+)
+def test_files_that_cannot_be_checked_exit_2(
+    written: Path, tmp_path: Path, capsys, case: str, message: str
+) -> None:
+    with np.load(written) as f:
+        x = f["x"]
+    path = tmp_path / f"{case}.npz"
+    if case == "text":
+        path.write_text("not a trajectory")
+    elif case == "short_x":
+        _edited(written, path, x=x[:10])
+    elif case == "nan":
+        _edited(written, path, x=np.full_like(x, np.nan))
+    elif case == "t_max":
+        _edited(written, path, params=json.dumps({**_params_json(written), "T_max": 4.0}))
+    elif case == "n":
+        _edited(written, path, params=json.dumps({**_params_json(written), "N": 2}))
+    assert main(["verify", str(written), str(path)]) == 2
+    captured = capsys.readouterr()
+    assert message in captured.err
+    assert captured.out == ""  # nothing reported before every file is known good to read
+
+
+def test_tolerances_must_be_positive(capsys) -> None:
+    with pytest.raises(ValueError, match="tolerance path must be a finite number > 0"):
+        Tolerances(path=0.0)
+    for bad in ("nan", "-1", "0", "x"):
+        with pytest.raises(SystemExit) as exc:
+            main(["verify", "x.npz", "--tol-landing", bad])
+        assert exc.value.code == 2
+        assert "expected a finite number > 0" in capsys.readouterr().err
