@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+import scipy.sparse as sp
 from socp_problems import (
     badly_scaled,
     random_dual_infeasible,
@@ -151,3 +152,17 @@ def test_badly_scaled(seed: int) -> None:
         assert abs(sol.obj - ref.obj) <= OBJ_RTOL * max(1.0, abs(ref.obj))
         pres, dres = residuals(prob, sol)
         assert max(pres, dres) <= RES_TOL, (pres, dres)
+
+
+@pytest.mark.parametrize(("c", "lo"), [(1e-9, 1e9), (1e-6, 1e8), (1e-12, 1e12)])
+def test_a_feasible_problem_whose_multipliers_look_like_a_certificate(c: float, lo: float) -> None:
+    """min c x s.t. x >= lo with a tiny cost and a huge answer: at the optimum |A'z| = c is
+    below tol_infeas times b'z = c lo, which alone would read as a certificate of primal
+    infeasibility. Only kappa > tau (the embedding's verdict) tells it from one; Clarabel
+    solves it, and so must we."""
+    prob = ConicProblem(
+        None, np.array([c]), sp.csc_matrix(np.array([[-1.0]])), np.array([-lo]), [("nonneg", 1)]
+    )
+    sol, ref = check_against_clarabel(prob)
+    assert ref.status == "solved"
+    assert sol.x[0] == pytest.approx(lo, rel=1e-8)
