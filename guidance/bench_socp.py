@@ -305,13 +305,12 @@ BENCH_DRIVER = ROOT / "build" / "ctest" / "bench_driver"  # `make bench` (or `ma
 
 
 def instructions_ours(prob: ConicProblem, kkt_backend: int = 0) -> int | None:
-    driver = BENCH_DRIVER
-    if not driver.exists():
+    if not BENCH_DRIVER.exists():
         return None
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "prob.bin"
         dump_c_problem(prob, path)
-        return _callgrind([str(driver), str(path), "1", str(kkt_backend)], "tscvx_solve")
+        return _callgrind([str(BENCH_DRIVER), str(path), "1", str(kkt_backend)], "tscvx_solve")
 
 
 _QOCO_SCRIPT = """
