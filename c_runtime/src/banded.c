@@ -30,12 +30,15 @@
  * regularization, as QDLDL and Clarabel do, replaces it by DYN_DELTA a_jj and leaves the
  * difference to the refinement; the semidefinite factor of P_gg drops the column instead
  * (P_gg = F'F exactly, F with a zero row). A non-finite pivot is a failure.
- * Only an indefinite P_gg leaves a dropped column more than SEMIDEF_TOL |P|_max away from
- * zero (pivot or entries below it): a semidefinite one has |S_ij| <= sqrt(S_ii S_jj), at most
- * sqrt(DYN_EPS) |P|_max for a dropped pivot S_jj <= DYN_EPS a_jj. */
+ * Only an indefinite P_gg leaves a dropped column away from zero: a semidefinite one has
+ * |S_ij| <= sqrt(S_ii S_jj), at most sqrt(DYN_EPS) |P|_max below a dropped pivot
+ * S_jj <= DYN_EPS a_jj (entries allowed SEMIDEF_TOL |P|_max), and the pivot itself only
+ * rounding below zero (allowed SEMIDEF_PIVOT_TOL |P|_max: the sparse method's check, which
+ * factors P + 1e-9 |P|_max I, draws the same line). */
 #define DYN_EPS 1e-13
 #define DYN_DELTA 1e-7
 #define SEMIDEF_TOL 1e-5
+#define SEMIDEF_PIVOT_TOL 1e-9
 enum { PIVOT_OK, PIVOT_DROP, PIVOT_FAIL };
 
 static int fix_pivot(tscvx_float *d, tscvx_float ajj, int semidefinite) {
@@ -66,7 +69,7 @@ static int chol(tscvx_float *M, tscvx_int s, int semidefinite, tscvx_float scale
         const int fix = fix_pivot(&d, ajj, semidefinite);
         if (fix == PIVOT_FAIL) return -1;
         if (fix == PIVOT_DROP) { /* checked only here: the normal path costs nothing more */
-            if (d < -SEMIDEF_TOL * scale) return -1;
+            if (d < -SEMIDEF_PIVOT_TOL * scale) return -1;
             for (tscvx_int i = j + 1; i < s; i++)
                 if (fabs(schur_entry(M, s, i, j)) > SEMIDEF_TOL * scale) return -1;
             for (tscvx_int i = j; i < s; i++) M[j * s + i] = 0.0;

@@ -309,12 +309,16 @@ static tscvx_setup_status setup_box(tscvx_workspace **ws, tscvx_int *Pp, tscvx_i
  *   tridiagonal [1 1 0; 1 1 1; 0 1 1] (eigenvalue 1 - sqrt 2),
  *   full [1 .9 -.9; .9 1 .9; -.9 .9 1] (determinant -2.888, minors 0.19; the banded factor
  *   meets its negative pivot last).
+ *   barely indefinite [1 1 0; 1 2-3e-6 1; 0 1 1] (eigenvalue -1e-6, below the 1e-9 |P|
+ *   every method allows for rounding; the banded factor meets it as a negative pivot it
+ *   would drop as zero).
  * Semidefinite P of the same patterns pass and solve: [1 1 0; 1 2 1; 0 1 1] (eigenvalues 0,
  * 1, 3) and v v' in rounded numbers, v = (1, 1/3, -0.7). */
 static void test_indefinite_p_every_method(void) {
     tscvx_int tri_p[] = {0, 1, 3, 5}, tri_i[] = {0, 0, 1, 1, 2};
     tscvx_int full_p[] = {0, 1, 3, 6}, full_i[] = {0, 0, 1, 0, 1, 2};
     const tscvx_float tri_bad[] = {1, 1, 1, 1, 1}, tri_good[] = {1, 1, 2, 1, 1};
+    const tscvx_float tri_barely[] = {1, 1, 2 - 3e-6, 1, 1};
     const tscvx_float full_bad[] = {1, 0.9, 1, -0.9, 0.9, 1};
     const tscvx_float v[] = {1.0, 1.0 / 3.0, -0.7};
     const tscvx_float full_good[] = {v[0] * v[0], v[0] * v[1], v[1] * v[1],
@@ -327,6 +331,8 @@ static void test_indefinite_p_every_method(void) {
               "method %d: tridiagonal indefinite P accepted", (int)mth);
         CHECK(setup_box(&ws, full_p, full_i, full_bad, mth) == TSCVX_SETUP_P_NOT_PSD,
               "method %d: full indefinite P accepted", (int)mth);
+        CHECK(setup_box(&ws, tri_p, tri_i, tri_barely, mth) == TSCVX_SETUP_P_NOT_PSD,
+              "method %d: barely indefinite P accepted", (int)mth);
         CHECK(setup_box(&ws, tri_p, tri_i, tri_good, mth) == TSCVX_SETUP_OK && ws &&
                   tscvx_solve(ws) == TSCVX_SOLVED,
               "method %d: singular semidefinite P refused or unsolved", (int)mth);
