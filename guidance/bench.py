@@ -12,7 +12,7 @@ from guidance.params import SCvxSettings
 
 
 def run_scvx_bench(backends: list[str], repeats: int = 1, method: str = "scvx") -> None:
-    from guidance.cli import run_solve
+    from guidance.api import solve
 
     print(
         f"SCvx benchmark: {len(SCENARIOS)} scenarios, N = 50, host {platform.machine()}, "
@@ -28,7 +28,7 @@ def run_scvx_bench(backends: list[str], repeats: int = 1, method: str = "scvx") 
         for name, scenario in SCENARIOS.items():
             best = None
             for _ in range(repeats):
-                r = run_solve(scenario, method, backend, SCvxSettings())
+                r = solve(scenario, method, backend, SCvxSettings())
                 if best is None or r.solve_time_s < best.solve_time_s:
                     best = r
             assert best is not None

@@ -68,7 +68,7 @@ def _solver(backend: str) -> Callable[..., SCvxResult]:
 def run(n: int, backend: str = "c", models_dir: Path | None = None, progress: bool = True):
     from tqdm import tqdm
 
-    from guidance.cli import CONSTRAINT_MODEL, MODELS_DIR, SOLUTION_MODEL
+    from guidance.api import CONSTRAINT_MODEL, MODELS_DIR, SOLUTION_MODEL
     from guidance.dataset import theta_of
     from guidance.guess import project_guess
     from guidance.nn.infer import ConstraintModel, SolutionModel

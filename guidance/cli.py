@@ -12,12 +12,12 @@ from pathlib import Path
 
 import numpy as np
 
+from guidance.api import CONSTRAINT_MODEL, MODELS_DIR, SOLUTION_MODEL, solve
 from guidance.errors import InputError
+from guidance.file_check import Tolerances
 from guidance.params import IM, Scenario, SCvxSettings
 from guidance.scenario import load_scenario, scenario_to_dict
-from guidance.scvx import SCvxResult, SCvxSolver, format_log
-from guidance.tscvx import REDUCED_ETA_INIT, solve_tscvx
-from guidance.verify_file import Tolerances
+from guidance.tscvx import REDUCED_ETA_INIT
 
 EXIT_BAD_INPUT = 2
 # No trajectory to write (the solve stopped before its first subproblem). Any status with a
@@ -30,74 +30,6 @@ def _load(path: str | None, pin_final_attitude: bool) -> Scenario:
     if pin_final_attitude:
         scenario = Scenario(scenario.initial, scenario.params.replace(final_roll_free=False))
     return scenario
-
-
-MODELS_DIR = Path(__file__).resolve().parent.parent / "models"
-CONSTRAINT_MODEL = "constraint.onnx"
-SOLUTION_MODEL = "solution.onnx"
-
-
-def run_solve(
-    scenario: Scenario,
-    method: str,
-    backend: str,
-    settings: SCvxSettings,
-    models_dir: Path = MODELS_DIR,
-    log: Callable[[str], None] | None = None,
-    eta_init: float | None = None,
-) -> SCvxResult:
-    """One landing by SCvx or T-SCvx on a backend:
-
-    clarabel  the Python SCvx with Clarabel (ground reference)
-    c-socp    the Python SCvx with the flight C SOCP runtime for the subproblems
-    c         the whole solve in the flight C library (for tscvx the networks too:
-              guidance.cguidance.solve_tscvx_c, not onnxruntime)
-
-    ``eta_init`` overrides the initial trust radius; without it SCvx starts from
-    settings.eta_init and T-SCvx (from the networks' warm start) from Table 1's reduced radius.
-    """
-    if method == "tscvx":
-        eta_init = REDUCED_ETA_INIT if eta_init is None else eta_init
-    if eta_init is not None:
-        settings = settings.replace(eta_init=eta_init)
-    if method == "tscvx" and backend == "c":
-        # the complete on-board call: networks, projection and SCvx all in the C library
-        from guidance.cguidance import solve_tscvx_c
-
-        result = solve_tscvx_c(
-            scenario, settings, models_dir=models_dir, eta_init=settings.eta_init
-        )
-        if log:
-            for line in format_log(result.history):
-                log(line)
-        return result
-    if method == "tscvx":
-        from guidance.dataset import theta_of
-        from guidance.nn.infer import ConstraintModel, SolutionModel
-
-        sol_model = SolutionModel(models_dir / SOLUTION_MODEL, scenario.params)
-        con_model = ConstraintModel(models_dir / CONSTRAINT_MODEL, scenario.params)
-        return solve_tscvx(
-            scenario,
-            lambda s: sol_model.solution(theta_of(s)),
-            lambda s, k: con_model.mask(theta_of(s), k),
-            settings,
-            "c" if backend == "c-socp" else backend,
-            log,
-            eta_init=settings.eta_init,
-        )
-    if backend == "c":
-        from guidance.cguidance import solve_c
-
-        result = solve_c(scenario, settings)
-        if log:
-            for line in format_log(result.history):
-                log(line)
-        return result
-    solver = SCvxSolver(
-        scenario, settings, backend="c" if backend == "c-socp" else backend, log=log
-    )
-    return solver.solve()
 
 
 def _setting(name: str, cast: Callable[[str], float] = float) -> Callable[[str], float]:
@@ -181,7 +113,7 @@ def cmd_solve(args: argparse.Namespace) -> int:
         f"method: {args.method}, backend: {args.backend}, N = {scenario.params.N}, "
         f"subproblem objective: {objective}"
     )
-    result = run_solve(
+    result = solve(
         scenario, args.method, args.backend, settings, Path(args.models), print, args.eta_init
     )
     p = scenario.params
@@ -283,10 +215,10 @@ def cmd_budget(args: argparse.Namespace) -> int:
 
 
 def cmd_verify(args: argparse.Namespace) -> int:
-    from guidance import verify_file
+    from guidance import file_check
 
     tol = Tolerances(landing=args.tol_landing, path=args.tol_path, node_deviation=args.tol_nodes)
-    return verify_file.main(args.files, tol)
+    return file_check.main(args.files, tol)
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -1,6 +1,6 @@
 """T-SCvx on board (pdg_solve_tscvx, guidance.cguidance.solve_tscvx_c): networks, projection
 and SCvx all in the C library, against the Python-orchestrated T-SCvx of ``guidance solve
---method tscvx`` (guidance.cli.run_solve before this call existed: onnxruntime predictions,
+--method tscvx`` (guidance.api.solve before this call existed: onnxruntime predictions,
 guidance.guess.project_guess, eta_init 0.01, the C solver).
 
 - theta and the projected warm start are the Python ones (the projection to rounding, the
@@ -183,10 +183,10 @@ def test_c_tscvx_trajectory_passes_open_loop_audit(runs, name: str, masks: bool)
 
 
 def test_cli_tscvx_on_the_c_backend_runs_the_networks_in_c(nets) -> None:
-    from guidance.cli import run_solve
+    from guidance.api import solve
 
     scn = SCENARIOS["default"]
-    res = run_solve(scn, "tscvx", "c", SCvxSettings())
+    res = solve(scn, "tscvx", "c", SCvxSettings())
     c = cguidance.solve_tscvx_c(scn, nets=nets)
     assert res.tscvx_report["warm_started"]  # the on-board call, not onnxruntime + solve_c
     assert (res.status, res.iterations) == (c.status, c.iterations)

@@ -17,11 +17,11 @@ from test_verify import reference_propagation
 
 from guidance.catalog import SCENARIOS
 from guidance.cli import main
+from guidance.file_check import SAMPLES_BETWEEN_NODES, Tolerances, verify_file
 from guidance.model import dynamics_functions, param_vector
 from guidance.params import IR, IV
 from guidance.trajectory_io import write_trajectory
 from guidance.verify import final_attitude_error
-from guidance.verify_file import SAMPLES_BETWEEN_NODES, Tolerances, verify_file
 
 SCN = SCENARIOS["default"]
 P = SCN.params

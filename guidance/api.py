@@ -1,0 +1,91 @@
+"""One landing by SCvx or T-SCvx on any backend: the entry point of the Python API (and of
+``guidance solve``)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+
+from guidance.errors import InputError
+from guidance.params import Scenario, SCvxSettings
+from guidance.scvx import SCvxResult, SCvxSolver, format_log
+from guidance.tscvx import REDUCED_ETA_INIT, solve_tscvx
+
+MODELS_DIR = Path(__file__).resolve().parent.parent / "models"  # the shipped networks
+CONSTRAINT_MODEL = "constraint.onnx"
+SOLUTION_MODEL = "solution.onnx"
+METHODS = ("scvx", "tscvx")
+BACKENDS = ("clarabel", "c-socp", "c")
+
+
+def solve(
+    scenario: Scenario | None = None,
+    method: str = "scvx",
+    backend: str = "clarabel",
+    settings: SCvxSettings | None = None,
+    models_dir: Path | str = MODELS_DIR,
+    log: Callable[[str], None] | None = None,
+    eta_init: float | None = None,
+) -> SCvxResult:
+    """Solve ``scenario`` (default: the default landing) by ``method`` on ``backend``:
+
+    clarabel  the Python SCvx with Clarabel (ground reference)
+    c-socp    the Python SCvx with the flight C SOCP runtime for the subproblems
+    c         the whole solve in the flight C library (for tscvx the networks too:
+              guidance.cguidance.solve_tscvx_c, not onnxruntime)
+
+    ``method="tscvx"`` starts from the shipped networks' warm start and masks (``models_dir``).
+    ``eta_init`` overrides the initial trust radius; without it SCvx starts from
+    settings.eta_init and T-SCvx (from the networks' warm start) from Table 1's reduced radius.
+    ``log`` receives one line per subproblem. An infeasible landing is a result (its
+    ``status`` and ``reason`` say so); bad input raises InputError.
+    """
+    if method not in METHODS:
+        raise InputError(f"method {method!r}: use one of {', '.join(METHODS)}")
+    if backend not in BACKENDS:
+        raise InputError(f"backend {backend!r}: use one of {', '.join(BACKENDS)}")
+    scenario = Scenario() if scenario is None else scenario
+    settings = SCvxSettings() if settings is None else settings
+    models_dir = Path(models_dir)
+    if method == "tscvx":
+        eta_init = REDUCED_ETA_INIT if eta_init is None else eta_init
+    if eta_init is not None:
+        settings = settings.replace(eta_init=eta_init)
+    if method == "tscvx" and backend == "c":
+        # the complete on-board call: networks, projection and SCvx all in the C library
+        from guidance.cguidance import solve_tscvx_c
+
+        result = solve_tscvx_c(
+            scenario, settings, models_dir=models_dir, eta_init=settings.eta_init
+        )
+        if log:
+            for line in format_log(result.history):
+                log(line)
+        return result
+    if method == "tscvx":
+        from guidance.dataset import theta_of
+        from guidance.nn.infer import ConstraintModel, SolutionModel
+
+        sol_model = SolutionModel(models_dir / SOLUTION_MODEL, scenario.params)
+        con_model = ConstraintModel(models_dir / CONSTRAINT_MODEL, scenario.params)
+        return solve_tscvx(
+            scenario,
+            lambda s: sol_model.solution(theta_of(s)),
+            lambda s, k: con_model.mask(theta_of(s), k),
+            settings,
+            "c" if backend == "c-socp" else backend,
+            log,
+            eta_init=settings.eta_init,
+        )
+    if backend == "c":
+        from guidance.cguidance import solve_c
+
+        result = solve_c(scenario, settings)
+        if log:
+            for line in format_log(result.history):
+                log(line)
+        return result
+    solver = SCvxSolver(
+        scenario, settings, backend="c" if backend == "c-socp" else backend, log=log
+    )
+    return solver.solve()
