@@ -70,7 +70,7 @@ def _objective(settings: dict) -> str:
     w = float(settings.get("prox_u", 0.0))
     if w == 0.0:
         return "the paper's linear subproblem objective, prox_u = 0"
-    return f"proximal term on the thrust prox_u = {w:g}"
+    return f"the subproblem objective with the proximal term on the thrust, prox_u = {w:g}"
 
 
 def _pct(v: float) -> str:
