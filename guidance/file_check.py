@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from guidance.errors import InputError
-from guidance.params import CONSTRAINT_NAMES, NU, NX, Params
+from guidance.params import CONSTRAINT_NAMES, IM, NU, NX, Params
 from guidance.scenario import ScenarioError, params_from_dict, scenario_from_dict
 from guidance.trajectory_io import read_trajectory
 from guidance.verify import Audit, audit
@@ -122,7 +122,7 @@ def verify_file(path: str | Path, tol: Tolerances = Tolerances()) -> FileVerdict
         checks.insert(0, Check("initial state vs scenario", start, tol.initial))
     header = (
         f"{data.get('method', '?')} on {data.get('backend', '?')}, status {data['status']}, "
-        f"N = {p.N}, t_f = {t_f:.6f} U_T, m_f = {x[-1, -1]:.6f} U_M"
+        f"N = {p.N}, t_f = {t_f:.6f} U_T, m_f = {x[-1, IM]:.6f} U_M"
     )
     return FileVerdict(path, header, checks, a)
 
