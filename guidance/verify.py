@@ -48,6 +48,17 @@ def dynamics_numpy(x: np.ndarray, u: np.ndarray, p: Params) -> np.ndarray:
     )
 
 
+def engine_thrust(u: np.ndarray, p: Params) -> np.ndarray:
+    """What an engine that can only throttle within [T_min, T_max] gives for the command u
+    (same direction; the gimbal cone is convex, so a first-order hold never leaves it)."""
+    n = float(np.linalg.norm(u))
+    if 0.0 < n < p.T_min:
+        return u * (p.T_min / n)
+    if n > p.T_max:
+        return u * (p.T_max / n)
+    return u
+
+
 def _interval(
     x0: np.ndarray,
     u_k: np.ndarray,
@@ -56,10 +67,16 @@ def _interval(
     p: Params,
     rtol: float,
     dense: bool,
+    engine: bool = False,
 ):  # -> scipy's OdeResult
     du = u_k1 - u_k
+
+    def thrust(t: float) -> np.ndarray:
+        u = u_k + (t / dt) * du
+        return engine_thrust(u, p) if engine else u
+
     return solve_ivp(
-        lambda t, x: dynamics_numpy(x, u_k + (t / dt) * du, p),
+        lambda t, x: dynamics_numpy(x, thrust(t), p),
         (0.0, dt),
         x0,
         rtol=rtol,
@@ -84,11 +101,18 @@ class Propagation:
 
 
 def propagate_sampled(
-    x0: np.ndarray, u: np.ndarray, t_f: float, p: Params, between: int, rtol: float = 1e-10
+    x0: np.ndarray,
+    u: np.ndarray,
+    t_f: float,
+    p: Params,
+    between: int,
+    rtol: float = 1e-10,
+    engine: bool = False,
 ) -> Propagation:
     """Open-loop integration from x0 under the FOH thrust: the states at the N node times and
     at ``between`` times inside each interval (from the integrator's dense output, which
-    leaves its steps and so the node states unchanged).
+    leaves its steps and so the node states unchanged). ``engine``: the thrust an engine
+    limited to [T_min, T_max] gives for the FOH command (``engine_thrust``), not the command.
 
     Each interval is integrated on its own, the state carried over: the thrust has a kink at
     every node, and a step across one leaves the error estimate blind to it: on the default
@@ -101,7 +125,7 @@ def propagate_sampled(
     ub = u[:-1, None, :] + s[None, :, None] * (u[1:] - u[:-1])[:, None, :]
     nodes[0] = x0
     for k in range(N - 1):
-        sol = _interval(nodes[k], u[k], u[k + 1], dt, p, rtol, between > 0)
+        sol = _interval(nodes[k], u[k], u[k + 1], dt, p, rtol, between > 0, engine)
         nodes[k + 1] = sol.y[:, -1]
         if between > 0:
             xb[k] = sol.sol(s * dt).T
@@ -161,4 +185,17 @@ def audit(x: np.ndarray, u: np.ndarray, t_f: float, p: Params, between: int = 0)
         final_rate_error=float(np.linalg.norm(xp[-1, IW] - np.array(p.omega_f))),
         path_at_nodes=h.max(axis=0),
         path_between_nodes=hb,
+    )
+
+
+def engine_landing_error(
+    x: np.ndarray, u: np.ndarray, t_f: float, p: Params
+) -> tuple[float, float]:
+    """|r(t_f) - r_f| and |v(t_f) - v_f| when an engine limited to [T_min, T_max] flies the
+    plan: where the first-order hold's norm dips below T_min between the nodes, it gives
+    T_min (``engine_thrust``). The cost of the dip, open loop."""
+    xp = propagate_sampled(x[0], u, t_f, p, 0, engine=True).nodes
+    return (
+        float(np.linalg.norm(xp[-1, IR] - np.array(p.r_f))),
+        float(np.linalg.norm(xp[-1, IV] - np.array(p.v_f))),
     )

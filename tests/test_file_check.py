@@ -200,3 +200,23 @@ def test_tolerances_must_be_positive(capsys) -> None:
             main(["verify", "x.npz", "--tol-landing", bad])
         assert exc.value.code == 2
         assert "expected a finite number > 0" in capsys.readouterr().err
+
+
+def test_a_dip_below_t_min_between_nodes_is_flown_by_the_engine_too(
+    written: Path, tmp_path: Path, capsys
+) -> None:
+    """Two neighbouring nodes at T_min + 2 %, gimballed 19 degrees to either side: the
+    first-order hold's norm sags to cos(19 deg) of that in between, and the report adds the
+    landing an engine held at T_min would fly."""
+    with np.load(written) as f:
+        u = f["u"].copy()
+    g = np.radians(19.0)
+    u[29] = 1.02 * P.T_min * np.array([np.cos(g), np.sin(g), 0.0])
+    u[30] = 1.02 * P.T_min * np.array([np.cos(g), -np.sin(g), 0.0])
+    v = verify_file(_edited(written, tmp_path / "turn.npz", u=u))
+    s = 4 / 9  # the sample nearest the interval's middle (8 per interval)
+    sag = P.T_min - 1.02 * P.T_min * np.hypot(np.cos(g), (1 - 2 * s) * np.sin(g))
+    assert v.audit.path_between_nodes[6] == pytest.approx(sag, rel=1e-9)
+    assert v.engine is not None
+    assert main(["verify", str(tmp_path / "turn.npz")]) == 1
+    assert "flown by an engine held at T_min there" in capsys.readouterr().out

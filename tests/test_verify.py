@@ -13,7 +13,7 @@ from scipy.integrate import solve_ivp
 from guidance.catalog import SCENARIOS
 from guidance.model import dynamics_functions, param_vector
 from guidance.params import IR, IV
-from guidance.verify import audit, propagate
+from guidance.verify import audit, engine_landing_error, propagate, propagate_sampled
 
 SCN = SCENARIOS["default"]
 P = SCN.params
@@ -90,3 +90,30 @@ def test_audit_reports_thrust_below_minimum(landing) -> None:
     u_bad[k] *= (P.T_min - 0.1) / np.linalg.norm(u[k])  # same direction: gimbal still met
     a = audit(x, u_bad, t_f, P)
     assert a.max_path_violation == pytest.approx(0.1, abs=1e-6)
+
+
+@pytest.mark.parametrize(("lo", "hi", "held"), [(0.1, 0.9, "T_min"), (1.1, 3.0, "T_max")])
+def test_engine_flies_its_limit_where_the_command_passes_it(
+    landing, lo: float, hi: float, held: str
+) -> None:
+    """A command along the thrust axis below T_min (above T_max) everywhere is flown at T_min
+    (T_max): the same states as the constant command at the limit, which the CasADi
+    reference integrates without any limiting."""
+    x, u, t_f = landing
+    limit = getattr(P, held)
+    command = np.zeros_like(u)
+    command[:, 0] = np.linspace(lo, hi, u.shape[0]) * limit
+    constant = np.zeros_like(u)
+    constant[:, 0] = limit
+    got = propagate_sampled(x[0], command, t_f, P, 0, engine=True).nodes
+    assert np.abs(got - reference_propagation(x[0], constant, t_f)).max() < 1e-8
+    assert np.abs(propagate(x[0], command, t_f, P) - got).max() > 1e-2  # the command differs
+
+
+def test_engine_landing_error_is_the_plans_when_the_thrust_stays_in_range(landing) -> None:
+    x, u, t_f = landing
+    plan = audit(x, u, t_f, P, between=8)
+    assert plan.path_between_nodes[6] < 0.0  # the reference landing keeps T_min in between
+    r, v = engine_landing_error(x, u, t_f, P)
+    assert r == pytest.approx(plan.landing_position_error, rel=1e-9)
+    assert v == pytest.approx(plan.landing_velocity_error, rel=1e-9)
