@@ -479,8 +479,12 @@ def test_trust_region_factor_alpha_below_one_is_refused() -> None:
 
 
 def test_restart_from_the_converged_solution_is_one_iteration() -> None:
-    """Started from its own converged trajectory, the subproblem gives the reference back
-    (dL <= 0 to the solver's tolerance): accepted, converged in one iteration, as Python."""
+    """Started from its own converged trajectory, the first subproblems at Table 1's radius
+    2 are rejected (their steps remove the defects left, ~1e-5, which the penalty weighs at
+    lambda = 500, and overshoot in the nonlinear cost); the retries shrink the radius until
+    a step is accepted, and that step converges: one iteration and the same subproblems as
+    the Python loop. (dL <= 0, the subproblem giving the reference back, does not happen
+    here: dL stays 0.09 however small the radius.)"""
     scn = SCENARIOS["default"]
     first = cguidance.solve_c(scn)
     assert first.status == "solved"
