@@ -76,7 +76,7 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
         choices=["c", "clarabel", "c-socp"],
         help="SCvx that solves the samples (default: the C library when built, else clarabel)",
     )
-    add_prox_u(d, "with which the shipped networks' data were solved")
+    add_prox_u(d, "with which the networks shipped until 23 Nov were trained")
     d.add_argument("--pack-only", action="store_true", help="pack the samples solved so far")
     d.add_argument("--no-progress", action="store_true")
     d.set_defaults(func=cmd_dataset, ranges=SamplingRanges())

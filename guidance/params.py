@@ -154,7 +154,8 @@ class SCvxSettings:
     # linear objective leaves the subproblem's optimal set flat in the thrust history, so two
     # correct conic solvers stop at different points of it and SCvx follows them apart (final
     # masses 1e-4 apart); with w = 2e-2 the answer is unique and the solvers agree to about
-    # 1e-8 (README, "Why the subproblem has a proximal term"). 0 gives the paper's objective.
+    # 1e-8 (README, "How the reference SCvx is built", "Beyond the paper"). 0 gives the
+    # paper's objective.
     prox_u: float = 2e-2
     # Conic subproblem solver (either backend, and the C loop): gap and feasibility
     # tolerances, and the interior-point iteration limit.

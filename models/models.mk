@@ -12,7 +12,7 @@
 
 MODELS_N_BASE  ?= 4000
 MODELS_TRAIN_MINUTES ?= 15
-# Subproblem proximal weight of the data (SCvxSettings.prox_u; the shipped networks' data: 0)
+# Subproblem proximal weight of the data (SCvxSettings.prox_u; the shipped networks' data: 0.02)
 MODELS_PROX_U  ?= 0.02
 MODELS_DATA    ?= data/dataset.npz
 MODELS_RUN_DIR ?= data/runs/default

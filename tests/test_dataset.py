@@ -232,8 +232,9 @@ def test_resume_by_other_code_warns_and_the_header_lists_every_version(tiny_run,
 
 
 def test_cli_prox_u_reaches_the_solves(tmp_path, monkeypatch) -> None:
-    """`guidance dataset --prox-u 0` solves with the paper's objective (the shipped networks'
-    data); the weight is part of the run's settings, so a resume with another is refused."""
+    """`guidance dataset --prox-u 0` solves with the paper's objective (the data of the
+    networks shipped until 23 Nov); the weight is part of the run's settings, so a resume with
+    another is refused."""
     import guidance.dataset as dataset
 
     seen = {}
