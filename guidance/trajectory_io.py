@@ -67,15 +67,13 @@ def read_trajectory(path: str | Path) -> dict[str, object]:
         raise InputError(f"{path}: not a trajectory file (not an .npz archive)")
     try:
         with np.load(path, allow_pickle=False) as data:
-            missing = [k for k in REQUIRED_KEYS if k not in data]
-            if missing:
-                raise InputError(f"{path}: not a trajectory file, missing {', '.join(missing)}")
             out: dict[str, object] = {k: data[k] for k in data.files}
         for key in JSON_KEYS:  # decoded to dictionaries
             if key in out:
                 out[key] = json.loads(str(out[key]))
-    except InputError:
-        raise
     except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
         raise InputError(f"{path}: not a readable trajectory file ({exc})") from exc
+    missing = [k for k in REQUIRED_KEYS if k not in out]
+    if missing:
+        raise InputError(f"{path}: not a trajectory file, missing {', '.join(missing)}")
     return out

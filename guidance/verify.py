@@ -148,11 +148,18 @@ def final_attitude_error(q: np.ndarray, p: Params) -> float:
     return float(min(np.linalg.norm(q - q_f), np.linalg.norm(q + q_f)))
 
 
+def _landing_errors(x_final: np.ndarray, p: Params) -> tuple[float, float]:
+    """|r(t_f) - r_f| and |v(t_f) - v_f| of a propagated final state."""
+    return (
+        float(np.linalg.norm(x_final[IR] - np.array(p.r_f))),
+        float(np.linalg.norm(x_final[IV] - np.array(p.v_f))),
+    )
+
+
 @dataclass
 class Audit:
     landing_position_error: float  # |r(t_f) - r_f| of the open-loop propagation
     landing_velocity_error: float
-    final_tilt_q: float  # |(q2, q3)| at t_f, propagated
     max_path_violation: float  # max over nodes and constraints of h (<= 0 when met)
     max_node_deviation: float  # max |x_propagated - x| over nodes
     final_attitude_error: float  # final_attitude_error() of the propagated q(t_f)
@@ -168,6 +175,7 @@ def audit(x: np.ndarray, u: np.ndarray, t_f: float, p: Params, between: int = 0)
     at that many times inside each interval."""
     prop = propagate_sampled(x[0], u, t_f, p, between)
     xp = prop.nodes
+    landing = _landing_errors(xp[-1], p)
     h = path_constraint_values(x, u, p)
     if between > 0:
         hb = path_constraint_values(
@@ -176,9 +184,8 @@ def audit(x: np.ndarray, u: np.ndarray, t_f: float, p: Params, between: int = 0)
     else:
         hb = np.full(h.shape[1], np.nan)
     return Audit(
-        landing_position_error=float(np.linalg.norm(xp[-1, IR] - np.array(p.r_f))),
-        landing_velocity_error=float(np.linalg.norm(xp[-1, IV] - np.array(p.v_f))),
-        final_tilt_q=float(np.linalg.norm(xp[-1, 8:10])),
+        landing_position_error=landing[0],
+        landing_velocity_error=landing[1],
         max_path_violation=float(h.max()),
         max_node_deviation=float(np.abs(xp - x).max()),
         final_attitude_error=final_attitude_error(xp[-1, IQ], p),
@@ -194,8 +201,4 @@ def engine_landing_error(
     """|r(t_f) - r_f| and |v(t_f) - v_f| when an engine limited to [T_min, T_max] flies the
     plan: where the first-order hold's norm dips below T_min between the nodes, it gives
     T_min (``engine_thrust``). The cost of the dip, open loop."""
-    xp = propagate_sampled(x[0], u, t_f, p, 0, engine=True).nodes
-    return (
-        float(np.linalg.norm(xp[-1, IR] - np.array(p.r_f))),
-        float(np.linalg.norm(xp[-1, IV] - np.array(p.v_f))),
-    )
+    return _landing_errors(propagate_sampled(x[0], u, t_f, p, 0, engine=True).nodes[-1], p)
