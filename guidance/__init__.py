@@ -1,6 +1,6 @@
 """T-SCvx guidance: 6-DoF powered-descent guidance by successive convexification.
 
-The Python API in a few names (README, "Python")::
+The Python API in a few names (README, "From Python")::
 
     from guidance import InitialState, Scenario, audit, solve
 

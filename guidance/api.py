@@ -51,17 +51,22 @@ def solve(
         eta_init = REDUCED_ETA_INIT if eta_init is None else eta_init
     if eta_init is not None:
         settings = settings.replace(eta_init=eta_init)
-    if method == "tscvx" and backend == "c":
-        # the complete on-board call: networks, projection and SCvx all in the C library
-        from guidance.cguidance import solve_tscvx_c
+    if backend == "c":
+        # the whole solve in the C library (for T-SCvx the complete on-board call: networks,
+        # projection and SCvx), its log replayed after it
+        from guidance.cguidance import solve_c, solve_tscvx_c
 
-        result = solve_tscvx_c(
-            scenario, settings, models_dir=models_dir, eta_init=settings.eta_init
-        )
+        if method == "tscvx":
+            result = solve_tscvx_c(
+                scenario, settings, models_dir=models_dir, eta_init=settings.eta_init
+            )
+        else:
+            result = solve_c(scenario, settings)
         if log:
             for line in format_log(result.history):
                 log(line)
         return result
+    conic = "c" if backend == "c-socp" else backend  # the Python loop's name for its solver
     if method == "tscvx":
         from guidance.dataset import theta_of
         from guidance.nn.infer import ConstraintModel, SolutionModel
@@ -73,19 +78,8 @@ def solve(
             lambda s: sol_model.solution(theta_of(s)),
             lambda s, k: con_model.mask(theta_of(s), k),
             settings,
-            "c" if backend == "c-socp" else backend,
+            conic,
             log,
             eta_init=settings.eta_init,
         )
-    if backend == "c":
-        from guidance.cguidance import solve_c
-
-        result = solve_c(scenario, settings)
-        if log:
-            for line in format_log(result.history):
-                log(line)
-        return result
-    solver = SCvxSolver(
-        scenario, settings, backend="c" if backend == "c-socp" else backend, log=log
-    )
-    return solver.solve()
+    return SCvxSolver(scenario, settings, backend=conic, log=log).solve()
