@@ -12,9 +12,9 @@ from pathlib import Path
 
 import numpy as np
 
+from guidance import file_check
 from guidance.api import CONSTRAINT_MODEL, MODELS_DIR, SOLUTION_MODEL, solve
 from guidance.errors import InputError
-from guidance.file_check import Tolerances
 from guidance.params import IM, Scenario, SCvxSettings
 from guidance.scenario import load_scenario, scenario_to_dict
 from guidance.tscvx import REDUCED_ETA_INIT
@@ -215,9 +215,9 @@ def cmd_budget(args: argparse.Namespace) -> int:
 
 
 def cmd_verify(args: argparse.Namespace) -> int:
-    from guidance import file_check
-
-    tol = Tolerances(landing=args.tol_landing, path=args.tol_path, node_deviation=args.tol_nodes)
+    tol = file_check.Tolerances(
+        landing=args.tol_landing, path=args.tol_path, node_deviation=args.tol_nodes
+    )
     return file_check.main(args.files, tol)
 
 
@@ -323,7 +323,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="fly trajectory files open loop (scipy) and check landing and path constraints",
     )
     v.add_argument("files", nargs="+", help="trajectory .npz files (DESIGN.md contract)")
-    tol = Tolerances()
+    tol = file_check.Tolerances()
     v.add_argument(
         "--tol-landing",
         type=positive_float,
