@@ -118,6 +118,7 @@ class _Info(ct.Structure):
         ("factorizations", c_int),
         ("arena_used", ct.c_size_t),
         ("arena_high_water", ct.c_size_t),
+        ("ruiz_passes", c_int),
     ]
 
 

@@ -265,6 +265,28 @@ def test_weakly_infeasible_soc_is_not_solved(c: float) -> None:
     assert sol.iterations < 100
 
 
+def test_empty_rows_do_not_stall_equilibration() -> None:
+    """T-SCvx's masked-out cones are rows of G without entries (h = e, trivially met). Ruiz
+    equilibration cannot balance an empty row, so it must judge balance on the others: the
+    padded problem takes the same passes as the plain one (fewer than the limit) and the
+    same optimal value, Clarabel's."""
+    plain = random_feasible(1, n=30)
+    extra = 3 * 3  # three empty 3-dim SOCs, each [1; 0; 0]
+    padded = ConicProblem(
+        P=plain.P,
+        q=plain.q,
+        A=sp.vstack([plain.A, sp.csc_matrix((extra, plain.n))]).tocsc(),
+        b=np.concatenate([plain.b, np.tile([1.0, 0.0, 0.0], 3)]),
+        cones=plain.cones + [("soc", 3)] * 3,
+    )
+    limit = 15  # the default
+    a, b = csocp.solve(plain, ruiz_iters=limit), csocp.solve(padded, ruiz_iters=limit)
+    assert a.status == b.status == "solved"
+    assert int(b.info["ruiz_passes"]) == int(a.info["ruiz_passes"]) < limit
+    assert b.obj == pytest.approx(a.obj, rel=1e-7)
+    assert b.obj == pytest.approx(solve_clarabel(padded).obj, rel=1e-6)
+
+
 def test_initial_mu_by_hand() -> None:
     """min x1 + 2 x2 s.t. x >= 0, no equilibration (ruiz_iters = 0). By hand: cost scaling
     cs = 1/|c|_inf = 1/2, so c_s = (1/2, 1). Initial primal point: x = 0, s = h - G x = 0,
