@@ -3,10 +3,10 @@
 #include "socp_internal.h"
 
 #define L 3
-#define NSOC 3
-static const tscvx_int q[NSOC] = {1, 3, 6};
-static const tscvx_int off[NSOC] = {3, 4, 7};
-#define M 13
+#define NSOC 4 /* sizes 3 and 4 take the runtime's unrolled kernels, 1 and 6 the general ones */
+static const tscvx_int q[NSOC] = {1, 3, 4, 6};
+static const tscvx_int off[NSOC] = {3, 4, 7, 11};
+#define M 17
 
 static tscvx_cones cones(void) {
     tscvx_cones K = {L, NSOC, q, off, M, L + NSOC};
