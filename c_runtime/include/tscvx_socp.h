@@ -152,7 +152,7 @@ typedef struct {
                                     regularization for stability) */
     tscvx_int refine_iters;      /* iterative-refinement steps per KKT solve, 0..20 (used once
                                     mu < 1e-3 mu_0, always with expanded SOCs) */
-    tscvx_int ruiz_iters;        /* Ruiz equilibration passes, 0..50 (setup only) */
+    tscvx_int ruiz_iters;        /* Ruiz equilibration passes at most, 0..50 (setup only) */
     tscvx_int soc_dense_max;     /* SOCs up to this dimension get a dense KKT block; larger
                                     ones the sparse diagonal + rank-2 expansion (setup only) */
     tscvx_int kkt_backend;       /* KKT method (setup only): TSCVX_KKT_AUTO (default: banded

@@ -58,12 +58,13 @@ static void zero(tscvx_float *v, tscvx_int len) {
     for (tscvx_int i = 0; i < len; i++) v[i] = 0.0;
 }
 
-/* Column norms and A/G row norms of the current numbers, scaled by (f->col, f->rowA,
- * f->rowG) first when f is not NULL. */
+/* One Ruiz pass's column and A/G row vectors: norms, then factors. */
 typedef struct {
     tscvx_float *col, *rowA, *rowG;
 } ruiz_vectors;
 
+/* nrm := the column and A/G row norms of the numbers, after scaling them by f's factors
+ * when f is not NULL. */
 static void pass(tscvx_workspace *ws, const ruiz_vectors *f, const ruiz_vectors *nrm) {
     zero(nrm->col, ws->n), zero(nrm->rowA, ws->p), zero(nrm->rowG, ws->m);
     scale_and_norms(&ws->P, f ? f->col : NULL, f ? f->col : NULL, nrm->col, nrm->col);
