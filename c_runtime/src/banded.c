@@ -755,6 +755,22 @@ static tscvx_float factor_group(tscvx_workspace *ws, tscvx_int g, tscvx_float d)
 }
 
 /* The group kernels with s = 1..4 as constants (see above). */
+/* An SOC's rows of Gt (q x s row-major B, Gt = W^-1 G on the cone's group): xgg += B' tk */
+static inline void soc_scatter(const tscvx_float *restrict B, tscvx_int q, tscvx_int s,
+                               const tscvx_float *restrict tk, tscvx_float *restrict xgg) {
+    for (tscvx_int r = 0; r < q; r++) {
+        SMALL_LOOP
+        for (tscvx_int a = 0; a < s; a++) xgg[a] += B[r * s + a] * tk[r];
+    }
+}
+
+/* out = B xgg - tk */
+static inline void soc_gather(const tscvx_float *restrict B, tscvx_int q, tscvx_int s,
+                              const tscvx_float *restrict xgg, const tscvx_float *restrict tk,
+                              tscvx_float *restrict out) {
+    for (tscvx_int r = 0; r < q; r++) out[r] = tscvx_dot(B + (size_t)r * s, xgg, s) - tk[r];
+}
+
 #define DISPATCH_S(s, call) \
     switch (s) {            \
     case 1: call(1); break; \
@@ -915,8 +931,9 @@ static void base_solve(tscvx_workspace *ws, const tscvx_float *rx, const tscvx_f
         const tscvx_int s = bd->gp[g + 1] - bd->gp[g], q = K->q[k];
         const tscvx_float *B = bd->B + bd->bp[k], *tk = t + K->off[k];
         tscvx_float *xgg = xg + bd->gp[g];
-        for (tscvx_int r = 0; r < q; r++)
-            for (tscvx_int a = 0; a < s; a++) xgg[a] += B[r * s + a] * tk[r];
+#define SCATTER(S) soc_scatter(B, q, S, tk, xgg)
+        DISPATCH_S(s, SCATTER)
+#undef SCATTER
     }
     /* groups: w_g = L_g^-1 rx~_g; ry~ = ry - sum_g C_g' w_g (band order) */
     for (tscvx_int i = 0; i < p; i++) yb[bd->iperm[i]] = ry[i];
@@ -984,7 +1001,9 @@ static void base_solve(tscvx_workspace *ws, const tscvx_float *rx, const tscvx_f
         }
         const tscvx_int s = bd->gp[g + 1] - bd->gp[g];
         const tscvx_float *B = bd->B + bd->bp[k], *xgg = xg + bd->gp[g];
-        for (tscvx_int r = 0; r < q; r++) wdz[o + r] = tscvx_dot(B + (size_t)r * s, xgg, s) - t[o + r];
+#define GATHER(S) soc_gather(B, q, S, xgg, t + o, wdz + o)
+        DISPATCH_S(s, GATHER)
+#undef GATHER
     }
     tscvx_nt_apply(K, &ws->W, 1, wdz, dz);
     for (tscvx_int v = 0; v < n; v++) dx[bd->gvar[v]] = xg[v];
