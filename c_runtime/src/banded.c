@@ -754,7 +754,6 @@ static tscvx_float factor_group(tscvx_workspace *ws, tscvx_int g, tscvx_float d)
     return wmax;
 }
 
-/* The group kernels with s = 1..4 as constants (see above). */
 /* An SOC's rows of Gt (q x s row-major B, Gt = W^-1 G on the cone's group): xgg += B' tk */
 static inline void soc_scatter(const tscvx_float *restrict B, tscvx_int q, tscvx_int s,
                                const tscvx_float *restrict tk, tscvx_float *restrict xgg) {
@@ -771,6 +770,7 @@ static inline void soc_gather(const tscvx_float *restrict B, tscvx_int q, tscvx_
     for (tscvx_int r = 0; r < q; r++) out[r] = tscvx_dot(B + (size_t)r * s, xgg, s) - tk[r];
 }
 
+/* The group kernels with s = 1..4 as constants (see above). */
 #define DISPATCH_S(s, call) \
     switch (s) {            \
     case 1: call(1); break; \
