@@ -880,8 +880,8 @@ static int banded_load(tscvx_workspace *ws) {
     tscvx_float pmax;
     const int status = factor_p_blocks(ws, &pmax);
     tscvx_float kmax = fmax(banded_reg(ws), pmax);
-    for (tscvx_int k = 0; k < ws->A.nnz; k++) kmax = fmax(kmax, fabs(ws->A.x[k]));
-    for (tscvx_int k = 0; k < ws->G.nnz; k++) kmax = fmax(kmax, fabs(ws->G.x[k]));
+    for (tscvx_int k = 0; k < ws->A.nnz; k++) kmax = tscvx_max(kmax, fabs(ws->A.x[k]));
+    for (tscvx_int k = 0; k < ws->G.nnz; k++) kmax = tscvx_max(kmax, fabs(ws->G.x[k]));
     ws->bd.kmax_data = kmax;
     return status;
 }

@@ -17,8 +17,6 @@ static tscvx_float clamp_norm(tscvx_float v) {
     return v > 1e4 ? 1e4 : v;
 }
 
-static inline tscvx_float max2(tscvx_float a, tscvx_float b) { return b > a ? b : a; }
-
 /* One traversal of M: each entry is multiplied by rs[row] cs[col] (unless rs is NULL), then
  * folded into the infinity norms of its column (cn) and row (rn; P passes rn = cn, its
  * symmetric part). Ruiz pass t's scaling and pass t + 1's norms share it. */
@@ -30,10 +28,10 @@ static void scale_and_norms(tscvx_csc *M, const tscvx_float *rs, const tscvx_flo
             const tscvx_int i = M->i[k];
             if (rs) M->x[k] *= rs[i] * cs[j];
             const tscvx_float v = fabs(M->x[k]);
-            cj = max2(cj, v);
-            rn[i] = max2(rn[i], v);
+            cj = tscvx_max(cj, v);
+            rn[i] = tscvx_max(rn[i], v);
         }
-        cn[j] = max2(cn[j], cj);
+        cn[j] = tscvx_max(cn[j], cj);
     }
 }
 
@@ -48,7 +46,7 @@ static void scale_only(tscvx_csc *M, const tscvx_float *rs, const tscvx_float *c
  * would run every pass (T-SCvx's masked-out cones are empty rows). */
 static tscvx_float norms_to_factors(tscvx_float *v, tscvx_int len, tscvx_float worst) {
     for (tscvx_int i = 0; i < len; i++) {
-        if (v[i] > 0.0) worst = max2(worst, fabs(1.0 - v[i]));
+        if (v[i] > 0.0) worst = tscvx_max(worst, fabs(1.0 - v[i]));
         v[i] = 1.0 / sqrt(clamp_norm(v[i]));
     }
     return worst;
@@ -73,7 +71,7 @@ static void pass(tscvx_workspace *ws, const ruiz_vectors *f, const ruiz_vectors 
     for (tscvx_int k = 0; k < ws->K.nsoc; k++) { /* one scale per SOC maps it onto itself */
         const tscvx_int o = ws->K.off[k], q = ws->K.q[k];
         tscvx_float mx = 0.0;
-        for (tscvx_int i = 0; i < q; i++) mx = max2(mx, nrm->rowG[o + i]);
+        for (tscvx_int i = 0; i < q; i++) mx = tscvx_max(mx, nrm->rowG[o + i]);
         for (tscvx_int i = 0; i < q; i++) nrm->rowG[o + i] = mx;
     }
 }
@@ -116,13 +114,13 @@ void tscvx_equilibrate(tscvx_workspace *ws) {
     tscvx_float cmax = 0.0, pmean = 0.0;
     for (tscvx_int j = 0; j < n; j++) {
         ws->c[j] *= ws->D[j];
-        cmax = max2(cmax, fabs(ws->c[j]));
+        cmax = tscvx_max(cmax, fabs(ws->c[j]));
         cn[j] = 0.0;
     }
     for (tscvx_int j = 0; j < n; j++)
         for (tscvx_int k = P->p[j]; k < P->p[j + 1]; k++) {
-            cn[j] = max2(cn[j], fabs(P->x[k]));
-            cn[P->i[k]] = max2(cn[P->i[k]], fabs(P->x[k]));
+            cn[j] = tscvx_max(cn[j], fabs(P->x[k]));
+            cn[P->i[k]] = tscvx_max(cn[P->i[k]], fabs(P->x[k]));
         }
     for (tscvx_int j = 0; j < n; j++) pmean += cn[j] / n;
     const tscvx_float scale = fmax(pmean, cmax);

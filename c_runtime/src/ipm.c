@@ -131,10 +131,10 @@ static int dual_infeasible(tscvx_workspace *ws) {
     const tscvx_float tol = ws->st.tol_infeas * rho;
     tscvx_float r = 0.0, xnorm = 0.0;
     for (tscvx_int i = 0; i < p; i++)
-        r = fmax(r, fabs((ws->ry[i] + ws->b[i] * ws->tau) / ws->EA[i]));
+        r = tscvx_max(r, fabs((ws->ry[i] + ws->b[i] * ws->tau) / ws->EA[i]));
     for (tscvx_int i = 0; i < m; i++)
-        r = fmax(r, fabs((ws->rz[i] + ws->h[i] * ws->tau) / ws->EG[i]));
-    for (tscvx_int j = 0; j < n; j++) xnorm = fmax(xnorm, fabs(ws->D[j] * ws->x[j]));
+        r = tscvx_max(r, fabs((ws->rz[i] + ws->h[i] * ws->tau) / ws->EG[i]));
+    for (tscvx_int j = 0; j < n; j++) xnorm = tscvx_max(xnorm, fabs(ws->D[j] * ws->x[j]));
     const tscvx_float px = vnorm_inf_div(ws->Px, ws->D, n) / ws->cs;
     return r <= tol && px <= fmax(tol, ws->st.tol_infeas * ws->norm_P * xnorm);
 }
@@ -234,7 +234,7 @@ static tscvx_float primal_row_error(tscvx_workspace *ws, tscvx_float lin) {
         const tscvx_float dxj = ws->dx[j];
         for (tscvx_int k = ws->G.p[j]; k < ws->G.p[j + 1]; k++) e[ws->G.i[k]] += ws->G.x[k] * dxj;
     }
-    for (tscvx_int i = 0; i < m; i++) emax = fmax(emax, fabs(e[i] / ws->EG[i]));
+    for (tscvx_int i = 0; i < m; i++) emax = tscvx_max(emax, fabs(e[i] / ws->EG[i]));
     return emax;
 }
 

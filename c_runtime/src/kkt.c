@@ -207,10 +207,10 @@ void tscvx_kkt_data_values(tscvx_workspace *ws, tscvx_float delta) {
     kk->delta = delta; /* removed again by iterative refinement (reg_of) */
     /* |entry|_max of the data part, for the refinement's rounding floor */
     tscvx_float kmax = delta;
-    for (tscvx_int j = 0; j < n; j++) kmax = fmax(kmax, fabs(kk->Kx[kk->mapDiag[j]]));
-    for (tscvx_int k = 0; k < ws->P.nnz; k++) kmax = fmax(kmax, fabs(kk->Kx[kk->mapP[k]]));
-    for (tscvx_int k = 0; k < ws->A.nnz; k++) kmax = fmax(kmax, fabs(ws->A.x[k]));
-    for (tscvx_int k = 0; k < ws->G.nnz; k++) kmax = fmax(kmax, fabs(ws->G.x[k]));
+    for (tscvx_int j = 0; j < n; j++) kmax = tscvx_max(kmax, fabs(kk->Kx[kk->mapDiag[j]]));
+    for (tscvx_int k = 0; k < ws->P.nnz; k++) kmax = tscvx_max(kmax, fabs(kk->Kx[kk->mapP[k]]));
+    for (tscvx_int k = 0; k < ws->A.nnz; k++) kmax = tscvx_max(kmax, fabs(ws->A.x[k]));
+    for (tscvx_int k = 0; k < ws->G.nnz; k++) kmax = tscvx_max(kmax, fabs(ws->G.x[k]));
     kk->kmax_data = kmax;
 }
 

@@ -342,6 +342,10 @@ long tscvx_kkt_build(tscvx_workspace *ws, tscvx_int *tmp);
 /* Fill the static (data) part of the KKT values from the scaled data; cone block zero. */
 void tscvx_kkt_data_values(tscvx_workspace *ws, tscvx_float delta);
 
+/* max(a, b) for a that is never NaN (a running maximum): b when b > a, so a NaN b is
+ * skipped as fmax skips it, without fmax's library call in the loops. */
+static inline tscvx_float tscvx_max(tscvx_float a, tscvx_float b) { return b > a ? b : a; }
+
 /* u'v, two terms per pass into one sum: half the loop overhead on the small cones, the same
  * rounding as one term per pass */
 static inline tscvx_float tscvx_dot(const tscvx_float *u, const tscvx_float *v, tscvx_int n) {
