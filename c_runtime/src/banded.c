@@ -231,13 +231,23 @@ static inline void group_ct(const tscvx_float *restrict L, tscvx_int ld,
     }
 }
 
-/* Y[rows, rows] += C_g' C_g (lower part: rows ascending) */
+/* Y[rows, rows] += C_g' C_g (lower part: rows ascending); two entries of a row per pass,
+ * each summed in the same order as alone */
 static inline void group_gram(const tscvx_banded *bd, const tscvx_int *restrict rows,
                               const tscvx_float *restrict CT, tscvx_int R, tscvx_int s) {
     for (tscvx_int u = 0; u < R; u++) {
         tscvx_float *restrict Yu = prow(bd, rows[u]);
         const tscvx_float *restrict cu = CT + (size_t)u * s;
-        for (tscvx_int v = 0; v <= u; v++) {
+        tscvx_int v = 0;
+        for (; v + 1 <= u; v += 2) {
+            const tscvx_float *restrict cv = CT + (size_t)v * s, *restrict cw = cv + s;
+            tscvx_float acc = cu[0] * cv[0], acw = cu[0] * cw[0];
+            SMALL_LOOP
+            for (tscvx_int a = 1; a < s; a++) acc += cu[a] * cv[a], acw += cu[a] * cw[a];
+            Yu[rows[v]] += acc;
+            Yu[rows[v + 1]] += acw;
+        }
+        if (v == u) {
             const tscvx_float *restrict cv = CT + (size_t)v * s;
             tscvx_float acc = cu[0] * cv[0];
             SMALL_LOOP
