@@ -326,19 +326,13 @@ static void copy_csc(tscvx_csc *M, const tscvx_int *Mp, const tscvx_int *Mi,
     if (M->nnz > 0) copy_floats(M->x, Mx, M->nnz);
 }
 
-static tscvx_float norm_inf(const tscvx_float *v, tscvx_int n) {
-    tscvx_float r = 0.0;
-    for (tscvx_int i = 0; i < n; i++) r = fmax(r, fabs(v[i]));
-    return r;
-}
-
 /* inf-norms of the caller's (unscaled) numbers, for relative residuals; NULL = unchanged */
 static void data_norms(tscvx_workspace *ws, const tscvx_float *Px, const tscvx_float *c,
                        const tscvx_float *b, const tscvx_float *h) {
-    if (Px) ws->norm_P = norm_inf(Px, ws->P.nnz);
-    if (c) ws->norm_c = norm_inf(c, ws->n);
-    if (b) ws->norm_b = norm_inf(b, ws->p);
-    if (h) ws->norm_h = norm_inf(h, ws->m);
+    if (Px) ws->norm_P = tscvx_max_abs(Px, ws->P.nnz, 0.0);
+    if (c) ws->norm_c = tscvx_max_abs(c, ws->n, 0.0);
+    if (b) ws->norm_b = tscvx_max_abs(b, ws->p, 0.0);
+    if (h) ws->norm_h = tscvx_max_abs(h, ws->m, 0.0);
 }
 
 /* The sparse method's set-up from the arena top: pattern and maps, then the ordering and

@@ -870,7 +870,7 @@ static int factor_p_blocks(tscvx_workspace *ws, tscvx_float *pmax) {
     *pmax = 0.0;
     for (tscvx_int k = 0; k < ws->P.nnz; k++) {
         bd->PF[bd->mapP[k]] += ws->P.x[k];
-        *pmax = fmax(*pmax, fabs(ws->P.x[k]));
+        *pmax = tscvx_max(*pmax, fabs(ws->P.x[k]));
     }
     int status = 0;
     for (tscvx_int g = 0; g < bd->ngroup; g++)
@@ -890,8 +890,7 @@ static int banded_load(tscvx_workspace *ws) {
     tscvx_float pmax;
     const int status = factor_p_blocks(ws, &pmax);
     tscvx_float kmax = fmax(banded_reg(ws), pmax);
-    for (tscvx_int k = 0; k < ws->A.nnz; k++) kmax = tscvx_max(kmax, fabs(ws->A.x[k]));
-    for (tscvx_int k = 0; k < ws->G.nnz; k++) kmax = tscvx_max(kmax, fabs(ws->G.x[k]));
+    kmax = tscvx_max_abs(ws->G.x, ws->G.nnz, tscvx_max_abs(ws->A.x, ws->A.nnz, kmax));
     ws->bd.kmax_data = kmax;
     return status;
 }
@@ -1020,14 +1019,6 @@ static void base_solve(tscvx_workspace *ws, const tscvx_float *rx, const tscvx_f
     for (tscvx_int i = 0; i < p; i++) dy[i] = yb[bd->iperm[i]];
 }
 
-static tscvx_float vmax_abs(const tscvx_float *v, tscvx_int n, tscvx_float r) {
-    for (tscvx_int i = 0; i < n; i++) {
-        const tscvx_float a = fabs(v[i]);
-        r = a > r ? a : r;
-    }
-    return r;
-}
-
 /* Residual of the unregularized KKT system, into res_x, res_y, res_z:
  *   (rx - P dx - A'dy - G'dz, ry - A dx, rz - G dx + W wdz); returns its inf-norm. */
 static tscvx_float residual(tscvx_workspace *ws, const tscvx_float *rx, const tscvx_float *ry,
@@ -1046,9 +1037,9 @@ static tscvx_float residual(tscvx_workspace *ws, const tscvx_float *rx, const ts
     for (tscvx_int j = 0; j < n; j++) bd->res_x[j] = rx[j] - bd->res_x[j];
     for (tscvx_int i = 0; i < p; i++) bd->res_y[i] = ry[i] - bd->res_y[i];
     for (tscvx_int i = 0; i < m; i++) bd->res_z[i] = rz[i] - bd->res_z[i];
-    r = vmax_abs(bd->res_x, n, r);
-    r = vmax_abs(bd->res_y, p, r);
-    return vmax_abs(bd->res_z, m, r);
+    r = tscvx_max_abs(bd->res_x, n, r);
+    r = tscvx_max_abs(bd->res_y, p, r);
+    return tscvx_max_abs(bd->res_z, m, r);
 }
 
 static int banded_solve(tscvx_workspace *ws, const tscvx_float *rx, const tscvx_float *ry,
@@ -1058,13 +1049,13 @@ static int banded_solve(tscvx_workspace *ws, const tscvx_float *rx, const tscvx_
     const tscvx_int n = ws->n, p = ws->p, m = ws->m;
     base_solve(ws, rx, ry, rz, dx, dy, dz, wdz);
     if (refine <= 0) return 0;
-    const tscvx_float bnorm = vmax_abs(rz, m, vmax_abs(ry, p, vmax_abs(rx, n, 0.0)));
+    const tscvx_float bnorm = tscvx_max_abs(rz, m, tscvx_max_abs(ry, p, tscvx_max_abs(rx, n, 0.0)));
     tscvx_float last = INFINITY;
     int steps = 0;
     for (tscvx_int it = 0; it < refine; it++) {
         const tscvx_float rnorm = residual(ws, rx, ry, rz, dx, dy, dz, wdz);
         if (!isfinite(rnorm)) return -1;
-        const tscvx_float xnorm = vmax_abs(wdz, m, vmax_abs(dy, p, vmax_abs(dx, n, 0.0)));
+        const tscvx_float xnorm = tscvx_max_abs(wdz, m, tscvx_max_abs(dy, p, tscvx_max_abs(dx, n, 0.0)));
         if (rnorm <= TSCVX_REFINE_TOL * (1.0 + bnorm) ||
             rnorm <= TSCVX_REFINE_FLOOR * bd->kmax * xnorm || rnorm > TSCVX_REFINE_RATIO * last)
             break;

@@ -209,8 +209,7 @@ void tscvx_kkt_data_values(tscvx_workspace *ws, tscvx_float delta) {
     tscvx_float kmax = delta;
     for (tscvx_int j = 0; j < n; j++) kmax = tscvx_max(kmax, fabs(kk->Kx[kk->mapDiag[j]]));
     for (tscvx_int k = 0; k < ws->P.nnz; k++) kmax = tscvx_max(kmax, fabs(kk->Kx[kk->mapP[k]]));
-    for (tscvx_int k = 0; k < ws->A.nnz; k++) kmax = tscvx_max(kmax, fabs(ws->A.x[k]));
-    for (tscvx_int k = 0; k < ws->G.nnz; k++) kmax = tscvx_max(kmax, fabs(ws->G.x[k]));
+    kmax = tscvx_max_abs(ws->G.x, ws->G.nnz, tscvx_max_abs(ws->A.x, ws->A.nnz, kmax));
     kk->kmax_data = kmax;
 }
 
@@ -364,8 +363,7 @@ static int sparse_load(tscvx_workspace *ws) {
  * the IPM sets both before it uses them. Returns 0 or -1. */
 #define PSD_FACTOR_TOL 1e-9
 static int sparse_check_p(tscvx_workspace *ws) {
-    tscvx_float pmax = 0.0;
-    for (tscvx_int k = 0; k < ws->P.nnz; k++) pmax = fmax(pmax, fabs(ws->P.x[k]));
+    const tscvx_float pmax = tscvx_max_abs(ws->P.x, ws->P.nnz, 0.0);
     if (pmax == 0.0) return 0;
     tscvx_kkt *kk = &ws->kkt;
     const tscvx_float eps = PSD_FACTOR_TOL * pmax;

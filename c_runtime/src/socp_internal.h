@@ -2,6 +2,7 @@
 #ifndef TSCVX_SOCP_INTERNAL_H
 #define TSCVX_SOCP_INTERNAL_H
 
+#include <math.h>
 #include <stddef.h>
 #include <stdint.h>
 
@@ -345,6 +346,12 @@ void tscvx_kkt_data_values(tscvx_workspace *ws, tscvx_float delta);
 /* max(a, b) for a that is never NaN (a running maximum): b when b > a, so a NaN b is
  * skipped as fmax skips it, without fmax's library call in the loops. */
 static inline tscvx_float tscvx_max(tscvx_float a, tscvx_float b) { return b > a ? b : a; }
+
+/* max(r, |v|_inf) */
+static inline tscvx_float tscvx_max_abs(const tscvx_float *v, tscvx_int n, tscvx_float r) {
+    for (tscvx_int i = 0; i < n; i++) r = tscvx_max(r, fabs(v[i]));
+    return r;
+}
 
 /* u'v, two terms per pass into one sum: half the loop overhead on the small cones, the same
  * rounding as one term per pass */
