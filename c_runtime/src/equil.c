@@ -6,7 +6,7 @@
  * Works in place: on entry P, A, G, c, b, h hold the caller's numbers. Computed at setup and
  * again on every data update (tscvx_update_equilibrate): O(ruiz_iters nnz); a landing
  * subproblem is balanced in two or three passes, about 0.5 % of its solve (`make budget`'s
- * T-SCvx call, 25 Nov: 20.8 M of 4,302 M instructions).
+ * T-SCvx call, 25 Nov: 20.8 M of 4,301 M instructions).
  */
 #include <math.h>
 
