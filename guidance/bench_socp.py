@@ -6,7 +6,8 @@ the 3-DoF lossless-convexification powered-descent SOCP of Acikmese & Blackmore
 (N = 50, generated here), (c) seeded random SOCPs. For each solver the table gives the median
 time of the solver's own solve call (set-up excluded), the median IPM iteration count and, for
 this runtime, the arena bytes; where this runtime takes its banded KKT method, the same runtime
-with its sparse LDL' method too. ``--callgrind`` adds instruction counts per solve (valgrind).
+with its sparse LDL' method too. ``--callgrind`` adds instruction and floating-point operation
+counts per solve (valgrind, objdump).
 
     python -m guidance.bench_socp [--quick] [--callgrind]
 """
@@ -16,6 +17,8 @@ from __future__ import annotations
 import argparse
 import math
 import os
+import re
+import shutil
 import statistics
 import subprocess
 import tempfile
@@ -280,7 +283,64 @@ def dump_c_problem(prob: ConicProblem, path: Path) -> None:
                 f.write(np.ascontiguousarray(arr).tobytes())
 
 
-def _callgrind(cmd: list[str], toggle: str) -> int | None:
+@dataclass(frozen=True)
+class Count:
+    """One solve under callgrind: all its instructions, and its floating-point arithmetic
+    (add, subtract, multiply, divide, square root; a packed instruction counts its lanes, a
+    fused multiply-add two a lane) in the solver's own object file. Instructions per flop
+    tell the overhead of the code (indexing, loops, copies) from the work of the algorithm."""
+
+    instructions: int
+    flops: int | None
+
+    def per_flop(self) -> float | None:
+        return self.instructions / self.flops if self.flops else None
+
+
+_FLOP = re.compile(r"v?(?:(?:add|sub|mul|div|sqrt)|(f)n?m(?:add|sub)\d*)([sp])d$")
+
+
+def _flop_weight(mnemonic: str) -> int:
+    m = _FLOP.match(mnemonic)
+    if not m:
+        return 0
+    return (2 if m.group(1) else 1) * (2 if m.group(2) == "p" else 1)
+
+
+def _object_flops(cg_out: Path, solver_object: str) -> int | None:
+    """Flops executed in the object file whose path contains ``solver_object``, from a
+    callgrind file written with --dump-instr=yes --compress-pos=no --compress-strings=no
+    (cost lines "address line count"; the line after calls= is a call's inclusive cost)."""
+    if shutil.which("objdump") is None:
+        return None
+    weights: dict[int, int] = {}
+    obj, in_obj, after_call, flops = None, False, False, 0
+    for line in cg_out.read_text().splitlines():
+        if line.startswith("ob="):
+            path = line[3:].strip()
+            in_obj = solver_object in path
+            if in_obj and obj is None:
+                obj = path
+                dis = subprocess.run(
+                    ["objdump", "-d", "--no-show-raw-insn", path],
+                    capture_output=True, text=True, check=False,
+                ).stdout  # fmt: skip
+                for m in re.finditer(r"^\s*([0-9a-f]+):\s+(\S+)", dis, re.MULTILINE):
+                    w = _flop_weight(m.group(2))
+                    if w:
+                        weights[int(m.group(1), 16)] = w
+        elif line.startswith("calls="):
+            after_call = True
+        elif line.startswith("0x"):
+            if after_call:
+                after_call = False
+            elif in_obj:
+                addr, _, count = line.split()
+                flops += weights.get(int(addr, 16), 0) * int(count)
+    return flops if obj is not None else None
+
+
+def _callgrind(cmd: list[str], toggle: str, solver_object: str) -> Count | None:
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "cg.out"
         r = subprocess.run(
@@ -289,6 +349,9 @@ def _callgrind(cmd: list[str], toggle: str) -> int | None:
                 "--tool=callgrind",
                 f"--callgrind-out-file={out}",
                 f"--toggle-collect={toggle}",
+                "--dump-instr=yes",
+                "--compress-pos=no",
+                "--compress-strings=no",
                 *cmd,
             ],
             capture_output=True,
@@ -297,20 +360,21 @@ def _callgrind(cmd: list[str], toggle: str) -> int | None:
         )
         for line in r.stderr.splitlines():
             if "Collected :" in line:
-                return int(line.split(":")[-1].strip())
+                return Count(int(line.split(":")[-1].strip()), _object_flops(out, solver_object))
     return None
 
 
 BENCH_DRIVER = ROOT / "build" / "ctest" / "bench_driver"  # `make bench` (or `make ctest`) builds it
 
 
-def instructions_ours(prob: ConicProblem, kkt_backend: int = 0) -> int | None:
+def instructions_ours(prob: ConicProblem, kkt_backend: int = 0) -> Count | None:
     if not BENCH_DRIVER.exists():
         return None
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "prob.bin"
         dump_c_problem(prob, path)
-        return _callgrind([str(BENCH_DRIVER), str(path), "1", str(kkt_backend)], "tscvx_solve")
+        cmd = [str(BENCH_DRIVER), str(path), "1", str(kkt_backend)]
+        return _callgrind(cmd, "tscvx_solve", BENCH_DRIVER.name)
 
 
 _QOCO_SCRIPT = """
@@ -320,7 +384,7 @@ run_qoco(pickle.load(open(sys.argv[1], "rb")), 1)
 """
 
 
-def instructions_qoco(prob: ConicProblem) -> int | None:
+def instructions_qoco(prob: ConicProblem) -> Count | None:
     import pickle
     import sys
 
@@ -328,7 +392,7 @@ def instructions_qoco(prob: ConicProblem) -> int | None:
         path = Path(tmp) / "prob.pkl"
         with open(path, "wb") as f:
             pickle.dump(prob, f)
-        return _callgrind([sys.executable, "-c", _QOCO_SCRIPT, str(path)], "*qoco_solve*")
+        return _callgrind([sys.executable, "-c", _QOCO_SCRIPT, str(path)], "*qoco_solve*", "qoco")
 
 
 # ---- the table -----------------------------------------------------------------------------
@@ -412,6 +476,14 @@ def bench_set(name: str, probs: list[ConicProblem], reps: int) -> list[str]:
     return lines
 
 
+def _count(c: Count | None) -> str:
+    if c is None:
+        return f"{'n/a':>12}"
+    per = c.per_flop()
+    flops = f"{c.flops / 1e6:.1f} M flops, {per:.2f}/flop" if per else "flops n/a"
+    return f"{c.instructions:>12} ({flops})"
+
+
 def main(argv: list[str] | None = None) -> int:
     """Print the benchmark table. ``argv`` defaults to no options (the CLI passes its own)."""
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
@@ -437,17 +509,20 @@ def main(argv: list[str] | None = None) -> int:
         for line in bench_set(name, probs, reps):
             print(line)
     if args.callgrind:
-        print("instructions per solve (callgrind, first problem of each set):")
+        print(
+            "instructions per solve (callgrind, first problem of each set); flops: the solver's "
+            "own floating-point arithmetic, and instructions per flop"
+        )
         if not BENCH_DRIVER.exists():
             print(f"  (tscvx: n/a, {BENCH_DRIVER.relative_to(ROOT)} is not built: make bench)")
         for name, probs in sets[:3]:
             ours = instructions_ours(probs[0])
             sparse = instructions_ours(probs[0], KKT_SPARSE)
             qoco = instructions_qoco(probs[0])
-            ratio = f"{qoco / ours:.2f}x" if ours and qoco else "n/a"
+            ratio = f"{qoco.instructions / ours.instructions:.2f}x" if ours and qoco else "n/a"
             print(
-                f"  {name[:4]:4} tscvx {ours or 'n/a':>12} (sparse method {sparse or 'n/a':>12})  "
-                f"qoco {qoco or 'n/a':>12}  qoco/tscvx {ratio}"
+                f"  {name[:4]:4} tscvx {_count(ours)}  qoco {_count(qoco)}  qoco/tscvx {ratio}"
+                f"  (tscvx's sparse method {sparse.instructions if sparse else 'n/a'})"
             )
     return 0
 

@@ -1,0 +1,81 @@
+"""The SOCP benchmark's flop counter (guidance/bench_socp.py, ``--callgrind``): it must count
+exactly the arithmetic of a kernel whose operations are known by construction."""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+from pathlib import Path
+
+import pytest
+
+from guidance import bench_socp
+
+needs_tools = pytest.mark.skipif(
+    any(shutil.which(t) is None for t in ("valgrind", "objdump", "gcc")),
+    reason="valgrind, objdump or gcc missing",
+)
+
+
+@pytest.mark.parametrize(
+    ("mnemonic", "flops"),
+    [
+        ("mulsd", 1),
+        ("addsd", 1),
+        ("subsd", 1),
+        ("divsd", 1),
+        ("sqrtsd", 1),
+        ("vmulsd", 1),
+        ("mulpd", 2),
+        ("vaddpd", 2),
+        ("vfmadd231sd", 2),
+        ("vfnmadd213pd", 4),
+        ("movsd", 0),  # moves, comparisons and single precision are not double arithmetic
+        ("maxsd", 0),
+        ("ucomisd", 0),
+        ("cvtsi2sd", 0),
+        ("mulss", 0),
+        ("add", 0),
+    ],
+)
+def test_flop_weight(mnemonic: str, flops: int) -> None:
+    assert bench_socp._flop_weight(mnemonic) == flops
+
+
+KERNEL = r"""
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+/* n multiplies, n additions, one square root and one division */
+__attribute__((noinline)) double kernel(const double *x, const double *y, int n) {
+    double acc = 0.0;
+    for (int i = 0; i < n; i++) acc += x[i] * y[i];
+    return sqrt(acc) / n;
+}
+int main(int argc, char **argv) {
+    int n = atoi(argv[1]);
+    double *x = malloc(sizeof(double) * (size_t)n);
+    for (int i = 0; i < n; i++) x[i] = 0.5 * i; /* outside the counted function */
+    printf("%g\n", kernel(x, x, n));
+    free(x);
+    return 0;
+}
+"""
+
+
+@needs_tools
+def test_flops_of_a_known_kernel(tmp_path: Path) -> None:
+    src, exe = tmp_path / "kernel.c", tmp_path / "kernel"
+    src.write_text(KERNEL)
+    subprocess.run(
+        ["gcc", "-O2", "-fno-tree-vectorize", "-fno-math-errno", str(src), "-o", str(exe), "-lm"],
+        check=True,
+    )
+    n = 1000
+    count = bench_socp._callgrind([str(exe), str(n)], "kernel", exe.name)
+    assert count is not None
+    assert count.flops == 2 * n + 2
+    # a scalar dot product needs at least a load, a multiply and an add per entry, plus the
+    # loop's increment, compare and branch
+    assert count.instructions >= 3 * n
+    assert count.per_flop() == pytest.approx(count.instructions / (2 * n + 2))
