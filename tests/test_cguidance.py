@@ -28,7 +28,7 @@ import pytest
 from guidance import cguidance
 from guidance.agreement import STRICT_REL_MF, same_trajectory
 from guidance.catalog import SCENARIOS
-from guidance.constraints import constraint_scales
+from guidance.constraints import constraint_scales, path_constraint_values
 from guidance.guess import initial_guess
 from guidance.model import discretize
 from guidance.params import NC, InitialState, Params, Scenario, SCvxSettings
@@ -336,6 +336,55 @@ def test_masks_run_tscvx_with_the_full_constraint_guard() -> None:
         assert audit(c2.x, c2.u, c2.t_f, scn.params).max_path_violation <= 1e-5
 
 
+def test_mask_table_shorter_than_the_solve_reuses_its_last_row() -> None:
+    """A mask table of n_masks rows: iteration k uses row min(k, n_masks) - 1
+    (tscvx_guidance.h, guidance/scvx.py _mask_for). With [drop everything, keep everything]
+    the first iteration runs the guard on a bare subproblem and every later one is the full
+    problem; the C solve is the Python reference's, subproblem by subproblem."""
+    scn = SCENARIOS["default"]
+    N = scn.params.N
+    table = [np.zeros(NC * N, bool), np.ones(NC * N, bool)]
+    c = cguidance.solve_c(scn, masks=table)
+    py = SCvxSolver(scn, backend="c").solve(masks=table)
+    assert py.history[0].restored > 0  # the first (bare) subproblem did need the guard
+    assert (c.status, c.iterations, c.subproblems_solved) == (
+        py.status,
+        py.iterations,
+        py.subproblems_solved,
+    )
+    assert [h.restored for h in c.history] == [h.restored for h in py.history]
+    np.testing.assert_allclose([h.eta for h in c.history], [h.eta for h in py.history], rtol=1e-12)
+
+
+def test_tmin_is_always_kept_and_a_kept_constraint_is_never_put_back() -> None:
+    """T_min (constraint 6) is always kept, whatever the mask says (its linearization has a
+    penalized buffer instead: guidance/subproblem.py, pdg_scvx.c), and the full-constraint
+    guard puts back only constraints the mask dropped. From a guess whose thrust is below
+    T_min, at a small radius the first candidates still fall short of T_min (buffer > 0): with a
+    mask that keeps everything, or everything but T_min, nothing may be put back, and the solve
+    is the Python reference's."""
+    scn = SCENARIOS["default"]
+    N = scn.params.N
+    x, u, t_f = initial_guess(scn)
+    guess = (x, 0.2 * u, t_f)
+    assert path_constraint_values(x, 0.2 * u, scn.params)[:, 6].max() > 0.05
+    st = SCvxSettings(eta_init=0.01)
+    everything = np.ones((N, NC), bool)
+    all_but_tmin = everything.copy()
+    all_but_tmin[:, 6] = False
+    py = SCvxSolver(scn, st, backend="c").solve(guess=guess, masks=[everything.reshape(-1)])
+    assert py.status == "solved"
+    for mask in (everything, all_but_tmin):
+        c = cguidance.solve_c(scn, st, guess=guess, masks=[mask.reshape(-1)])
+        assert [h.restored for h in c.history] == [0] * len(c.history)
+        assert (c.status, c.iterations, c.subproblems_solved) == (
+            py.status,
+            py.iterations,
+            py.subproblems_solved,
+        )
+        assert abs(c.m_f - py.m_f) / py.m_f <= STRICT_REL_MF
+
+
 # ---- input checking -------------------------------------------------------------------------
 
 BAD_DICTS = [
@@ -349,6 +398,8 @@ BAD_DICTS = [
     ({"T_min": 6.0}, "T_min"),
     ({"T_max": -1.0}, "T_max"),
     ({"T_min": 4.0, "T_max": 4.0}, "T_min"),  # T_min == T_max: no throttle range
+    ({"T_min": 0.0}, "T_min"),  # must be positive: zero is not
+    ({"alpha_mdot": 0.0}, "alpha_mdot"),
     ({"gimbal_max_deg": 95.0}, "gimbal_max_deg"),
     ({"glideslope_deg": 90.0}, "glideslope_deg"),
     ({"g_I": [-1.0, 0.1, 0.0]}, "g_I"),
@@ -571,3 +622,41 @@ def test_stall_with_virtual_control_left_gives_pythons_reason() -> None:
     assert py.reason.startswith(f"step rejected at the smallest trust radius {st.eta_lb:g}; ")
     assert f"after {py.iterations} iterations" in py.reason, py.reason
     assert c.reason == py.reason
+
+
+def test_penalty_counts_path_constraint_violations_of_the_guess() -> None:
+    """J = -m_f + lam (defect block norms + sum max(h, 0) / scale) on the FULL constraint set
+    (paper Eq. (12), guidance/scvx.py penalty). A guess whose thrust exceeds T_max by far:
+    J at the guess (J + dJ of the first log row) is the reference's, violation term included."""
+    scn = SCENARIOS["default"]
+    x, u, t_f = initial_guess(scn)
+    u = 1.6 * u
+    h = path_constraint_values(x, u, scn.params)
+    assert h[:, 4].max() > 1.0  # T_max violated by more than 1 thrust unit
+    st = SCvxSettings(iter_max=1)
+    c = cguidance.solve_c(scn, st, guess=(x, u, t_f))
+    py = SCvxSolver(scn, st, backend="c").solve(guess=(x, u, t_f))
+    sc = Scaling.for_scenario(scn, t_f)
+    scales = constraint_scales(scn.params, sc.Sx, sc.Su)
+    violation_term = st.lam * float((np.maximum(h, 0.0) / scales[None, :]).sum())
+    assert violation_term > 100.0  # the term this test is about is far above rounding
+    j0_c = c.history[0].J + c.history[0].dJ
+    j0_py = py.history[0].J + py.history[0].dJ
+    assert j0_c == pytest.approx(j0_py, rel=1e-9)
+    assert c.history[0].rho == pytest.approx(py.history[0].rho, rel=1e-6)
+
+
+def test_trust_radius_never_exceeds_eta_ub() -> None:
+    """Eq. (15) with the bounds: eta in [eta_lb, eta_ub] always; an accepted step with
+    rho >= rho2 grows the radius to min(beta eta, eta_ub). Started at eta_ub, the first steps
+    are good ones (rho >= rho2), so the clamp is what keeps the radius at eta_ub."""
+    scn = SCENARIOS["default"]
+    st = SCvxSettings(eta_init=0.05, eta_ub=0.05)
+    c = cguidance.solve_c(scn, st)
+    assert c.status == "solved"
+    rows = c.history
+    assert all(st.eta_lb <= r.eta <= st.eta_ub for r in rows), [r.eta for r in rows]
+    grown = [i for i in range(len(rows) - 1) if rows[i].accepted and rows[i].rho >= st.rho2]
+    assert grown and grown[0] == 0
+    for i in grown:
+        assert rows[i + 1].eta == min(st.beta * rows[i].eta, st.eta_ub)

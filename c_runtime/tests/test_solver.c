@@ -274,6 +274,24 @@ static void test_psd_check(void) {
         d2.Px = good[k];
         CHECK(try_setup(&d2) == TSCVX_SETUP_OK, "good P %zu refused", k);
     }
+    /* a negative diagonal entry is refused however small: in diag(1, -1e-12) it lies within
+     * the factorization's tolerance (1e-9 of the largest entry), so only the entry check sees
+     * it; at setup and in an update */
+    tscvx_int Pp3[] = {0, 1, 2}, Pi3[] = {0, 1};
+    const tscvx_float Px3[] = {1, -1e-12}, Px3_good[] = {1, 0};
+    tscvx_data d3 = d2;
+    d3.Pp = Pp3, d3.Pi = Pi3, d3.Px = Px3;
+    CHECK(try_setup(&d3) == TSCVX_SETUP_P_NOT_PSD, "P = diag(1, -1e-12) accepted");
+    {
+        tscvx_settings st3;
+        tscvx_workspace *ws3 = NULL;
+        tscvx_default_settings(&st3);
+        d3.Px = Px3_good;
+        CHECK(tscvx_setup(&ws3, arena, sizeof arena, &d3, &st3) == TSCVX_SETUP_OK, "diag setup");
+        CHECK(ws3 && tscvx_update_data(ws3, Px3, NULL, NULL, NULL, NULL, NULL) ==
+                         TSCVX_SETUP_P_NOT_PSD,
+              "update to P = diag(1, -1e-12) accepted");
+    }
     /* updates: a bad P makes the workspace not ready until a good one */
     tscvx_settings st;
     tscvx_default_settings(&st);

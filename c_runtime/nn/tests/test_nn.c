@@ -312,6 +312,41 @@ static void test_synthetic(void)
     }
 }
 
+/* The tight rule at its boundary: a bit is tight when 1 / (1 + exp(-logit)) >= threshold
+ * (tscvx_nn.h), so probability exactly equal to the threshold is tight. With threshold 0.5,
+ * logit 0 (or -0) gives p = 1 / (1 + 1) = 0.5 exactly, logit -1e-12 gives p < 0.5. */
+static void test_mask_threshold_boundary(void)
+{
+    static const arch a = {TSCVX_NN_KIND_CONSTRAINT, TSCVX_NN_TOKENS_SCALAR, 17, 14, 4, 2, 1, 4,
+                           0, 2};
+    size_t len = 0, need = 0;
+    unsigned char *blob = make_blob(&a, &len);
+    unsigned char mask[14];
+    double logits[14];
+    void *arena;
+    tscvx_nn *net = NULL;
+    tscvx_nn_info info;
+    int i;
+    wr_f64(blob + 72, 0.5); /* threshold */
+    reseal(blob, len);
+    CHECK_ST(tscvx_nn_arena_size(blob, len, 0, &need), TSCVX_NN_OK);
+    arena = malloc(need);
+    CHECK_ST(tscvx_nn_init(&net, arena, need, blob, len, 0), TSCVX_NN_OK);
+    CHECK_ST(tscvx_nn_get_info(net, &info), TSCVX_NN_OK);
+    CHECK(info.threshold == 0.5);
+    for (i = 0; i < 14; ++i) {
+        logits[i] = i % 2 ? 0.0 : -1e-12; /* p = 0.5 exactly, p just below 0.5 */
+    }
+    logits[2] = -0.0;
+    memset(mask, 7, sizeof mask);
+    CHECK_ST(tscvx_nn_tight_mask(net, logits, 14, mask), TSCVX_NN_OK);
+    for (i = 0; i < 14; ++i) {
+        CHECK(mask[i] == (i % 2 || i == 2 ? 1 : 0));
+    }
+    free(arena);
+    free(blob);
+}
+
 /* ---- a shipped model --------------------------------------------------------------------- */
 
 static void test_model(const char *path)
@@ -572,6 +607,7 @@ int main(int argc, char **argv)
     int i;
     test_messages();
     test_synthetic();
+    test_mask_threshold_boundary();
     test_bad_blobs();
     for (i = 1; i < argc; ++i) {
         test_model(argv[i]);
