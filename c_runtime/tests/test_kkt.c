@@ -180,6 +180,69 @@ static void run_refinement(int dense_max, int backend) {
     CHECK(e[1] < 0.1 * e[0], "backend %d: one refinement step %g vs none %g", backend, e[1], e[0]);
 }
 
+/* The refinement's stopping rule (socp_internal.h): a step is taken only while the residual
+ * of the UNREGULARIZED system is above REFINE_TOL (1 + |rhs|) and above the rounding floor,
+ * and after the first only while the last step at least halved it; it stops otherwise. With
+ * a static regularization comparable to the matrix's entries or larger (delta = 1 and 1e4;
+ * the banded method regularizes by 1e-4 delta), refinement gains slowly or stalls, and must
+ * stop at the first step that gains less than 2x instead of spending its 20 steps. The
+ * residuals r_k after k steps are measured here on the dense matrix (the solve with
+ * `refine` = k takes the first k steps of the solve with more). */
+static void run_refinement_stops(int dense_max, int backend) {
+    run(dense_max, 1, backend);
+    tscvx_workspace *ws = last_ws;
+    if (!ws) return;
+    const int n = ws->n, p = ws->p, m = ws->m, dim = n + p + m;
+    static double Kd[DMAX * DMAX], rhs[DMAX], sol[DMAX], r[21];
+    static tscvx_float e[DMAX], t1[DMAX], t2[DMAX];
+    for (int pass = 0; pass < 2; pass++) {
+        ws->delta = pass == 0 ? 1.0 : 1e4;
+        CHECK(ws->method->load(ws) == 0 && ws->method->factor(ws) == 0, "factor (%s)",
+              ws->method->name);
+        memset(Kd, 0, sizeof(double) * dim * dim);
+        csc_to_dense(&ws->P, Kd, dim, 0, 0, 1);
+        csc_to_dense(&ws->A, Kd, dim, n, 0, 0);
+        csc_to_dense(&ws->G, Kd, dim, n + p, 0, 0);
+        for (int j = 0; j < n; j++)
+            for (int i = n; i < dim; i++) Kd[i * dim + j] = Kd[j * dim + i];
+        for (int j = 0; j < m; j++) {
+            for (int i = 0; i < m; i++) e[i] = i == j;
+            tscvx_nt_apply(&ws->K, &ws->W, 0, e, t1);
+            tscvx_nt_apply(&ws->K, &ws->W, 0, t1, t2);
+            for (int i = 0; i < m; i++) Kd[(n + p + j) * dim + n + p + i] = -t2[i];
+        }
+        double bnorm = 0.0;
+        for (int i = 0; i < dim; i++) rhs[i] = ct_randn(), bnorm = fmax(bnorm, fabs(rhs[i]));
+        const int steps = ws->method->solve(ws, rhs, rhs + n, rhs + n + p, sol, sol + n,
+                                            sol + n + p, t1, 20);
+        CHECK(steps >= 0, "%s: refinement failed", ws->method->name);
+        for (int k = 0; k <= steps; k++) {
+            CHECK(ws->method->solve(ws, rhs, rhs + n, rhs + n + p, sol, sol + n, sol + n + p, t1,
+                                    k) == k,
+                  "%s: refine %d", ws->method->name, k);
+            r[k] = 0.0;
+            for (int i = 0; i < dim; i++) {
+                double v = rhs[i];
+                for (int j = 0; j < dim; j++) v -= Kd[j * dim + i] * sol[j];
+                r[k] = fmax(r[k], fabs(v));
+            }
+            if (k < steps) /* a step was taken from here: not yet accurate */
+                CHECK(r[k] > 0.5 * TSCVX_REFINE_TOL * (1.0 + bnorm),
+                      "%s: step %d taken at residual %g", ws->method->name, k + 1, r[k]);
+            if (k >= 1 && k < steps) /* ... and the last one gained at least 2x */
+                CHECK(r[k] <= 0.5 * r[k - 1] * 1.01, "%s, delta %g: step %d taken after %g -> %g",
+                      ws->method->name, ws->delta, k + 1, r[k - 1], r[k]);
+        }
+        /* stopped before its 20 steps for a reason: accurate, or the last step gained less
+         * than 2x (the rounding floor, 1e-15 |K| |x|, is far below these residuals) */
+        if (steps >= 1 && steps < 20)
+            CHECK(r[steps] <= 2.0 * TSCVX_REFINE_TOL * (1.0 + bnorm) ||
+                      r[steps] > 0.5 * r[steps - 1] * 0.99,
+                  "%s, delta %g: stopped after %d steps at %g (before %g)", ws->method->name,
+                  ws->delta, steps, r[steps], r[steps - 1]);
+    }
+}
+
 /* ---- the static-pattern backend alone, on random quasi-definite matrices ---------------- */
 
 #define QD_MAX 60
@@ -417,6 +480,8 @@ int main(void) {
     for (int backend = TSCVX_KKT_LDL; backend <= TSCVX_KKT_BANDED; backend++) {
         run_refinement(16, backend);
         run_refinement(1, backend);
+        run_refinement_stops(16, backend);
+        run_refinement_stops(1, backend);
     }
     return ct_report("test_kkt");
 }

@@ -367,6 +367,221 @@ static void test_indefinite_p_every_method(void) {
     }
 }
 
+/* A positive definite but ill-conditioned P is accepted and solved by every method: the
+ * semidefinite factor of P drops only numerically zero pivots (DYN_EPS = 1e-13 of their
+ * diagonal entry, banded.c), and the sparse check factors P + 1e-9 |P|_max I.
+ *   P = [1 1 0; 1 1+1e-8 5e-5; 0 5e-5 1]: Cholesky pivots 1, 1e-8, 0.75 (all > 0; the
+ *   middle one is 1e-8 of its diagonal entry and has an entry 5e-5 below it, which a
+ *   dropped pivot may not have). */
+static void test_ill_conditioned_p_every_method(void) {
+    tscvx_int tri_p[] = {0, 1, 3, 5}, tri_i[] = {0, 0, 1, 1, 2};
+    const tscvx_float tri_pd[] = {1, 1, 1 + 1e-8, 5e-5, 1};
+    const tscvx_int methods[] = {TSCVX_KKT_STATIC, TSCVX_KKT_LDL, TSCVX_KKT_BANDED};
+    for (size_t k = 0; k < sizeof methods / sizeof methods[0]; k++) {
+        tscvx_workspace *ws;
+        const tscvx_setup_status st = setup_box(&ws, tri_p, tri_i, tri_pd, methods[k]);
+        CHECK(st == TSCVX_SETUP_OK && ws && tscvx_solve(ws) == TSCVX_SOLVED,
+              "method %d: positive definite P (pivot 1e-8) refused (%d) or unsolved",
+              (int)methods[k], (int)st);
+    }
+}
+
+/* ---- Ruiz equilibration and cost scaling against a dense reference ---------------------
+ * The rule (equil.c, tscvx_info.ruiz_passes): each pass divides every row and column of
+ * M = [P A' G'; A 0 0; G 0 0] by the square root of its infinity norm (clamped to
+ * [1e-4, 1e4]; an empty one stays), one norm per SOC (the largest of its rows); it stops
+ * before a pass once every nonempty row/column has norm 1 +- 1e-3, or after ruiz_iters
+ * passes. Then the cost scaling cs = 1 / max(mean_j |Ps col j|_inf, |D c|_inf) (clamped). */
+#define EQ_N 6
+#define EQ_P 2
+#define EQ_L 3
+#define EQ_M 10 /* EQ_L + 3 + 4 */
+
+typedef struct {
+    double P[EQ_N][EQ_N], A[EQ_P][EQ_N], G[EQ_M][EQ_N], c[EQ_N], b[EQ_P], h[EQ_M];
+} eq_dense;
+
+static double eq_clamp(double v) {
+    if (!(v > 1e-4)) return v > 0.0 ? 1e-4 : 1.0;
+    return v > 1e4 ? 1e4 : v;
+}
+
+/* The reference: D, EA, EG, cs and the number of passes. */
+static int eq_reference(const eq_dense *e, const tscvx_int *q, int nsoc, int iters, double *D,
+                        double *EA, double *EG, double *cs) {
+    int passes = 0;
+    for (int j = 0; j < EQ_N; j++) D[j] = 1.0;
+    for (int i = 0; i < EQ_P; i++) EA[i] = 1.0;
+    for (int i = 0; i < EQ_M; i++) EG[i] = 1.0;
+    for (int it = 0; it < iters; it++) {
+        double cn[EQ_N] = {0}, an[EQ_P] = {0}, gn[EQ_M] = {0}, worst = 0.0;
+        for (int j = 0; j < EQ_N; j++) {
+            for (int i = 0; i < EQ_N; i++) cn[j] = fmax(cn[j], fabs(D[i] * e->P[i][j] * D[j]));
+            for (int i = 0; i < EQ_P; i++) {
+                const double v = fabs(EA[i] * e->A[i][j] * D[j]);
+                cn[j] = fmax(cn[j], v), an[i] = fmax(an[i], v);
+            }
+            for (int i = 0; i < EQ_M; i++) {
+                const double v = fabs(EG[i] * e->G[i][j] * D[j]);
+                cn[j] = fmax(cn[j], v), gn[i] = fmax(gn[i], v);
+            }
+        }
+        for (int k = 0, o = EQ_L; k < nsoc; o += q[k++]) {
+            double mx = 0.0;
+            for (int r = 0; r < q[k]; r++) mx = fmax(mx, gn[o + r]);
+            for (int r = 0; r < q[k]; r++) gn[o + r] = mx;
+        }
+        for (int j = 0; j < EQ_N; j++) worst = cn[j] > 0.0 ? fmax(worst, fabs(1.0 - cn[j])) : worst;
+        for (int i = 0; i < EQ_P; i++) worst = an[i] > 0.0 ? fmax(worst, fabs(1.0 - an[i])) : worst;
+        for (int i = 0; i < EQ_M; i++) worst = gn[i] > 0.0 ? fmax(worst, fabs(1.0 - gn[i])) : worst;
+        if (worst < 1e-3) break;
+        for (int j = 0; j < EQ_N; j++) D[j] /= sqrt(eq_clamp(cn[j]));
+        for (int i = 0; i < EQ_P; i++) EA[i] /= sqrt(eq_clamp(an[i]));
+        for (int i = 0; i < EQ_M; i++) EG[i] /= sqrt(eq_clamp(gn[i]));
+        passes = it + 1;
+    }
+    double pmean = 0.0, cmax = 0.0;
+    for (int j = 0; j < EQ_N; j++) {
+        double pc = 0.0;
+        for (int i = 0; i < EQ_N; i++) pc = fmax(pc, fabs(D[i] * e->P[i][j] * D[j]));
+        pmean += pc / EQ_N;
+        cmax = fmax(cmax, fabs(D[j] * e->c[j]));
+    }
+    const double scale = fmax(pmean, cmax);
+    *cs = scale > 0.0 ? 1.0 / fmin(fmax(scale, 1e-4), 1e4) : 1.0;
+    return passes;
+}
+
+static double rel_err(double a, double b) { return fabs(a - b) / fmax(fabs(b), 1e-300); }
+
+/* The workspace's scalings and scaled data against the reference for the numbers in e. */
+static void eq_compare(const char *what, tscvx_workspace *ws, const eq_dense *e,
+                       const tscvx_int *q, int nsoc, int iters) {
+    double D[EQ_N], EA[EQ_P], EG[EQ_M], cs, err = 0.0;
+    const int passes = eq_reference(e, q, nsoc, iters, D, EA, EG, &cs);
+    tscvx_info info;
+    tscvx_get_info(ws, &info);
+    CHECK(info.ruiz_passes == passes, "%s (ruiz_iters %d): %d passes, the rule takes %d", what,
+          iters, (int)info.ruiz_passes, passes);
+    for (int j = 0; j < EQ_N; j++) err = fmax(err, rel_err(ws->D[j], D[j]));
+    for (int i = 0; i < EQ_P; i++) err = fmax(err, rel_err(ws->EA[i], EA[i]));
+    for (int i = 0; i < EQ_M; i++) err = fmax(err, rel_err(ws->EG[i], EG[i]));
+    CHECK(err < 1e-12, "%s (ruiz_iters %d): scalings off by %g", what, iters, err);
+    CHECK(rel_err(ws->cs, cs) < 1e-12, "%s (ruiz_iters %d): cost scale %g, expected %g", what,
+          iters, ws->cs, cs);
+    /* the scaled data: Ps = cs D P D, As = EA A D, Gs = EG G D, cs D c, EA b, EG h */
+    err = 0.0;
+    for (int j = 0; j < EQ_N; j++) {
+        for (int k = ws->P.p[j]; k < ws->P.p[j + 1]; k++) {
+            const int i = ws->P.i[k];
+            err = fmax(err, rel_err(ws->P.x[k], cs * D[i] * e->P[i][j] * D[j]));
+        }
+        for (int k = ws->A.p[j]; k < ws->A.p[j + 1]; k++) {
+            const int i = ws->A.i[k];
+            err = fmax(err, rel_err(ws->A.x[k], EA[i] * e->A[i][j] * D[j]));
+        }
+        for (int k = ws->G.p[j]; k < ws->G.p[j + 1]; k++) {
+            const int i = ws->G.i[k];
+            err = fmax(err, rel_err(ws->G.x[k], EG[i] * e->G[i][j] * D[j]));
+        }
+        err = fmax(err, rel_err(ws->c[j], cs * D[j] * e->c[j]));
+    }
+    for (int i = 0; i < EQ_P; i++) err = fmax(err, rel_err(ws->b[i], EA[i] * e->b[i]));
+    for (int i = 0; i < EQ_M; i++) err = fmax(err, rel_err(ws->h[i], EG[i] * e->h[i]));
+    CHECK(err < 1e-12, "%s (ruiz_iters %d): scaled data off by %g", what, iters, err);
+}
+
+/* dense -> CSC (upper triangle only when `upper`) */
+static int eq_csc(int nrow, const double *Md, int upper, tscvx_int *Mp, tscvx_int *Mi,
+                  tscvx_float *Mx) {
+    int nz = 0;
+    for (int j = 0; j < EQ_N; j++) {
+        Mp[j] = nz;
+        for (int i = 0; i < (upper ? j + 1 : nrow); i++)
+            if (Md[i * EQ_N + j] != 0.0) Mi[nz] = i, Mx[nz++] = Md[i * EQ_N + j];
+    }
+    Mp[EQ_N] = nz;
+    return nz;
+}
+
+static void test_equilibration_reference(void) {
+    static const tscvx_int q[2] = {3, 4};
+    static unsigned char ar[1 << 17];
+    for (int trial = 0; trial < 6; trial++) {
+        eq_dense e;
+        memset(&e, 0, sizeof e);
+        /* entries spread over six decades: Ruiz has work to do */
+        for (int j = 0; j < EQ_N; j++) {
+            const double pj = pow(10.0, 3.0 * ct_randn());
+            e.P[j][j] = pj * (1.0 + ct_rand());
+            if (j % 2 == 1 && trial % 2 == 0) { /* 2 x 2 blocks of correlation 0.9: P > 0,
+                                                 * and an entry off the diagonal can be the
+                                                 * largest of its column in either triangle */
+                const double v = (ct_rand() < 0.5 ? -0.9 : 0.9) * sqrt(e.P[j - 1][j - 1] * e.P[j][j]);
+                e.P[j - 1][j] = e.P[j][j - 1] = v;
+            }
+            /* trials 0 and 2: a small cost, so that the cost scale is P's mean column norm */
+            e.c[j] = pow(10.0, trial % 2 == 0 ? -4.0 : 2.0 * ct_randn()) * ct_randn();
+            for (int i = 0; i < EQ_P; i++)
+                if (ct_rand() < 0.5 || i == j % EQ_P) e.A[i][j] = pow(10.0, 3.0 * ct_randn()) * ct_randn();
+            for (int i = 0; i < EQ_M; i++)
+                if (ct_rand() < 0.4 || i == j % EQ_M) e.G[i][j] = pow(10.0, 3.0 * ct_randn()) * ct_randn();
+        }
+        for (int i = 0; i < EQ_P; i++) e.b[i] = ct_randn();
+        for (int i = 0; i < EQ_M; i++) e.h[i] = 1.0 + ct_rand();
+        double Pu[EQ_N * EQ_N], Ad[EQ_P * EQ_N], Gd[EQ_M * EQ_N];
+        for (int i = 0; i < EQ_N; i++)
+            for (int j = 0; j < EQ_N; j++) Pu[i * EQ_N + j] = e.P[i][j];
+        for (int i = 0; i < EQ_P; i++)
+            for (int j = 0; j < EQ_N; j++) Ad[i * EQ_N + j] = e.A[i][j];
+        for (int i = 0; i < EQ_M; i++)
+            for (int j = 0; j < EQ_N; j++) Gd[i * EQ_N + j] = e.G[i][j];
+        tscvx_int Pp[EQ_N + 1], Pi[EQ_N * EQ_N], Ap[EQ_N + 1], Ai[EQ_P * EQ_N];
+        tscvx_int Gp[EQ_N + 1], Gi[EQ_M * EQ_N];
+        tscvx_float Px[EQ_N * EQ_N], Ax[EQ_P * EQ_N], Gx[EQ_M * EQ_N];
+        eq_csc(EQ_N, Pu, 1, Pp, Pi, Px);
+        eq_csc(EQ_P, Ad, 0, Ap, Ai, Ax);
+        eq_csc(EQ_M, Gd, 0, Gp, Gi, Gx);
+        tscvx_data d = {EQ_N, EQ_P, EQ_M, Pp, Pi, Px, e.c, Ap, Ai, Ax, e.b,
+                        Gp, Gi, Gx, e.h, EQ_L, 2, q};
+        static const int iters[4] = {1, 2, 3, 15};
+        for (int t = 0; t < 4; t++) {
+            tscvx_settings st;
+            tscvx_default_settings(&st);
+            st.ruiz_iters = iters[t];
+            tscvx_workspace *ws = NULL;
+            CHECK(tscvx_setup(&ws, ar, sizeof ar, &d, &st) == TSCVX_SETUP_OK, "eq setup");
+            if (!ws) continue;
+            eq_compare("setup", ws, &e, q, 2, iters[t]);
+            /* an update of some parts: the kept ones are the caller's numbers again */
+            tscvx_float c2[EQ_N], h2[EQ_M];
+            for (int j = 0; j < EQ_N; j++) c2[j] = e.c[j] = pow(10.0, 2.0 * ct_randn()) * ct_randn();
+            CHECK(tscvx_update_data(ws, NULL, c2, NULL, NULL, NULL, NULL) == TSCVX_SETUP_OK, "c update");
+            eq_compare("after a c update", ws, &e, q, 2, iters[t]);
+            for (int i = 0; i < EQ_M; i++) h2[i] = e.h[i] = 1.0 + 3.0 * ct_rand();
+            CHECK(tscvx_update_data(ws, NULL, NULL, NULL, NULL, NULL, h2) == TSCVX_SETUP_OK, "h update");
+            eq_compare("after an h update", ws, &e, q, 2, iters[t]);
+            tscvx_float Px2[EQ_N * EQ_N];
+            for (int k = 0; k < Pp[EQ_N]; k++) Px2[k] = Px[k];
+            for (int j = 0; j < EQ_N; j++) { /* G and P: new numbers, b and h kept */
+                for (int k = Pp[j]; k < Pp[j + 1]; k++)
+                    if (Pi[k] == j) Px2[k] *= 4.0, e.P[j][j] *= 4.0;
+            }
+            tscvx_float Gx2[EQ_M * EQ_N];
+            for (int j = 0; j < EQ_N; j++)
+                for (int k = Gp[j]; k < Gp[j + 1]; k++) Gx2[k] = Gx[k] * 0.25, e.G[Gi[k]][j] = Gx2[k];
+            CHECK(tscvx_update_data(ws, Px2, NULL, NULL, NULL, Gx2, NULL) == TSCVX_SETUP_OK, "P, G update");
+            eq_compare("after a P and G update", ws, &e, q, 2, iters[t]);
+            /* the next setup: P and G as before (c and h, which d points to, as updated) */
+            for (int j = 0; j < EQ_N; j++) {
+                for (int k = Pp[j]; k < Pp[j + 1]; k++)
+                    if (Pi[k] == j) e.P[j][j] /= 4.0;
+                for (int k = Gp[j]; k < Gp[j + 1]; k++) e.G[Gi[k]][j] = Gx[k];
+            }
+        }
+    }
+}
+
 int main(void) {
     test_soc();
     test_qp();
@@ -376,5 +591,7 @@ int main(void) {
     test_stale_workspace();
     test_psd_check();
     test_indefinite_p_every_method();
+    test_ill_conditioned_p_every_method();
+    test_equilibration_reference();
     return ct_report("test_solver");
 }
