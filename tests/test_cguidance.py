@@ -71,6 +71,25 @@ def test_c_guess_equals_python_guess(name: str) -> None:
     np.testing.assert_allclose(uc, u, rtol=0, atol=1e-12)
 
 
+def test_c_guess_equals_python_guess_when_thrust_opposes_the_body_axis() -> None:
+    """Upside down (q0: pi about y, body axis 1 pointing down; tilt_max 180 deg makes it a
+    valid start) in a vertical descent: the required thrust points straight up, exactly
+    opposite the initial body axis, so the guess's smallest rotation between them is the
+    antipodal case (a rotation by pi about an axis normal to it, guidance/guess.py), not the
+    Rodrigues formula, whose 1 / (1 + cos) is infinite there. The C guess is the Python one."""
+    scn = Scenario(
+        InitialState(r0=(4.0, 0.0, 0.0), v0=(-1.0, 0.0, 0.0), q0=(0.0, 0.0, 1.0, 0.0)),
+        Params(tilt_max_deg=180.0),
+    )
+    validate(scn)
+    x, u, tf = initial_guess(scn)
+    assert np.all(np.isfinite(x)) and np.all(np.isfinite(u))
+    xc, uc, tfc = cguidance.c_guess(scn)
+    assert tfc == pytest.approx(tf, rel=1e-14)
+    np.testing.assert_allclose(xc, x, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(uc, u, rtol=0, atol=1e-12)
+
+
 def _python_split(scn: Scenario, eta: float) -> tuple[dict, dict]:
     x, u, tf = initial_guess(scn)
     sc = Scaling.for_scenario(scn, tf)
