@@ -80,6 +80,30 @@ static void check_against_dense(tscvx_workspace *ws, int backend, int dense_max,
           ws->method->name, backend, dense_max, with_P, err, scale);
 }
 
+/* The unregularized KKT matrix [P A' G'; A 0 0; G 0 -W'W] of the workspace, dense (dim x dim,
+ * dim = n + p + m); -1 (a failed check) when dim exceeds DMAX. */
+static int dense_kkt(tscvx_workspace *ws, double *Kd) {
+    const int n = ws->n, p = ws->p, m = ws->m, dim = n + p + m;
+    static tscvx_float e[DMAX], t1[DMAX], t2[DMAX];
+    if (dim > DMAX) {
+        CHECK(0, "reference too small for dim %d", dim);
+        return -1;
+    }
+    memset(Kd, 0, sizeof(double) * dim * dim);
+    csc_to_dense(&ws->P, Kd, dim, 0, 0, 1);
+    csc_to_dense(&ws->A, Kd, dim, n, 0, 0);
+    csc_to_dense(&ws->G, Kd, dim, n + p, 0, 0);
+    for (int j = 0; j < n; j++)
+        for (int i = n; i < dim; i++) Kd[i * dim + j] = Kd[j * dim + i];
+    for (int j = 0; j < m; j++) { /* -W'W column j */
+        for (int i = 0; i < m; i++) e[i] = i == j;
+        tscvx_nt_apply(&ws->K, &ws->W, 0, e, t1);
+        tscvx_nt_apply(&ws->K, &ws->W, 0, t1, t2);
+        for (int i = 0; i < m; i++) Kd[(n + p + j) * dim + n + p + i] = -t2[i];
+    }
+    return 0;
+}
+
 /* |x - x_ref|_inf of the method's solve (static regularization delta, `refine` refinement
  * steps) against the dense solution of the UNREGULARIZED system; the scale max(1, |x_ref|). */
 static double dense_error(tscvx_workspace *ws, double delta, int refine, double *scale_out) {
@@ -87,27 +111,12 @@ static double dense_error(tscvx_workspace *ws, double delta, int refine, double 
     static double Kd[DMAX * DMAX];
     static double rhs[DMAX], ref[DMAX], sol[DMAX];
     *scale_out = 1.0;
-    if (dim > DMAX) {
-        CHECK(0, "reference too small for dim %d", dim);
-        return INFINITY;
-    }
     ws->delta = delta;
     CHECK(ws->method->load(ws) == 0, "load (%s)", ws->method->name);
     CHECK(ws->method->factor(ws) == 0, "factorization (%s, n %d, delta %g)", ws->method->name, n,
           delta);
-    memset(Kd, 0, sizeof(double) * dim * dim);
-    csc_to_dense(&ws->P, Kd, dim, 0, 0, 1);
-    csc_to_dense(&ws->A, Kd, dim, n, 0, 0);
-    csc_to_dense(&ws->G, Kd, dim, n + p, 0, 0);
-    for (int j = 0; j < n; j++)
-        for (int i = n; i < dim; i++) Kd[i * dim + j] = Kd[j * dim + i];
-    static tscvx_float e[DMAX], t1[DMAX], t2[DMAX];
-    for (int j = 0; j < m; j++) { /* -W'W column j */
-        for (int i = 0; i < m; i++) e[i] = i == j;
-        tscvx_nt_apply(&ws->K, &ws->W, 0, e, t1);
-        tscvx_nt_apply(&ws->K, &ws->W, 0, t1, t2);
-        for (int i = 0; i < m; i++) Kd[(n + p + j) * dim + n + p + i] = -t2[i];
-    }
+    if (dense_kkt(ws, Kd) != 0) return INFINITY;
+    static tscvx_float t1[DMAX];
     for (int i = 0; i < dim; i++) rhs[i] = ref[i] = ct_randn();
     CHECK(dense_solve(Kd, ref, dim) == 0, "dense solve");
     CHECK(ws->method->solve(ws, rhs, rhs + n, rhs + n + p, sol, sol + n, sol + n + p, t1,
@@ -194,23 +203,12 @@ static void run_refinement_stops(int dense_max, int backend) {
     if (!ws) return;
     const int n = ws->n, p = ws->p, m = ws->m, dim = n + p + m;
     static double Kd[DMAX * DMAX], rhs[DMAX], sol[DMAX], r[21];
-    static tscvx_float e[DMAX], t1[DMAX], t2[DMAX];
+    static tscvx_float t1[DMAX];
     for (int pass = 0; pass < 2; pass++) {
         ws->delta = pass == 0 ? 1.0 : 1e4;
         CHECK(ws->method->load(ws) == 0 && ws->method->factor(ws) == 0, "factor (%s)",
               ws->method->name);
-        memset(Kd, 0, sizeof(double) * dim * dim);
-        csc_to_dense(&ws->P, Kd, dim, 0, 0, 1);
-        csc_to_dense(&ws->A, Kd, dim, n, 0, 0);
-        csc_to_dense(&ws->G, Kd, dim, n + p, 0, 0);
-        for (int j = 0; j < n; j++)
-            for (int i = n; i < dim; i++) Kd[i * dim + j] = Kd[j * dim + i];
-        for (int j = 0; j < m; j++) {
-            for (int i = 0; i < m; i++) e[i] = i == j;
-            tscvx_nt_apply(&ws->K, &ws->W, 0, e, t1);
-            tscvx_nt_apply(&ws->K, &ws->W, 0, t1, t2);
-            for (int i = 0; i < m; i++) Kd[(n + p + j) * dim + n + p + i] = -t2[i];
-        }
+        if (dense_kkt(ws, Kd) != 0) return;
         double bnorm = 0.0;
         for (int i = 0; i < dim; i++) rhs[i] = ct_randn(), bnorm = fmax(bnorm, fabs(rhs[i]));
         const int steps = ws->method->solve(ws, rhs, rhs + n, rhs + n + p, sol, sol + n,
