@@ -15,6 +15,7 @@ counts per solve (valgrind, objdump).
 from __future__ import annotations
 
 import argparse
+import functools
 import math
 import os
 import re
@@ -307,6 +308,20 @@ def _flop_weight(mnemonic: str) -> int:
     return (2 if m.group(1) else 1) * (2 if m.group(2) == "p" else 1)
 
 
+@functools.cache
+def _flop_table(path: str) -> dict[int, int]:
+    """Address -> flops of each arithmetic instruction of an object file (objdump; cached by
+    path: a benchmark run does not rebuild its objects)."""
+    dis = subprocess.run(
+        ["objdump", "-d", "--no-show-raw-insn", path], capture_output=True, text=True, check=False
+    ).stdout
+    table = {}
+    for m in re.finditer(r"^\s*([0-9a-f]+):\s+(\S+)", dis, re.MULTILINE):
+        if w := _flop_weight(m.group(2)):
+            table[int(m.group(1), 16)] = w
+    return table
+
+
 def _object_flops(cg_out: Path, solver_object: str) -> int | None:
     """Flops executed in the object file whose path contains ``solver_object``, from a
     callgrind file written with --dump-instr=yes --compress-pos=no --compress-strings=no
@@ -320,15 +335,7 @@ def _object_flops(cg_out: Path, solver_object: str) -> int | None:
             path = line[3:].strip()
             in_obj = solver_object in path
             if in_obj and obj is None:
-                obj = path
-                dis = subprocess.run(
-                    ["objdump", "-d", "--no-show-raw-insn", path],
-                    capture_output=True, text=True, check=False,
-                ).stdout  # fmt: skip
-                for m in re.finditer(r"^\s*([0-9a-f]+):\s+(\S+)", dis, re.MULTILINE):
-                    w = _flop_weight(m.group(2))
-                    if w:
-                        weights[int(m.group(1), 16)] = w
+                obj, weights = path, _flop_table(path)
         elif line.startswith("calls="):
             after_call = True
         elif line.startswith("0x"):
@@ -340,7 +347,10 @@ def _object_flops(cg_out: Path, solver_object: str) -> int | None:
     return flops if obj is not None else None
 
 
-def _callgrind(cmd: list[str], toggle: str, solver_object: str) -> Count | None:
+def _callgrind(cmd: list[str], toggle: str, solver_object: str | None) -> Count | None:
+    """Instructions of ``cmd`` inside ``toggle``, and the flops of ``solver_object`` (None:
+    instructions only, without the per-instruction dump)."""
+    per_instr = ["--dump-instr=yes", "--compress-pos=no", "--compress-strings=no"]
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "cg.out"
         r = subprocess.run(
@@ -349,9 +359,7 @@ def _callgrind(cmd: list[str], toggle: str, solver_object: str) -> Count | None:
                 "--tool=callgrind",
                 f"--callgrind-out-file={out}",
                 f"--toggle-collect={toggle}",
-                "--dump-instr=yes",
-                "--compress-pos=no",
-                "--compress-strings=no",
+                *(per_instr if solver_object else []),
                 *cmd,
             ],
             capture_output=True,
@@ -360,21 +368,22 @@ def _callgrind(cmd: list[str], toggle: str, solver_object: str) -> Count | None:
         )
         for line in r.stderr.splitlines():
             if "Collected :" in line:
-                return Count(int(line.split(":")[-1].strip()), _object_flops(out, solver_object))
+                flops = _object_flops(out, solver_object) if solver_object else None
+                return Count(int(line.split(":")[-1].strip()), flops)
     return None
 
 
 BENCH_DRIVER = ROOT / "build" / "ctest" / "bench_driver"  # `make bench` (or `make ctest`) builds it
 
 
-def instructions_ours(prob: ConicProblem, kkt_backend: int = 0) -> Count | None:
+def instructions_ours(prob: ConicProblem, kkt_backend: int = 0, flops: bool = True) -> Count | None:
     if not BENCH_DRIVER.exists():
         return None
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "prob.bin"
         dump_c_problem(prob, path)
         cmd = [str(BENCH_DRIVER), str(path), "1", str(kkt_backend)]
-        return _callgrind(cmd, "tscvx_solve", BENCH_DRIVER.name)
+        return _callgrind(cmd, "tscvx_solve", BENCH_DRIVER.name if flops else None)
 
 
 _QOCO_SCRIPT = """
@@ -517,7 +526,7 @@ def main(argv: list[str] | None = None) -> int:
             print(f"  (tscvx: n/a, {BENCH_DRIVER.relative_to(ROOT)} is not built: make bench)")
         for name, probs in sets[:3]:
             ours = instructions_ours(probs[0])
-            sparse = instructions_ours(probs[0], KKT_SPARSE)
+            sparse = instructions_ours(probs[0], KKT_SPARSE, flops=False)
             qoco = instructions_qoco(probs[0])
             ratio = f"{qoco.instructions / ours.instructions:.2f}x" if ours and qoco else "n/a"
             print(
