@@ -452,6 +452,12 @@ static int eq_reference(const eq_dense *e, const tscvx_int *q, int nsoc, int ite
     return passes;
 }
 
+/* a random number of either sign, magnitude spread over 2 `decades` */
+static double eq_wide(double decades) {
+    const double scale = pow(10.0, decades * ct_randn());
+    return scale * ct_randn();
+}
+
 static double rel_err(double a, double b) { return fabs(a - b) / fmax(fabs(b), 1e-300); }
 
 /* The workspace's scalings and scaled data against the reference for the numbers in e. */
@@ -517,15 +523,16 @@ static void test_equilibration_reference(void) {
             if (j % 2 == 1 && trial % 2 == 0) { /* 2 x 2 blocks of correlation 0.9: P > 0,
                                                  * and an entry off the diagonal can be the
                                                  * largest of its column in either triangle */
-                const double v = (ct_rand() < 0.5 ? -0.9 : 0.9) * sqrt(e.P[j - 1][j - 1] * e.P[j][j]);
+                const double sign = ct_rand() < 0.5 ? -1.0 : 1.0;
+                const double v = 0.9 * sign * sqrt(e.P[j - 1][j - 1] * e.P[j][j]);
                 e.P[j - 1][j] = e.P[j][j - 1] = v;
             }
             /* trials 0 and 2: a small cost, so that the cost scale is P's mean column norm */
             e.c[j] = pow(10.0, trial % 2 == 0 ? -4.0 : 2.0 * ct_randn()) * ct_randn();
             for (int i = 0; i < EQ_P; i++)
-                if (ct_rand() < 0.5 || i == j % EQ_P) e.A[i][j] = pow(10.0, 3.0 * ct_randn()) * ct_randn();
+                if (ct_rand() < 0.5 || i == j % EQ_P) e.A[i][j] = eq_wide(3.0);
             for (int i = 0; i < EQ_M; i++)
-                if (ct_rand() < 0.4 || i == j % EQ_M) e.G[i][j] = pow(10.0, 3.0 * ct_randn()) * ct_randn();
+                if (ct_rand() < 0.4 || i == j % EQ_M) e.G[i][j] = eq_wide(3.0);
         }
         for (int i = 0; i < EQ_P; i++) e.b[i] = ct_randn();
         for (int i = 0; i < EQ_M; i++) e.h[i] = 1.0 + ct_rand();
@@ -555,11 +562,13 @@ static void test_equilibration_reference(void) {
             eq_compare("setup", ws, &e, q, 2, iters[t]);
             /* an update of some parts: the kept ones are the caller's numbers again */
             tscvx_float c2[EQ_N], h2[EQ_M];
-            for (int j = 0; j < EQ_N; j++) c2[j] = e.c[j] = pow(10.0, 2.0 * ct_randn()) * ct_randn();
-            CHECK(tscvx_update_data(ws, NULL, c2, NULL, NULL, NULL, NULL) == TSCVX_SETUP_OK, "c update");
+            for (int j = 0; j < EQ_N; j++) c2[j] = e.c[j] = eq_wide(2.0);
+            CHECK(tscvx_update_data(ws, NULL, c2, NULL, NULL, NULL, NULL) == TSCVX_SETUP_OK,
+                  "c update");
             eq_compare("after a c update", ws, &e, q, 2, iters[t]);
             for (int i = 0; i < EQ_M; i++) h2[i] = e.h[i] = 1.0 + 3.0 * ct_rand();
-            CHECK(tscvx_update_data(ws, NULL, NULL, NULL, NULL, NULL, h2) == TSCVX_SETUP_OK, "h update");
+            CHECK(tscvx_update_data(ws, NULL, NULL, NULL, NULL, NULL, h2) == TSCVX_SETUP_OK,
+                  "h update");
             eq_compare("after an h update", ws, &e, q, 2, iters[t]);
             tscvx_float Px2[EQ_N * EQ_N];
             for (int k = 0; k < Pp[EQ_N]; k++) Px2[k] = Px[k];
@@ -569,8 +578,12 @@ static void test_equilibration_reference(void) {
             }
             tscvx_float Gx2[EQ_M * EQ_N];
             for (int j = 0; j < EQ_N; j++)
-                for (int k = Gp[j]; k < Gp[j + 1]; k++) Gx2[k] = Gx[k] * 0.25, e.G[Gi[k]][j] = Gx2[k];
-            CHECK(tscvx_update_data(ws, Px2, NULL, NULL, NULL, Gx2, NULL) == TSCVX_SETUP_OK, "P, G update");
+                for (int k = Gp[j]; k < Gp[j + 1]; k++) {
+                    Gx2[k] = Gx[k] * 0.25;
+                    e.G[Gi[k]][j] = Gx2[k];
+                }
+            CHECK(tscvx_update_data(ws, Px2, NULL, NULL, NULL, Gx2, NULL) == TSCVX_SETUP_OK,
+                  "P, G update");
             eq_compare("after a P and G update", ws, &e, q, 2, iters[t]);
             /* the next setup: P and G as before (c and h, which d points to, as updated) */
             for (int j = 0; j < EQ_N; j++) {
