@@ -105,7 +105,10 @@ def cmd_solve(args: argparse.Namespace) -> int:
     if args.plot:
         _check_plot_format(args.plot)
     settings = SCvxSettings(
-        iter_max=args.iter_max, tau_r_update=args.trust_update == "tau_r", prox_u=args.prox_u
+        iter_max=args.iter_max,
+        tau_r_update=args.trust_update == "tau_r",
+        prox_u=args.prox_u,
+        socp_warm_start=not args.cold_ipm,
     )
     print(f"scenario: {json.dumps(scenario_to_dict(scenario))}")
     objective = "paper's linear" if settings.prox_u == 0 else f"proximal weight {settings.prox_u:g}"
@@ -271,6 +274,12 @@ def build_parser() -> argparse.ArgumentParser:
         "--pin-final-attitude",
         action="store_true",
         help="require q(t_f) = q_f instead of only an upright touchdown",
+    )
+    s.add_argument(
+        "--cold-ipm",
+        action="store_true",
+        help="start every subproblem's interior-point method cold (default with the C "
+        "backends: from the last subproblem's answer; Clarabel always starts cold)",
     )
     s.set_defaults(func=cmd_solve)
 

@@ -157,7 +157,9 @@ class ClarabelSession:
         self.tol, self.max_iter = tol, max_iter
         self._solver: object | None = None
 
-    def solve(self, prob: ConicProblem) -> ConicSolution:
+    def solve(self, prob: ConicProblem, warm: ConicSolution | None = None) -> ConicSolution:
+        """``warm`` is ignored: Clarabel has no warm start (the reference starts cold)."""
+        del warm
         if self._solver is None:
             settings = _clarabel_settings(self.tol, self.max_iter, False)
             self._solver = clarabel_solver(prob, settings)
@@ -172,7 +174,7 @@ class ClarabelSession:
 
 
 class Session(Protocol):
-    def solve(self, prob: ConicProblem) -> ConicSolution: ...
+    def solve(self, prob: ConicProblem, warm: ConicSolution | None = None) -> ConicSolution: ...
 
 
 def session(backend: str, tol: float = 1e-9, max_iter: int = 200) -> Session:

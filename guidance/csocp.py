@@ -119,6 +119,7 @@ class _Info(ct.Structure):
         ("arena_used", ct.c_size_t),
         ("arena_high_water", ct.c_size_t),
         ("ruiz_passes", c_int),
+        ("warm_started", c_int),
     ]
 
 
@@ -194,6 +195,7 @@ def load_library() -> ct.CDLL:
         ),
         "tscvx_update_data": (c_int, [ws_p] + [P_double] * 6),
         "tscvx_update_settings": (c_int, [ws_p, ct.POINTER(_Settings)]),
+        "tscvx_warm_start": (c_int, [ws_p] + [P_double] * 4),
         "tscvx_solve": (c_int, [ws_p]),
         "tscvx_get_solution": (c_int, [ws_p, P_double, P_double, P_double, P_double]),
         "tscvx_get_info": (c_int, [ws_p, ct.POINTER(_Info)]),
@@ -441,6 +443,26 @@ class Solver:
             self.message = self.lib.tscvx_setup_status_message(st).decode()
         return int(st)
 
+    def warm_start(self, sol: ConicSolution) -> int:
+        """Start the next solve from ``sol`` (Clarabel's form, e.g. the last solve's answer)
+        blended with the cold start (tscvx_warm_start). Returns the C setup status (0 = ok);
+        a solution of another size is refused (-1) and the next solve starts cold."""
+        if not self.ready:
+            return self.setup_status
+        n, m = self.prob.n, self.prob.m
+        if sol.x.shape != (n,) or sol.z.shape != (m,) or sol.s.shape != (m,):
+            return -1
+        x, y, z, s = self.c_point(sol)
+        return int(self.lib.tscvx_warm_start(self.ws, _dptr(x), _dptr(y), _dptr(z), _dptr(s)))
+
+    def c_point(self, sol: ConicSolution) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """``sol`` (Clarabel's form) as the runtime's (x, y, z, s): y the zero cones' z."""
+        rows_eq, rows_g = self.split.eq_rows, self.split.g_rows
+        return tuple(  # type: ignore[return-value]
+            np.ascontiguousarray(v, dtype=float)
+            for v in (sol.x, sol.z[rows_eq], sol.z[rows_g], sol.s[rows_g])
+        )
+
     def info(self) -> dict[str, float]:
         inf = _Info()
         if self.ready:
@@ -519,7 +541,9 @@ class Session:
         self.solver: Solver | None = None
         self.setups = 0
 
-    def solve(self, prob: ConicProblem) -> ConicSolution:
+    def solve(self, prob: ConicProblem, warm: ConicSolution | None = None) -> ConicSolution:
+        """Solve ``prob``; ``warm``, a solution of a problem of the same size, is where the
+        interior-point method starts (Solver.warm_start)."""
         if self.solver is None or not _same_pattern(self.solver.prob, prob):
             try:
                 self.solver = Solver(prob, **self.settings)
@@ -537,6 +561,8 @@ class Session:
             self.solver.prob = prob
             if st != 0:
                 return _invalid(prob.n, prob.m, self.solver.message)
+        if warm is not None and warm.ok:
+            self.solver.warm_start(warm)
         return self.solver.solve()
 
 

@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from guidance import conic
-from guidance.conic import ConicProblem
+from guidance.conic import ConicProblem, ConicSolution
 from guidance.constraints import constraint_scales, path_constraint_values, tight_mask
 from guidance.errors import ModelEvaluationError
 from guidance.guess import initial_guess
@@ -190,6 +190,7 @@ class SCvxSolver:
         if self.log:
             self.log(_HEADER)
         stalled = False
+        last_sol: ConicSolution | None = None
         k = 0  # successions (accepted steps); rejected steps retry the same k (Algorithm 1)
         for _ in range(st.max_subproblems):
             if k >= st.iter_max:
@@ -202,7 +203,9 @@ class SCvxSolver:
                 subproblems.append(prob)
             if id(tpl) not in self._sessions:
                 self._sessions[id(tpl)] = conic.session(self.backend, st.socp_tol, st.socp_max_iter)
-            sol = self._sessions[id(tpl)].solve(prob)
+            sol = self._sessions[id(tpl)].solve(prob, last_sol if st.socp_warm_start else None)
+            if sol.ok:
+                last_sol = sol  # the next subproblem's IPM starts from it (as the C loop)
             failure = None  # no candidate: the C library's reasons (pdg_scvx.c)
             if not sol.ok:
                 failure = f"subproblem at iteration {k + 1}: conic solver returned {sol.status}"

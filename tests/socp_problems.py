@@ -13,7 +13,7 @@ import scipy.sparse as sp
 from guidance.conic import ConicProblem
 
 
-def _cone_interior(rng: np.random.Generator, cones, scale: float = 1.0) -> np.ndarray:
+def cone_interior(rng: np.random.Generator, cones, scale: float = 1.0) -> np.ndarray:
     """A point in the interior of K (zero cones get 0)."""
     parts = []
     for kind, dim in cones:
@@ -28,9 +28,9 @@ def _cone_interior(rng: np.random.Generator, cones, scale: float = 1.0) -> np.nd
     return np.concatenate(parts) if parts else np.zeros(0)
 
 
-def _dual_interior(rng: np.random.Generator, cones) -> np.ndarray:
+def dual_interior(rng: np.random.Generator, cones) -> np.ndarray:
     """A point in the interior of K* (zero cones get free values)."""
-    z = _cone_interior(rng, cones)
+    z = cone_interior(rng, cones)
     row = 0
     for kind, dim in cones:
         if kind == "zero":
@@ -78,9 +78,9 @@ def random_feasible(
         A + sp.csc_matrix((np.ones(min(m, n)), (np.arange(min(m, n)),) * 2), shape=(m, n))
     )
     x0 = rng.standard_normal(n)
-    s0 = _cone_interior(rng, cones)
+    s0 = cone_interior(rng, cones)
     b = A @ x0 + s0
-    z0 = _dual_interior(rng, cones)
+    z0 = dual_interior(rng, cones)
     if with_P:
         r = int(rng.integers(1, n + 1))
         F = sp.random(r, n, density=0.3, random_state=rng, data_rvs=rng.standard_normal)
@@ -147,7 +147,7 @@ def random_dual_infeasible(seed: int) -> ConicProblem:
         P = sp.csc_matrix(sp.triu(sp.csc_matrix(F.T @ F)))
     q = base.q.copy()
     q -= (q @ d + rng.uniform(0.5, 2.0)) * d / (d @ d)  # now q'd < 0
-    b = A @ rng.standard_normal(n) + _cone_interior(rng, base.cones)  # primal stays feasible
+    b = A @ rng.standard_normal(n) + cone_interior(rng, base.cones)  # primal stays feasible
     return ConicProblem(P=P, q=q, A=sp.csc_matrix(A), b=b, cones=base.cones)
 
 

@@ -90,6 +90,7 @@ struct pdg_workspace {
     double scales[NC];
     /* iterates, discretizations and buffers */
     double *z, *znew, *zdual;
+    double *ydual, *slack;          /* the rest of the last subproblem solution (warm start) */
     double *disc, *disc_new, *aug, *augw;
     double *x, *u, *xn, *un, *hval; /* physical iterate, candidate, path constraint values */
     /* masks (7N): pred, the prediction for this succession; prev_mask, that of the last

@@ -119,6 +119,7 @@ static pdg_setup_status check_settings(const pdg_settings *s, char *msg)
              {"max_subproblems", s->max_subproblems, 1, 500},
              {"rk4_substeps", s->rk4_substeps, 1, PDG_MAX_SUBSTEPS},
              {"socp_max_iter", s->socp_max_iter, 1, 500},
+             {"socp_warm_start", s->socp_warm_start, 0, 1},
              {"tau_r_update", s->tau_r_update, 0, 1}};
     char text[PDG_MESSAGE_LEN - 16];
     size_t i;
@@ -329,6 +330,8 @@ static void claim_arrays(pdg_workspace *t, arena *a)
     t->z = (double *)take(a, n, sizeof(double));
     t->znew = (double *)take(a, n, sizeof(double));
     t->zdual = (double *)take(a, (size_t)t->m, sizeof(double));
+    t->ydual = (double *)take(a, (size_t)t->p, sizeof(double));
+    t->slack = (double *)take(a, (size_t)t->m, sizeof(double));
     t->disc = (double *)take(a, nI * N_DISC, sizeof(double));
     t->disc_new = (double *)take(a, nI * N_DISC, sizeof(double));
     t->aug = (double *)take(a, PDG_NAUG, sizeof(double));
@@ -1027,6 +1030,7 @@ pdg_status pdg_solve_from(pdg_workspace *ws, const pdg_scenario *scenario,
     static const pdg_options no_options = {NULL, NULL, 0.0, NULL, 0, NULL, NULL, NULL};
     const pdg_settings *st;
     int k = 0, it, have_masks, prev_has_mask = 0, stalled = 0;
+    int have_solution = 0; /* a subproblem solution to warm-start the next IPM from */
     double J = NAN, defect = NAN, viol = NAN, eta, vc = INFINITY;
     pdg_status status;
 
@@ -1072,6 +1076,12 @@ pdg_status pdg_solve_from(pdg_workspace *ws, const pdg_scenario *scenario,
         sst = TSCVX_INVALID_INPUT;
         if (assemble(ws, ws->z, ws->disc, keep, eta) == 0) {
             const double t0 = opt->clock_s ? opt->clock_s() : 0.0;
+            /* the last subproblem's solution, accepted or not: the subproblems of a solve
+             * differ by one linearization or one radius (info.warm_started reports a blend
+             * that left the cones, which then starts cold) */
+            if (have_solution && st->socp_warm_start) {
+                tscvx_warm_start(ws->socp, ws->znew, ws->ydual, ws->zdual, ws->slack);
+            }
             sst = (int)tscvx_solve(ws->socp);
             t_solve = opt->clock_s ? opt->clock_s() - t0 : 0.0;
         }
@@ -1091,7 +1101,8 @@ pdg_status pdg_solve_from(pdg_workspace *ws, const pdg_scenario *scenario,
                      socp_status_name(sst));
             break;
         }
-        tscvx_get_solution(ws->socp, ws->znew, NULL, ws->zdual, NULL);
+        tscvx_get_solution(ws->socp, ws->znew, ws->ydual, ws->zdual, ws->slack);
+        have_solution = 1;
         /* 3. the candidate on the full nonlinear problem */
         if (evaluate(ws, keep, &cd) != 0) {
             failed_row(r, J);

@@ -137,6 +137,8 @@ typedef struct {
     /* conic subproblem solver (tscvx_socp.h) */
     double socp_tol;        /* gap and feasibility tolerances (the reference uses 1e-9) */
     int socp_max_iter;      /* IPM iteration limit, 1..500 */
+    int socp_warm_start;    /* 1: each subproblem's IPM starts from the last subproblem's
+                               solution (tscvx_warm_start), 0: from the cold start */
     /* T-SCvx only: 1 = Algorithm 2's radius update (alpha^tau_r, beta^(1 - tau_r), tau_r the
      * fraction of bits in which the predicted masks of successions k+1 and k differ);
      * 0 = Eq. (15) of Algorithm 1 with the masks as well */

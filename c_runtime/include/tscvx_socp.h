@@ -45,6 +45,8 @@
  *                                                          pattern, maps and factor symbolics
  *   4. tscvx_update_data(ws, Px, c, Ax, b, Gx, h)        -- new numbers, same sparsity;
  *                                                          NULL = unchanged; no symbolic work
+ *      tscvx_warm_start(ws, x, y, z, s)                  -- optional: where the next solve
+ *                                                          starts (e.g. the last answer)
  *   5. tscvx_solve(ws)                                   -- no allocation, bounded loops
  *      tscvx_get_solution / tscvx_get_info / tscvx_get_iter_log
  *   6. tscvx_cleanup(ws)                                 -- ends the workspace (later calls
@@ -186,6 +188,8 @@ typedef struct {
     size_t arena_high_water;     /* most bytes of the arena ever touched (setup scratch incl.) */
     tscvx_int ruiz_passes;       /* Ruiz passes the current data took (stops early once every
                                     nonempty row and column has infinity norm 1 +- 1e-3) */
+    tscvx_int warm_started;      /* 1: the last solve started from tscvx_warm_start's point;
+                                    0: from the cold start */
 } tscvx_info;
 
 /* One row of the iteration log. */
@@ -232,6 +236,19 @@ tscvx_setup_status tscvx_update_data(tscvx_workspace *ws, const tscvx_float *Px,
  * ruiz_iters, soc_dense_max and kkt_backend are fixed at setup (changing them:
  * TSCVX_SETUP_BAD_SETTINGS). */
 tscvx_setup_status tscvx_update_settings(tscvx_workspace *ws, const tscvx_settings *settings);
+
+/* Warm start: the next tscvx_solve starts from (x, y, z, s) in original units (what
+ * tscvx_get_solution returns, e.g. the solution of the previous, similar problem) instead of
+ * the cold start. The point is blended with the cold start (x, y, s, z, tau, kappa) =
+ * (0, 0, e, e, 1, 1), 0.98 of it (Skajaa, Andersen & Ye, Math. Prog. Comp. 2013), which is
+ * strictly inside the cones for any s and z in them; a blend that is not (s or z outside its
+ * cone) falls back to the cold start. Only the next solve uses the point; data updates before
+ * it are fine (it is scaled at the solve). info.warm_started says which start a solve took.
+ * x: n, y: p, z: m, s: m, all finite (TSCVX_SETUP_NONFINITE_DATA otherwise, and no warm
+ * start); NULL only for a part of length 0. */
+tscvx_setup_status tscvx_warm_start(tscvx_workspace *ws, const tscvx_float *x,
+                                    const tscvx_float *y, const tscvx_float *z,
+                                    const tscvx_float *s);
 
 tscvx_solve_status tscvx_solve(tscvx_workspace *ws);
 

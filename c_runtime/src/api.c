@@ -541,9 +541,29 @@ tscvx_setup_status tscvx_update_settings(tscvx_workspace *ws, const tscvx_settin
 
 /* ---- solve and results ------------------------------------------------------------------- */
 
+tscvx_setup_status tscvx_warm_start(tscvx_workspace *ws, const tscvx_float *x,
+                                    const tscvx_float *y, const tscvx_float *z,
+                                    const tscvx_float *s) {
+    if (ws == NULL) return TSCVX_SETUP_NULL_ARGUMENT;
+    if (!ws_live(ws)) return TSCVX_SETUP_NOT_READY;
+    if (x == NULL || (y == NULL && ws->p > 0) || ((z == NULL || s == NULL) && ws->m > 0))
+        return TSCVX_SETUP_NULL_ARGUMENT;
+    ws->warm = 0;
+    if (!all_finite(x, ws->n) || !all_finite(y, ws->p) || !all_finite(z, ws->m) ||
+        !all_finite(s, ws->m))
+        return TSCVX_SETUP_NONFINITE_DATA;
+    /* the best-iterate buffers are free between solves; the IPM scales the point at start */
+    for (tscvx_int j = 0; j < ws->n; j++) ws->bx[j] = x[j];
+    for (tscvx_int i = 0; i < ws->p; i++) ws->by[i] = y[i];
+    for (tscvx_int i = 0; i < ws->m; i++) ws->bz[i] = z[i], ws->bs[i] = s[i];
+    ws->warm = 1;
+    return TSCVX_SETUP_OK;
+}
+
 tscvx_solve_status tscvx_solve(tscvx_workspace *ws) {
     if (ws == NULL || !ws_live(ws)) return TSCVX_INVALID_INPUT;
     if (!ws->ready) {
+        ws->warm = 0; /* only the next solve may use the point */
         ws->info.status = TSCVX_INVALID_INPUT;
         return TSCVX_INVALID_INPUT;
     }

@@ -311,9 +311,10 @@ struct tscvx_workspace {
     tscvx_float *wm, *wm2;       /* m: work vectors in the cone space */
     tscvx_float *wn;             /* n: work vector */
     tscvx_float *wp;             /* p: work vector (right-hand sides of the y rows) */
-    /* best iterate so far */
+    /* best iterate so far; between solves, the warm-start point (original units) */
     tscvx_float *bx, *by, *bz, *bs, btau, bkappa, bmerit;
     tscvx_int best_iter;
+    int warm; /* bx, by, bz, bs hold a point from tscvx_warm_start for the next solve */
     /* results (original units) */
     tscvx_info info;
     tscvx_iter_log *log; /* max_iter + 1 rows */

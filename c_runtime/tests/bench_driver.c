@@ -4,7 +4,8 @@
  * sets it up in one malloc'ed arena and solves it `reps` times. Used with callgrind:
  *   valgrind --tool=callgrind --toggle-collect=tscvx_solve build/ctest/bench_driver FILE 1
  * (optional third argument: kkt_backend, 0 automatic (default: banded when the problem has the
- * structure), 1 SuiteSparse LDL, 2 static-pattern LDL', 3 banded)
+ * structure), 1 SuiteSparse LDL, 2 static-pattern LDL', 3 banded; optional fourth: a file
+ * f64 x[n] y[p] z[m] s[m], given to tscvx_warm_start before each solve)
  * File: int32 n p m l nsoc nnzP nnzA nnzG (nnzP = -1: no P), then int32 q[nsoc],
  * [int32 Pp[n+1] Pi[nnzP] f64 Px[nnzP]], f64 c[n], int32 Ap[n+1] Ai[nnzA] f64 Ax[nnzA] b[p],
  * int32 Gp[n+1] Gi[nnzG] f64 Gx[nnzG] h[m]. */
@@ -25,7 +26,7 @@ static void *rd(FILE *f, size_t count, size_t size) {
 
 int main(int argc, char **argv) {
     if (argc < 2) {
-        fprintf(stderr, "usage: bench_driver FILE [reps [kkt_backend]]\n");
+        fprintf(stderr, "usage: bench_driver FILE [reps [kkt_backend [WARM_FILE]]]\n");
         return 2;
     }
     FILE *f = fopen(argv[1], "rb");
@@ -50,6 +51,16 @@ int main(int argc, char **argv) {
     d.Gx = rd(f, (size_t)hdr[7], sizeof(double));
     d.h = rd(f, (size_t)d.m, sizeof(double));
     fclose(f);
+    double *wx = NULL, *wy = NULL, *wz = NULL, *ws_ = NULL; /* warm start */
+    if (argc > 4) {
+        FILE *fw = fopen(argv[4], "rb");
+        if (fw == NULL) return 2;
+        wx = rd(fw, (size_t)d.n, sizeof(double));
+        wy = rd(fw, (size_t)d.p, sizeof(double));
+        wz = rd(fw, (size_t)d.m, sizeof(double));
+        ws_ = rd(fw, (size_t)d.m, sizeof(double));
+        fclose(fw);
+    }
     const int reps = argc > 2 ? atoi(argv[2]) : 1;
     tscvx_settings st;
     tscvx_default_settings(&st);
@@ -66,6 +77,7 @@ int main(int argc, char **argv) {
     double best = 1e30;
     tscvx_solve_status s = TSCVX_UNSOLVED;
     for (int r = 0; r < reps; r++) {
+        if (wx && tscvx_warm_start(ws, wx, wy, wz, ws_) != TSCVX_SETUP_OK) return 3;
         clock_gettime(CLOCK_MONOTONIC, &t0);
         s = tscvx_solve(ws);
         clock_gettime(CLOCK_MONOTONIC, &t1);
@@ -74,11 +86,12 @@ int main(int argc, char **argv) {
     }
     tscvx_info info;
     tscvx_get_info(ws, &info);
-    printf("status %d (%s) iter %d factorizations %d pcost %.12e time %.3f ms arena %zu kkt %d nnz %d lnz %d\n",
+    printf("status %d (%s) iter %d factorizations %d pcost %.12e time %.3f ms arena %zu kkt %d nnz %d lnz %d warm %d\n",
            (int)s, tscvx_solve_status_message(s), (int)info.iterations, (int)info.factorizations, info.pcost, 1e3 * best,
-           narena, (int)info.kkt_dim, (int)info.kkt_nnz, (int)info.factor_nnz);
+           narena, (int)info.kkt_dim, (int)info.kkt_nnz, (int)info.factor_nnz, (int)info.warm_started);
     free(arena);
-    const void *bufs[] = {d.q, d.Pp, d.Pi, d.Px, d.c, d.Ap, d.Ai, d.Ax, d.b, d.Gp, d.Gi, d.Gx, d.h};
+    const void *bufs[] = {d.q, d.Pp, d.Pi, d.Px, d.c,  d.Ap, d.Ai, d.Ax, d.b,
+                          d.Gp, d.Gi, d.Gx, d.h, wx, wy, wz, ws_};
     for (size_t i = 0; i < sizeof bufs / sizeof bufs[0]; i++) free((void *)bufs[i]);
     return 0;
 }

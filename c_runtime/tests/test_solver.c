@@ -595,6 +595,72 @@ static void test_equilibration_reference(void) {
     }
 }
 
+/* tscvx_warm_start: the next solve (only) starts from the given point blended with the cold
+ * start and reaches the same answer; bad points are refused or fall back to the cold start. */
+static void test_warm_start(void) {
+    small_soc p;
+    const tscvx_data d = small_soc_data(&p);
+    tscvx_settings st;
+    tscvx_default_settings(&st);
+    tscvx_workspace *ws = NULL;
+    tscvx_info info;
+    tscvx_float x[2], z[3], s[3], y[1] = {0.0}, h2[] = {1.5, 0, 0};
+    CHECK(tscvx_setup(&ws, arena, sizeof arena, &d, &st) == TSCVX_SETUP_OK, "setup");
+    CHECK(tscvx_solve(ws) == TSCVX_SOLVED, "cold solve");
+    tscvx_get_info(ws, &info);
+    CHECK(info.warm_started == 0, "a solve without a warm point started warm");
+    tscvx_get_solution(ws, x, NULL, z, s);
+    /* another radius, warm from the first answer: the answer of the new data */
+    CHECK(tscvx_warm_start(ws, x, y, z, s) == TSCVX_SETUP_OK, "warm start refused");
+    CHECK(tscvx_update_data(ws, NULL, NULL, NULL, NULL, NULL, h2) == TSCVX_SETUP_OK, "update");
+    CHECK(tscvx_solve(ws) == TSCVX_SOLVED, "warm solve");
+    tscvx_get_info(ws, &info);
+    CHECK(info.warm_started == 1, "the warm point was not used");
+    tscvx_float xw[2];
+    tscvx_get_solution(ws, xw, NULL, NULL, NULL);
+    CHECK(fabs(xw[0] - 1.5 * sqrt(0.5)) < 1e-7 && fabs(xw[1] - 1.5 * sqrt(0.5)) < 1e-7,
+          "warm x %g %g", xw[0], xw[1]);
+    CHECK(fabs(info.pcost + 1.5 * sqrt(2.0)) < 1e-7, "warm obj %g", info.pcost);
+    /* the point served one solve */
+    CHECK(tscvx_solve(ws) == TSCVX_SOLVED, "solve after the warm one");
+    tscvx_get_info(ws, &info);
+    CHECK(info.warm_started == 0, "the warm point served a second solve");
+    /* refused: NULL (but for a part of length 0: y here), non-finite (which also drops a
+     * point given before) */
+    CHECK(tscvx_warm_start(ws, x, y, NULL, s) == TSCVX_SETUP_NULL_ARGUMENT, "NULL z accepted");
+    CHECK(tscvx_warm_start(ws, NULL, y, z, s) == TSCVX_SETUP_NULL_ARGUMENT, "NULL x accepted");
+    CHECK(tscvx_warm_start(NULL, x, y, z, s) == TSCVX_SETUP_NULL_ARGUMENT, "NULL ws accepted");
+    CHECK(tscvx_warm_start(ws, x, y, z, s) == TSCVX_SETUP_OK, "warm start refused");
+    tscvx_float znan[3] = {z[0], NAN, z[2]};
+    CHECK(tscvx_warm_start(ws, x, y, znan, s) == TSCVX_SETUP_NONFINITE_DATA, "NaN z accepted");
+    CHECK(tscvx_solve(ws) == TSCVX_SOLVED, "solve after a refused point");
+    tscvx_get_info(ws, &info);
+    CHECK(info.warm_started == 0, "a refused point was used");
+    /* s outside its cone (|s_1| > s_0 by far): the blend leaves the cone, the solve starts
+     * cold and still solves */
+    tscvx_float sout[3] = {-10.0, 50.0, 0.0};
+    CHECK(tscvx_warm_start(ws, x, y, z, sout) == TSCVX_SETUP_OK, "finite point refused");
+    CHECK(tscvx_solve(ws) == TSCVX_SOLVED, "solve from a point outside the cone");
+    tscvx_get_info(ws, &info);
+    CHECK(info.warm_started == 0, "a blend outside the cone was used");
+    tscvx_get_solution(ws, xw, NULL, NULL, NULL);
+    CHECK(fabs(xw[0] - 1.5 * sqrt(0.5)) < 1e-7, "x after the cold fallback %g", xw[0]);
+
+    /* infeasibility is still detected from a warm start (x >= 1 and x <= 0) */
+    tscvx_int Gp[] = {0, 2}, Gi[] = {0, 1};
+    tscvx_float Gx[] = {-1, 1}, h[] = {-1, 0}, c[] = {1};
+    tscvx_data di = {1, 0, 2, NULL, NULL, NULL, c, NULL, NULL, NULL, NULL, Gp, Gi, Gx, h, 2, 0,
+                     NULL};
+    tscvx_workspace *wi = NULL;
+    tscvx_float xi[1] = {0.5}, zi[2] = {1.0, 1.0}, si[2] = {0.5, 0.5};
+    CHECK(tscvx_setup(&wi, arena2, sizeof arena2, &di, &st) == TSCVX_SETUP_OK, "setup");
+    /* no equalities: y may be NULL */
+    CHECK(tscvx_warm_start(wi, xi, NULL, zi, si) == TSCVX_SETUP_OK, "warm");
+    CHECK(tscvx_solve(wi) == TSCVX_PRIMAL_INFEASIBLE, "infeasible from a warm start");
+    tscvx_get_info(wi, &info);
+    CHECK(info.warm_started == 1, "the warm point was not used");
+}
+
 int main(void) {
     test_soc();
     test_qp();
@@ -606,5 +672,6 @@ int main(void) {
     test_indefinite_p_every_method();
     test_ill_conditioned_p_every_method();
     test_equilibration_reference();
+    test_warm_start();
     return ct_report("test_solver");
 }

@@ -1,0 +1,107 @@
+"""The flight SOCP runtime's warm start (``tscvx_warm_start``, ``csocp.Solver.warm_start``)
+against Clarabel: a solve started from a neighbouring problem's answer must reach Clarabel's
+answer with the same bars as a cold one, and a warm start must not hide an infeasibility.
+(The landing subproblem sequences, warm-started as the flight loop does, are checked in
+``test_socp_landing.py``.)"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from socp_problems import (
+    cone_interior,
+    dual_interior,
+    random_dual_infeasible,
+    random_feasible,
+    random_primal_infeasible,
+)
+from test_socp_random import (
+    assert_dual_certificate,
+    assert_primal_certificate,
+    check_against_clarabel,
+)
+
+from guidance import csocp
+from guidance.conic import ConicProblem, ConicSolution
+
+
+def _neighbour(prob: ConicProblem, rng: np.random.Generator, size: float) -> ConicProblem:
+    """``prob`` with q and b moved by ``size`` relative noise (the same sparsity)."""
+    return ConicProblem(
+        P=prob.P,
+        q=prob.q * (1.0 + size * rng.standard_normal(prob.n)),
+        A=prob.A,
+        b=prob.b * (1.0 + size * rng.standard_normal(prob.m)),
+        cones=prob.cones,
+    )
+
+
+def _warm_solve(prob: ConicProblem, start: ConicSolution) -> ConicSolution:
+    solver = csocp.Solver(prob)
+    assert solver.warm_start(start) == 0
+    return solver.solve()
+
+
+# 120 feasible problems (with and without P), each warm-started from the answer of a
+# neighbour 1 % away in q and b
+@pytest.mark.parametrize("block", range(4))
+def test_warm_start_from_a_neighbour_matches_clarabel(block: int) -> None:
+    tried = warm = 0
+    for seed in range(30 * block, 30 * block + 30):
+        prob = random_feasible(seed, with_P=bool(seed % 2))
+        start = csocp.solve(_neighbour(prob, np.random.default_rng(seed), 1e-2))
+        if not start.ok:  # the neighbour may be unbounded
+            continue
+        sol = _warm_solve(prob, start)
+        check_against_clarabel(prob, sol)
+        tried += 1
+        warm += int(sol.info["warm_started"])
+    # an answer's s and z lie in the cones, so the blend always lies inside them
+    assert warm == tried >= 25
+
+
+def _interior_start(prob: ConicProblem, seed: int) -> ConicSolution:
+    """A point with s and z inside the cones (a warm start for a problem with no answer)."""
+    rng = np.random.default_rng(seed)
+    return ConicSolution(
+        status="solved",
+        x=rng.standard_normal(prob.n),
+        s=cone_interior(rng, prob.cones),
+        z=dual_interior(rng, prob.cones),
+        obj=0.0,
+        iterations=0,
+        solve_time_s=0.0,
+    )
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_warm_start_keeps_the_infeasibility_certificates(seed: int) -> None:
+    primal = random_primal_infeasible(seed)
+    sol = _warm_solve(primal, _interior_start(primal, seed))
+    assert sol.info["warm_started"] == 1
+    assert_primal_certificate(primal, sol)
+    dual = random_dual_infeasible(seed)
+    if csocp.solve(dual).status != "dual_infeasible":
+        pytest.skip("the cold solve finds no dual certificate either")
+    sol = _warm_solve(dual, _interior_start(dual, seed))
+    assert sol.info["warm_started"] == 1
+    assert_dual_certificate(dual, sol)
+
+
+def test_bad_warm_points_are_refused_and_the_solve_starts_cold() -> None:
+    prob = random_feasible(7)
+    good = csocp.solve(prob)
+    assert good.ok
+    solver = csocp.Solver(prob)
+    short = ConicSolution("solved", good.x[:-1], good.s, good.z, 0.0, 0, 0.0)
+    assert solver.warm_start(short) == -1
+    nan = ConicSolution("solved", good.x, good.s, np.full(prob.m, np.nan), 0.0, 0, 0.0)
+    assert solver.warm_start(good) == 0
+    assert solver.warm_start(nan) != 0  # ... and the good point given before is dropped
+    sol = solver.solve()
+    assert sol.info["warm_started"] == 0 and sol.ok
+    assert abs(sol.obj - good.obj) <= 1e-9 * max(1.0, abs(good.obj))
+    # the point serves one solve only
+    assert solver.warm_start(good) == 0
+    assert solver.solve().info["warm_started"] == 1
+    assert solver.solve().info["warm_started"] == 0
