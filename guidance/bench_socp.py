@@ -6,8 +6,10 @@ the 3-DoF lossless-convexification powered-descent SOCP of Acikmese & Blackmore
 (N = 50, generated here), (c) seeded random SOCPs. For each solver the table gives the median
 time of the solver's own solve call (set-up excluded), the median IPM iteration count and, for
 this runtime, the arena bytes; where this runtime takes its banded KKT method, the same runtime
-with its sparse LDL' method too. ``--callgrind`` adds instruction and floating-point operation
-counts per solve (valgrind, objdump).
+with its sparse LDL' method too. On the landing sets a second row of this runtime solves the
+sequence as the SCvx loop does, each subproblem warm-started from the last one's answer (the
+other solvers have no warm start). ``--callgrind`` adds instruction and floating-point
+operation counts per solve (valgrind, objdump).
 
     python -m guidance.bench_socp [--quick] [--callgrind]
 """
@@ -31,7 +33,7 @@ from pathlib import Path
 import numpy as np
 import scipy.sparse as sp
 
-from guidance.conic import ConicProblem, clarabel_solver
+from guidance.conic import ConicProblem, ConicSolution, clarabel_solver
 from guidance.params import SCvxSettings
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -167,6 +169,7 @@ class Run:
     seconds: float
     iterations: int
     status: str
+    solution: ConicSolution | None = None  # this runtime's answer (the next warm start)
 
 
 def _split_c_form(prob: ConicProblem):
@@ -179,20 +182,35 @@ def _split_c_form(prob: ConicProblem):
     return s, Aeq, prob.b[s.eq_rows], G, prob.b[s.g_rows]
 
 
-def run_ours(prob: ConicProblem, reps: int, kkt_backend: int = 0) -> tuple[Run, int, str]:
-    """This runtime with the given KKT method (0: its default choice); also the arena bytes
-    and the method that ran."""
+def run_ours(
+    prob: ConicProblem, reps: int, kkt_backend: int = 0, warm: ConicSolution | None = None
+) -> tuple[Run, int, str]:
+    """This runtime with the given KKT method (0: its default choice), each solve started
+    from ``warm`` if given; also the arena bytes and the method that ran."""
     from guidance import csocp
 
     solver = csocp.Solver(prob, kkt_backend=kkt_backend)
     best = math.inf
     sol = None
     for _ in range(reps):
+        if warm is not None:
+            solver.warm_start(warm)  # serves one solve
         sol = solver.solve()
         best = min(best, sol.solve_time_s)
     assert sol is not None
     method = csocp.KKT_NAMES.get(int(sol.info.get("kkt_backend", 0)), "?")
-    return Run(best, sol.iterations, sol.status), solver.arena_bytes, method
+    return Run(best, sol.iterations, sol.status, sol), solver.arena_bytes, method
+
+
+def warm_sequence(probs: list[ConicProblem], reps: int) -> list[Run]:
+    """This runtime on the problems in order as the SCvx loop solves them: each from the last
+    one's answer (the first, and any after a failure, cold)."""
+    runs, last = [], None
+    for prob in probs:
+        run = run_ours(prob, reps, warm=last)[0]
+        runs.append(run)
+        last = run.solution if run.solution is not None and run.solution.ok else None
+    return runs
 
 
 def run_clarabel(prob: ConicProblem, reps: int) -> Run:
@@ -376,13 +394,25 @@ def _callgrind(cmd: list[str], toggle: str, solver_object: str | None) -> Count 
 BENCH_DRIVER = ROOT / "build" / "ctest" / "bench_driver"  # `make bench` (or `make ctest`) builds it
 
 
-def instructions_ours(prob: ConicProblem, kkt_backend: int = 0, flops: bool = True) -> Count | None:
+def instructions_ours(
+    prob: ConicProblem,
+    kkt_backend: int = 0,
+    flops: bool = True,
+    warm: ConicSolution | None = None,
+) -> Count | None:
+    """One solve of ``prob`` by the bench driver under callgrind (from ``warm`` if given)."""
     if not BENCH_DRIVER.exists():
         return None
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "prob.bin"
         dump_c_problem(prob, path)
         cmd = [str(BENCH_DRIVER), str(path), "1", str(kkt_backend)]
+        if warm is not None:
+            from guidance import csocp
+
+            wpath = Path(tmp) / "warm.bin"
+            wpath.write_bytes(b"".join(v.tobytes() for v in csocp.Solver(prob).c_point(warm)))
+            cmd.append(str(wpath))
         return _callgrind(cmd, "tscvx_solve", BENCH_DRIVER.name if flops else None)
 
 
@@ -431,7 +461,9 @@ def _median(xs: list[float]) -> float:
     return statistics.median(xs) if xs else math.nan
 
 
-def bench_set(name: str, probs: list[ConicProblem], reps: int) -> list[str]:
+def bench_set(name: str, probs: list[ConicProblem], reps: int, sequence: bool = False) -> list[str]:
+    """The table of one set; ``sequence``: the problems are one SCvx solve's subproblems in
+    order, and a row adds this runtime warm-started along them."""
     solvers: dict[str, Callable[[ConicProblem, int], Run | None]] = {
         "clarabel": run_clarabel,
         "ecos": run_ecos,
@@ -474,6 +506,15 @@ def bench_set(name: str, probs: list[ConicProblem], reps: int) -> list[str]:
             f"  {'(sparse)':<10}{1e3 * t:>11.3f}{t / t_ours:>8.2f}{_median(sparse_it):>7.0f}"
             f"{max(sparse_arena) / 1024:>10.0f}   tscvx with its sparse LDL' method"
         )
+    if sequence:
+        runs = warm_sequence(probs, reps)
+        t = _median([r.seconds for r in runs])
+        lines.append(
+            f"  {'(warm)':<10}{1e3 * t:>11.3f}{t / t_ours:>8.2f}"
+            f"{_median([r.iterations for r in runs]):>7.0f}{max(arena) / 1024:>10.0f}"
+            f"   tscvx, each from the last one's answer (not solved: "
+            f"{sum(r.status not in ('solved', 'solved_inaccurate') for r in runs)})"
+        )
     for key, (ts, its) in others.items():
         if ts:
             t = _median(ts)
@@ -515,7 +556,7 @@ def main(argv: list[str] | None = None) -> int:
         f"(set-up excluded); ratio = solver time / tscvx time"
     )
     for name, probs in sets:
-        for line in bench_set(name, probs, reps):
+        for line in bench_set(name, probs, reps, sequence=name.startswith("(a")):
             print(line)
     if args.callgrind:
         print(
@@ -533,7 +574,31 @@ def main(argv: list[str] | None = None) -> int:
                 f"  {name[:4]:4} tscvx {_count(ours)}  qoco {_count(qoco)}  qoco/tscvx {ratio}"
                 f"  (tscvx's sparse method {sparse.instructions if sparse else 'n/a'})"
             )
+        for name, probs in sets[:2]:
+            print(f"  {name[:4]:4} {_warm_counts(probs[: WARM_COUNTED + 1])}")
     return 0
+
+
+WARM_COUNTED = 5  # subproblems 2 to 6 of a landing set, counted warm-started
+
+
+def _warm_counts(probs: list[ConicProblem]) -> str:
+    """Mean instructions per solve over probs[1:], this runtime warm-started along the
+    sequence against the same problems started cold and QOCO's (which has no warm start)."""
+    runs = warm_sequence(probs, 1)
+    counts: dict[str, list[Count | None]] = {"warm": [], "cold": [], "qoco": []}
+    for prob, before in zip(probs[1:], runs[:-1], strict=True):
+        counts["warm"].append(instructions_ours(prob, flops=False, warm=before.solution))
+        counts["cold"].append(instructions_ours(prob, flops=False))
+        counts["qoco"].append(instructions_qoco(prob))
+    if any(c is None for v in counts.values() for c in v):
+        return "warm start: n/a"
+    mean = {k: statistics.mean(c.instructions for c in v if c) / 1e6 for k, v in counts.items()}
+    return (
+        f"subproblems 2-{len(probs)}, mean per solve: tscvx warm-started {mean['warm']:.1f} M, "
+        f"cold {mean['cold']:.1f} M, qoco {mean['qoco']:.1f} M; qoco/tscvx "
+        f"{mean['qoco'] / mean['warm']:.2f}x warm-started, {mean['qoco'] / mean['cold']:.2f}x cold"
+    )
 
 
 if __name__ == "__main__":
