@@ -1076,9 +1076,8 @@ pdg_status pdg_solve_from(pdg_workspace *ws, const pdg_scenario *scenario,
         sst = TSCVX_INVALID_INPUT;
         if (assemble(ws, ws->z, ws->disc, keep, eta) == 0) {
             const double t0 = opt->clock_s ? opt->clock_s() : 0.0;
-            /* the last subproblem's solution, accepted or not: the subproblems of a solve
-             * differ by one linearization or one radius (info.warm_started reports a blend
-             * that left the cones, which then starts cold) */
+            /* from the last subproblem's solution, accepted or not: the subproblems of a
+             * solve differ by one linearization or one radius (tscvx_warm_start) */
             if (have_solution && st->socp_warm_start) {
                 tscvx_warm_start(ws->socp, ws->znew, ws->ydual, ws->zdual, ws->slack);
             }

@@ -241,9 +241,11 @@ tscvx_setup_status tscvx_update_settings(tscvx_workspace *ws, const tscvx_settin
  * tscvx_get_solution returns, e.g. the solution of the previous, similar problem) instead of
  * the cold start. The point is blended with the cold start (x, y, s, z, tau, kappa) =
  * (0, 0, e, e, 1, 1), 0.98 of it (Skajaa, Andersen & Ye, Math. Prog. Comp. 2013), which is
- * strictly inside the cones for any s and z in them; a blend that is not (s or z outside its
- * cone) falls back to the cold start. Only the next solve uses the point; data updates before
- * it are fine (it is scaled at the solve). info.warm_started says which start a solve took.
+ * strictly inside the cones for any s and z in them; on each cone where the data's own slack
+ * h - G x lies strictly inside, that slack replaces s. A blend outside the cones (s or z
+ * outside) falls back to the cold start. Only the next solve uses the point; data updates
+ * before it are fine (it is scaled at the solve). info.warm_started says which start a solve
+ * took.
  * x: n, y: p, z: m, s: m, all finite (TSCVX_SETUP_NONFINITE_DATA otherwise, and no warm
  * start); NULL only for a part of length 0. */
 tscvx_setup_status tscvx_warm_start(tscvx_workspace *ws, const tscvx_float *x,

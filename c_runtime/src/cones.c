@@ -219,3 +219,14 @@ void tscvx_cone_add_identity(const tscvx_cones *K, tscvx_float *u, tscvx_float t
     for (tscvx_int i = 0; i < K->l; i++) u[i] += t;
     for (tscvx_int k = 0; k < K->nsoc; k++) u[K->off[k]] += t;
 }
+
+void tscvx_cone_copy_interior(const tscvx_cones *K, const tscvx_float *u, tscvx_float a,
+                              tscvx_float *dst) {
+    for (tscvx_int i = 0; i < K->l; i++)
+        if (u[i] > 0.0) dst[i] = a * u[i];
+    for (tscvx_int k = 0; k < K->nsoc; k++) {
+        const tscvx_int o = K->off[k], q = K->q[k];
+        if (norm2(u + o + 1, q - 1) < u[o])
+            for (tscvx_int j = 0; j < q; j++) dst[o + j] = a * u[o + j];
+    }
+}

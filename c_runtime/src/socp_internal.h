@@ -71,6 +71,10 @@ tscvx_float tscvx_cone_max_step(const tscvx_cones *K, const tscvx_float *u,
 tscvx_float tscvx_cone_shift_needed(const tscvx_cones *K, const tscvx_float *u);
 /* u += t e */
 void tscvx_cone_add_identity(const tscvx_cones *K, tscvx_float *u, tscvx_float t);
+/* dst = a u on each cone (orthant row or SOC) where u is strictly inside it; elsewhere dst is
+ * left as it is. */
+void tscvx_cone_copy_interior(const tscvx_cones *K, const tscvx_float *u, tscvx_float a,
+                              tscvx_float *dst);
 
 /* ---- KKT system -------------------------------------------------------------------------- */
 /*

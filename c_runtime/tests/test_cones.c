@@ -1,4 +1,5 @@
-/* Cone operations: Jordan product/division, NT scaling, step to the boundary, shift. */
+/* Cone operations: Jordan product/division, NT scaling, step to the boundary, shift, the
+ * interior test of the warm start. */
 #include "ctest_util.h"
 #include "socp_internal.h"
 
@@ -142,10 +143,33 @@ static void test_shift(void) {
     }
 }
 
+/* copy_interior takes a u block exactly where that block alone is strictly inside its cone */
+static void test_copy_interior(void) {
+    tscvx_cones K = cones();
+    tscvx_float u[M], dst[M];
+    for (int trial = 0; trial < 100; trial++) {
+        for (int i = 0; i < M; i++) u[i] = 2.0 * ct_randn(), dst[i] = 100.0 + i;
+        u[0] = 0.0;                                  /* an orthant boundary: not inside */
+        u[off[1]] = hypot(u[off[1] + 1], u[off[1] + 2]); /* an SOC boundary */
+        tscvx_cone_copy_interior(&K, u, 0.5, dst);
+        for (int i = 0; i < K.l; i++)
+            CHECK(dst[i] == (u[i] > 0.0 ? 0.5 * u[i] : 100.0 + i), "orthant row %d", i);
+        for (int k = 0; k < K.nsoc; k++) {
+            double nrm = 0.0;
+            for (int j = 1; j < q[k]; j++) nrm += u[off[k] + j] * u[off[k] + j];
+            const int inside = sqrt(nrm) < u[off[k]];
+            for (int j = 0; j < q[k]; j++)
+                CHECK(dst[off[k] + j] == (inside ? 0.5 * u[off[k] + j] : 100.0 + off[k] + j),
+                      "SOC %d entry %d", k, j);
+        }
+    }
+}
+
 int main(void) {
     test_product_division();
     test_nt_scaling();
     test_max_step();
     test_shift();
+    test_copy_interior();
     return ct_report("test_cones");
 }

@@ -636,15 +636,22 @@ static void test_warm_start(void) {
     CHECK(tscvx_solve(ws) == TSCVX_SOLVED, "solve after a refused point");
     tscvx_get_info(ws, &info);
     CHECK(info.warm_started == 0, "a refused point was used");
-    /* s outside its cone (|s_1| > s_0 by far): the blend leaves the cone, the solve starts
-     * cold and still solves */
-    tscvx_float sout[3] = {-10.0, 50.0, 0.0};
-    CHECK(tscvx_warm_start(ws, x, y, z, sout) == TSCVX_SETUP_OK, "finite point refused");
+    /* s outside its cone (|s_1| > s_0 by far), and so is the data's slack h - G x at x: the
+     * blend leaves the cone, the solve starts cold and still solves */
+    tscvx_float sout[3] = {-10.0, 50.0, 0.0}, xfar[2] = {10.0, 10.0}, xnear[2] = {0.1, 0.2};
+    CHECK(tscvx_warm_start(ws, xfar, y, z, sout) == TSCVX_SETUP_OK, "finite point refused");
     CHECK(tscvx_solve(ws) == TSCVX_SOLVED, "solve from a point outside the cone");
     tscvx_get_info(ws, &info);
     CHECK(info.warm_started == 0, "a blend outside the cone was used");
     tscvx_get_solution(ws, xw, NULL, NULL, NULL);
     CHECK(fabs(xw[0] - 1.5 * sqrt(0.5)) < 1e-7, "x after the cold fallback %g", xw[0]);
+    /* the same s, but the data's slack at x strictly inside the cone: it replaces s */
+    CHECK(tscvx_warm_start(ws, xnear, y, z, sout) == TSCVX_SETUP_OK, "finite point refused");
+    CHECK(tscvx_solve(ws) == TSCVX_SOLVED, "solve with the data's slack");
+    tscvx_get_info(ws, &info);
+    CHECK(info.warm_started == 1, "the data's slack did not replace s");
+    CHECK(fabs(info.pcost + 1.5 * sqrt(2.0)) < 1e-7, "obj from the data's slack %.12g",
+          info.pcost);
 
     /* infeasibility is still detected from a warm start (x >= 1 and x <= 0) */
     tscvx_int Gp[] = {0, 2}, Gi[] = {0, 1};
