@@ -306,6 +306,17 @@ def _split(prob: ConicProblem) -> _Split:
     )
 
 
+def c_point(
+    split: _Split, sol: ConicSolution
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``sol`` (Clarabel's form) as the runtime's (x, y, z, s): y the zero cones' z."""
+    rows_eq, rows_g = split.eq_rows, split.g_rows
+    return tuple(  # type: ignore[return-value]
+        np.ascontiguousarray(v, dtype=float)
+        for v in (sol.x, sol.z[rows_eq], sol.z[rows_g], sol.s[rows_g])
+    )
+
+
 class Solver:
     """A set-up workspace: one arena, fixed sparsity, repeated solves."""
 
@@ -451,17 +462,10 @@ class Solver:
             return self.setup_status
         n, m = self.prob.n, self.prob.m
         if sol.x.shape != (n,) or sol.z.shape != (m,) or sol.s.shape != (m,):
+            self.lib.tscvx_warm_start(self.ws, None, None, None, None)  # refused: drops any point
             return -1
-        x, y, z, s = self.c_point(sol)
+        x, y, z, s = c_point(self.split, sol)
         return int(self.lib.tscvx_warm_start(self.ws, _dptr(x), _dptr(y), _dptr(z), _dptr(s)))
-
-    def c_point(self, sol: ConicSolution) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """``sol`` (Clarabel's form) as the runtime's (x, y, z, s): y the zero cones' z."""
-        rows_eq, rows_g = self.split.eq_rows, self.split.g_rows
-        return tuple(  # type: ignore[return-value]
-            np.ascontiguousarray(v, dtype=float)
-            for v in (sol.x, sol.z[rows_eq], sol.z[rows_g], sol.s[rows_g])
-        )
 
     def info(self) -> dict[str, float]:
         inf = _Info()

@@ -94,7 +94,9 @@ def test_bad_warm_points_are_refused_and_the_solve_starts_cold() -> None:
     assert good.ok
     solver = csocp.Solver(prob)
     short = ConicSolution("solved", good.x[:-1], good.s, good.z, 0.0, 0, 0.0)
-    assert solver.warm_start(short) == -1
+    assert solver.warm_start(good) == 0
+    assert solver.warm_start(short) == -1  # ... and the good point given before is dropped
+    assert solver.solve().info["warm_started"] == 0
     nan = ConicSolution("solved", good.x, good.s, np.full(prob.m, np.nan), 0.0, 0, 0.0)
     assert solver.warm_start(good) == 0
     assert solver.warm_start(nan) != 0  # ... and the good point given before is dropped

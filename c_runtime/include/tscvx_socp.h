@@ -246,8 +246,9 @@ tscvx_setup_status tscvx_update_settings(tscvx_workspace *ws, const tscvx_settin
  * outside) falls back to the cold start. Only the next solve uses the point; data updates
  * before it are fine (it is scaled at the solve). info.warm_started says which start a solve
  * took.
- * x: n, y: p, z: m, s: m, all finite (TSCVX_SETUP_NONFINITE_DATA otherwise, and no warm
- * start); NULL only for a part of length 0. */
+ * x: n, y: p, z: m, s: m, all finite (TSCVX_SETUP_NONFINITE_DATA otherwise); NULL only for a
+ * part of length 0 (TSCVX_SETUP_NULL_ARGUMENT otherwise). A refused call leaves no point: the
+ * next solve starts cold. */
 tscvx_setup_status tscvx_warm_start(tscvx_workspace *ws, const tscvx_float *x,
                                     const tscvx_float *y, const tscvx_float *z,
                                     const tscvx_float *s);

@@ -546,9 +546,9 @@ tscvx_setup_status tscvx_warm_start(tscvx_workspace *ws, const tscvx_float *x,
                                     const tscvx_float *s) {
     if (ws == NULL) return TSCVX_SETUP_NULL_ARGUMENT;
     if (!ws_live(ws)) return TSCVX_SETUP_NOT_READY;
+    ws->warm = 0; /* a refused point also drops the one given before */
     if (x == NULL || (y == NULL && ws->p > 0) || ((z == NULL || s == NULL) && ws->m > 0))
         return TSCVX_SETUP_NULL_ARGUMENT;
-    ws->warm = 0;
     if (!all_finite(x, ws->n) || !all_finite(y, ws->p) || !all_finite(z, ws->m) ||
         !all_finite(s, ws->m))
         return TSCVX_SETUP_NONFINITE_DATA;

@@ -627,7 +627,11 @@ static void test_warm_start(void) {
     CHECK(info.warm_started == 0, "the warm point served a second solve");
     /* refused: NULL (but for a part of length 0: y here), non-finite (which also drops a
      * point given before) */
+    CHECK(tscvx_warm_start(ws, x, y, z, s) == TSCVX_SETUP_OK, "warm start refused");
     CHECK(tscvx_warm_start(ws, x, y, NULL, s) == TSCVX_SETUP_NULL_ARGUMENT, "NULL z accepted");
+    CHECK(tscvx_solve(ws) == TSCVX_SOLVED, "solve after a NULL point");
+    tscvx_get_info(ws, &info);
+    CHECK(info.warm_started == 0, "a point survived a refused call");
     CHECK(tscvx_warm_start(ws, NULL, y, z, s) == TSCVX_SETUP_NULL_ARGUMENT, "NULL x accepted");
     CHECK(tscvx_warm_start(NULL, x, y, z, s) == TSCVX_SETUP_NULL_ARGUMENT, "NULL ws accepted");
     CHECK(tscvx_warm_start(ws, x, y, z, s) == TSCVX_SETUP_OK, "warm start refused");
