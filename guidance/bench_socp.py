@@ -33,6 +33,7 @@ from pathlib import Path
 import numpy as np
 import scipy.sparse as sp
 
+from guidance import callgrind
 from guidance.conic import ConicProblem, ConicSolution, clarabel_solver
 from guidance.params import SCvxSettings
 
@@ -367,28 +368,13 @@ def _object_flops(cg_out: Path, solver_object: str) -> int | None:
 
 def _callgrind(cmd: list[str], toggle: str, solver_object: str | None) -> Count | None:
     """Instructions of ``cmd`` inside ``toggle``, and the flops of ``solver_object`` (None:
-    instructions only, without the per-instruction dump)."""
-    per_instr = ["--dump-instr=yes", "--compress-pos=no", "--compress-strings=no"]
-    with tempfile.TemporaryDirectory() as tmp:
-        out = Path(tmp) / "cg.out"
-        r = subprocess.run(
-            [
-                "valgrind",
-                "--tool=callgrind",
-                f"--callgrind-out-file={out}",
-                f"--toggle-collect={toggle}",
-                *(per_instr if solver_object else []),
-                *cmd,
-            ],
-            capture_output=True,
-            text=True,
-            check=False,
-        )
-        for line in r.stderr.splitlines():
-            if "Collected :" in line:
-                flops = _object_flops(out, solver_object) if solver_object else None
-                return Count(int(line.split(":")[-1].strip()), flops)
-    return None
+    instructions only, without the per-instruction dump); None when the run fails."""
+    try:
+        with callgrind.collect(cmd, toggle, per_instruction=solver_object is not None) as run:
+            flops = _object_flops(run.out_file, solver_object) if solver_object else None
+            return Count(run.instructions, flops)
+    except RuntimeError:
+        return None
 
 
 BENCH_DRIVER = ROOT / "build" / "ctest" / "bench_driver"  # `make bench` (or `make ctest`) builds it

@@ -34,13 +34,12 @@ from __future__ import annotations
 
 import argparse
 import json
-import re
-import shutil
 import subprocess
 import sys
-import tempfile
 from dataclasses import asdict, dataclass
 from pathlib import Path
+
+from guidance import callgrind
 
 ROOT = Path(__file__).resolve().parent.parent
 BUILD = ROOT / "build"
@@ -62,6 +61,13 @@ NN_MODELS = {"constraint": BUILD / "models" / "constraint.tnn",
 NN_INSTRUCTION_BUDGET = 5_000_000
 NN_CONSTRAINT_CALLS = 20  # T-SCvx: one mask per SCvx iteration, iter_max = 20 (Table 1)
 
+
+# The driver's exit codes for a call made: 0 solved, 3 another status (printed, and judged by
+# the report); 1 is a failure before the call.
+DRIVER_OK = (0, 3)
+# The parts of a guidance call: function (inclusive cost) -> key in the report.
+PARTS = {"tscvx_solve": "socp_solve", "discretize": "discretization",
+         "tscvx_nn_run": "network_inference"}  # fmt: skip
 
 VARIANTS = {  # name -> (driver arguments, function counted by callgrind)
     "SCvx": ([], "pdg_solve"),
@@ -154,18 +160,15 @@ def _variant_args(variant: str) -> tuple[list[str], str]:
     return [a.format(**paths) for a in args], function
 
 
-def _run_driver(
-    prefix: list[str] | None = None, cwd: str | None = None, variant: str = "SCvx"
-) -> dict[str, str]:
+def _driver_cmd(variant: str, repeat: int) -> list[str]:
     args, _ = _variant_args(variant)
-    out = subprocess.run(
-        (prefix or []) + [str(DRIVER), "--repeat", "1" if prefix else "3", *args],
-        capture_output=True,
-        text=True,
-        cwd=cwd,
-        check=False,
-    )
-    if out.returncode not in (0, 3):
+    return [str(DRIVER), "--repeat", str(repeat), *args]
+
+
+def _run_driver(variant: str = "SCvx") -> dict[str, str]:
+    """Three native guidance calls: the driver's ``key value`` lines."""
+    out = subprocess.run(_driver_cmd(variant, 3), capture_output=True, text=True, check=False)
+    if out.returncode not in DRIVER_OK:
         raise RuntimeError(f"budget driver failed ({out.returncode}): {out.stderr[-2000:]}")
     kv = {}
     for line in out.stdout.splitlines():
@@ -177,52 +180,18 @@ def _run_driver(
 def count_instructions(variant: str = "SCvx") -> tuple[int, dict[str, int]]:
     """Instructions inside the guidance call (callgrind): pdg_solve, or pdg_solve_tscvx for
     the T-SCvx variants, with the SOCP / discretization / network-inference split."""
-    if shutil.which("valgrind") is None:
-        raise RuntimeError("valgrind not found (Debian package valgrind)")
     _, function = _variant_args(variant)
-    with tempfile.TemporaryDirectory() as tmp:
-        out_file = Path(tmp) / "callgrind.out"
-        _run_driver(
-            ["valgrind", "--tool=callgrind", f"--callgrind-out-file={out_file}",
-             f"--toggle-collect={function}"],
-            cwd=tmp,
-            variant=variant,
-        )  # fmt: skip
-        text = out_file.read_text()
-        m = re.search(r"^(?:summary|totals):\s*(\d+)", text, re.MULTILINE)
-        if not m:
-            raise RuntimeError("no instruction total in the callgrind output")
-        total = int(m.group(1))
-        parts: dict[str, int] = {}
-        if shutil.which("callgrind_annotate"):
-            ann = subprocess.run(
-                ["callgrind_annotate", "--inclusive=yes", "--threshold=100", str(out_file)],
-                capture_output=True, text=True, check=False,
-            ).stdout  # fmt: skip
-            for name, key in (("tscvx_solve", "socp_solve"), ("discretize", "discretization"),
-                              ("tscvx_nn_run", "network_inference")):  # fmt: skip
-                mm = re.search(rf"^\s*([\d,]+)\s.*:{name}\s", ann, re.MULTILINE)
-                if mm:
-                    parts[key] = int(mm.group(1).replace(",", ""))
-            parts["rest"] = total - sum(parts.values())
-    return total, parts
+    with callgrind.collect(_driver_cmd(variant, 1), function, ok_codes=DRIVER_OK) as run:
+        parts = callgrind.inclusive_costs(run.out_file, PARTS)
+    if parts:
+        parts["rest"] = run.instructions - sum(parts.values())
+    return run.instructions, parts
 
 
-def _callgrind_total(cmd: list[str], function: str) -> int:
+def callgrind_total(cmd: list[str], function: str) -> int:
     """Instructions inside ``function`` (inclusive) of one run of ``cmd`` under callgrind."""
-    if shutil.which("valgrind") is None:
-        raise RuntimeError("valgrind not found (Debian package valgrind)")
-    with tempfile.TemporaryDirectory() as tmp:
-        out_file = Path(tmp) / "callgrind.out"
-        subprocess.run(
-            ["valgrind", "--tool=callgrind", f"--callgrind-out-file={out_file}",
-             f"--toggle-collect={function}", *cmd],
-            capture_output=True, text=True, cwd=tmp, check=True,
-        )  # fmt: skip
-        m = re.search(r"^(?:summary|totals):\s*(\d+)", out_file.read_text(), re.MULTILINE)
-        if not m:
-            raise RuntimeError("no instruction total in the callgrind output")
-        return int(m.group(1))
+    with callgrind.collect(cmd, function) as run:
+        return run.instructions
 
 
 def measure_networks(do_build: bool = True) -> list[NetBudget]:
@@ -237,7 +206,7 @@ def measure_networks(do_build: bool = True) -> list[NetBudget]:
         if out.returncode != 0:
             raise RuntimeError(f"nn budget driver failed on {path}: {out.stderr[-2000:]}")
         kv = dict(line.split(" ", 1) for line in out.stdout.splitlines() if " " in line)
-        instr = _callgrind_total([str(NN_DRIVER), str(path), "--repeat", "1"], "tscvx_nn_run")
+        instr = callgrind_total([str(NN_DRIVER), str(path), "--repeat", "1"], "tscvx_nn_run")
         rows.append(
             NetBudget(
                 name=name,
