@@ -455,8 +455,8 @@ class Solver:
         return int(st)
 
     def warm_start(self, sol: ConicSolution) -> int:
-        """Start the next solve from ``sol`` (Clarabel's form, e.g. the last solve's answer)
-        blended with the cold start (tscvx_warm_start). Returns the C setup status (0 = ok);
+        """Start the next solve from ``sol`` (Clarabel's form, e.g. the last solve's answer),
+        centred into the cones (tscvx_warm_start). Returns the C setup status (0 = ok);
         a solution of another size is refused (-1) and the next solve starts cold."""
         if not self.ready:
             return self.setup_status

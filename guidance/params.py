@@ -162,9 +162,10 @@ class SCvxSettings:
     socp_tol: float = 1e-9
     socp_max_iter: int = 200
     # The flight runtime's IPM starts each subproblem from the last subproblem's solution
-    # (tscvx_warm_start: blended with its cold start, Skajaa, Andersen & Ye 2013), in the C
-    # loop and with `--backend c-socp` alike. Clarabel has no warm start: the reference
-    # always starts cold. The answer is the same to the conic tolerance, in fewer iterations.
+    # (tscvx_warm_start: centred at a complementarity balanced against its residuals on the
+    # new data), in the C loop and with `--backend c-socp` alike. Clarabel has no warm
+    # start: the reference always starts cold. The answer is the same to the conic
+    # tolerance, in fewer iterations.
     socp_warm_start: bool = True
     # T-SCvx trust radius: True is Algorithm 2's update (alpha^tau_r, beta^(1 - tau_r), tau_r
     # the fraction of bits in which the predicted masks of successions k+1 and k differ);

@@ -56,7 +56,7 @@ def test_warm_start_from_a_neighbour_matches_clarabel(block: int) -> None:
         check_against_clarabel(prob, sol)
         tried += 1
         warm += int(sol.info["warm_started"])
-    # an answer's s and z lie in the cones, so the blend always lies inside them
+    # an answer's s and z lie in the cones, so the centred point always lies inside them
     assert warm == tried >= 25
 
 
@@ -107,3 +107,31 @@ def test_bad_warm_points_are_refused_and_the_solve_starts_cold() -> None:
     assert solver.warm_start(good) == 0
     assert solver.solve().info["warm_started"] == 1
     assert solver.solve().info["warm_started"] == 0
+
+
+def test_warm_start_is_centred_as_far_as_its_residuals_need() -> None:
+    """The warm point's complementarity (row 0 of the log: mu) follows its infeasibility on
+    the new data: about a tenth of its relative residuals, at least 1e-5 (ipm.c,
+    warm_initialize). From a neighbour's answer mu grows with the residuals; from the
+    problem's own answer it stays at the floor instead of restarting the path."""
+    ratios, own_mu = [], []
+    for seed in range(40):
+        prob = random_feasible(seed, with_P=bool(seed % 2))
+        for size in (1e-2, 1e-1):
+            start = csocp.solve(_neighbour(prob, np.random.default_rng(seed), size))
+            if not start.ok:
+                continue
+            solver = csocp.Solver(prob)
+            assert solver.warm_start(start) == 0
+            row = solver.solve(log=True).info["log"][0]
+            ratios.append(row["mu"] / max(row["pres"], row["dres"]))
+        solver = csocp.Solver(prob)
+        assert solver.warm_start(csocp.solve(prob)) == 0
+        sol = solver.solve(log=True)
+        assert sol.info["warm_started"] and sol.ok
+        own_mu.append(sol.info["log"][0]["mu"])
+    assert len(ratios) >= 60
+    # each cone gets mu_0 / 4 to 5 mu_0 / 4 (cones.c), mu_0 = max(1e-5, 0.1 max(pres, dres))
+    # before the centring moves the residuals a little
+    assert min(ratios) >= 0.01
+    assert max(own_mu) <= 2e-5

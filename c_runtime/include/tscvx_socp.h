@@ -239,13 +239,13 @@ tscvx_setup_status tscvx_update_settings(tscvx_workspace *ws, const tscvx_settin
 
 /* Warm start: the next tscvx_solve starts from (x, y, z, s) in original units (what
  * tscvx_get_solution returns, e.g. the solution of the previous, similar problem) instead of
- * the cold start. The point is blended with the cold start (x, y, s, z, tau, kappa) =
- * (0, 0, e, e, 1, 1), 0.98 of it (Skajaa, Andersen & Ye, Math. Prog. Comp. 2013), which is
- * strictly inside the cones for any s and z in them; on each cone where the data's own slack
- * h - G x lies strictly inside, that slack replaces s. A blend outside the cones (s or z
- * outside) falls back to the cold start. Only the next solve uses the point; data updates
- * before it are fine (it is scaled at the solve). info.warm_started says which start a solve
- * took.
+ * the cold start. On each cone where the data's own slack h - G x lies strictly inside, that
+ * slack replaces s; then each cone of s and z is moved off the boundary along the identity
+ * until its s'z is about mu_0, a tenth of the point's relative residuals on the data (at
+ * least 1e-5), and tau = 1, kappa = mu_0: a point centred as far as its infeasibility
+ * needs. An s or z outside the cones falls back to the cold start. Only the next solve uses
+ * the point; data updates before it are fine (it is scaled at the solve). info.warm_started
+ * says which start a solve took.
  * x: n, y: p, z: m, s: m, all finite (TSCVX_SETUP_NONFINITE_DATA otherwise); NULL only for a
  * part of length 0 (TSCVX_SETUP_NULL_ARGUMENT otherwise). A refused call leaves no point: the
  * next solve starts cold. */

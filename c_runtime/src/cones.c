@@ -220,13 +220,28 @@ void tscvx_cone_add_identity(const tscvx_cones *K, tscvx_float *u, tscvx_float t
     for (tscvx_int k = 0; k < K->nsoc; k++) u[K->off[k]] += t;
 }
 
-void tscvx_cone_copy_interior(const tscvx_cones *K, const tscvx_float *u, tscvx_float a,
-                              tscvx_float *dst) {
+void tscvx_cone_copy_interior(const tscvx_cones *K, const tscvx_float *u, tscvx_float *dst) {
     for (tscvx_int i = 0; i < K->l; i++)
-        if (u[i] > 0.0) dst[i] = a * u[i];
+        if (u[i] > 0.0) dst[i] = u[i];
     for (tscvx_int k = 0; k < K->nsoc; k++) {
         const tscvx_int o = K->off[k], q = K->q[k];
         if (norm2(u + o + 1, q - 1) < u[o])
-            for (tscvx_int j = 0; j < q; j++) dst[o + j] = a * u[o + j];
+            for (tscvx_int j = 0; j < q; j++) dst[o + j] = u[o + j];
+    }
+}
+
+/* Centring of a warm point, one cone at a time: s += a e, z += b e with
+ *   a = mu / (2 max(z_0, sqrt mu)),  b = mu / (2 max(s_0, sqrt mu)),
+ * so s'z grows by a z_0 + b s_0 + ab (e'z = z_0 on each cone), between mu/4 and 5 mu/4
+ * whatever the sizes of s and z: a complementary pair (s'z = 0) leaves each cone with
+ * complementarity of the order of mu. Used on s and z in K, it leaves them strictly inside. */
+void tscvx_cone_center_pair(const tscvx_cones *K, tscvx_float *s, tscvx_float *z,
+                            tscvx_float mu) {
+    const tscvx_float rt = sqrt(mu);
+    for (tscvx_int c = 0; c < K->l + K->nsoc; c++) {
+        const tscvx_int o = c < K->l ? c : K->off[c - K->l];
+        const tscvx_float s0 = s[o], z0 = z[o];
+        s[o] = s0 + mu / (2.0 * (z0 > rt ? z0 : rt));
+        z[o] = z0 + mu / (2.0 * (s0 > rt ? s0 : rt));
     }
 }

@@ -302,40 +302,51 @@ static void take_step(tscvx_workspace *ws, tscvx_float a) {
 
 /* ---- initial point ---------------------------------------------------------------------- */
 
-/* Warm start (Skajaa, Andersen & Ye 2013, Sec. 3): lambda (x*, y*, s*, z*, 1, 0) +
- * (1 - lambda) (0, 0, e, e, 1, 1), (x*, ...) the caller's point in the current scaling
- * (x = x_o / D, y = cs y_o / EA, z = cs z_o / EG, s = EG s_o: tscvx_unscale_solution
- * inverted at tau = 1). The cold part keeps the blend at least 1 - lambda inside the cones
- * and its complementarity of the order of 1 - lambda. One change: on each cone where the
- * current data's slack h - G x* lies strictly inside, s* is that slack (the given s* may be
- * another problem's), so that those rows start with the blend's residual only. Over the SCvx
- * subproblem sequences of the landing catalog, 0.97 to 0.995 took within 1 % of the fewest IPM
- * iterations (README, "Warm start"). Returns -1 when the blend is not strictly inside the cones (the caller's s or
- * z outside). */
-#define WARM_WEIGHT 0.98
+/* Warm start: the caller's point (x*, y*, s*, z*) in the current scaling (x = x_o / D,
+ * y = cs y_o / EA, z = cs z_o / EG, s = EG s_o: tscvx_unscale_solution inverted at tau = 1),
+ * tau = 1. On each cone where the current data's slack h - G x* lies strictly inside, s* is
+ * that slack (the given s* may be another problem's), so those rows start with no primal
+ * residual. Then every cone is moved off the boundary along e until its s'z is about mu_0
+ * (tscvx_cone_center_pair), kappa = mu_0, with mu_0 balanced against the point's relative
+ * residuals on the new data:
+ *   mu_0 = max(WARM_MU_MIN, WARM_MU_PER_RES max(pres, dres)).
+ * The homogeneous IPM shrinks residuals and mu together (by 1 - alpha per step): a start
+ * whose mu is far below its residuals takes short steps until they catch up, one far above
+ * spends iterations on complementarity alone. An answer is complementary (s'z = 0), so the
+ * centring moves it only as far as that balance needs. Before this (until 25 Nov) the point
+ * was blended with the cold start (Skajaa, Andersen & Ye 2013), which gave each cone the
+ * complementarity 0.02 (s_0 + z_0) whatever the residuals: up to 10 on the landing's
+ * penalty rows (multipliers near 500). Over the SCvx solves of the landing catalog this
+ * start takes 8 % fewer IPM iterations than that blend (README, "Warm start"). Returns -1
+ * when the centred s or z is not strictly inside the cones (the caller's s or z outside). */
+#define WARM_MU_MIN 1e-5
+#define WARM_MU_PER_RES 0.1
 static int warm_initialize(tscvx_workspace *ws) {
     const tscvx_int n = ws->n, p = ws->p, m = ws->m;
-    const tscvx_float lam = WARM_WEIGHT, cs = ws->cs;
+    const tscvx_float cs = ws->cs;
     tscvx_float *slack = ws->wm; /* h - G x* */
     for (tscvx_int i = 0; i < m; i++) {
-        ws->z[i] = lam * cs * ws->bz[i] / ws->EG[i];
-        ws->s[i] = lam * ws->EG[i] * ws->bs[i];
+        ws->z[i] = cs * ws->bz[i] / ws->EG[i];
+        ws->s[i] = ws->EG[i] * ws->bs[i];
         slack[i] = ws->h[i];
     }
     for (tscvx_int j = 0; j < n; j++) {
-        const tscvx_float xj = ws->bx[j] / ws->D[j];
-        ws->x[j] = lam * xj;
+        ws->x[j] = ws->bx[j] / ws->D[j];
         for (tscvx_int k = ws->G.p[j]; k < ws->G.p[j + 1]; k++)
-            slack[ws->G.i[k]] -= ws->G.x[k] * xj;
+            slack[ws->G.i[k]] -= ws->G.x[k] * ws->x[j];
     }
-    for (tscvx_int i = 0; i < p; i++) ws->y[i] = lam * cs * ws->by[i] / ws->EA[i];
-    tscvx_cone_copy_interior(&ws->K, slack, lam, ws->s);
-    tscvx_cone_add_identity(&ws->K, ws->s, 1.0 - lam);
-    tscvx_cone_add_identity(&ws->K, ws->z, 1.0 - lam);
+    for (tscvx_int i = 0; i < p; i++) ws->y[i] = cs * ws->by[i] / ws->EA[i];
+    tscvx_cone_copy_interior(&ws->K, slack, ws->s);
+    ws->tau = 1.0, ws->kappa = 0.0;
+    residuals(ws);
+    const measures r = measure(ws);
+    const tscvx_float mu0 = fmax(WARM_MU_MIN, WARM_MU_PER_RES * fmax(r.pres, r.dres));
+    if (!isfinite(mu0)) return -1;
+    tscvx_cone_center_pair(&ws->K, ws->s, ws->z, mu0);
     if (m > 0 && !(tscvx_cone_shift_needed(&ws->K, ws->s) < 0.0 &&
                    tscvx_cone_shift_needed(&ws->K, ws->z) < 0.0))
         return -1;
-    ws->tau = 1.0, ws->kappa = 1.0 - lam;
+    ws->kappa = mu0;
     return 0;
 }
 
@@ -379,10 +390,10 @@ static int initialize(tscvx_workspace *ws, int warm) {
 /* Iterative refinement of the Newton solves starts once mu < REFINE_MU mu_0. Before that the
  * factor's rounding is far below what the step needs; it grows as W's conditioning does
  * (like 1/mu) and matters in the last iterations only. Over the SCvx solves of the landing
- * catalog (25 Nov), every ratio from 1e-3 (used before) down to 1e-10 took the same
- * subproblems and, to 0.3 %, the same IPM iterations, with final masses within 1e-7; 1e-12
- * took 10 % more iterations, none at all 25 % more. 1e-8 keeps two decades from that edge. */
-#define REFINE_MU 1e-8
+ * catalog (25 Nov), every ratio from 1e-3 (used before) down to 1e-6 took the same
+ * subproblems and IPM iterations; 1e-8 took 1 % more iterations (and, from the blended warm
+ * start used before, 1e-12 took 10 % more). 1e-6 keeps two decades from that edge. */
+#define REFINE_MU 1e-6
 
 static void log_row(tscvx_workspace *ws, tscvx_int k, const measures *r, tscvx_float step) {
     if (k >= ws->log_cap) return;

@@ -71,10 +71,13 @@ tscvx_float tscvx_cone_max_step(const tscvx_cones *K, const tscvx_float *u,
 tscvx_float tscvx_cone_shift_needed(const tscvx_cones *K, const tscvx_float *u);
 /* u += t e */
 void tscvx_cone_add_identity(const tscvx_cones *K, tscvx_float *u, tscvx_float t);
-/* dst = a u on each cone (orthant row or SOC) where u is strictly inside it; elsewhere dst is
+/* dst = u on each cone (orthant row or SOC) where u is strictly inside it; elsewhere dst is
  * left as it is. */
-void tscvx_cone_copy_interior(const tscvx_cones *K, const tscvx_float *u, tscvx_float a,
-                              tscvx_float *dst);
+void tscvx_cone_copy_interior(const tscvx_cones *K, const tscvx_float *u, tscvx_float *dst);
+/* Centres a warm point: s += a e and z += b e on each cone, so that each cone's s'z grows by
+ * mu/4 to 5 mu/4 (a, b in cones.c). */
+void tscvx_cone_center_pair(const tscvx_cones *K, tscvx_float *s, tscvx_float *z,
+                            tscvx_float mu);
 
 /* ---- KKT system -------------------------------------------------------------------------- */
 /*

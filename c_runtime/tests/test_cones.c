@@ -151,16 +151,61 @@ static void test_copy_interior(void) {
         for (int i = 0; i < M; i++) u[i] = 2.0 * ct_randn(), dst[i] = 100.0 + i;
         u[0] = 0.0;                                  /* an orthant boundary: not inside */
         u[off[1]] = hypot(u[off[1] + 1], u[off[1] + 2]); /* an SOC boundary */
-        tscvx_cone_copy_interior(&K, u, 0.5, dst);
+        tscvx_cone_copy_interior(&K, u, dst);
         for (int i = 0; i < K.l; i++)
-            CHECK(dst[i] == (u[i] > 0.0 ? 0.5 * u[i] : 100.0 + i), "orthant row %d", i);
+            CHECK(dst[i] == (u[i] > 0.0 ? u[i] : 100.0 + i), "orthant row %d", i);
         for (int k = 0; k < K.nsoc; k++) {
             double nrm = 0.0;
             for (int j = 1; j < q[k]; j++) nrm += u[off[k] + j] * u[off[k] + j];
             const int inside = sqrt(nrm) < u[off[k]];
             for (int j = 0; j < q[k]; j++)
-                CHECK(dst[off[k] + j] == (inside ? 0.5 * u[off[k] + j] : 100.0 + off[k] + j),
+                CHECK(dst[off[k] + j] == (inside ? u[off[k] + j] : 100.0 + off[k] + j),
                       "SOC %d entry %d", k, j);
+        }
+    }
+}
+
+/* 10^U(-6, 3): the sizes of an answer's slacks and multipliers */
+static double magnitude(void) { return pow(10.0, -6.0 + 9.0 * ct_rand()); }
+
+/* center_pair: complementary s, z (s'z = 0 on each cone, either or both on the boundary, of
+ * any size) end strictly inside their cones with each cone's s'z in [mu/4, 5 mu/4] */
+static void test_center_pair(void) {
+    tscvx_cones K = cones();
+    tscvx_float s[M], z[M];
+    const double mus[] = {1e-4, 1.0};
+    for (int trial = 0; trial < 200; trial++) {
+        const double mu = mus[trial % 2];
+        for (int i = 0; i < K.l; i++) { /* s = 0, z = 0 or both 0 */
+            const int which = (int)(3.0 * ct_rand());
+            s[i] = which == 0 ? magnitude() : 0.0;
+            z[i] = which == 1 ? magnitude() : 0.0;
+        }
+        for (int k = 0; k < K.nsoc; k++) { /* s = a (1, u), z = b (1, -u), |u| = 1 */
+            const tscvx_int o = off[k];
+            double nrm = 0.0;
+            for (int j = 1; j < q[k]; j++) s[o + j] = ct_randn(), nrm += s[o + j] * s[o + j];
+            const double a = ct_rand() < 0.2 ? 0.0 : magnitude();
+            const double b = ct_rand() < 0.2 ? 0.0 : magnitude();
+            s[o] = a, z[o] = b;
+            if (q[k] == 1 && a > 0.0) z[o] = 0.0; /* Q^1 is a ray: one of them 0 */
+            for (int j = 1; j < q[k]; j++) {
+                const double uj = s[o + j] / sqrt(nrm);
+                s[o + j] = a * uj, z[o + j] = -b * uj;
+            }
+        }
+        tscvx_float s2[M], z2[M];
+        for (int i = 0; i < M; i++) s2[i] = s[i], z2[i] = z[i];
+        tscvx_cone_center_pair(&K, s2, z2, mu);
+        CHECK(tscvx_cone_shift_needed(&K, s2) < 0.0 && tscvx_cone_shift_needed(&K, z2) < 0.0,
+              "centred point not strictly inside");
+        for (int c = 0; c < K.l + K.nsoc; c++) {
+            const tscvx_int o = c < K.l ? c : off[c - K.l], len = c < K.l ? 1 : q[c - K.l];
+            double before = 0.0, after = 0.0;
+            for (int j = 0; j < len; j++) before += s[o + j] * z[o + j], after += s2[o + j] * z2[o + j];
+            const double gain = after - before;
+            CHECK(gain >= 0.25 * mu * (1.0 - 1e-9) && gain <= 1.25 * mu * (1.0 + 1e-9),
+                  "cone %d: s'z grew by %g for mu %g", c, gain, mu);
         }
     }
 }
@@ -171,5 +216,6 @@ int main(void) {
     test_max_step();
     test_shift();
     test_copy_interior();
+    test_center_pair();
     return ct_report("test_cones");
 }

@@ -595,8 +595,8 @@ static void test_equilibration_reference(void) {
     }
 }
 
-/* tscvx_warm_start: the next solve (only) starts from the given point blended with the cold
- * start and reaches the same answer; bad points are refused or fall back to the cold start. */
+/* tscvx_warm_start: the next solve (only) starts from the given point, centred into the
+ * cones, and reaches the same answer; bad points are refused or fall back to the cold start. */
 static void test_warm_start(void) {
     small_soc p;
     const tscvx_data d = small_soc_data(&p);
@@ -641,12 +641,12 @@ static void test_warm_start(void) {
     tscvx_get_info(ws, &info);
     CHECK(info.warm_started == 0, "a refused point was used");
     /* s outside its cone (|s_1| > s_0 by far), and so is the data's slack h - G x at x: the
-     * blend leaves the cone, the solve starts cold and still solves */
+     * centred point is outside too, the solve starts cold and still solves */
     tscvx_float sout[3] = {-10.0, 50.0, 0.0}, xfar[2] = {10.0, 10.0}, xnear[2] = {0.1, 0.2};
     CHECK(tscvx_warm_start(ws, xfar, y, z, sout) == TSCVX_SETUP_OK, "finite point refused");
     CHECK(tscvx_solve(ws) == TSCVX_SOLVED, "solve from a point outside the cone");
     tscvx_get_info(ws, &info);
-    CHECK(info.warm_started == 0, "a blend outside the cone was used");
+    CHECK(info.warm_started == 0, "a point outside the cone was used");
     tscvx_get_solution(ws, xw, NULL, NULL, NULL);
     CHECK(fabs(xw[0] - 1.5 * sqrt(0.5)) < 1e-7, "x after the cold fallback %g", xw[0]);
     /* the same s, but the data's slack at x strictly inside the cone: it replaces s */
