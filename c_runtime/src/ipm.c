@@ -324,21 +324,15 @@ static void take_step(tscvx_workspace *ws, tscvx_float a) {
 static int warm_initialize(tscvx_workspace *ws) {
     const tscvx_int n = ws->n, p = ws->p, m = ws->m;
     const tscvx_float cs = ws->cs;
-    tscvx_float *slack = ws->wm; /* h - G x* */
-    for (tscvx_int i = 0; i < m; i++) {
-        ws->z[i] = cs * ws->bz[i] / ws->EG[i];
-        ws->s[i] = ws->EG[i] * ws->bs[i];
-        slack[i] = ws->h[i];
-    }
-    for (tscvx_int j = 0; j < n; j++) {
-        ws->x[j] = ws->bx[j] / ws->D[j];
-        for (tscvx_int k = ws->G.p[j]; k < ws->G.p[j + 1]; k++)
-            slack[ws->G.i[k]] -= ws->G.x[k] * ws->x[j];
-    }
+    for (tscvx_int j = 0; j < n; j++) ws->x[j] = ws->bx[j] / ws->D[j];
     for (tscvx_int i = 0; i < p; i++) ws->y[i] = cs * ws->by[i] / ws->EA[i];
-    tscvx_cone_copy_interior(&ws->K, slack, ws->s);
+    for (tscvx_int i = 0; i < m; i++) ws->z[i] = cs * ws->bz[i] / ws->EG[i], ws->s[i] = 0.0;
     ws->tau = 1.0, ws->kappa = 0.0;
-    residuals(ws);
+    residuals(ws); /* with s = 0: rz = G x* - h, the data's slack negated */
+    tscvx_float *slack = ws->wm;
+    for (tscvx_int i = 0; i < m; i++) slack[i] = -ws->rz[i], ws->s[i] = ws->EG[i] * ws->bs[i];
+    tscvx_cone_copy_interior(&ws->K, slack, ws->s);
+    for (tscvx_int i = 0; i < m; i++) ws->rz[i] += ws->s[i];
     const measures r = measure(ws);
     const tscvx_float mu0 = fmax(WARM_MU_MIN, WARM_MU_PER_RES * fmax(r.pres, r.dres));
     if (!isfinite(mu0)) return -1;
