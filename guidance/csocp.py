@@ -120,6 +120,7 @@ class _Info(ct.Structure):
         ("arena_high_water", ct.c_size_t),
         ("ruiz_passes", c_int),
         ("warm_started", c_int),
+        ("restart_iterations", c_int),
     ]
 
 
@@ -519,7 +520,8 @@ class Solver:
             s=s,
             z=z,
             obj=float(obj),
-            iterations=int(info["iterations"]),
+            # a warm start that failed and was run again cold counts both runs (as the C loop)
+            iterations=int(info["iterations"] + info["restart_iterations"]),
             solve_time_s=elapsed,
             info=info,
         )

@@ -1090,7 +1090,9 @@ pdg_status pdg_solve_from(pdg_workspace *ws, const pdg_scenario *scenario,
         r->k = k + 1;
         r->eta = eta;
         r->solver_status = sst;
-        r->solver_iterations = sst == TSCVX_INVALID_INPUT ? 0 : info.iterations;
+        /* a warm start that failed and was run again cold counts both runs */
+        r->solver_iterations =
+            sst == TSCVX_INVALID_INPUT ? 0 : info.iterations + info.restart_iterations;
         res->socp_iterations += r->solver_iterations;
         if (sst != TSCVX_SOLVED && sst != TSCVX_SOLVED_INACCURATE) {
             failed_row(r, J);

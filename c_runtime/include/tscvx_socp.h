@@ -190,6 +190,9 @@ typedef struct {
                                     nonempty row and column has infinity norm 1 +- 1e-3) */
     tscvx_int warm_started;      /* 1: the last solve started from tscvx_warm_start's point;
                                     0: from the cold start */
+    tscvx_int restart_iterations; /* a warm-started run that failed (numerical error,
+                                    iteration limit) is run again cold: its IPM iterations
+                                    (0: none); iterations and the log are the cold run's */
 } tscvx_info;
 
 /* One row of the iteration log. */

@@ -437,7 +437,8 @@ static int corrector(tscvx_workspace *ws, tscvx_float sigma, tscvx_float mu) {
     return direction(ws, 1.0 - sigma, ws->wm2, dk, ws->refine_now);
 }
 
-tscvx_solve_status tscvx_ipm(tscvx_workspace *ws) {
+/* One run of the IPM from the warm start (if asked for and possible) or the cold start. */
+static tscvx_solve_status ipm_run(tscvx_workspace *ws, int warm) {
     tscvx_solve_status status = TSCVX_MAX_ITER;
     measures r = {0, 0, 0, 0, 0, 0, 0};
     tscvx_float step = 0.0, mu0 = 1.0, sigma = 0.0;
@@ -446,8 +447,6 @@ tscvx_solve_status tscvx_ipm(tscvx_workspace *ws) {
     ws->best_iter = -1;
     ws->info.factorizations = 0;
     ws->refine_now = ws->st.refine_iters;
-    const int warm = ws->warm;
-    ws->warm = 0; /* tscvx_warm_start's point serves this solve only */
     ws->info.warm_started = 0;
     if (ws->method->load(ws) != 0 || initialize(ws, warm) != 0) {
         log_row(ws, 0, &r, 0.0); /* row 0 of the log, as the info says: no iterate */
@@ -493,5 +492,24 @@ tscvx_solve_status tscvx_ipm(tscvx_workspace *ws) {
     }
     if (k > ws->st.max_iter) k = ws->st.max_iter;
     finish_info(ws, status, k, &r);
+    return status;
+}
+
+/* A warm-started run that fails (numerical error, iteration limit) is run again from the
+ * cold start: a warm start is there to save iterations, not to cost an answer the cold start
+ * would give. (Seen on the ill-posed subproblems of a landing with no fuel to spare, where a
+ * start from an inaccurate answer ran into a numerical error that the cold start avoids.)
+ * info and the log describe the cold run; info.restart_iterations counts the failed one. */
+tscvx_solve_status tscvx_ipm(tscvx_workspace *ws) {
+    const int warm = ws->warm;
+    ws->warm = 0; /* tscvx_warm_start's point serves this solve only */
+    ws->info.restart_iterations = 0;
+    tscvx_solve_status status = ipm_run(ws, warm);
+    if (ws->info.warm_started &&
+        (status == TSCVX_NUMERICAL_ERROR || status == TSCVX_MAX_ITER)) {
+        const tscvx_int lost = ws->info.iterations;
+        status = ipm_run(ws, 0);
+        ws->info.restart_iterations = lost;
+    }
     return status;
 }
