@@ -188,12 +188,6 @@ def count_instructions(variant: str = "SCvx") -> tuple[int, dict[str, int]]:
     return run.instructions, parts
 
 
-def callgrind_total(cmd: list[str], function: str) -> int:
-    """Instructions inside ``function`` (inclusive) of one run of ``cmd`` under callgrind."""
-    with callgrind.collect(cmd, function) as run:
-        return run.instructions
-
-
 def measure_networks(do_build: bool = True) -> list[NetBudget]:
     """One tscvx_nn_run of each shipped network: instructions (callgrind) and memory."""
     if do_build:
@@ -206,7 +200,7 @@ def measure_networks(do_build: bool = True) -> list[NetBudget]:
         if out.returncode != 0:
             raise RuntimeError(f"nn budget driver failed on {path}: {out.stderr[-2000:]}")
         kv = dict(line.split(" ", 1) for line in out.stdout.splitlines() if " " in line)
-        instr = callgrind_total([str(NN_DRIVER), str(path), "--repeat", "1"], "tscvx_nn_run")
+        instr = callgrind.total([str(NN_DRIVER), str(path), "--repeat", "1"], "tscvx_nn_run")
         rows.append(
             NetBudget(
                 name=name,

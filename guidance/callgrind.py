@@ -1,6 +1,6 @@
 """Instruction counts with valgrind's callgrind: one run of a program, counting only inside
-one function (``--toggle-collect``). Shared by the RAD750 budget (``guidance budget``) and the
-SOCP benchmark (``python -m guidance.bench_socp --callgrind``)."""
+one function (``--toggle-collect``). Shared by the RAD750 budget (``guidance budget``), the
+network card and the SOCP benchmark (``python -m guidance.bench_socp --callgrind``)."""
 
 from __future__ import annotations
 
@@ -57,6 +57,12 @@ def collect(
         if not m:
             raise RuntimeError("no instruction total in the callgrind output")
         yield Collected(int(m.group(1)), out_file)
+
+
+def total(cmd: list[str], function: str) -> int:
+    """Instructions inside ``function`` (inclusive) of one run of ``cmd`` under callgrind."""
+    with collect(cmd, function) as run:
+        return run.instructions
 
 
 def inclusive_costs(out_file: Path, functions: dict[str, str]) -> dict[str, int]:

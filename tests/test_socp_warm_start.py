@@ -60,14 +60,17 @@ def test_warm_start_from_a_neighbour_matches_clarabel(block: int) -> None:
     assert warm == tried >= 25
 
 
-def _interior_start(prob: ConicProblem, seed: int) -> ConicSolution:
-    """A point with s and z inside the cones (a warm start for a problem with no answer)."""
+def _interior_start(
+    prob: ConicProblem, seed: int, primal_scale: float = 1.0, dual_scale: float = 1.0
+) -> ConicSolution:
+    """A point with s and z inside the cones (a warm start for a problem with no answer);
+    x and s scaled by ``primal_scale``, z by ``dual_scale``."""
     rng = np.random.default_rng(seed)
     return ConicSolution(
         status="solved",
-        x=rng.standard_normal(prob.n),
-        s=cone_interior(rng, prob.cones),
-        z=dual_interior(rng, prob.cones),
+        x=primal_scale * rng.standard_normal(prob.n),
+        s=primal_scale * cone_interior(rng, prob.cones),
+        z=dual_scale * dual_interior(rng, prob.cones),
         obj=0.0,
         iterations=0,
         solve_time_s=0.0,
@@ -137,33 +140,19 @@ def test_warm_start_is_centred_as_far_as_its_residuals_need() -> None:
     assert max(own_mu) <= 2e-5
 
 
-def _far_point(prob: ConicProblem, seed: int) -> ConicSolution:
-    """A warm point inside the cones but far from any answer (x and s at 1e6, z at 1e-6)."""
-    rng = np.random.default_rng(seed)
-    return ConicSolution(
-        status="solved",
-        x=1e6 * rng.standard_normal(prob.n),
-        s=1e6 * cone_interior(rng, prob.cones),
-        z=1e-6 * dual_interior(rng, prob.cones),
-        obj=0.0,
-        iterations=0,
-        solve_time_s=0.0,
-        info={},
-    )
-
-
 def test_a_warm_start_that_fails_is_run_again_cold() -> None:
-    """From a far point the IPM needs about three times the cold start's iterations; with an
-    iteration limit between the two the warm run fails, and the solve runs again from the cold
-    start (ipm.c, tscvx_ipm): Clarabel's answer, info of the cold run (warm_started 0), the
-    failed run's iterations in restart_iterations and counted in ``iterations``."""
+    """From a far point (x and s at 1e6, z at 1e-6) the IPM needs about three times the
+    cold start's iterations; with an iteration limit between the two the warm run fails, and
+    the solve runs again from the cold start (ipm.c, tscvx_ipm): Clarabel's answer, info of
+    the cold run (warm_started 0), the failed run's iterations in restart_iterations and
+    counted in ``iterations``."""
     limit, restarted = 14, 0
     for seed in range(10):
         prob = random_feasible(seed)
         cold = csocp.Solver(prob, max_iter=limit).solve()
         assert cold.ok and not cold.info["restart_iterations"]
         solver = csocp.Solver(prob, max_iter=limit)
-        assert solver.warm_start(_far_point(prob, seed)) == 0
+        assert solver.warm_start(_interior_start(prob, seed, 1e6, 1e-6)) == 0
         sol = solver.solve()
         check_against_clarabel(prob, sol)
         if sol.info["restart_iterations"]:

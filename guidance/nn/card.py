@@ -47,7 +47,8 @@ def callgrind_instructions(models: Path) -> dict[str, int]:
     import shutil
     import tempfile
 
-    from guidance.budget import NN_DRIVER, callgrind_total
+    from guidance import callgrind
+    from guidance.budget import NN_DRIVER
     from guidance.nn.flight import write_tnn
 
     if not NN_DRIVER.exists() or shutil.which("valgrind") is None:
@@ -60,7 +61,7 @@ def callgrind_instructions(models: Path) -> dict[str, int]:
             tnn = Path(tmp) / f"{kind}.tnn"
             write_tnn(models / f"{kind}.onnx", tnn)
             cmd = [str(NN_DRIVER), str(tnn), "--repeat", "1"]
-            out[kind] = callgrind_total(cmd, "tscvx_nn_run")
+            out[kind] = callgrind.total(cmd, "tscvx_nn_run")
     return out
 
 
