@@ -284,7 +284,10 @@ def test_warm_started_subproblems_give_the_cold_answer_in_fewer_iterations() -> 
     """socp_warm_start (on by default) starts each subproblem's IPM from the last subproblem's
     answer: the landing is the cold-started one (issue 3's figure: same status and iterations,
     1e-6 in final mass) in at least 5 % fewer IPM iterations (14 % on the catalog, 25 Nov);
-    the Python loop on the C SOCP starts cold too when told."""
+    the Python loop on the C SOCP starts cold too when told: subproblem by subproblem, its
+    IPM iterations are the C loop's cold ones (within one: the two loops' data differ in the
+    last bits, and the IPM's last iteration can fall either side of the tolerance), and its
+    warm start saves as much."""
     scn = SCENARIOS["default"]
     off = SCvxSettings(socp_warm_start=False)
     cold, warm = cguidance.solve_c(scn, off), cguidance.solve_c(scn)
@@ -294,10 +297,12 @@ def test_warm_started_subproblems_give_the_cold_answer_in_fewer_iterations() -> 
         return sum(h.solver_iterations for h in r.history)
 
     assert ipm(warm) < 0.95 * ipm(cold), (ipm(warm), ipm(cold))
-    py_cold = solve_scvx(scn, off, backend="c")
-    assert [h.solver_iterations for h in py_cold.history] == [
-        h.solver_iterations for h in cold.history
-    ]
+    py_cold, py_warm = solve_scvx(scn, off, backend="c"), solve_scvx(scn, backend="c")
+    py_its = [h.solver_iterations for h in py_cold.history]
+    c_its = [h.solver_iterations for h in cold.history]
+    assert len(py_its) == len(c_its)
+    assert max(abs(a - b) for a, b in zip(py_its, c_its, strict=True)) <= 1, (py_its, c_its)
+    assert ipm(py_warm) < 0.95 * ipm(py_cold), (ipm(py_warm), ipm(py_cold))
 
 
 def test_cli_cold_ipm_reaches_the_c_solve(tmp_path: Path) -> None:
@@ -633,22 +638,40 @@ def test_convergence_needs_zero_virtual_control(kw: dict) -> None:
             assert last.vc_norm1 <= st.vc_tol
 
 
-# vc_tol = 0: the cold-started IPM ends the second subproblem with the virtual control exactly
-# 0.0 (a warm-started one at 2.8e-14, which is "infeasible" against a zero tolerance)
-@pytest.mark.parametrize(
-    "kw", [{"iter_max": 3}, {"iter_max": 2, "vc_tol": 0.0, "socp_warm_start": False}]
-)
-def test_iteration_limit_diagnosis_is_pythons(kw: dict) -> None:
+def test_iteration_limit_diagnosis_is_pythons() -> None:
     """At the iteration limit with no virtual control left: max_iterations, "virtual control is
-    zero" (vc <= vc_tol, also with vc_tol = 0), as the Python reference says."""
+    zero", as the Python reference says."""
     scn = SCENARIOS["default"]
-    st = SCvxSettings(**kw)
+    st = SCvxSettings(iter_max=3)
     c = cguidance.solve_c(scn, st)
     py = SCvxSolver(scn, st, backend="c").solve()
     assert py.status == "max_iterations"
     assert c.status == py.status
-    head = f"not converged after {kw['iter_max']} iterations; virtual control is zero"
+    head = "not converged after 3 iterations; virtual control is zero"
     assert c.reason.startswith(head) and py.reason.startswith(head), (c.reason, py.reason)
+
+
+@pytest.mark.parametrize("loop", ["c", "python"])
+def test_iteration_limit_verdict_counts_vc_equal_to_vc_tol_as_zero(loop: str) -> None:
+    """vc <= vc_tol is "virtual control is zero", in C as in Python: stopped at the iteration
+    limit with its own last virtual control as vc_tol, each loop says max_iterations; with the
+    next smaller double, infeasible. (Each loop's own value: what is left of the virtual
+    control is rounding, 1e-14 or exactly 0, and the two loops' data differ in the last bits.
+    The verdict does not feed back into the path, so every run takes the same steps.)"""
+    scn = SCENARIOS["default"]
+    base = SCvxSettings(iter_max=2)
+
+    def solve(st: SCvxSettings) -> SCvxResult:
+        return cguidance.solve_c(scn, st) if loop == "c" else SCvxSolver(scn, st, "c").solve()
+
+    vc = [h for h in solve(base).history if h.accepted][-1].vc_norm1
+    assert 0.0 <= vc <= 1e-12
+    at = solve(base.replace(vc_tol=vc))
+    assert at.status == "max_iterations", at.reason
+    assert at.reason.startswith("not converged after 2 iterations; virtual control is zero")
+    if vc > 0.0:  # a tolerance below 0 is refused
+        below = solve(base.replace(vc_tol=math.nextafter(vc, 0.0)))
+        assert below.status == "infeasible", below.reason
 
 
 # rho0 near 1: every step is rejected until the radius reaches eta_lb, where the loop stops
