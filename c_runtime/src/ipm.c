@@ -203,7 +203,7 @@ static int factor(tscvx_workspace *ws) {
  * guidance call (26 Nov); refined in the certificate regime, a primal-infeasible problem
  * warm-started far from its certificate is still detected warm. The cost: where within its
  * tolerances the IPM stops depends more on rounding (two SCvx loops whose data differ in the
- * last bits end 1e-9 to 1e-8 apart in final mass, against 1e-11 with the refinement). */
+ * last bits end up to 1e-8 apart in final mass, against up to 1e-11 with the refinement). */
 static int constant_solve(tscvx_workspace *ws) {
     const tscvx_int n = ws->n, m = ws->m;
     const tscvx_float tau = ws->tau;
