@@ -194,16 +194,12 @@ static int factor(tscvx_workspace *ws) {
  *   den = -kappa/tau + xi'x1 + b'y1 + h'z1 - xhat'P xhat,  xi = c + 2 P xhat, xhat = x/tau.
  * (The equivalent -(kappa/tau + |x1 - xhat|_P^2 + |W z1|^2) is exact only for exact solves;
  * the direct form shares its rounding errors with the numerator, which cancel in dtau.)
- * Refined only where it weighs: (x1, y1, z1) enters each direction as dtau (x1, y1, z1),
- * small while tau converges (the error that matters near a solution, in the primal row, is
- * caught on the whole direction in direction()), dominant once tau collapses towards an
- * infeasibility certificate (kappa > tau, where the certificate tests apply). The sparse SOC
- * expansion's solves always need it, as in the predictor. Over the landing catalog skipping
- * it took the same subproblems and 0.5 % more IPM iterations, for 6 % fewer instructions per
- * guidance call (26 Nov); refined in the certificate regime, a primal-infeasible problem
- * warm-started far from its certificate is still detected warm. The cost: where within its
- * tolerances the IPM stops depends more on rounding (two SCvx loops whose data differ in the
- * last bits end up to 1e-8 apart in final mass, against up to 1e-11 with the refinement). */
+ * Refined only where it weighs: it enters each direction as dtau (x1, y1, z1), small while
+ * tau converges (near a solution the primal-row error that matters is caught on the whole
+ * direction, in direction()), dominant once tau collapses towards a certificate (kappa > tau).
+ * The sparse SOC expansion's solves always need it, as in the predictor. Saves 6 % of a
+ * guidance call; the cost, where within its tolerances the IPM stops depends more on
+ * rounding, is measured in the README ("The SOCP runtime's KKT methods"). */
 static int constant_solve(tscvx_workspace *ws) {
     const tscvx_int n = ws->n, m = ws->m;
     const tscvx_float tau = ws->tau;
