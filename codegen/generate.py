@@ -24,6 +24,7 @@ from guidance.model import (
     constraint_functions,
     dynamics_functions,
     foh_step_function,
+    transition_pattern,
 )
 
 BASENAME = "tscvx_model"
@@ -33,6 +34,20 @@ def functions() -> list[ca.Function]:
     f, jac = dynamics_functions()
     h, hjac = constraint_functions()
     return [f, jac, h, hjac, foh_step_function()]
+
+
+def pattern_macros() -> str:
+    """The structural pattern of A_k (guidance.model.transition_pattern) as C macros: the
+    flight subproblem writes the same entries as the Python one."""
+    pattern = transition_pattern()
+    rows = ",\\\n".join("    " + ", ".join(str(int(b)) for b in row) for row in pattern)
+    return (
+        "/* Structural nonzeros of A_k = Phi_A, row-major NX x NX (guidance.model."
+        "transition_pattern):\n * the discretization leaves every other entry 0.0 and the "
+        "subproblem leaves it out. */\n"
+        f"#define TSCVX_PHI_A_NNZ {int(pattern.sum())}\n"
+        f"#define TSCVX_PHI_A_PATTERN {{\\\n{rows}}}\n"
+    )
 
 
 def generate(outdir: Path) -> list[Path]:
@@ -63,6 +78,8 @@ def generate(outdir: Path) -> list[Path]:
     written = []
     for name in (f"{BASENAME}.c", f"{BASENAME}.h"):
         text = (tmp / name).read_text()
+        if name.endswith(".h"):
+            text += pattern_macros()
         target = outdir / name
         new = stamp + text
         if not target.exists() or target.read_text() != new:  # keep mtimes for make

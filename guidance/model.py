@@ -249,6 +249,26 @@ def foh_step_function() -> ca.Function:
     )
 
 
+@lru_cache(maxsize=1)
+def transition_pattern() -> np.ndarray:
+    """The structural nonzeros of A_k = Phi_A (NX x NX bool, row-major), for every parameter
+    vector. Phi_A' = sigma A(x(t)) Phi_A from Phi_A(0) = I, and A = df/dx has a fixed
+    structural pattern S (nothing depends on the position; the mass rate on the mass only),
+    so entry (i, j) can be nonzero only if j reaches i in the graph of S plus self-loops: the
+    transitive closure. The integration keeps every other entry an exact 0.0 (each of its
+    terms has an exact zero factor, the generated products skip S's structural zeros) as
+    long as the numbers are finite, which the discretization checks. The subproblem leaves
+    those 49 of 196 entries per interval out of its pattern."""
+    _, jac = dynamics_functions()
+    rows, cols = jac.sparsity_out(0).get_triplet()
+    step = np.eye(NX, dtype=np.int64)
+    step[rows, cols] = 1
+    reach = step.copy()
+    for _ in range(NX):  # paths of length <= NX cover every pair a path joins
+        reach = np.minimum(reach @ step, 1)
+    return reach.astype(bool)
+
+
 @lru_cache(maxsize=8)
 def discretization_function(substeps: int) -> ca.Function:
     """FOH discretization of one interval of normalized length dtau (paper Eq. (10)).
@@ -295,12 +315,23 @@ def discretize(
     expressions (build/libtscvx_gnc.so, equal to 1e-10 and about ten times faster).
 
     Returns x_next (N-1, 14), A (N-1, 14, 14), Bm (N-1, 14, 3), Bp (N-1, 14, 3),
-    Sigma (N-1, 14), z (N-1, 14). Raises ModelEvaluationError if any of them is not finite.
+    Sigma (N-1, 14), z (N-1, 14). Raises ModelEvaluationError if any of them is not finite,
+    or if A has a nonzero outside :func:`transition_pattern` (which the subproblem drops).
     """
     if engine == "c":
         from guidance import cgnc
 
-        return cgnc.discretize_all(x, u, sigma, param_vector(params), substeps)
+        disc = cgnc.discretize_all(x, u, sigma, param_vector(params), substeps)
+    else:
+        disc = _discretize_casadi(x, u, sigma, params, substeps)
+    if np.any(disc["A"][:, ~transition_pattern()]):
+        raise ModelEvaluationError("the FOH discretization left its structural pattern")
+    return disc
+
+
+def _discretize_casadi(
+    x: np.ndarray, u: np.ndarray, sigma: float, params: Params, substeps: int
+) -> dict[str, np.ndarray]:
     N = x.shape[0]
     fun = _mapped_discretization(substeps, N - 1)
     out = fun(x[:-1].T, u[:-1].T, u[1:].T, sigma, 1.0 / (N - 1), param_vector(params))

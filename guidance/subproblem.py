@@ -23,6 +23,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from guidance.conic import ConeKind, ConicProblem
+from guidance.model import transition_pattern
 from guidance.params import IM, IR, IV, IW, NC, NU, NX, Scenario
 
 # Cone dimension of each path constraint (mask order); 1 = a linear row.
@@ -162,10 +163,10 @@ class SubproblemTemplate:
         nI = N - 1
         k = np.arange(nI)
         # Dynamics (zero cone), 14 rows per interval; entries in this order per interval:
-        # x_{k+1} (14), A_hat (14x14), Bm_hat (14x3), Bp_hat (14x3), Sigma_hat (14), nu (14).
+        # x_{k+1} (14), A_hat (its structural nonzeros, row-major), Bm_hat (14x3),
+        # Bp_hat (14x3), Sigma_hat (14), nu (14).
         eye_r = np.arange(NX)
-        rr = np.repeat(eye_r, NX)  # row-major over (row, col) of a 14x14 block
-        cc = np.tile(eye_r, NX)
+        rr, cc = np.nonzero(transition_pattern())  # row-major over (row, col)
         ru = np.repeat(eye_r, NU)
         cu = np.tile(np.arange(NU), NX)
         rows_d, cols_d = [], []
@@ -181,7 +182,6 @@ class SubproblemTemplate:
                 L.inu + NX * kk + eye_r,
             ]
         self.r_dyn = R.add("zero", np.concatenate(rows_d), np.concatenate(cols_d), NX * nI)
-        self.nnz_dyn_per_interval = NX * (1 + NX + 2 * NU + 2)
         # Boundary conditions (zero cone): full initial state, final r, v, omega, q.
         self.r_x0 = R.add("zero", eye_r, L.x_index(0, eye_r), NX)
         fin = list(range(0, 6)) + list(range(10, 13))
@@ -314,9 +314,9 @@ class SubproblemTemplate:
         Sh = -(inv[None, :] * S * Ss)
         nI = N - 1
         ones = np.ones((nI, NX))
+        Ah = Ah[:, transition_pattern()]  # its structural nonzeros, row-major
         dyn = np.concatenate(
-            [ones, Ah.reshape(nI, -1), Bmh.reshape(nI, -1), Bph.reshape(nI, -1), Sh, -ones],
-            axis=1,
+            [ones, Ah, Bmh.reshape(nI, -1), Bph.reshape(nI, -1), Sh, -ones], axis=1
         )
         vals.append(dyn.ravel())
         b[self.r_dyn : self.r_dyn + NX * nI] = (inv * (A @ cx + zk - cx)).ravel()

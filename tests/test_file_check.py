@@ -133,14 +133,14 @@ def test_a_node_below_the_thrust_minimum_fails(written: Path, tmp_path: Path) ->
 
 def test_the_tolerances_come_from_the_command_line(written: Path, capsys) -> None:
     """The reference landing lands 2.3e-4 off (the solvers' discretization error) and meets
-    its path constraints to Clarabel's 6e-11: tighter tolerances fail it."""
+    its path constraints to about Clarabel's tolerance (1.0e-9): tighter tolerances fail it."""
     assert main(["verify", str(written), "--tol-landing", "1e-5"]) == 1
     assert "landing position |r(t_f) - r_f|        2.28e-04      1e-05  FAIL" in (
         capsys.readouterr().out
     )
     assert main(["verify", str(written), "--tol-nodes", "1e-5"]) == 1
     assert main(["verify", str(written), "--tol-path", "1e-12"]) == 1
-    assert main(["verify", str(written), "--tol-path", "1e-9"]) == 0
+    assert main(["verify", str(written), "--tol-path", "1e-8"]) == 0
 
 
 def test_a_pinned_attitude_is_measured_against_q_f_either_sign() -> None:

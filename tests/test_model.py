@@ -160,3 +160,25 @@ def test_foh_interval_sensitivities_match_scipy(samples) -> None:
     np.testing.assert_allclose(d["Sigma"][0], S_fd, atol=1e-7)
     # B-_k and B+_k weigh the two ends differently (the hold is not symmetric in time)
     assert np.abs(d["Bm"][0] - d["Bp"][0]).max() > 1e-4
+
+
+def test_transition_pattern_is_the_support_of_a_k() -> None:
+    """A_k's entries off transition_pattern are exact zeros, and each entry on it is nonzero
+    somewhere, for parameters without the default vehicle's special values (its centre of
+    pressure at the centre of mass and J2 = J3 zero further entries, which the pattern keeps)."""
+    from guidance.model import transition_pattern
+
+    pattern = transition_pattern()
+    p = param_vector(P)
+    p[1:4] = (0.001, 0.012, 0.008)  # J, all different
+    p[7:10] = (0.05, 0.02, -0.03)  # r_cp off the centre of mass
+    F = discretization_function(2)
+    rng = np.random.default_rng(5)
+    support = np.zeros_like(pattern)
+    for _ in range(8):
+        x, u = random_state(rng), rng.normal(size=3) + np.array([3.0, 0.0, 0.0])
+        A = np.asarray(F(x, u, u + 0.1 * rng.normal(size=3), 6.0, 1 / 49, p)[1])
+        assert np.all(A[~pattern] == 0.0)
+        support |= A != 0.0
+    np.testing.assert_array_equal(support, pattern)
+    assert pattern.sum() == 147  # position reaches no other state, mass rate only the mass

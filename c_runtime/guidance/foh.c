@@ -7,6 +7,9 @@
 
 #include "tscvx_model.h"
 
+const unsigned char pdg_phi_a_pattern[PDG_NX * PDG_NX] = TSCVX_PHI_A_PATTERN;
+const int pdg_phi_a_nnz = TSCVX_PHI_A_NNZ;
+
 static void initial_augmented_state(const double *x_k, double *P)
 {
     int i;
@@ -76,6 +79,15 @@ int pdg_foh_interval(const double *x_k, const double *u_k, const double *u_k1, d
     for (i = 0; i < PDG_NAUG; ++i) {
         if (!isfinite(aug[i])) {
             return -2;
+        }
+    }
+    /* Exact zeros off the structural pattern (they are, for finite numbers): the subproblem
+     * leaves those entries out */
+    for (i = 0; i < PDG_NX; ++i) {
+        for (j = 0; j < PDG_NX; ++j) {
+            if (!pdg_phi_a_pattern[PDG_NX * i + j] && aug[PDG_AUG_A + j * PDG_NX + i] != 0.0) {
+                return -2;
+            }
         }
     }
     return 0;

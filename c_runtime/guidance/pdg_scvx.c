@@ -300,7 +300,7 @@ static void problem_dims(pdg_workspace *w, int N, int roll_free, const pdg_setti
     em.p = w->p;
     pdg_emit(&em, &w->lay, w->roll_free, NULL);
     w->nnz = em.cnt;
-    w->nnz_A = NX * (N - 1) * (1 + NX + 2 * NU + 2) + NX + 9 + (w->roll_free ? 2 : 4);
+    w->nnz_A = (N - 1) * (NX * (1 + 2 * NU + 2) + pdg_phi_a_nnz) + NX + 9 + (w->roll_free ? 2 : 4);
     w->nnz_G = w->nnz - w->nnz_A;
     w->g_mass = w->l - 2 * N; /* rows of G: mass block, then T_min, then the cones */
     w->g_tmin = w->l - N;
