@@ -19,8 +19,10 @@ import casadi as ca
 from guidance.model import (
     CONSTRAINT_PARAM_NAMES,
     N_AUG,
+    N_PATTERNS,
     NP,
     P_NAMES,
+    PATTERN_PARAM_GROUPS,
     constraint_functions,
     dynamics_functions,
     foh_step_function,
@@ -37,16 +39,31 @@ def functions() -> list[ca.Function]:
 
 
 def pattern_macros() -> str:
-    """The structural pattern of A_k (guidance.model.transition_pattern) as C macros: the
-    flight subproblem writes the same entries as the Python one."""
-    pattern = transition_pattern()
-    rows = ",\\\n".join("    " + ", ".join(str(int(b)) for b in row) for row in pattern)
+    """A_k's structural patterns (guidance.model.transition_pattern, one per pattern_index)
+    and the index of a parameter vector, as C: the flight subproblem writes the entries the
+    Python one writes."""
+    tables = []
+    for index in range(N_PATTERNS):
+        rows = ",\\\n".join(
+            "    " + ", ".join(str(int(b)) for b in row) for row in transition_pattern(index)
+        )
+        tables.append(f"  {{\\\n{rows}}}")
+    nnz = ", ".join(str(int(transition_pattern(i).sum())) for i in range(N_PATTERNS))
+    groups = " | ".join(
+        f"(({' && '.join(f'p[{i}] == 0.0' for i in group)}) ? {1 << g} : 0)"
+        for g, group in enumerate(PATTERN_PARAM_GROUPS)
+    )
+    table_sep = ",\\\n"
     return (
         "/* Structural nonzeros of A_k = Phi_A, row-major NX x NX (guidance.model."
-        "transition_pattern):\n * the discretization leaves every other entry 0.0 and the "
-        "subproblem leaves it out. */\n"
-        f"#define TSCVX_PHI_A_NNZ {int(pattern.sum())}\n"
-        f"#define TSCVX_PHI_A_PATTERN {{\\\n{rows}}}\n"
+        "transition_pattern),\n * one pattern per tscvx_phi_a_pattern_index(p): the "
+        "discretization leaves every other\n * entry 0.0 and the subproblem leaves it out. */\n"
+        f"#define TSCVX_PHI_A_NPATTERNS {N_PATTERNS}\n"
+        f"#define TSCVX_PHI_A_NNZ {{{nnz}}}\n"
+        f"#define TSCVX_PHI_A_PATTERNS {{\\\n{table_sep.join(tables)}}}\n"
+        "static inline int tscvx_phi_a_pattern_index(const casadi_real *p) {\n"
+        f"  return {groups};\n"
+        "}\n"
     )
 
 

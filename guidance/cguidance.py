@@ -32,6 +32,7 @@ import numpy as np
 
 from guidance.csocp import SOLVE_STATUS
 from guidance.errors import InputError
+from guidance.model import param_vector, pattern_index
 from guidance.params import NC, NU, NX, Params, Scenario, SCvxSettings
 from guidance.scenario import ScenarioError
 from guidance.scvx import IterationRecord, SCvxResult
@@ -128,9 +129,9 @@ def library() -> ct.CDLL:
     sz = ct.c_size_t
     lib.pdg_default_settings.argtypes = [ct.POINTER(_Settings)]
     lib.pdg_default_scenario.argtypes = [ct.POINTER(_Scenario)]
-    lib.pdg_workspace_size.argtypes = [_i, _i, ct.POINTER(_Settings), ct.c_void_p, sz,
-                                       ct.POINTER(sz)]  # fmt: skip
-    lib.pdg_setup.argtypes = [ct.POINTER(ct.c_void_p), ct.c_void_p, sz, _i, _i,
+    lib.pdg_workspace_size.argtypes = [ct.POINTER(_Params), ct.POINTER(_Settings), ct.c_void_p,
+                                       sz, ct.POINTER(sz)]  # fmt: skip
+    lib.pdg_setup.argtypes = [ct.POINTER(ct.c_void_p), ct.c_void_p, sz, ct.POINTER(_Params),
                               ct.POINTER(_Settings)]  # fmt: skip
     lib.pdg_solve.argtypes = [ct.c_void_p, ct.POINTER(_Scenario), ct.POINTER(_Options),
                               ct.POINTER(_Result)]  # fmt: skip
@@ -193,11 +194,13 @@ def c_settings(settings: SCvxSettings | None = None, **socp: float | int) -> _Se
 
 
 class Workspace:
-    """One arena holding the whole guidance workspace for (N, terminal condition, settings)."""
+    """One arena holding the whole guidance workspace for a vehicle (its N, terminal condition
+    and A_k pattern, model.vehicle_pattern) and settings."""
 
-    def __init__(self, N: int, final_roll_free: bool, settings: _Settings) -> None:
+    def __init__(self, vehicle: Params, settings: _Settings) -> None:
         lib = library()
-        self.lib, self.N, self.settings = lib, N, settings
+        self.lib, self.N, self.settings = lib, vehicle.N, settings
+        cv = c_scenario(Scenario(params=vehicle)).params
         msg = ct.create_string_buffer(MESSAGE_LEN)
         if lib.pdg_check_settings(ct.byref(settings), msg) != 0:
             raise ValueError(msg.value.decode())
@@ -205,8 +208,8 @@ class Workspace:
         scratch = None
         for _ in range(4):  # bounded: pattern size, then analysis size, then exact size
             buf = (ct.c_char * max(need.value, 1))() if need.value else None
-            st = lib.pdg_workspace_size(N, int(final_roll_free), ct.byref(settings), buf,
-                                        need.value, ct.byref(need))  # fmt: skip
+            st = lib.pdg_workspace_size(ct.byref(cv), ct.byref(settings), buf, need.value,
+                                        ct.byref(need))  # fmt: skip
             scratch = buf
             if st == 0:
                 break
@@ -216,8 +219,8 @@ class Workspace:
         self.arena_bytes = need.value
         self.arena = (ct.c_char * self.arena_bytes)()
         self.ws = ct.c_void_p()
-        st = lib.pdg_setup(ct.byref(self.ws), self.arena, self.arena_bytes, N,
-                           int(final_roll_free), ct.byref(settings))  # fmt: skip
+        st = lib.pdg_setup(ct.byref(self.ws), self.arena, self.arena_bytes, ct.byref(cv),
+                           ct.byref(settings))  # fmt: skip
         if st != 0:
             raise RuntimeError(f"pdg_setup: {lib.pdg_setup_status_message(st).decode()}")
 
@@ -237,9 +240,10 @@ _WORKSPACES: dict[tuple, Workspace] = {}
 def workspace(scenario: Scenario, settings: SCvxSettings | None = None,
               **socp: float | int) -> Workspace:  # fmt: skip
     st = c_settings(settings, **socp)
-    key = (scenario.params.N, scenario.params.final_roll_free, bytes(st))
+    p = scenario.params
+    key = (p.N, p.final_roll_free, pattern_index(param_vector(p)), bytes(st))
     if key not in _WORKSPACES:
-        _WORKSPACES[key] = Workspace(scenario.params.N, scenario.params.final_roll_free, st)
+        _WORKSPACES[key] = Workspace(p, st)
     return _WORKSPACES[key]
 
 

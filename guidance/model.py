@@ -249,24 +249,59 @@ def foh_step_function() -> ca.Function:
     )
 
 
-@lru_cache(maxsize=1)
-def transition_pattern() -> np.ndarray:
-    """The structural nonzeros of A_k = Phi_A (NX x NX bool, row-major), for every parameter
-    vector. Phi_A' = sigma A(x(t)) Phi_A from Phi_A(0) = I, and A = df/dx has a fixed
-    structural pattern S (nothing depends on the position; the mass rate on the mass only),
-    so entry (i, j) can be nonzero only if j reaches i in the graph of S plus self-loops: the
-    transitive closure. The integration keeps every other entry an exact 0.0 (each of its
-    terms has an exact zero factor, the generated products skip S's structural zeros) as
-    long as the numbers are finite, which the discretization checks. The subproblem leaves
-    those 49 of 196 entries per interval out of its pattern."""
-    _, jac = dynamics_functions()
-    rows, cols = jac.sparsity_out(0).get_triplet()
+# The parameters whose value zero removes entries from A_k's structural pattern, in groups
+# that act together: the centre of pressure r_cp_B (the aerodynamic torque r_cp x A_B; one or
+# two components zero remove none). Any other parameter zero removes no entry of A_k's
+# pattern, or cannot be zero (J, aero_coeff: the scenario check wants them positive);
+# test_model checks both claims.
+PATTERN_PARAM_GROUPS = ((7, 8, 9),)
+N_PATTERNS = 1 << len(PATTERN_PARAM_GROUPS)
+
+
+def pattern_index(p: np.ndarray) -> int:
+    """Which of the N_PATTERNS patterns of A_k holds for the parameter vector p: bit g is set
+    when every parameter of group g is exactly zero."""
+    return sum(
+        1 << g for g, group in enumerate(PATTERN_PARAM_GROUPS) if all(p[i] == 0.0 for i in group)
+    )
+
+
+@lru_cache(maxsize=N_PATTERNS)
+def transition_pattern(index: int = 0) -> np.ndarray:
+    """The structural nonzeros of A_k = Phi_A (NX x NX bool, row-major) for every parameter
+    vector of pattern_index ``index`` (0: every parameter vector): pattern_with_zeros of the
+    index's zero parameters. The subproblem leaves the other entries out of its pattern: 49
+    of 196 per interval in general, 89 with r_cp_B = 0."""
+    return pattern_with_zeros(
+        frozenset(
+            i for g, group in enumerate(PATTERN_PARAM_GROUPS) if index >> g & 1 for i in group
+        )
+    )
+
+
+@lru_cache(maxsize=32)
+def pattern_with_zeros(zero: frozenset[int]) -> np.ndarray:
+    """The entries of A_k = Phi_A that can be nonzero when the parameters ``zero`` are 0.
+    Phi_A' = sigma A(x(t)) Phi_A from Phi_A(0) = I, and A = df/dx has a structural pattern S
+    (nothing depends on the position; the mass rate on the mass only; built here with the
+    zero parameters as constant zeros, which CasADi folds away), so entry (i, j) can be
+    nonzero only if j reaches i in the graph of S plus self-loops: the transitive closure.
+    The integration keeps every other entry an exact 0.0 (each of its terms has an exact zero
+    factor) as long as the numbers are finite, which the discretization checks."""
+    x, u, p = ca.SX.sym("x", NX), ca.SX.sym("u", NU), ca.SX.sym("p", NP)
+    p_const = ca.vertcat(*(0 if i in zero else p[i] for i in range(NP)))
+    rows, cols = ca.jacobian(dynamics_expr(x, u, p_const), x).sparsity().get_triplet()
     step = np.eye(NX, dtype=np.int64)
     step[rows, cols] = 1
     reach = step.copy()
     for _ in range(NX):  # paths of length <= NX cover every pair a path joins
         reach = np.minimum(reach @ step, 1)
     return reach.astype(bool)
+
+
+def vehicle_pattern(params: Params) -> np.ndarray:
+    """A_k's structural nonzeros for this vehicle (transition_pattern of its pattern_index)."""
+    return transition_pattern(pattern_index(param_vector(params)))
 
 
 @lru_cache(maxsize=8)
@@ -316,7 +351,7 @@ def discretize(
 
     Returns x_next (N-1, 14), A (N-1, 14, 14), Bm (N-1, 14, 3), Bp (N-1, 14, 3),
     Sigma (N-1, 14), z (N-1, 14). Raises ModelEvaluationError if any of them is not finite,
-    or if A has a nonzero outside :func:`transition_pattern` (which the subproblem drops).
+    or if A has a nonzero outside :func:`vehicle_pattern` (which the subproblem drops).
     """
     if engine == "c":
         from guidance import cgnc
@@ -324,7 +359,7 @@ def discretize(
         disc = cgnc.discretize_all(x, u, sigma, param_vector(params), substeps)
     else:
         disc = _discretize_casadi(x, u, sigma, params, substeps)
-    if np.any(disc["A"][:, ~transition_pattern()]):
+    if np.any(disc["A"][:, ~vehicle_pattern(params)]):
         raise ModelEvaluationError("the FOH discretization left its structural pattern")
     return disc
 

@@ -23,7 +23,7 @@ from guidance.conic import ConicProblem, ConicSolution
 from guidance.constraints import constraint_scales, path_constraint_values, tight_mask
 from guidance.errors import ModelEvaluationError
 from guidance.guess import initial_guess
-from guidance.model import discretize
+from guidance.model import discretize, vehicle_pattern
 from guidance.params import IM, NC, NU, NX, Scenario, SCvxSettings
 from guidance.subproblem import (
     TR_PAIRS,
@@ -117,7 +117,9 @@ class SCvxSolver:
     def template(self, mask: np.ndarray | None) -> SubproblemTemplate:
         key = b"full" if mask is None else np.packbits(np.asarray(mask, bool)).tobytes()
         if key not in self._templates:
-            self._templates[key] = SubproblemTemplate(self.p.N, self.p.final_roll_free, mask)
+            self._templates[key] = SubproblemTemplate(
+                self.p.N, self.p.final_roll_free, mask, vehicle_pattern(self.p)
+            )
         return self._templates[key]
 
     def _discretize(self, z: np.ndarray) -> dict[str, np.ndarray]:

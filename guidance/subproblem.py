@@ -142,10 +142,19 @@ class SubproblemTemplate:
 
     ``mask`` (7N booleans, node-major bit 7k + c) selects which path constraints enter; the
     full problem uses all ones. Constraint 6 (T_min) is always kept (DESIGN.md).
+    ``a_pattern``: the entries of A_k the dynamics rows carry (model.vehicle_pattern of the
+    vehicle; the default, transition_pattern(), holds for every vehicle).
     """
 
-    def __init__(self, N: int, final_roll_free: bool, mask: np.ndarray | None = None) -> None:
+    def __init__(
+        self,
+        N: int,
+        final_roll_free: bool,
+        mask: np.ndarray | None = None,
+        a_pattern: np.ndarray | None = None,
+    ) -> None:
         self.N = N
+        self.a_pattern = transition_pattern() if a_pattern is None else a_pattern
         self.lay = Layout(N)
         self.final_roll_free = final_roll_free
         mask = np.ones(NC * N, dtype=bool) if mask is None else np.asarray(mask, dtype=bool)
@@ -166,7 +175,7 @@ class SubproblemTemplate:
         # x_{k+1} (14), A_hat (its structural nonzeros, row-major), Bm_hat (14x3),
         # Bp_hat (14x3), Sigma_hat (14), nu (14).
         eye_r = np.arange(NX)
-        rr, cc = np.nonzero(transition_pattern())  # row-major over (row, col)
+        rr, cc = np.nonzero(self.a_pattern)  # row-major over (row, col)
         ru = np.repeat(eye_r, NU)
         cu = np.tile(np.arange(NU), NX)
         rows_d, cols_d = [], []
@@ -314,7 +323,7 @@ class SubproblemTemplate:
         Sh = -(inv[None, :] * S * Ss)
         nI = N - 1
         ones = np.ones((nI, NX))
-        Ah = Ah[:, transition_pattern()]  # its structural nonzeros, row-major
+        Ah = Ah[:, self.a_pattern]  # its structural nonzeros, row-major
         dyn = np.concatenate(
             [ones, Ah, Bmh.reshape(nI, -1), Bph.reshape(nI, -1), Sh, -ones], axis=1
         )

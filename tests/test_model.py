@@ -162,16 +162,25 @@ def test_foh_interval_sensitivities_match_scipy(samples) -> None:
     assert np.abs(d["Bm"][0] - d["Bp"][0]).max() > 1e-4
 
 
-def test_transition_pattern_is_the_support_of_a_k() -> None:
-    """A_k's entries off transition_pattern are exact zeros, and each entry on it is nonzero
-    somewhere, for parameters without the default vehicle's special values (its centre of
-    pressure at the centre of mass and J2 = J3 zero further entries, which the pattern keeps)."""
-    from guidance.model import transition_pattern
-
-    pattern = transition_pattern()
+def _generic_params(r_cp_zero: bool) -> np.ndarray:
+    """A parameter vector without the default vehicle's special values (J2 = J3 and r_cp_B = 0
+    zero further entries), with r_cp_B zero if asked."""
     p = param_vector(P)
-    p[1:4] = (0.001, 0.012, 0.008)  # J, all different
-    p[7:10] = (0.05, 0.02, -0.03)  # r_cp off the centre of mass
+    p[1:4] = (0.001, 0.012, 0.008)
+    p[7:10] = 0.0 if r_cp_zero else (0.05, 0.02, -0.03)
+    return p
+
+
+@pytest.mark.parametrize("index", [0, 1])
+def test_transition_pattern_is_the_support_of_a_k(index: int) -> None:
+    """Each pattern of A_k is its support: the entries off it are exact zeros, and each entry
+    on it is nonzero somewhere (numbers without special values), for the vectors of its
+    pattern_index."""
+    from guidance.model import pattern_index, transition_pattern
+
+    p = _generic_params(r_cp_zero=index == 1)
+    assert pattern_index(p) == index
+    pattern = transition_pattern(index)
     F = discretization_function(2)
     rng = np.random.default_rng(5)
     support = np.zeros_like(pattern)
@@ -181,4 +190,17 @@ def test_transition_pattern_is_the_support_of_a_k() -> None:
         assert np.all(A[~pattern] == 0.0)
         support |= A != 0.0
     np.testing.assert_array_equal(support, pattern)
-    assert pattern.sum() == 147  # position reaches no other state, mass rate only the mass
+
+
+def test_only_the_pattern_groups_change_the_pattern() -> None:
+    """PATTERN_PARAM_GROUPS is complete: no other parameter that may be zero (J and aero_coeff
+    must be positive), and no part of r_cp_B, removes an entry of the general pattern."""
+    from guidance.model import N_PATTERNS, NP, pattern_with_zeros, transition_pattern
+
+    general = transition_pattern(0)
+    assert general.sum() == 147  # position reaches no other state, mass rate only the mass
+    for i in set(range(NP)) - {1, 2, 3, 7, 8, 9, 12}:
+        np.testing.assert_array_equal(pattern_with_zeros(frozenset({i})), general)
+    for part in ({7}, {8}, {9}, {7, 8}, {7, 9}, {8, 9}):
+        np.testing.assert_array_equal(pattern_with_zeros(frozenset(part)), general)
+    assert N_PATTERNS == 2 and transition_pattern(1).sum() == 107

@@ -88,8 +88,7 @@ int main(int argc, char **argv)
     for (tries = 0; tries < 4 && s == PDG_SETUP_SCRATCH_TOO_SMALL; ++tries) {
         free(arena);
         arena = need ? malloc(need) : NULL;
-        s = pdg_workspace_size(scn.params.N, scn.params.final_roll_free, &st, arena, need,
-                               &need);
+        s = pdg_workspace_size(&scn.params, &st, arena, need, &need);
     }
     free(arena);
     if (s != PDG_SETUP_OK || !(arena = malloc(need))) {
@@ -97,7 +96,7 @@ int main(int argc, char **argv)
         return 1;
     }
     memset(arena, 0, need);
-    s = pdg_setup(&ws, arena, need, scn.params.N, scn.params.final_roll_free, &st);
+    s = pdg_setup(&ws, arena, need, &scn.params, &st);
     if (s != PDG_SETUP_OK) {
         fprintf(stderr, "pdg_setup: %s\n", pdg_setup_status_message(s));
         return 1;

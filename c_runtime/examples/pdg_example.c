@@ -75,7 +75,7 @@ int main(int argc, char **argv)
             fprintf(stderr, "out of memory\n");
             return 1;
         }
-        s = pdg_workspace_size(N, scn.params.final_roll_free, &st, scratch, need, &need);
+        s = pdg_workspace_size(&scn.params, &st, scratch, need, &need);
     }
     free(scratch);
     if (s != PDG_SETUP_OK) {
@@ -88,7 +88,7 @@ int main(int argc, char **argv)
         fprintf(stderr, "out of memory\n");
         return 1;
     }
-    s = pdg_setup(&ws, arena, need, N, scn.params.final_roll_free, &st);
+    s = pdg_setup(&ws, arena, need, &scn.params, &st);
     if (s != PDG_SETUP_OK) {
         fprintf(stderr, "pdg_setup: %s\n", pdg_setup_status_message(s));
         free(arena);

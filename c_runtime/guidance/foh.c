@@ -7,8 +7,18 @@
 
 #include "tscvx_model.h"
 
-const unsigned char pdg_phi_a_pattern[PDG_NX * PDG_NX] = TSCVX_PHI_A_PATTERN;
-const int pdg_phi_a_nnz = TSCVX_PHI_A_NNZ;
+static const unsigned char phi_a_patterns[TSCVX_PHI_A_NPATTERNS][PDG_NX * PDG_NX] =
+    TSCVX_PHI_A_PATTERNS;
+static const int phi_a_nnz[TSCVX_PHI_A_NPATTERNS] = TSCVX_PHI_A_NNZ;
+
+const unsigned char *pdg_phi_a_pattern(const double *p, int *nnz)
+{
+    const int i = tscvx_phi_a_pattern_index(p);
+    if (nnz) {
+        *nnz = phi_a_nnz[i];
+    }
+    return phi_a_patterns[i];
+}
 
 static void initial_augmented_state(const double *x_k, double *P)
 {
@@ -28,6 +38,7 @@ int pdg_foh_interval(const double *x_k, const double *u_k, const double *u_k1, d
 {
     const double *arg[tscvx_foh_step_SZ_ARG];
     double *res[tscvx_foh_step_SZ_RES];
+    const unsigned char *pattern;
     double *cur = aug;
     double *next = work;
     double s = 0.0;
@@ -83,9 +94,10 @@ int pdg_foh_interval(const double *x_k, const double *u_k, const double *u_k1, d
     }
     /* Exact zeros off the structural pattern (they are, for finite numbers): the subproblem
      * leaves those entries out */
+    pattern = pdg_phi_a_pattern(p, NULL);
     for (i = 0; i < PDG_NX; ++i) {
         for (j = 0; j < PDG_NX; ++j) {
-            if (!pdg_phi_a_pattern[PDG_NX * i + j] && aug[PDG_AUG_A + j * PDG_NX + i] != 0.0) {
+            if (!pattern[PDG_NX * i + j] && aug[PDG_AUG_A + j * PDG_NX + i] != 0.0) {
                 return -2;
             }
         }

@@ -24,16 +24,17 @@
 #define PDG_AUG_BP (PDG_AUG_BM + PDG_NX * PDG_NU)
 #define PDG_AUG_S (PDG_AUG_BP + PDG_NX * PDG_NU)
 
-/* The structural nonzeros of A_k, row-major (guidance.model.transition_pattern, generated):
- * every other entry is 0.0 for finite numbers, and the subproblem leaves it out. */
-extern const unsigned char pdg_phi_a_pattern[PDG_NX * PDG_NX];
-extern const int pdg_phi_a_nnz;
+/* The structural nonzeros of A_k for the parameter vector p (PDG_NP), row-major NX x NX, and
+ * their count in *nnz (may be NULL): guidance.model.vehicle_pattern, generated. Every other
+ * entry is 0.0 for finite numbers, and the subproblem leaves it out. Parameter vectors of one
+ * pattern get the same pointer. */
+const unsigned char *pdg_phi_a_pattern(const double *p, int *nnz);
 
 /* Discretizes one interval. `aug` (PDG_NAUG) receives x(dtau), A_k, B-_k, B+_k, Sigma_k;
  * `z` (PDG_NX) the defect term; `work` must hold PDG_NAUG doubles. Returns 0, or -1 for a bad
  * argument (NULL pointer, substeps outside [1, PDG_MAX_SUBSTEPS], dtau <= 0, sigma <= 0) and
  * -2 when the model evaluation fails, produces a non-finite number or a nonzero off
- * pdg_phi_a_pattern. */
+ * pdg_phi_a_pattern(p). */
 int pdg_foh_interval(const double *x_k, const double *u_k, const double *u_k1, double sigma,
                      double dtau, const double *p, int substeps, double *aug, double *z,
                      double *work);

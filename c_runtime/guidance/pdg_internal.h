@@ -49,6 +49,7 @@ typedef struct {
     const int *dest; /* mode 2: entry -> slot (A slot, or nnz_A + G slot) */
     double *Ax, *Gx; /* mode 2 */
     int nnz_A;
+    const unsigned char *phi_a; /* the entries of A_k the dynamics rows carry (foh.h) */
 } pdg_emitter;
 
 /* Values that the emission needs (mode 2). */
@@ -70,6 +71,8 @@ typedef struct {
 struct pdg_workspace {
     unsigned magic;
     int N, roll_free;
+    const unsigned char *phi_a; /* A_k's structural pattern for the vehicle (foh.h) */
+    int phi_a_nnz;
     pdg_settings st;
     pdg_layout lay;
     int n, p, m, nnz_A, nnz_G, nnz;

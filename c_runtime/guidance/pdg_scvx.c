@@ -282,13 +282,18 @@ static int build_csc(pdg_workspace *ws, const int *row, const int *col, int *ent
 
 enum { BUILD_SIZE, BUILD_SETUP };
 
-/* Sizes of the subproblem for N and the terminal condition (no memory needed). */
-static void problem_dims(pdg_workspace *w, int N, int roll_free, const pdg_settings *st)
+/* Sizes of the subproblem for the vehicle's N, terminal condition and A_k pattern (no memory
+ * needed). */
+static void problem_dims(pdg_workspace *w, const pdg_params *vehicle, const pdg_settings *st)
 {
+    const int N = vehicle->N;
+    double pvec[PDG_NP];
     pdg_emitter em;
     memset(w, 0, sizeof *w);
     w->N = N;
-    w->roll_free = roll_free ? 1 : 0;
+    w->roll_free = vehicle->final_roll_free ? 1 : 0;
+    pdg_param_vector(vehicle, pvec);
+    w->phi_a = pdg_phi_a_pattern(pvec, &w->phi_a_nnz);
     w->st = *st;
     pdg_layout_init(&w->lay, N);
     w->n = w->lay.n;
@@ -298,9 +303,10 @@ static void problem_dims(pdg_workspace *w, int N, int roll_free, const pdg_setti
     em.mode = 0;
     em.cnt = 0;
     em.p = w->p;
+    em.phi_a = w->phi_a;
     pdg_emit(&em, &w->lay, w->roll_free, NULL);
     w->nnz = em.cnt;
-    w->nnz_A = (N - 1) * (NX * (1 + 2 * NU + 2) + pdg_phi_a_nnz) + NX + 9 + (w->roll_free ? 2 : 4);
+    w->nnz_A = (N - 1) * (NX * (1 + 2 * NU + 2) + w->phi_a_nnz) + NX + 9 + (w->roll_free ? 2 : 4);
     w->nnz_G = w->nnz - w->nnz_A;
     w->g_mass = w->l - 2 * N; /* rows of G: mass block, then T_min, then the cones */
     w->g_tmin = w->l - N;
@@ -357,7 +363,7 @@ static void claim_arrays(pdg_workspace *t, arena *a)
 /* The one set-up path. BUILD_SIZE stops after the SOCP's analysis and returns the arena size
  * in *need; BUILD_SETUP builds the workspace. When the memory is short, *need is a size that
  * gets further (the exact one once the pattern fits). */
-static pdg_setup_status build(void *mem, size_t bytes, int N, int roll_free,
+static pdg_setup_status build(void *mem, size_t bytes, const pdg_params *vehicle,
                               const pdg_settings *st, int mode, pdg_workspace **out,
                               size_t *need)
 {
@@ -371,11 +377,11 @@ static pdg_setup_status build(void *mem, size_t bytes, int N, int roll_free,
     size_t mark, skip = 0, nscr = 0, nsocp = 0, socp_at, total;
     int *row, *col, *ent, e, i, n_eq = 0, l, nsoc;
 
-    if (!st || !need) {
+    if (!vehicle || !st || !need) {
         return PDG_SETUP_NULL_ARGUMENT;
     }
     *need = 0;
-    if (N < PDG_N_MIN || N > PDG_N_MAX) {
+    if (vehicle->N < PDG_N_MIN || vehicle->N > PDG_N_MAX) {
         return PDG_SETUP_BAD_SIZE;
     }
     if (pdg_check_settings(st, NULL) != PDG_SETUP_OK) {
@@ -390,7 +396,7 @@ static pdg_setup_status build(void *mem, size_t bytes, int N, int roll_free,
     a.overflow = 0;
 
     /* 1. the workspace, its arrays and the temporaries of the pattern build */
-    problem_dims(&dims, N, roll_free, st);
+    problem_dims(&dims, vehicle, st);
     ws = (pdg_workspace *)take(&a, 1, sizeof(pdg_workspace));
     if (ws) {
         *ws = dims;
@@ -407,10 +413,11 @@ static pdg_setup_status build(void *mem, size_t bytes, int N, int roll_free,
         return short_memory;
     }
     /* 2. the sparsity pattern, fixed from here on */
-    pdg_cone_dims(N, &l, &nsoc, ws->q);
+    pdg_cone_dims(ws->N, &l, &nsoc, ws->q);
     em.mode = 1;
     em.cnt = 0;
     em.p = ws->p;
+    em.phi_a = ws->phi_a;
     em.row = row;
     em.col = col;
     pdg_emit(&em, &ws->lay, ws->roll_free, NULL);
@@ -490,21 +497,21 @@ static pdg_setup_status build(void *mem, size_t bytes, int N, int roll_free,
     return PDG_SETUP_OK;
 }
 
-pdg_setup_status pdg_workspace_size(int N, int final_roll_free, const pdg_settings *settings,
+pdg_setup_status pdg_workspace_size(const pdg_params *vehicle, const pdg_settings *settings,
                                     void *scratch, size_t scratch_bytes, size_t *bytes)
 {
-    return build(scratch, scratch_bytes, N, final_roll_free, settings, BUILD_SIZE, NULL, bytes);
+    return build(scratch, scratch_bytes, vehicle, settings, BUILD_SIZE, NULL, bytes);
 }
 
-pdg_setup_status pdg_setup(pdg_workspace **ws, void *arena_mem, size_t arena_bytes, int N,
-                           int final_roll_free, const pdg_settings *settings)
+pdg_setup_status pdg_setup(pdg_workspace **ws, void *arena_mem, size_t arena_bytes,
+                           const pdg_params *vehicle, const pdg_settings *settings)
 {
     size_t need = 0;
     if (!ws || !arena_mem) {
         return PDG_SETUP_NULL_ARGUMENT;
     }
     *ws = NULL;
-    return build(arena_mem, arena_bytes, N, final_roll_free, settings, BUILD_SETUP, ws, &need);
+    return build(arena_mem, arena_bytes, vehicle, settings, BUILD_SETUP, ws, &need);
 }
 
 /* ---- pieces of the iteration ------------------------------------------------------------- */
@@ -724,6 +731,7 @@ static int assemble(pdg_workspace *ws, const double *z, const double *disc,
     em.mode = 2;
     em.cnt = 0;
     em.p = ws->p;
+    em.phi_a = ws->phi_a;
     em.dest = ws->dest;
     em.Ax = ws->Ax;
     em.Gx = ws->Gx;
@@ -777,6 +785,20 @@ int pdg_check_workspace_scenario(const pdg_workspace *ws, const pdg_scenario *s,
                  "scenario field 'final_roll_free': the workspace was set up for %s",
                  ws->roll_free ? "true" : "false");
         return 1;
+    }
+    {
+        double pvec[PDG_NP];
+        pdg_param_vector(&s->params, pvec);
+        if (pdg_phi_a_pattern(pvec, NULL) != ws->phi_a) {
+            snprintf(msg, PDG_MESSAGE_LEN,
+                     "scenario field 'r_cp_B': the workspace was set up for a vehicle with r_cp_B "
+                     "%s zero (another structure of the dynamics' Jacobian)",
+                     s->params.r_cp_B[0] == 0.0 && s->params.r_cp_B[1] == 0.0 &&
+                             s->params.r_cp_B[2] == 0.0
+                         ? "not"
+                         : "all");
+            return 1;
+        }
     }
     return 0;
 }

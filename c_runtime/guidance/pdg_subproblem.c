@@ -166,7 +166,7 @@ void pdg_emit(pdg_emitter *e, const pdg_layout *L, int roll_free, const pdg_valu
         }
         for (i = 0; i < NX; ++i) {
             for (j = 0; j < NX; ++j) {
-                if (pdg_phi_a_pattern[NX * i + j]) {
+                if (e->phi_a[NX * i + j]) {
                     put(e, base + i, XI(k, j), vals ? -(inv[i] * D[D_A + NX * i + j] * sc->Sx[j]) : 0);
                 }
             }

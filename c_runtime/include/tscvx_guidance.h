@@ -13,13 +13,13 @@
  * Lifecycle (memory is claimed in exactly one place, from ONE caller-provided arena):
  *
  *   1. pdg_default_settings(&st); pdg_default_scenario(&scn)      -- Table 1 values
- *   2. pdg_workspace_size(N, roll_free, &st, scratch, nscratch, &need)
+ *   2. pdg_workspace_size(&scn.params, &st, scratch, nscratch, &need)
  *        lays out the subproblem pattern and runs the SOCP's symbolic analysis in caller
  *        scratch. If the scratch is too small it returns PDG_SETUP_SCRATCH_TOO_SMALL with
  *        `need` = a larger scratch size to retry with (at most two retries: the first learns
  *        the pattern size, the second the analysis size). On success `need` = arena bytes.
  *        The scratch may be the arena that will be given to pdg_setup.
- *   3. pdg_setup(&ws, arena, bytes, N, roll_free, &st)
+ *   3. pdg_setup(&ws, arena, bytes, &scn.params, &st)
  *        builds the subproblem's sparsity (CSC, fixed from now on), the SOCP workspace and
  *        every buffer (discretization, iterates, log, masks) inside the arena.
  *   4. pdg_solve(ws, &scenario, &options, &result)     -- any number of times; no allocation,
@@ -111,7 +111,7 @@ typedef struct {
     double omega_max_deg;   /* deg / U_T */
     double r_f[3], v_f[3], q_f[4], omega_f[3];
     int final_roll_free;    /* 1: only q2(t_f) = q3(t_f) = 0; 0: q(t_f) = q_f */
-    int N;                  /* nodes; must equal the N given to pdg_setup */
+    int N;                  /* nodes; must equal the vehicle's given to pdg_setup */
 } pdg_params;
 
 typedef struct {
@@ -214,11 +214,15 @@ void pdg_default_scenario(pdg_scenario *scenario);
  * (PDG_MESSAGE_LEN bytes; may be NULL): what pdg_workspace_size and pdg_setup refuse. */
 pdg_setup_status pdg_check_settings(const pdg_settings *settings, char *message);
 
-pdg_setup_status pdg_workspace_size(int N, int final_roll_free, const pdg_settings *settings,
+/* The workspace is built for a vehicle: its N, its terminal condition (final_roll_free) and
+ * the structure of its dynamics' Jacobian (whether r_cp_B is zero, which removes entries of
+ * A_k from the subproblem). pdg_solve takes scenarios whose params agree with it on these;
+ * every other field may change from one solve to the next. */
+pdg_setup_status pdg_workspace_size(const pdg_params *vehicle, const pdg_settings *settings,
                                     void *scratch, size_t scratch_bytes, size_t *bytes);
 
-pdg_setup_status pdg_setup(pdg_workspace **ws, void *arena, size_t arena_bytes, int N,
-                           int final_roll_free, const pdg_settings *settings);
+pdg_setup_status pdg_setup(pdg_workspace **ws, void *arena, size_t arena_bytes,
+                           const pdg_params *vehicle, const pdg_settings *settings);
 
 /* Validates the scenario as guidance/scenario.py does; 0 = valid, otherwise writes the
  * message ("scenario field 'm0': ...") into `message` (PDG_MESSAGE_LEN bytes). */

@@ -21,6 +21,17 @@ static int failures = 0;
 
 static double x[PDG_N_MAX * PDG_NSTATE], u[PDG_N_MAX * PDG_NCTRL];
 
+/* The default vehicle with N nodes and the terminal condition roll_free (one static copy:
+ * use it in the call it is made for) */
+static inline const pdg_params *vehicle(int N, int roll_free)
+{
+    static pdg_params p;
+    pdg_default_params(&p);
+    p.N = N;
+    p.final_roll_free = roll_free;
+    return &p;
+}
+
 /* Arena bytes for (N, roll_free, settings) in *need; *tries counts the sizing calls. */
 static inline pdg_setup_status arena_size(int N, int roll_free, const pdg_settings *st,
                                           size_t *need, int *tries)
@@ -31,7 +42,7 @@ static inline pdg_setup_status arena_size(int N, int roll_free, const pdg_settin
     for (*tries = 0; *tries < 4 && s == PDG_SETUP_SCRATCH_TOO_SMALL; ++*tries) {
         free(scratch);
         scratch = *need ? malloc(*need) : NULL;
-        s = pdg_workspace_size(N, roll_free, st, scratch, *need, need);
+        s = pdg_workspace_size(vehicle(N, roll_free), st, scratch, *need, need);
     }
     free(scratch);
     return s;

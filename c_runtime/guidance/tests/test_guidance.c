@@ -31,9 +31,9 @@ static pdg_workspace *make_ws(int N, int roll_free, const pdg_settings *st, void
     *arena = malloc(need);
     *bytes = need;
     /* one byte short must be refused cleanly */
-    CHECK(pdg_setup(&ws, *arena, need - 64, N, roll_free, st) == PDG_SETUP_ARENA_TOO_SMALL);
+    CHECK(pdg_setup(&ws, *arena, need - 64, vehicle(N, roll_free), st) == PDG_SETUP_ARENA_TOO_SMALL);
     CHECK(ws == NULL);
-    CHECK(pdg_setup(&ws, *arena, need, N, roll_free, st) == PDG_SETUP_OK);
+    CHECK(pdg_setup(&ws, *arena, need, vehicle(N, roll_free), st) == PDG_SETUP_OK);
     CHECK(ws != NULL);
     CHECK(pdg_arena_high_water(ws) <= need);
     CHECK(pdg_arena_high_water(ws) > need / 2);
@@ -83,6 +83,8 @@ static void test_bad_input(pdg_workspace *ws)
     BAD(s.params.N = 2, "N");
     BAD(s.params.N = 40, "N");                        /* workspace is for N = 50 */
     BAD(s.params.final_roll_free = 0, "final_roll_free"); /* workspace is roll-free */
+    /* the workspace's A_k pattern is r_cp_B = 0's, which this vehicle's dynamics leave */
+    BAD(s.params.r_cp_B[2] = 0.01, "r_cp_B");
     BAD(s.params.q_f[0] = 2.0, "q_f");
     /* NULL pointers */
     pdg_default_scenario(&s);
@@ -118,36 +120,38 @@ static void test_settings_and_sizes(void)
     char buf[64];
     pdg_default_settings(&st);
     CHECK(st.lam == 500.0 && st.iter_max == 20 && st.eta_init == 2.0 && st.rho1 == 0.1);
-    CHECK(pdg_workspace_size(2, 1, &st, NULL, 0, &need) == PDG_SETUP_BAD_SIZE);
-    CHECK(pdg_workspace_size(401, 1, &st, NULL, 0, &need) == PDG_SETUP_BAD_SIZE);
-    CHECK(pdg_workspace_size(50, 1, NULL, NULL, 0, &need) == PDG_SETUP_NULL_ARGUMENT);
+    CHECK(pdg_workspace_size(vehicle(2, 1), &st, NULL, 0, &need) == PDG_SETUP_BAD_SIZE);
+    CHECK(pdg_workspace_size(vehicle(401, 1), &st, NULL, 0, &need) == PDG_SETUP_BAD_SIZE);
+    CHECK(pdg_workspace_size(vehicle(50, 1), NULL, NULL, 0, &need) == PDG_SETUP_NULL_ARGUMENT);
     st.lam = NAN;
-    CHECK(pdg_workspace_size(50, 1, &st, NULL, 0, &need) == PDG_SETUP_BAD_SETTINGS);
+    CHECK(pdg_workspace_size(vehicle(50, 1), &st, NULL, 0, &need) == PDG_SETUP_BAD_SETTINGS);
     pdg_default_settings(&st);
     st.iter_max = 0;
-    CHECK(pdg_workspace_size(50, 1, &st, NULL, 0, &need) == PDG_SETUP_BAD_SETTINGS);
+    CHECK(pdg_workspace_size(vehicle(50, 1), &st, NULL, 0, &need) == PDG_SETUP_BAD_SETTINGS);
     pdg_default_settings(&st);
     CHECK(st.tau_r_update == 1); /* Algorithm 2's radius rule unless asked otherwise */
     st.tau_r_update = 2;
-    CHECK(pdg_workspace_size(50, 1, &st, NULL, 0, &need) == PDG_SETUP_BAD_SETTINGS);
+    CHECK(pdg_workspace_size(vehicle(50, 1), &st, NULL, 0, &need) == PDG_SETUP_BAD_SETTINGS);
     pdg_default_settings(&st);
     CHECK(st.prox_u == 2e-2); /* guidance/params.py SCvxSettings.prox_u */
     st.prox_u = -1e-3;
-    CHECK(pdg_workspace_size(50, 1, &st, NULL, 0, &need) == PDG_SETUP_BAD_SETTINGS);
+    CHECK(pdg_workspace_size(vehicle(50, 1), &st, NULL, 0, &need) == PDG_SETUP_BAD_SETTINGS);
     st.prox_u = NAN;
-    CHECK(pdg_workspace_size(50, 1, &st, NULL, 0, &need) == PDG_SETUP_BAD_SETTINGS);
+    CHECK(pdg_workspace_size(vehicle(50, 1), &st, NULL, 0, &need) == PDG_SETUP_BAD_SETTINGS);
     st.prox_u = 0.0; /* the paper's linear objective: valid */
-    CHECK(pdg_workspace_size(50, 1, &st, NULL, 0, &need) == PDG_SETUP_SCRATCH_TOO_SMALL);
+    CHECK(pdg_workspace_size(vehicle(50, 1), &st, NULL, 0, &need) == PDG_SETUP_SCRATCH_TOO_SMALL);
     pdg_default_settings(&st);
     st.eta_init = 20.0; /* outside [eta_lb, eta_ub] = [0.001, 10] (SCvxSettings checks the same) */
-    CHECK(pdg_workspace_size(50, 1, &st, NULL, 0, &need) == PDG_SETUP_BAD_SETTINGS);
+    CHECK(pdg_workspace_size(vehicle(50, 1), &st, NULL, 0, &need) == PDG_SETUP_BAD_SETTINGS);
     st.eta_init = 5e-4;
-    CHECK(pdg_workspace_size(50, 1, &st, NULL, 0, &need) == PDG_SETUP_BAD_SETTINGS);
+    CHECK(pdg_workspace_size(vehicle(50, 1), &st, NULL, 0, &need) == PDG_SETUP_BAD_SETTINGS);
     pdg_default_settings(&st);
-    CHECK(pdg_workspace_size(50, 1, &st, NULL, 0, &need) == PDG_SETUP_SCRATCH_TOO_SMALL);
+    CHECK(pdg_workspace_size(vehicle(50, 1), &st, NULL, 0, &need) == PDG_SETUP_SCRATCH_TOO_SMALL);
     CHECK(need > 0);
-    CHECK(pdg_setup(&ws, buf, sizeof buf, 50, 1, &st) == PDG_SETUP_ARENA_TOO_SMALL);
-    CHECK(pdg_setup(NULL, buf, sizeof buf, 50, 1, &st) == PDG_SETUP_NULL_ARGUMENT);
+    CHECK(pdg_setup(&ws, buf, sizeof buf, vehicle(50, 1), &st) == PDG_SETUP_ARENA_TOO_SMALL);
+    CHECK(pdg_setup(NULL, buf, sizeof buf, vehicle(50, 1), &st) == PDG_SETUP_NULL_ARGUMENT);
+    CHECK(pdg_setup(&ws, buf, sizeof buf, NULL, &st) == PDG_SETUP_NULL_ARGUMENT);
+    CHECK(pdg_workspace_size(NULL, &st, NULL, 0, &need) == PDG_SETUP_NULL_ARGUMENT);
     CHECK(strcmp(pdg_status_name(PDG_INFEASIBLE), "infeasible") == 0);
     CHECK(strcmp(pdg_status_name((pdg_status)99), "unknown") == 0);
     CHECK(strlen(pdg_setup_status_message(PDG_SETUP_ARENA_TOO_SMALL)) > 0);

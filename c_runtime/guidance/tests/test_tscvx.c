@@ -31,7 +31,7 @@ static pdg_workspace *make_ws(int N, double eta_lb, void **arena)
     if (arena_size(N, 1, &st, &need, &tries) != PDG_SETUP_OK || !(*arena = malloc(need))) {
         return NULL;
     }
-    return pdg_setup(&ws, *arena, need, N, 1, &st) == PDG_SETUP_OK ? ws : NULL;
+    return pdg_setup(&ws, *arena, need, vehicle(N, 1), &st) == PDG_SETUP_OK ? ws : NULL;
 }
 
 static void expect_refused(pdg_workspace *ws, const pdg_scenario *s, tscvx_nn *sol,
