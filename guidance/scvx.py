@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -28,6 +28,7 @@ from guidance.params import IM, NC, NU, NX, Scenario, SCvxSettings
 from guidance.subproblem import (
     TR_PAIRS,
     TR_SCALAR_STATES,
+    Layout,
     Scaling,
     SubproblemTemplate,
     physical,
@@ -293,6 +294,8 @@ class SCvxSolver:
                 # Same reference, same radius: the same step would be rejected forever.
                 stalled = True
                 break
+            if not accepted and not newly_forced and last_sol is not None and eta_new < tr_step:
+                last_sol = _pulled_back(last_sol, z, RETRY_START * eta_new / tr_step, self.lay)
             eta = eta_new
         if status == "max_iterations":
             status, reason = self._diagnose(z, vc, defect, viol, k)
@@ -408,6 +411,21 @@ def _changed_fraction(prev: np.ndarray | None, cur: np.ndarray | None) -> float:
 # skipped (a bound for alpha near 1). The C library has the same.
 RETRY_MARGIN = 1.001
 RETRY_SKIP_MAX = 64
+# The interior-point method of a retry starts from the rejected answer with its trajectory
+# part pulled back towards the reference, to RETRY_START of the new radius: the retry's answer
+# lies near there, on or inside the smaller trust region, and the rejected one outside it.
+# On the 11 catalog landings this took 4 % fewer IPM iterations than the rejected answer as
+# it is (26 Nov: 2,689 against 2,801; 0.9 gave 2,698, scaling by eta_new / eta 2,712). The C
+# library does the same.
+RETRY_START = 0.99
+
+
+def _pulled_back(sol: ConicSolution, z: np.ndarray, f: float, lay: Layout) -> ConicSolution:
+    """sol with its trajectory part at z + f (sol.x - z), the rest as it is."""
+    x = sol.x.copy()
+    n = lay.n_traj
+    x[:n] = z[:n] + f * (sol.x[:n] - z[:n])
+    return replace(sol, x=x)
 
 
 def _retry_radius(eta: float, tr_step: float, st: SCvxSettings) -> float:

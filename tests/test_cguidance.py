@@ -322,6 +322,23 @@ def test_warm_started_subproblems_give_the_cold_answer_in_fewer_iterations() -> 
     assert ipm(py_warm) < 0.95 * ipm(py_cold), (ipm(py_warm), ipm(py_cold))
 
 
+@pytest.mark.parametrize("name", ["default", "crossing"])
+def test_a_retry_starts_both_loops_from_the_rejected_answer_pulled_back(name: str) -> None:
+    """After a rejection the IPM starts from the rejected answer with its trajectory part
+    pulled back to RETRY_START of the new radius (guidance/scvx.py, pdg_scvx.c): subproblem
+    by subproblem the two loops' warm-started IPM iterations agree (within one; with the C
+    loop starting from the rejected answer as it is, they do not), and the landing is the one
+    the cold-started IPMs give."""
+    scn = SCENARIOS[name]
+    c, py = cguidance.solve_c(scn), solve_scvx(scn, backend="c")
+    c_its = [h.solver_iterations for h in c.history]
+    py_its = [h.solver_iterations for h in py.history]
+    assert any(not h.accepted for h in c.history)  # there are retries to start
+    assert len(c_its) == len(py_its)
+    assert max(abs(a - b) for a, b in zip(c_its, py_its, strict=True)) <= 1, (c_its, py_its)
+    assert same_trajectory(c, cguidance.solve_c(scn, SCvxSettings(socp_warm_start=False)))
+
+
 def test_cli_cold_ipm_reaches_the_c_solve(tmp_path: Path) -> None:
     """`guidance solve --backend c --cold-ipm` runs the cold-started C solve and its file
     records it."""

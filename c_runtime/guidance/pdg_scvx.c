@@ -665,6 +665,19 @@ static int label_tight(pdg_workspace *ws, const double *h, const unsigned char *
  * skipped (a bound for alpha near 1) */
 #define RETRY_MARGIN 1.001
 #define RETRY_SKIP_MAX 64
+/* The IPM of a retry starts from the rejected answer with its trajectory part pulled back
+ * towards the reference, to RETRY_START of the new radius, where the retry's answer lies
+ * (guidance/scvx.py RETRY_START) */
+#define RETRY_START 0.99
+
+/* z_new's trajectory part := z + f (z_new - z); the rest of the answer stays */
+static void pull_back(pdg_workspace *ws, double f)
+{
+    int i;
+    for (i = 0; i < ws->lay.n_traj; ++i) {
+        ws->znew[i] = ws->z[i] + f * (ws->znew[i] - ws->z[i]);
+    }
+}
 
 /* |z_new - z| in the trust region's norm: the largest |difference| of a scalar component
  * (states, thrust, sigma) and 2-norm of a rotation pair of states (guidance/subproblem.py). */
@@ -1185,6 +1198,9 @@ pdg_status pdg_solve_from(pdg_workspace *ws, const pdg_scenario *scenario,
         if (!accepted && eta <= st->eta_lb && !newly_forced) {
             stalled = 1; /* same reference, same radius: it would be rejected forever */
             break;
+        }
+        if (!accepted && !newly_forced && eta_new < cd.tr_step) {
+            pull_back(ws, RETRY_START * eta_new / cd.tr_step); /* the retry's warm start */
         }
         eta = eta_new;
     }
