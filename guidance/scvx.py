@@ -413,10 +413,9 @@ RETRY_MARGIN = 1.001
 RETRY_SKIP_MAX = 64
 # The interior-point method of a retry starts from the rejected answer with its trajectory
 # part pulled back towards the reference, to RETRY_START of the new radius: the retry's answer
-# lies near there, on or inside the smaller trust region, and the rejected one outside it.
-# On the 11 catalog landings this took 4 % fewer IPM iterations than the rejected answer as
-# it is (26 Nov: 2,689 against 2,801; 0.9 gave 2,698, scaling by eta_new / eta 2,712). The C
-# library does the same.
+# lies near there, on or inside the smaller trust region, and the rejected one outside it
+# (4 % fewer IPM iterations on the catalog: README, "Warm start"). The C library does the
+# same.
 RETRY_START = 0.99
 
 
