@@ -95,7 +95,9 @@ def discretize_all(x: np.ndarray, u: np.ndarray, sigma: float, p: np.ndarray,
         _ptr(work),
     )  # fmt: skip
     if status == FOH_NOT_FINITE:
-        raise ModelEvaluationError("the FOH discretization is not finite")
+        raise ModelEvaluationError(
+            "the FOH discretization is not finite or left its structural pattern"
+        )
     if status != 0:
         raise ValueError(f"pdg_foh_all returned {status}")
     i = np.cumsum([0, NX, NX * NX, NX * NU, NX * NU, NX])

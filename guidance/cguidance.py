@@ -162,13 +162,8 @@ def _fill(arr: ct.Array, values: Sequence[float]) -> None:
         arr[i] = float(v)
 
 
-def c_scenario(scenario: Scenario) -> _Scenario:
-    s, p = scenario.initial, scenario.params
-    out = _Scenario()
-    for name in ("r0", "v0", "q0", "w0"):
-        _fill(getattr(out, name), getattr(s, name))
-    out.m0 = float(s.m0)
-    cp = out.params
+def c_params(p: Params) -> _Params:
+    cp = _Params()
     for f in dataclasses.fields(Params):
         v = getattr(p, f.name)
         if isinstance(v, tuple):
@@ -177,6 +172,16 @@ def c_scenario(scenario: Scenario) -> _Scenario:
             setattr(cp, f.name, int(v))
         else:
             setattr(cp, f.name, float(v))
+    return cp
+
+
+def c_scenario(scenario: Scenario) -> _Scenario:
+    s = scenario.initial
+    out = _Scenario()
+    for name in ("r0", "v0", "q0", "w0"):
+        _fill(getattr(out, name), getattr(s, name))
+    out.m0 = float(s.m0)
+    out.params = c_params(scenario.params)
     return out
 
 
@@ -200,7 +205,7 @@ class Workspace:
     def __init__(self, vehicle: Params, settings: _Settings) -> None:
         lib = library()
         self.lib, self.N, self.settings = lib, vehicle.N, settings
-        cv = c_scenario(Scenario(params=vehicle)).params
+        cv = c_params(vehicle)
         msg = ct.create_string_buffer(MESSAGE_LEN)
         if lib.pdg_check_settings(ct.byref(settings), msg) != 0:
             raise ValueError(msg.value.decode())

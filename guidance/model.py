@@ -351,32 +351,26 @@ def discretize(
 
     Returns x_next (N-1, 14), A (N-1, 14, 14), Bm (N-1, 14, 3), Bp (N-1, 14, 3),
     Sigma (N-1, 14), z (N-1, 14). Raises ModelEvaluationError if any of them is not finite,
-    or if A has a nonzero outside :func:`vehicle_pattern` (which the subproblem drops).
+    or if A has a nonzero outside :func:`vehicle_pattern` (which the subproblem drops; the C
+    engine checks both itself).
     """
     if engine == "c":
         from guidance import cgnc
 
-        disc = cgnc.discretize_all(x, u, sigma, param_vector(params), substeps)
-    else:
-        disc = _discretize_casadi(x, u, sigma, params, substeps)
-    if np.any(disc["A"][:, ~vehicle_pattern(params)]):
-        raise ModelEvaluationError("the FOH discretization left its structural pattern")
-    return disc
-
-
-def _discretize_casadi(
-    x: np.ndarray, u: np.ndarray, sigma: float, params: Params, substeps: int
-) -> dict[str, np.ndarray]:
+        return cgnc.discretize_all(x, u, sigma, param_vector(params), substeps)
     N = x.shape[0]
     fun = _mapped_discretization(substeps, N - 1)
     out = fun(x[:-1].T, u[:-1].T, u[1:].T, sigma, 1.0 / (N - 1), param_vector(params))
     xn, A, Bm, Bp, S, z = (np.asarray(o) for o in out)
     if not all(np.isfinite(o).all() for o in (xn, A, Bm, Bp, S, z)):
         raise ModelEvaluationError("the FOH discretization is not finite")
+    A = A.reshape(NX, N - 1, NX).transpose(1, 0, 2)
+    if np.any(A[:, ~vehicle_pattern(params)]):
+        raise ModelEvaluationError("the FOH discretization left its structural pattern")
     return {
         "x_next": xn.T,
         # CasADi stacks the mapped matrix outputs side by side (column-major blocks).
-        "A": A.reshape(NX, N - 1, NX).transpose(1, 0, 2),
+        "A": A,
         "Bm": Bm.reshape(NX, N - 1, NU).transpose(1, 0, 2),
         "Bp": Bp.reshape(NX, N - 1, NU).transpose(1, 0, 2),
         "Sigma": S.T,

@@ -18,9 +18,11 @@
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import re
 import subprocess
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -172,19 +174,17 @@ TIGHTER = SCvxSettings(socp_tol=1e-10)
 
 
 def _pair_that_agrees(
-    c: SCvxResult, ref: SCvxResult, backend: str, scn: Scenario, c_tight: list[SCvxResult]
+    c: SCvxResult, ref: SCvxResult, backend: str, scn: Scenario, c_tight: Callable[[], SCvxResult]
 ) -> tuple[SCvxResult, SCvxResult]:
     """(c, ref), or where c is not ref's trajectory, both one decade tighter, where at least
     one of them must then leave its own trajectory: on such a landing SCvx's path hinges on
     where within their tolerances the subproblems stop, and the answer is only fixed tighter.
-    c_tight caches the C solve at 1e-10 between the two references."""
+    c_tight gives the C solve at 1e-10 (made once for both references)."""
     if same_trajectory(c, ref):
         return c, ref
-    if not c_tight:
-        c_tight.append(cguidance.solve_c(scn, TIGHTER))
     ref_tight = solve_scvx(scn, TIGHTER, backend=backend)
-    assert not same_trajectory(c_tight[0], c) or not same_trajectory(ref_tight, ref)
-    return c_tight[0], ref_tight
+    assert not same_trajectory(c_tight(), c) or not same_trajectory(ref_tight, ref)
+    return c_tight(), ref_tight
 
 
 @pytest.mark.slow
@@ -198,7 +198,7 @@ def test_twenty_more_scenarios(index: int) -> None:
     final mass moves by up to 2e-6 with where within 1e-9 the subproblems stop)."""
     scn = random_scenarios(20)[index]
     c = cguidance.solve_c(scn)
-    c_tight: list[SCvxResult] = []
+    c_tight = functools.cache(lambda: cguidance.solve_c(scn, TIGHTER))
     c1, clarabel = _pair_that_agrees(c, solve_scvx(scn), "clarabel", scn, c_tight)
     assert c1.status == clarabel.status, (c1.reason, clarabel.reason)
     assert abs(c1.m_f - clarabel.m_f) / clarabel.m_f <= STRICT_REL_MF
