@@ -66,9 +66,12 @@ demo: setup lib
 	$(GUIDANCE) solve --method scvx --backend c --out out/scvx_c.npz --plot out/scvx_c.png
 	$(GUIDANCE) solve --method tscvx --backend c --out out/tscvx_c.npz --plot out/tscvx_c.png
 	$(GUIDANCE) verify out/scvx.npz out/scvx_c.npz out/tscvx_c.npz
-	./$(BUILD)/pdg_example > out/pdg_example.txt && tail -n 3 out/pdg_example.txt
+	./$(BUILD)/pdg_example > out/pdg_example.txt
+	@grep -E '^(SCvx|status|iterations)' out/pdg_example.txt
 	./$(BUILD)/pdg_example $(BUILD)/models/solution.tnn $(BUILD)/models/constraint.tnn \
-	  > out/pdg_example_tscvx.txt && tail -n 3 out/pdg_example_tscvx.txt
+	  > out/pdg_example_tscvx.txt
+	@grep -E '^(T-SCvx|status|iterations)' out/pdg_example_tscvx.txt
+	@echo "the C example's whole output, trajectories included: out/pdg_example*.txt"
 
 bench: setup lib $(BUILD)/ctest/bench_driver
 	$(GUIDANCE) bench --backend clarabel c-socp c --tscvx-landings 24 --callgrind

@@ -51,6 +51,8 @@ def solve(
         eta_init = REDUCED_ETA_INIT if eta_init is None else eta_init
     if eta_init is not None:
         settings = settings.replace(eta_init=eta_init)
+    if backend == "clarabel":  # Clarabel has no warm start: record what runs
+        settings = settings.replace(socp_warm_start=False)
     if backend == "c":
         # the whole solve in the C library (for T-SCvx the complete on-board call: networks,
         # projection and SCvx), its log replayed after it

@@ -483,7 +483,7 @@ def bench_set(name: str, probs: list[ConicProblem], reps: int, sequence: bool = 
     lines = [
         f"{name} ({len(probs)} problems, n={probs[0].n}, m={probs[0].m}, "
         f"nnz(A)={probs[0].A.nnz}; not solved by tscvx: {bad})",
-        f"  {'solver':<10}{'median ms':>11}{'ratio':>8}{'iters':>7}{'arena KB':>10}",
+        f"  {'solver':<10}{'median ms':>11}{'ratio':>8}{'iters':>7}{'arena KiB':>10}",
         f"  {'tscvx':<10}{1e3 * t_ours:>11.3f}{1.0:>8.2f}{_median(ours_it):>7.0f}"
         f"{max(arena) / 1024:>10.0f}   KKT method: {', '.join(sorted(methods))}",
     ]

@@ -208,7 +208,7 @@ class Workspace:
         cv = c_params(vehicle)
         msg = ct.create_string_buffer(MESSAGE_LEN)
         if lib.pdg_check_settings(ct.byref(settings), msg) != 0:
-            raise ValueError(msg.value.decode())
+            raise InputError(msg.value.decode())
         need = ct.c_size_t(0)
         scratch = None
         for _ in range(4):  # bounded: pattern size, then analysis size, then exact size
@@ -235,7 +235,8 @@ class Workspace:
 
     def problem_size(self) -> dict[str, int]:
         vals = [_i() for _ in range(5)]
-        self.lib.pdg_problem_size(self.ws, *[ct.byref(v) for v in vals])
+        if self.lib.pdg_problem_size(self.ws, *[ct.byref(v) for v in vals]) != 0:
+            raise RuntimeError("pdg_problem_size: the workspace is not set up")
         return dict(zip(("n", "p", "m", "nnz_A", "nnz_G"), [v.value for v in vals], strict=True))
 
 
@@ -345,7 +346,7 @@ def _collect(
         field = message.split("'")[1] if message.startswith("scenario field '") else "<input>"
         if message.startswith("scenario field '"):
             raise ScenarioError(field, message.split("': ", 1)[1])
-        raise ValueError(message)
+        raise InputError(message)
     history = []
     row = _LogRow()
     for i in range(lib.pdg_log_length(ws.ws)):
@@ -526,7 +527,7 @@ def tscvx_guess_c(
                                    _dptr(u), ct.byref(tf), msg)  # fmt: skip
     if st != 0:
         text = msg.value.decode()
-        raise (FlightNetsError if text.startswith("nets: ") else ValueError)(text)
+        raise (FlightNetsError if text.startswith("nets: ") else InputError)(text)
     return x, u, tf.value
 
 

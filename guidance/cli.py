@@ -98,15 +98,33 @@ def _check_plot_format(path: str) -> None:
         )
 
 
+def _check_writable(flag: str, path: Path) -> None:
+    """Create an output file's folder and make sure the file can be written there, before
+    solving: a solve must not end in an error because of where its result goes."""
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InputError(f"{flag} {path}: cannot create its folder ({exc.strerror})") from None
+    if path.is_dir():
+        raise InputError(f"{flag} {path}: is a folder, not a file")
+    if not os.access(path.parent, os.W_OK) or (path.exists() and not os.access(path, os.W_OK)):
+        raise InputError(f"{flag} {path}: not writable")
+
+
 def cmd_solve(args: argparse.Namespace) -> int:
     from guidance.trajectory_io import write_trajectory
 
     scenario = _load(args.scenario, args.pin_final_attitude)
+    if args.trust_update is not None and args.method != "tscvx":
+        raise InputError("--trust-update: applies to --method tscvx only (SCvx has no masks)")
     if args.plot:
         _check_plot_format(args.plot)
+    for flag, path in (("--out", args.out), ("--plot", args.plot)):
+        if path:
+            _check_writable(flag, Path(path))
     settings = SCvxSettings(
         iter_max=args.iter_max,
-        tau_r_update=args.trust_update == "tau_r",
+        tau_r_update=args.trust_update != "alg1",
         prox_u=args.prox_u,
         socp_warm_start=not args.cold_ipm,
     )
@@ -167,7 +185,10 @@ def _network_files(models: Path, backend: str) -> dict[str, Path]:
 
 def cmd_scenario(args: argparse.Namespace) -> int:
     scenario = _load(args.scenario, False)
-    print(json.dumps(scenario_to_dict(scenario), indent=2))
+    out = scenario_to_dict(scenario)
+    if args.all:  # every parameter a scenario file may set, with its value
+        out.update({k: v for k, v in scenario.params.to_json_dict().items() if k not in out})
+    print(json.dumps(out, indent=2))
     return 0
 
 
@@ -258,9 +279,9 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument(
         "--trust-update",
         choices=["tau_r", "alg1"],
-        default="tau_r",
-        help="T-SCvx trust radius: tau_r = Algorithm 2's update (paper), alg1 = Algorithm 1's "
-        "Eq. (15) with the masks as well",
+        default=None,
+        help="T-SCvx trust radius (--method tscvx only): tau_r = Algorithm 2's update (paper, "
+        "the default), alg1 = Algorithm 1's Eq. (15) with the masks as well",
     )
     add_prox_u(s, "whose answer depends on the conic solver")
     s.add_argument(
@@ -285,7 +306,15 @@ def build_parser() -> argparse.ArgumentParser:
 
     c = sub.add_parser("scenario", help="print a scenario (default: the default) as JSON")
     c.add_argument(
-        "scenario", nargs="?", help="scenario JSON to check and print with its defaults filled"
+        "scenario",
+        nargs="?",
+        help="scenario JSON to check and print (parameters only where they differ from the "
+        "defaults)",
+    )
+    c.add_argument(
+        "--all",
+        action="store_true",
+        help="print every parameter a scenario file may set, defaults included",
     )
     c.set_defaults(func=cmd_scenario)
 

@@ -498,8 +498,9 @@ class Solver:
         if status == "invalid_input":
             return _invalid(n, m, self.message)
         p, mg = self._Aeq.shape[0], self._G.shape[0]
-        x, y = np.empty(n), np.empty(p)
-        zg, sg = np.empty(mg), np.empty(mg)
+        # NaN where the runtime keeps no point (TSCVX_SETUP_NO_SOLUTION after a numerical error)
+        x, y = np.full(n, np.nan), np.full(p, np.nan)
+        zg, sg = np.full(mg, np.nan), np.full(mg, np.nan)
         self.lib.tscvx_get_solution(self.ws, _dptr(x), _dptr(y), _dptr(zg), _dptr(sg))
         z, s = np.zeros(m), np.zeros(m)
         z[self.split.eq_rows] = y

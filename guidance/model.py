@@ -82,10 +82,16 @@ def omega_matrix(w: ca.SX) -> ca.SX:
     )
 
 
+# |v| is floored at sqrt of this (1e-150) so that its derivative at v = 0 is 0, not 0 * inf.
+NORM_FLOOR_SQ = 1e-300
+
+
 def _norm(v: ca.SX) -> ca.SX:
-    # A smooth norm would change the model; |v| is only non-differentiable at v = 0, which
-    # the thrust never reaches (T_min > 0) and where the drag term is zero to second order.
-    return ca.sqrt(ca.sumsqr(v))
+    """|v|, exactly, for |v| >= 1e-150. A smooth norm would change the model; this one only
+    fixes v = 0, where |v| is not differentiable: there the drag |v_B| v_B (a landing that
+    starts or passes at rest) has derivative 0, which the floor gives, where the plain norm gave
+    0 * inf = NaN and failed the model evaluation."""
+    return ca.sqrt(ca.fmax(ca.sumsqr(v), NORM_FLOOR_SQ))
 
 
 def dynamics_expr(x: ca.SX, u: ca.SX, p: ca.SX) -> ca.SX:

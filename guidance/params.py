@@ -13,6 +13,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from guidance.errors import InputError
+
 # State layout (DESIGN.md): r_I (3), v_I (3), q_B<-I (4, scalar first), omega_B (3), m (1).
 NX = 14
 NU = 3
@@ -178,27 +180,42 @@ class SCvxSettings:
         for f in dataclasses.fields(self):
             value = getattr(self, f.name)
             if isinstance(value, float) and not math.isfinite(value):
-                raise ValueError(f"{f.name} must be finite, got {value}")
+                raise InputError(f"{f.name} must be finite, got {value}")
         if not (math.isfinite(self.prox_u) and self.prox_u >= 0.0):
-            raise ValueError(f"prox_u must be a weight >= 0, got {self.prox_u}")
-        if not (0.0 < self.eta_lb <= self.eta_init <= self.eta_ub < math.inf):
-            raise ValueError(
+            raise InputError(f"prox_u must be a weight >= 0, got {self.prox_u}")
+        if not self.eta_lb > 0.0:
+            raise InputError(f"eta_lb must be > 0, got {self.eta_lb!r}")
+        if not self.eta_ub >= self.eta_lb:
+            raise InputError(f"eta_ub must be >= eta_lb = {self.eta_lb:g}, got {self.eta_ub!r}")
+        if not (self.eta_lb <= self.eta_init <= self.eta_ub):
+            raise InputError(
                 f"eta_init must lie within [eta_lb, eta_ub] = [{self.eta_lb:g}, "
                 f"{self.eta_ub:g}], got {self.eta_init:g}"
             )
         for name, (lo, hi) in INT_SETTING_RANGES.items():
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or not lo <= value <= hi:
-                raise ValueError(f"{name} must be an integer within {lo}..{hi}, got {value!r}")
-        if not (self.lam > 0.0 and self.rho0 <= self.rho1 <= self.rho2):
-            raise ValueError("lam must be > 0 and rho0 <= rho1 <= rho2")
-        if not (self.alpha >= 1.0 and self.beta >= 1.0):
-            raise ValueError("alpha and beta (trust-region factors) must be >= 1")
+                raise InputError(f"{name} must be an integer within {lo}..{hi}, got {value!r}")
+        if not self.lam > 0.0:
+            raise InputError(f"lam must be > 0, got {self.lam!r}")
+        if not self.rho0 <= self.rho1:
+            raise InputError(
+                f"rho1 must satisfy rho0 <= rho1 (rho0 = {self.rho0:g}), got {self.rho1!r}"
+            )
+        if not self.rho1 <= self.rho2:
+            raise InputError(
+                f"rho2 must satisfy rho1 <= rho2 (rho1 = {self.rho1:g}), got {self.rho2!r}"
+            )
+        for name in ("alpha", "beta"):
+            if not getattr(self, name) >= 1.0:
+                raise InputError(
+                    f"{name} must be >= 1 (a trust-region factor), got {getattr(self, name)!r}"
+                )
         for name in ("step_tol", "vc_tol", "defect_tol", "tight_tol"):
             if not getattr(self, name) >= 0.0:
-                raise ValueError(f"{name} must be >= 0, got {getattr(self, name)!r}")
+                raise InputError(f"{name} must be >= 0, got {getattr(self, name)!r}")
         if not 0.0 < self.socp_tol < 1.0:
-            raise ValueError(f"socp_tol must lie within (0, 1), got {self.socp_tol!r}")
+            raise InputError(f"socp_tol must lie within (0, 1), got {self.socp_tol!r}")
 
     def replace(self, **changes: object) -> SCvxSettings:
         return dataclasses.replace(self, **changes)

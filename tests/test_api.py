@@ -39,3 +39,18 @@ def test_the_readme_example_runs_and_lands() -> None:
 def test_bad_method_or_backend_is_an_input_error(kw: dict[str, str]) -> None:
     with pytest.raises(guidance.InputError, match="use one of"):
         guidance.solve(**kw)
+
+
+@pytest.mark.parametrize(
+    "call",
+    [
+        lambda: guidance.solve(settings=guidance.SCvxSettings(eta_init=50.0)),
+        lambda: guidance.solve(eta_init=50.0),
+        lambda: guidance.solve(backend="c", settings=guidance.SCvxSettings(iter_max=0)),
+    ],
+    ids=["settings", "eta_init", "c-settings"],
+)
+def test_a_bad_setting_is_an_input_error(call) -> None:
+    """What the README promises: bad input raises guidance.InputError, settings included."""
+    with pytest.raises(guidance.InputError, match=r"eta_init|iter_max"):
+        call()

@@ -33,6 +33,7 @@ from guidance.agreement import STRICT_REL_MF, same_trajectory
 from guidance.catalog import SCENARIOS
 from guidance.cli import main
 from guidance.constraints import constraint_scales, path_constraint_values
+from guidance.errors import InputError
 from guidance.guess import initial_guess
 from guidance.model import discretize
 from guidance.params import NC, InitialState, Params, Scenario, SCvxSettings
@@ -393,11 +394,38 @@ def test_settings_out_of_range_are_named() -> None:
     for a caller that skips SCvxSettings' check."""
     st = cguidance.c_settings()
     st.iter_max = 0
-    with pytest.raises(ValueError, match=r"settings.iter_max: must lie within 1..100, got 0"):
+    with pytest.raises(InputError, match=r"settings.iter_max: must lie within 1..100, got 0"):
         cguidance.Workspace(Params(), st)
     st = cguidance.c_settings()
     st.eta_lb = 5.0
-    with pytest.raises(ValueError, match=r"settings.eta_init: must lie within \[eta_lb"):
+    with pytest.raises(InputError, match=r"settings.eta_init: must lie within \[eta_lb"):
+        cguidance.Workspace(Params(), st)
+
+
+def test_a_landing_from_rest_solves_in_both_loops() -> None:
+    """v0 = 0 (a hover start): |v_B| v_B, the drag, has derivative 0 at rest, where the plain
+    norm's derivative gave NaN and both loops stopped at their initial guess."""
+    scn = Scenario(InitialState(r0=(4.0, 4.0, 0.0), v0=(0.0, 0.0, 0.0), m0=3.0))
+    ref = solve_scvx(scn)
+    c = cguidance.solve_c(scn)
+    assert ref.status == c.status == "solved", (ref.reason, c.reason)
+    assert same_trajectory(c, ref)
+    assert audit(c.x, c.u, c.t_f, scn.params).landing_position_error <= 1e-3
+
+
+@pytest.mark.parametrize(
+    ("field", "value"),
+    [("eta_lb", 0.0), ("eta_ub", 5e-4), ("lam", 0.0), ("rho1", -0.1), ("rho2", 0.05),
+     ("alpha", 0.5), ("beta", 0.5), ("step_tol", -1.0), ("vc_tol", -1.0),
+     ("defect_tol", -1.0), ("tight_tol", -1.0), ("prox_u", -1.0)],
+)  # fmt: skip
+def test_a_bad_setting_is_named_alike_in_python_and_c(field: str, value: float) -> None:
+    """The one field at fault, by SCvxSettings and by the C library's own check (eta_lb = 0
+    used to be reported as a bad eta_init, rho1 < rho0 as "lam, rho0..2")."""
+    with pytest.raises(InputError, match=rf"^{field} must"):
+        SCvxSettings(**{field: value})
+    st = cguidance.c_settings(**{field: value})
+    with pytest.raises(InputError, match=rf"settings\.{field}: must"):
         cguidance.Workspace(Params(), st)
 
 

@@ -42,9 +42,13 @@ def _nonzeros(m: object) -> np.ndarray:
 
 
 @pytest.mark.parametrize("seed", range(5))
-def test_generated_model_matches_casadi(seed: int) -> None:
+@pytest.mark.parametrize("at_rest", [False, True], ids=["moving", "at_rest"])
+def test_generated_model_matches_casadi(seed: int, at_rest: bool) -> None:
+    """At random points, and at rest (v = 0, where |v| is not differentiable)."""
     rng = np.random.default_rng(seed)
     x, u = random_point(rng)
+    if at_rest:
+        x[3:6] = 0.0
     p, c = param_vector(P), constraint_param_vector(P)
     f, jac = dynamics_functions()
     h, hjac = constraint_functions()
@@ -58,6 +62,7 @@ def test_generated_model_matches_casadi(seed: int) -> None:
         want = [_nonzeros(o) for o in fun.call(args)]
         got = cgnc.call_generated(fun.name(), args, [w.size for w in want])
         for g, w in zip(got, want, strict=True):
+            assert np.isfinite(w).all()
             np.testing.assert_allclose(g, w, rtol=1e-12, atol=1e-12)
     step = foh_step_function()
     Paug = rng.normal(size=N_AUG)

@@ -135,3 +135,30 @@ def test_a_dead_worker_stops_the_run_with_how_to_resume(tmp_path, monkeypatch, d
     monkeypatch.setattr(mask_ceiling, "neighbour_masks", die_on_landing_1)
     with pytest.raises(WorkerDiedError, match=r"worker process died.* of 3 are kept in .*resume"):
         measure(3, 3, [0.0], std=np.ones(16), progress=False, workers=2, run_dir=tmp_path)
+
+
+@pytest.mark.parametrize(
+    ("scores", "expected"),
+    [
+        # met within 0.02 std, not at 0.1: 2.4 / 0.02 = 120 (not 2.4 / 0.1 = 24)
+        ([(0.02, 0.95, 0.995), (0.1, 0.85, 0.994)], "120 times farther apart than 0.02 std"),
+        (
+            [(0.02, 0.85, 0.995), (0.1, 0.80, 0.99)],
+            "more than 120 times farther apart than 0.02 std",
+        ),
+    ],
+)
+def test_card_compares_the_data_spacing_with_where_the_goal_is_met(scores, expected) -> None:
+    from guidance.nn.card import _ceiling_section
+
+    run = dict(landings=20, neighbours=9, backend="c")
+    rows = [
+        dict(eps=e, rule="union", precision=p, recall=r, rows_missing=0, rows=1)
+        for e, p, r in scores
+    ]
+    lines: list[str] = []
+    _ceiling_section(
+        lines.append, dict(run=run, scores=rows, data_spacing_std=2.4, n_train_landings=3008)
+    )
+    text = "\n".join(lines)
+    assert f"The training landings are {expected}:" in text

@@ -80,6 +80,26 @@ def test_jacobians_match_finite_differences(samples) -> None:
         np.testing.assert_allclose(B, B_fd, atol=1e-7)
 
 
+def test_jacobians_at_rest_are_finite_and_the_limit(samples) -> None:
+    """At v = 0 the drag |v_B| v_B is not differentiable term by term (|v| is not), but it is
+    C1 with derivative 0: the Jacobians must be finite and match finite differences, or a
+    landing that starts at rest fails its first model evaluation."""
+    _, jac = dynamics_functions()
+    eps = 1e-7
+    for x, u in samples[:5]:
+        x = x.copy()
+        x[3:6] = 0.0
+        A, B = (np.asarray(m) for m in jac(x, u, param_vector(P)))
+        assert np.isfinite(A).all() and np.isfinite(B).all()
+        A_fd = np.column_stack(
+            [
+                (dynamics_numpy(x + eps * e, u, P) - dynamics_numpy(x - eps * e, u, P)) / (2 * eps)
+                for e in np.eye(14)
+            ]
+        )
+        np.testing.assert_allclose(A @ tangent(x), A_fd @ tangent(x), atol=1e-7)
+
+
 def test_path_constraints_match_numpy(samples) -> None:
     h, _ = constraint_functions()
     c = constraint_param_vector(P)

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from guidance.cli import main
+from guidance.errors import InputError
 from guidance.params import Params, SCvxSettings
 from guidance.scenario import ScenarioError, scenario_from_dict
 
@@ -134,6 +135,17 @@ def test_counts_and_figure_format_are_checked_before_work(
     assert main(["solve", "--out", str(out), "--plot", str(tmp_path / "fig.xyz")]) == 2
     assert "unknown figure format 'xyz'" in capsys.readouterr().err
     assert not out.exists()
+    (tmp_path / "a_file").write_text("")
+    refused = {
+        "--trust-update: applies to --method tscvx only": ["--trust-update", "alg1"],
+        f"--out {tmp_path}: is a folder": ["--out", str(tmp_path)],
+        "--plot": ["--out", str(out), "--plot", str(tmp_path / "a_file" / "fig.png")],
+    }
+    for message, args in refused.items():
+        assert main(["solve", *args]) == 2, args
+        err = capsys.readouterr().err
+        assert message in err and "Traceback" not in err, err
+        assert not out.exists()
 
 
 def test_missing_models_and_data_exit_2(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
@@ -193,7 +205,7 @@ def test_bad_proximal_weight_exits_2(weight: str, capsys: pytest.CaptureFixture[
             main([command, "--prox-u", weight])
         assert exc.value.code == 2
         assert "--prox-u" in capsys.readouterr().err
-    with pytest.raises(ValueError, match="prox_u"):
+    with pytest.raises(InputError, match="prox_u"):
         SCvxSettings(prox_u=float("nan") if weight == "heavy" else float(weight))
 
 
@@ -203,7 +215,7 @@ def test_bad_initial_radius_exits_2(radius: str, capsys: pytest.CaptureFixture[s
         main(["solve", "--eta-init", radius])
     assert exc.value.code == 2
     assert "--eta-init" in capsys.readouterr().err
-    with pytest.raises(ValueError, match=r"eta_init must (lie within \[eta_lb, eta_ub\]|be fin)"):
+    with pytest.raises(InputError, match=r"eta_init must (lie within \[eta_lb, eta_ub\]|be fin)"):
         SCvxSettings(eta_init=float("nan") if radius == "wide" else float(radius))
 
 
@@ -244,3 +256,17 @@ def test_trust_region_factors_and_ratio_thresholds_are_checked() -> None:
     # the limits themselves are allowed
     assert SCvxSettings(alpha=1.0, beta=1.0).beta == 1.0
     assert SCvxSettings(rho0=0.7, rho1=0.7, rho2=0.7).rho1 == 0.7
+
+
+def test_scenario_all_lists_every_parameter_and_reads_back(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """`guidance scenario --all` prints every parameter a scenario file may set (an override
+    kept, the rest at their defaults), and the printed file is the same scenario."""
+    path = tmp_path / "s.json"
+    path.write_text(json.dumps({**GOOD, "T_max": 4.5}))
+    assert main(["scenario", "--all", str(path)]) == 0
+    printed = json.loads(capsys.readouterr().out)
+    assert set(Params().to_json_dict()) <= set(printed)
+    assert printed["T_max"] == 4.5 and printed["m_dry"] == Params().m_dry
+    assert scenario_from_dict(printed) == scenario_from_dict({**GOOD, "T_max": 4.5})

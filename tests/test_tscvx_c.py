@@ -24,6 +24,7 @@ import pytest
 
 from guidance import cguidance
 from guidance.catalog import SCENARIOS
+from guidance.errors import InputError
 from guidance.params import NC, NU, NX, Params, Scenario, SCvxSettings
 from guidance.scenario import ScenarioError
 from guidance.verify import audit
@@ -247,7 +248,7 @@ def test_cli_initial_radius_reaches_the_c_loop(tmp_path: Path, nets) -> None:
 def test_initial_radius_outside_the_bounds_is_refused(nets) -> None:
     """The C library refuses an initial radius outside [eta_lb, eta_ub] with a message (it
     is not replaced by the default)."""
-    with pytest.raises(ValueError, match=r"eta_init: must be 0 .* got 20"):
+    with pytest.raises(InputError, match=r"eta_init: must be 0 .* got 20"):
         cguidance.solve_tscvx_c(SCENARIOS["default"], nets=nets, eta_init=20.0)
 
 

@@ -9,11 +9,11 @@
 #define DEG (3.14159265358979323846 / 180.0)
 #define UNIT_QUATERNION_TOL 1e-6
 
-void pdg_default_params(pdg_params *p)
+pdg_setup_status pdg_default_params(pdg_params *p)
 {
     const double I_sp = 30.0, P_amb = 0.1, A_noz = 0.5, rho_SA_CA = 0.2;
     if (!p) {
-        return;
+        return PDG_SETUP_NULL_ARGUMENT;
     }
     memset(p, 0, sizeof *p);
     p->g_I[0] = -1.0;
@@ -35,12 +35,13 @@ void pdg_default_params(pdg_params *p)
     p->q_f[0] = 1.0;
     p->final_roll_free = 1;
     p->N = 50;
+    return PDG_SETUP_OK;
 }
 
-void pdg_default_scenario(pdg_scenario *s)
+pdg_setup_status pdg_default_scenario(pdg_scenario *s)
 {
     if (!s) {
-        return;
+        return PDG_SETUP_NULL_ARGUMENT;
     }
     memset(s, 0, sizeof *s);
     s->r0[0] = 4.0;
@@ -49,13 +50,13 @@ void pdg_default_scenario(pdg_scenario *s)
     s->v0[2] = -2.0;
     s->q0[0] = 1.0;
     s->m0 = 3.0;
-    pdg_default_params(&s->params);
+    return pdg_default_params(&s->params);
 }
 
-void pdg_default_settings(pdg_settings *st)
+pdg_setup_status pdg_default_settings(pdg_settings *st)
 {
     if (!st) {
-        return;
+        return PDG_SETUP_NULL_ARGUMENT;
     }
     st->lam = 500.0;
     st->rho0 = 0.0;
@@ -78,6 +79,7 @@ void pdg_default_settings(pdg_settings *st)
     st->socp_warm_start = 1;
     st->tau_r_update = 1;
     st->prox_u = 2e-2;
+    return PDG_SETUP_OK;
 }
 
 /* ---- derived quantities (guidance/params.py properties) ---------------------------------- */

@@ -114,6 +114,13 @@ static pdg_setup_status check_settings(const pdg_settings *s, char *msg)
              {"tight_tol", s->tight_tol}, {"socp_tol", s->socp_tol}, {"prox_u", s->prox_u}};
     const struct {
         const char *name;
+        double v;
+    } factor[] = {{"alpha", s->alpha}, {"beta", s->beta}},
+      nonneg[] = {{"step_tol", s->step_tol},   {"vc_tol", s->vc_tol},
+                  {"defect_tol", s->defect_tol}, {"tight_tol", s->tight_tol},
+                  {"prox_u", s->prox_u}};
+    const struct {
+        const char *name;
         int v, lo, hi;
     } n[] = {{"iter_max", s->iter_max, 1, 100},
              {"max_subproblems", s->max_subproblems, 1, 500},
@@ -136,20 +143,47 @@ static pdg_setup_status check_settings(const pdg_settings *s, char *msg)
             return bad_setting(msg, text);
         }
     }
-    if (!(s->eta_lb > 0 && s->eta_lb <= s->eta_init && s->eta_init <= s->eta_ub)) {
+    /* each refusal names the one field at fault and its value (the order of params.py) */
+    if (!(s->eta_lb > 0)) {
+        snprintf(text, sizeof text, "eta_lb: must be > 0, got %g", s->eta_lb);
+        return bad_setting(msg, text);
+    }
+    if (!(s->eta_ub >= s->eta_lb)) {
+        snprintf(text, sizeof text, "eta_ub: must be >= eta_lb = %g, got %g", s->eta_lb,
+                 s->eta_ub);
+        return bad_setting(msg, text);
+    }
+    if (!(s->eta_lb <= s->eta_init && s->eta_init <= s->eta_ub)) {
         snprintf(text, sizeof text, "eta_init: must lie within [eta_lb, eta_ub] = [%g, %g], got %g",
                  s->eta_lb, s->eta_ub, s->eta_init);
         return bad_setting(msg, text);
     }
-    if (!(s->lam > 0 && s->rho0 <= s->rho1 && s->rho1 <= s->rho2)) {
-        return bad_setting(msg, "lam, rho0..2: need lam > 0 and rho0 <= rho1 <= rho2");
+    if (!(s->lam > 0)) {
+        snprintf(text, sizeof text, "lam: must be > 0, got %g", s->lam);
+        return bad_setting(msg, text);
     }
-    if (!(s->alpha >= 1.0 && s->beta >= 1.0)) {
-        return bad_setting(msg, "alpha, beta: trust-region factors must be >= 1");
+    if (!(s->rho0 <= s->rho1)) {
+        snprintf(text, sizeof text, "rho1: must satisfy rho0 <= rho1 (rho0 = %g), got %g", s->rho0,
+                 s->rho1);
+        return bad_setting(msg, text);
     }
-    if (!(s->step_tol >= 0 && s->vc_tol >= 0 && s->defect_tol >= 0 && s->tight_tol >= 0 &&
-          s->prox_u >= 0)) {
-        return bad_setting(msg, "step_tol, vc_tol, defect_tol, tight_tol, prox_u: must be >= 0");
+    if (!(s->rho1 <= s->rho2)) {
+        snprintf(text, sizeof text, "rho2: must satisfy rho1 <= rho2 (rho1 = %g), got %g", s->rho1,
+                 s->rho2);
+        return bad_setting(msg, text);
+    }
+    for (i = 0; i < sizeof factor / sizeof factor[0]; ++i) {
+        if (!(factor[i].v >= 1.0)) {
+            snprintf(text, sizeof text, "%s: must be >= 1 (a trust-region factor), got %g",
+                     factor[i].name, factor[i].v);
+            return bad_setting(msg, text);
+        }
+    }
+    for (i = 0; i < sizeof nonneg / sizeof nonneg[0]; ++i) {
+        if (!(nonneg[i].v >= 0)) {
+            snprintf(text, sizeof text, "%s: must be >= 0, got %g", nonneg[i].name, nonneg[i].v);
+            return bad_setting(msg, text);
+        }
     }
     if (!(s->socp_tol > 0 && s->socp_tol < 1)) {
         snprintf(text, sizeof text, "socp_tol: must lie within (0, 1), got %g", s->socp_tol);
@@ -1255,16 +1289,18 @@ size_t pdg_arena_high_water(const pdg_workspace *ws)
     return PDG_WS_READY(ws) ? ws->arena_high : 0;
 }
 
-void pdg_problem_size(const pdg_workspace *ws, int *n, int *p, int *m, int *nnz_A, int *nnz_G)
+pdg_setup_status pdg_problem_size(const pdg_workspace *ws, int *n, int *p, int *m, int *nnz_A,
+                                  int *nnz_G)
 {
     if (!PDG_WS_READY(ws)) {
-        return;
+        return PDG_SETUP_NOT_READY;
     }
     if (n) *n = ws->n;
     if (p) *p = ws->p;
     if (m) *m = ws->m;
     if (nnz_A) *nnz_A = ws->nnz_A;
     if (nnz_G) *nnz_G = ws->nnz_G;
+    return PDG_SETUP_OK;
 }
 
 /* ---- test hooks -------------------------------------------------------------------------- */

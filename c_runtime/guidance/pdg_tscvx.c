@@ -13,14 +13,15 @@
 
 #define THETA PDG_THETA_LEN
 
-void pdg_theta_of(const pdg_scenario *s, double *theta)
+pdg_setup_status pdg_theta_of(const pdg_scenario *s, double *theta)
 {
     if (!s || !theta) {
-        return;
+        return PDG_SETUP_NULL_ARGUMENT;
     }
     pdg_initial_state(s, theta); /* theta starts with x0 (guidance.dataset.theta_of) */
     theta[14] = s->params.glideslope_deg;
     theta[15] = s->params.tilt_max_deg;
+    return PDG_SETUP_OK;
 }
 
 /* Refuses a network that is not of `kind` or does not fit N; 0 = fits. */

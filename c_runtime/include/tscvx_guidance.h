@@ -205,10 +205,11 @@ typedef struct pdg_workspace pdg_workspace; /* opaque, lives in the arena */
 
 /* ---- API --------------------------------------------------------------------------------- */
 
-void pdg_default_settings(pdg_settings *settings);
-void pdg_default_params(pdg_params *params);
+/* Table 1's settings and DESIGN.md's vehicle; PDG_SETUP_NULL_ARGUMENT for NULL. */
+pdg_setup_status pdg_default_settings(pdg_settings *settings);
+pdg_setup_status pdg_default_params(pdg_params *params);
 /* The default scenario of DESIGN.md (r0 = (4, 4, 0), v0 = (0, -1, -2), m0 = 3, ...). */
-void pdg_default_scenario(pdg_scenario *scenario);
+pdg_setup_status pdg_default_scenario(pdg_scenario *scenario);
 
 /* PDG_SETUP_OK, or PDG_SETUP_BAD_SETTINGS with the field, its range and the value in `message`
  * (PDG_MESSAGE_LEN bytes; may be NULL): what pdg_workspace_size and pdg_setup refuse. */
@@ -239,10 +240,12 @@ int pdg_log_length(const pdg_workspace *ws);
 pdg_setup_status pdg_get_log(const pdg_workspace *ws, int i, pdg_log_row *row);
 pdg_setup_status pdg_get_mask(const pdg_workspace *ws, int k, unsigned char *mask);
 
-/* Most bytes of the arena ever used (setup scratch included) and the size of the
- * subproblem: variables n, equality rows p, cone rows m, nonzeros of A and G. */
+/* Most bytes of the arena ever used (setup scratch included; 0 for a workspace not set up)
+ * and the size of the subproblem: variables n, equality rows p, cone rows m, nonzeros of A
+ * and G (any output may be NULL; PDG_SETUP_NOT_READY, outputs untouched, when not set up). */
 size_t pdg_arena_high_water(const pdg_workspace *ws);
-void pdg_problem_size(const pdg_workspace *ws, int *n, int *p, int *m, int *nnz_A, int *nnz_G);
+pdg_setup_status pdg_problem_size(const pdg_workspace *ws, int *n, int *p, int *m, int *nnz_A,
+                                  int *nnz_G);
 
 /* ---- T-SCvx on board (paper Algorithm 2, pdg_tscvx.c) ---------------------------------------
  *
@@ -292,8 +295,9 @@ typedef struct {
     double eta_init;       /* trust radius the solve started from */
 } pdg_tscvx_report;
 
-/* theta of a scenario (PDG_THETA_LEN numbers, guidance/dataset.py theta_of). */
-void pdg_theta_of(const pdg_scenario *scenario, double *theta);
+/* theta of a scenario (PDG_THETA_LEN numbers, guidance/dataset.py theta_of);
+ * PDG_SETUP_NULL_ARGUMENT for NULL. */
+pdg_setup_status pdg_theta_of(const pdg_scenario *scenario, double *theta);
 
 /* The projected warm start of the solution network for `scenario` into x (N x 14), u (N x 3),
  * t_f: for tests and ground tools (pdg_solve_tscvx does the same internally). Returns 0 or a

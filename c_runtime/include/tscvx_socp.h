@@ -36,7 +36,7 @@
  * Lifecycle (memory is claimed in exactly one place, from ONE caller-provided arena):
  *
  *   1. tscvx_default_settings(&st)                      -- defaults, edit as needed
- *   2. tscvx_scratch_size(&data, &st, &nscratch)         -- pure arithmetic
+ *   2. tscvx_scratch_size(&data, &st, &nscratch)         -- validates, then arithmetic
  *      tscvx_workspace_size(&data, &st, scratch, nscratch, &narena)
  *                                                       -- ordering + symbolic analysis in
  *                                                          caller scratch (contents clobbered;
@@ -54,10 +54,13 @@
  *                                                          owns the arena and may reuse it
  *
  * The workspace is opaque and lives inside the arena. Every call taking it first checks a mark
- * that setup writes last and cleanup clears, so a workspace whose arena was reused or
- * overwritten is refused (TSCVX_SETUP_NOT_READY; tscvx_solve: TSCVX_INVALID_INPUT) before any
- * of its pointers is followed. The library never calls malloc, has no recursion and no global
- * mutable state. Every public function returns a status code.
+ * that setup writes last and cleanup clears (and that the KKT method pointer is one of the
+ * library's), so a workspace whose arena was reused or overwritten is refused
+ * (TSCVX_SETUP_NOT_READY; tscvx_solve: TSCVX_INVALID_INPUT) before any of its pointers is
+ * followed. The workspace is not checksummed: a bit flipped inside it with the mark intact (a
+ * single-event upset) is not detected, and can make a call read or write out of bounds; flight
+ * memory needs EDAC for that, as for any code. The library never calls malloc, has no
+ * recursion and no global mutable state. Every public function returns a status code.
  */
 #ifndef TSCVX_SOCP_H
 #define TSCVX_SOCP_H
@@ -90,6 +93,8 @@ typedef enum {
     TSCVX_SETUP_BAD_INDEX,       /* iteration-log index out of range */
     TSCVX_SETUP_NOT_BANDED,      /* kkt_backend TSCVX_KKT_BANDED, but no banded structure */
     TSCVX_SETUP_P_NOT_PSD,       /* P fails the semidefiniteness check (see the problem form) */
+    TSCVX_SETUP_NO_SOLUTION,     /* getters: no solve since setup or the last data update, or
+                                    (tscvx_get_solution) the last one ended in NUMERICAL_ERROR */
     TSCVX_SETUP_NSTATUS
 } tscvx_setup_status;
 
@@ -207,7 +212,8 @@ typedef struct tscvx_workspace tscvx_workspace; /* opaque, lives in the arena */
 
 tscvx_setup_status tscvx_default_settings(tscvx_settings *settings);
 
-/* Bytes of scratch that tscvx_workspace_size needs (arithmetic only, data not checked). */
+/* Bytes of scratch that tscvx_workspace_size needs: the data and settings are validated as
+ * by setup (the same statuses), then the size is arithmetic on the dimensions. */
 tscvx_setup_status tscvx_scratch_size(const tscvx_data *data, const tscvx_settings *settings,
                                       size_t *scratch_bytes);
 
@@ -259,14 +265,16 @@ tscvx_setup_status tscvx_warm_start(tscvx_workspace *ws, const tscvx_float *x,
 tscvx_solve_status tscvx_solve(tscvx_workspace *ws);
 
 /* Copies the last solution (original units) into caller arrays; any may be NULL.
- * x: n, y: p, z: m, s: m. For infeasible statuses these hold the certificate. */
+ * x: n, y: p, z: m, s: m. For infeasible statuses these hold the certificate; for
+ * SOLVED_INACCURATE and MAX_ITER the best or last iterate. TSCVX_SETUP_NO_SOLUTION (arrays
+ * untouched) before a solve since the last setup or data update, and after NUMERICAL_ERROR. */
 tscvx_setup_status tscvx_get_solution(const tscvx_workspace *ws, tscvx_float *x, tscvx_float *y,
                                       tscvx_float *z, tscvx_float *s);
 
 tscvx_setup_status tscvx_get_info(const tscvx_workspace *ws, tscvx_info *info);
 
-/* Row k (0 <= k <= info.iterations) of the last solve's iteration log; TSCVX_SETUP_NOT_READY
- * before a solve (since setup or the last data update), as tscvx_get_solution. */
+/* Row k (0 <= k <= info.iterations) of the last solve's iteration log;
+ * TSCVX_SETUP_NO_SOLUTION before a solve (since setup or the last data update). */
 tscvx_setup_status tscvx_get_iter_log(const tscvx_workspace *ws, tscvx_int k,
                                       tscvx_iter_log *row);
 

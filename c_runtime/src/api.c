@@ -27,6 +27,8 @@ static const char *const setup_messages[TSCVX_SETUP_NSTATUS] = {
     "row of border variables only, or too wide a profile)",
     "P is not positive semidefinite (a negative diagonal entry, an entry with "
     "P_ij^2 > P_ii P_jj, or a factorization of P that shows a negative eigenvalue)",
+    "no solution to return: no solve since setup or the last data update, or the last solve "
+    "ended in a numerical error",
 };
 
 static const char *const solve_messages[TSCVX_NSTATUS] = {
@@ -127,12 +129,15 @@ static int all_finite(const tscvx_float *v, tscvx_int n) {
 }
 
 /* CSC of nrow x ncol: pointers monotone from 0, indices in range, strictly increasing.
- * upper != 0 additionally demands row <= col (P). */
+ * upper != 0 additionally demands row <= col (P). The pointers are checked whole before any
+ * index is read (Mi may be NULL where the pointers say there are no entries). */
 static tscvx_setup_status check_csc(const tscvx_int *Mp, const tscvx_int *Mi, tscvx_int nrow,
                                     tscvx_int ncol, int upper) {
     if (Mp[0] != 0) return TSCVX_SETUP_BAD_SPARSITY;
-    for (tscvx_int j = 0; j < ncol; j++) {
+    for (tscvx_int j = 0; j < ncol; j++)
         if (Mp[j + 1] < Mp[j]) return TSCVX_SETUP_BAD_SPARSITY;
+    if (Mp[ncol] > 0 && Mi == NULL) return TSCVX_SETUP_NULL_ARGUMENT;
+    for (tscvx_int j = 0; j < ncol; j++) {
         for (tscvx_int k = Mp[j]; k < Mp[j + 1]; k++) {
             if (Mi[k] < 0 || Mi[k] >= nrow) return TSCVX_SETUP_BAD_SPARSITY;
             if (k > Mp[j] && Mi[k] <= Mi[k - 1]) return TSCVX_SETUP_BAD_SPARSITY;
@@ -517,7 +522,10 @@ tscvx_setup_status tscvx_update_data(tscvx_workspace *ws, const tscvx_float *Px,
     }
     data_norms(ws, Px, c, b, h);
     tscvx_update_equilibrate(ws, Px, c, Ax, b, Gx, h);
-    if (Px && ws->P.nnz > 0 && ws->method->check_p(ws) != 0) { /* not ready, as above */
+    /* the factorization test sees P only once it is stored: a P it refused stays refused, and
+     * is tested again, until an update replaces it */
+    if ((Px || ws->p_refused) && ws->P.nnz > 0) ws->p_refused = ws->method->check_p(ws) != 0;
+    if (ws->p_refused) { /* not ready, as above */
         ws->ready = 0;
         ws->info.status = TSCVX_INVALID_INPUT;
         return TSCVX_SETUP_P_NOT_PSD;
@@ -573,8 +581,9 @@ tscvx_solve_status tscvx_solve(tscvx_workspace *ws) {
 tscvx_setup_status tscvx_get_solution(const tscvx_workspace *ws, tscvx_float *x, tscvx_float *y,
                                       tscvx_float *z, tscvx_float *s) {
     if (ws == NULL) return TSCVX_SETUP_NULL_ARGUMENT;
-    if (!ws_live(ws) || !ws->ready || ws->info.status == TSCVX_UNSOLVED)
-        return TSCVX_SETUP_NOT_READY;
+    if (!ws_live(ws) || !ws->ready) return TSCVX_SETUP_NOT_READY;
+    if (ws->info.status == TSCVX_UNSOLVED || ws->info.status == TSCVX_NUMERICAL_ERROR)
+        return TSCVX_SETUP_NO_SOLUTION; /* nothing solved since the data, or no point kept */
     tscvx_unscale_solution(ws, x, y, z, s);
     return TSCVX_SETUP_OK;
 }
@@ -589,8 +598,8 @@ tscvx_setup_status tscvx_get_info(const tscvx_workspace *ws, tscvx_info *info) {
 tscvx_setup_status tscvx_get_iter_log(const tscvx_workspace *ws, tscvx_int k,
                                       tscvx_iter_log *row) {
     if (ws == NULL || row == NULL) return TSCVX_SETUP_NULL_ARGUMENT;
-    if (!ws_live(ws) || !ws->ready || ws->info.status == TSCVX_UNSOLVED)
-        return TSCVX_SETUP_NOT_READY; /* no log since setup or the last update */
+    if (!ws_live(ws) || !ws->ready) return TSCVX_SETUP_NOT_READY;
+    if (ws->info.status == TSCVX_UNSOLVED) return TSCVX_SETUP_NO_SOLUTION; /* no log since the data */
     if (k < 0 || k >= ws->log_cap || k > ws->info.iterations) return TSCVX_SETUP_BAD_INDEX;
     *row = ws->log[k];
     return TSCVX_SETUP_OK;

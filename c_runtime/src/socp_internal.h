@@ -326,7 +326,8 @@ struct tscvx_workspace {
     tscvx_info info;
     tscvx_iter_log *log; /* max_iter + 1 rows */
     tscvx_int log_cap;
-    int ready; /* data valid and set up */
+    int ready;     /* data valid and set up */
+    int p_refused; /* the stored P failed the factorization test (tscvx_update_data) */
     size_t arena_used, arena_high;
 };
 

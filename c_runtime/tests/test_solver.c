@@ -141,6 +141,17 @@ static void test_bad_input(void) {
     tscvx_float Gx4[] = {-1, -1, -1};
     d.Gp = Gp4, d.Gi = Gi4, d.Gx = Gx4;
     CHECK(try_setup(&d) == TSCVX_SETUP_BAD_SPARSITY, "duplicate row index accepted");
+    /* p = 0 with A's pointers given, not monotone, and no row indices: refused, not read */
+    d = ok;
+    tscvx_int Ap5[] = {0, 1, 0};
+    d.Ap = Ap5, d.Ai = NULL;
+    CHECK(try_setup(&d) == TSCVX_SETUP_BAD_SPARSITY, "non-monotone pointers accepted");
+    tscvx_int Ap6[] = {0, 1, 1};
+    d.Ap = Ap6;
+    CHECK(try_setup(&d) == TSCVX_SETUP_BAD_SPARSITY, "entries in a matrix of no rows accepted");
+    d = ok;
+    d.Gi = NULL;
+    CHECK(try_setup(&d) == TSCVX_SETUP_NULL_ARGUMENT, "NULL row indices accepted");
     tscvx_default_settings(&st);
     CHECK(tscvx_setup(&ws, arena, 64, &ok, &st) == TSCVX_SETUP_ARENA_TOO_SMALL, "tiny arena");
     CHECK(tscvx_solve(NULL) == TSCVX_INVALID_INPUT, "solve(NULL)");
@@ -163,7 +174,9 @@ static void test_update(void) {
     tscvx_workspace *ws = NULL;
     tscvx_iter_log row;
     CHECK(tscvx_setup(&ws, arena, sizeof arena, &d, &st) == TSCVX_SETUP_OK, "setup");
-    CHECK(tscvx_get_iter_log(ws, 0, &row) == TSCVX_SETUP_NOT_READY, "log before a solve");
+    CHECK(tscvx_get_iter_log(ws, 0, &row) == TSCVX_SETUP_NO_SOLUTION, "log before a solve");
+    CHECK(tscvx_get_solution(ws, x, NULL, NULL, NULL) == TSCVX_SETUP_NO_SOLUTION,
+          "solution before a solve");
     CHECK(tscvx_solve(ws) == TSCVX_SOLVED, "first solve");
     CHECK(tscvx_get_iter_log(ws, 0, &row) == TSCVX_SETUP_OK, "log after a solve");
     tscvx_float h2[] = {2, 0, 0}, bad[] = {NAN, 0, 0};
@@ -172,7 +185,7 @@ static void test_update(void) {
     CHECK(tscvx_get_iter_log(ws, 0, &row) == TSCVX_SETUP_NOT_READY, "log after a bad update");
     CHECK(tscvx_solve(ws) == TSCVX_INVALID_INPUT, "solve after bad update");
     CHECK(tscvx_update_data(ws, NULL, NULL, NULL, NULL, NULL, h2) == TSCVX_SETUP_OK, "update");
-    CHECK(tscvx_get_iter_log(ws, 0, &row) == TSCVX_SETUP_NOT_READY, "log after an update");
+    CHECK(tscvx_get_iter_log(ws, 0, &row) == TSCVX_SETUP_NO_SOLUTION, "log after an update");
     CHECK(tscvx_solve(ws) == TSCVX_SOLVED, "second solve");
     tscvx_get_solution(ws, x, NULL, NULL, NULL);
     CHECK(fabs(x[0] - sqrt(2.0)) < 1e-7, "updated x %g", x[0]);
@@ -361,6 +374,13 @@ static void test_indefinite_p_every_method(void) {
         CHECK(tscvx_update_data(ws, full_bad, NULL, NULL, NULL, NULL, NULL) ==
                   TSCVX_SETUP_P_NOT_PSD, "method %d: indefinite P update accepted", (int)mth);
         CHECK(tscvx_solve(ws) == TSCVX_INVALID_INPUT, "method %d: solve after it", (int)mth);
+        /* the refused P is stored (the factorization test needs it there): an update without
+         * P keeps it refused, not solved as if it were valid */
+        const tscvx_float c2[] = {1, -1, 0.5};
+        CHECK(tscvx_update_data(ws, NULL, c2, NULL, NULL, NULL, NULL) == TSCVX_SETUP_P_NOT_PSD,
+              "method %d: an update without P accepted the refused P", (int)mth);
+        CHECK(tscvx_solve(ws) == TSCVX_INVALID_INPUT, "method %d: solve on the refused P",
+              (int)mth);
         CHECK(tscvx_update_data(ws, full_good, NULL, NULL, NULL, NULL, NULL) == TSCVX_SETUP_OK &&
                   tscvx_solve(ws) == TSCVX_SOLVED,
               "method %d: good P update", (int)mth);

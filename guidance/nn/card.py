@@ -391,12 +391,19 @@ def _ceiling_section(add, ceiling: dict) -> None:
     coarse = [e for e, ok in meets.items() if not ok]
     if coarse and spacing is not None:
         within = f"only within {max(fine):g} std" if fine else "at none of the distances tried"
+        # how much farther apart the training landings are than the largest distance at
+        # which exact neighbours still meet the goal (or than the smallest one tried)
+        farther = (
+            f"{spacing / max(fine):.0f} times farther apart than {max(fine):g} std"
+            if fine
+            else f"more than {spacing / min(coarse):.0f} times farther apart than "
+            f"{min(coarse):g} std"
+        )
         add(
             f"Exact masks of neighbours meet issue 5's goal (recall 0.99 at precision 0.9) "
             f"{within}, not at {min(coarse):g} std: the tight set of the k-th subproblem "
             "changes under small changes of θ (an accept/reject decision, a constraint that "
-            "touches its bound or not). The training landings are "
-            f"{spacing / min(coarse):.0f} times farther apart than that: the goal asks a "
+            f"touches its bound or not). The training landings are {farther}: the goal asks a "
             "predictor of (θ, k) to resolve detail that much finer than its training data, in "
             "a 15-dimensional θ."
         )

@@ -201,6 +201,11 @@ static void test_stale_workspace(pdg_workspace *ws, void *arena, size_t bytes)
     CHECK(pdg_solve(ws, &s, NULL, &r) == PDG_INVALID_INPUT);
     CHECK(pdg_get_log(ws, 0, &row) == PDG_SETUP_NOT_READY);
     CHECK(pdg_log_length(ws) == 0 && pdg_arena_high_water(ws) == 0);
+    int n = -1;
+    CHECK(pdg_problem_size(ws, &n, NULL, NULL, NULL, NULL) == PDG_SETUP_NOT_READY && n == -1);
+    CHECK(pdg_default_scenario(NULL) == PDG_SETUP_NULL_ARGUMENT);
+    CHECK(pdg_default_settings(NULL) == PDG_SETUP_NULL_ARGUMENT);
+    CHECK(pdg_theta_of(&s, NULL) == PDG_SETUP_NULL_ARGUMENT);
 }
 
 /* Mask callback: keep everything except every constraint c = 1 (glideslope). */
