@@ -8,6 +8,7 @@ from pathlib import Path
 
 from guidance.errors import InputError
 from guidance.params import Scenario, SCvxSettings
+from guidance.scenario import checked
 from guidance.scvx import SCvxResult, SCvxSolver, format_log
 from guidance.tscvx import REDUCED_ETA_INIT, solve_tscvx
 
@@ -44,7 +45,8 @@ def solve(
         raise InputError(f"method {method!r}: use one of {', '.join(METHODS)}")
     if backend not in BACKENDS:
         raise InputError(f"backend {backend!r}: use one of {', '.join(BACKENDS)}")
-    scenario = Scenario() if scenario is None else scenario
+    # checked as a scenario file is: a Scenario built in Python skips no rule
+    scenario = checked(Scenario() if scenario is None else scenario)
     settings = SCvxSettings() if settings is None else settings
     models_dir = Path(models_dir)
     if method == "tscvx":

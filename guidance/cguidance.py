@@ -157,7 +157,11 @@ def library() -> ct.CDLL:
     return lib
 
 
-def _fill(arr: ct.Array, values: Sequence[float]) -> None:
+def _fill(arr: ct.Array, values: Sequence[float], field: str) -> None:
+    """A fixed-size C array from a sequence of exactly its length (the C library checks the
+    numbers themselves; a short or long sequence cannot reach it)."""
+    if len(values) != len(arr):
+        raise ScenarioError(field, f"expected a list of {len(arr)} numbers, got {list(values)}")
     for i, v in enumerate(values):
         arr[i] = float(v)
 
@@ -167,7 +171,7 @@ def c_params(p: Params) -> _Params:
     for f in dataclasses.fields(Params):
         v = getattr(p, f.name)
         if isinstance(v, tuple):
-            _fill(getattr(cp, f.name), v)
+            _fill(getattr(cp, f.name), v, f.name)
         elif f.name in ("final_roll_free", "N"):
             setattr(cp, f.name, int(v))
         else:
@@ -179,7 +183,7 @@ def c_scenario(scenario: Scenario) -> _Scenario:
     s = scenario.initial
     out = _Scenario()
     for name in ("r0", "v0", "q0", "w0"):
-        _fill(getattr(out, name), getattr(s, name))
+        _fill(getattr(out, name), getattr(s, name), name)
     out.m0 = float(s.m0)
     out.params = c_params(scenario.params)
     return out
@@ -435,8 +439,9 @@ _TRAINED: dict[tuple, dict] = {}
 
 def check_trained_params(models_dir: Path | str, kind: str, params: Params) -> None:
     """For an ONNX source, the check of guidance.nn.infer: every problem parameter that is not
-    a network input must be the one the model was trained for (a .tnn blob does not record
-    them; `make lib` writes it from the same ONNX file)."""
+    a network input must be the one the model was trained for, named in the ONNX file's
+    terms. (The C library checks the same against the values the .tnn blob records, for
+    .tnn files and converted ONNX alike; this names them before the conversion.)"""
     import json
 
     from guidance.nn.infer import META_KEY, _params_diff
@@ -450,7 +455,9 @@ def check_trained_params(models_dir: Path | str, kind: str, params: Params) -> N
         from guidance.nn.flight import load_onnx
 
         props = {p.key: p.value for p in load_onnx(path, load_external_data=False).metadata_props}
-        _TRAINED[key] = json.loads(props.get(META_KEY, "{}")).get("params", {})
+        if META_KEY not in props:  # an empty file parses as an empty model
+            raise FlightNetsError(f"model {path}: not a T-SCvx model export (no metadata)")
+        _TRAINED[key] = json.loads(props[META_KEY]).get("params", {})
     diff = _params_diff(_TRAINED[key], params)
     if diff:
         raise FlightNetsError(

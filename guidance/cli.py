@@ -14,7 +14,7 @@ import numpy as np
 
 from guidance import file_check
 from guidance.api import CONSTRAINT_MODEL, MODELS_DIR, SOLUTION_MODEL, solve
-from guidance.errors import InputError
+from guidance.errors import InputError, check_output_path
 from guidance.params import IM, Scenario, SCvxSettings
 from guidance.scenario import load_scenario, scenario_to_dict
 from guidance.tscvx import REDUCED_ETA_INIT
@@ -98,19 +98,6 @@ def _check_plot_format(path: str) -> None:
         )
 
 
-def _check_writable(flag: str, path: Path) -> None:
-    """Create an output file's folder and make sure the file can be written there, before
-    solving: a solve must not end in an error because of where its result goes."""
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise InputError(f"{flag} {path}: cannot create its folder ({exc.strerror})") from None
-    if path.is_dir():
-        raise InputError(f"{flag} {path}: is a folder, not a file")
-    if not os.access(path.parent, os.W_OK) or (path.exists() and not os.access(path, os.W_OK)):
-        raise InputError(f"{flag} {path}: not writable")
-
-
 def cmd_solve(args: argparse.Namespace) -> int:
     from guidance.trajectory_io import write_trajectory
 
@@ -121,7 +108,7 @@ def cmd_solve(args: argparse.Namespace) -> int:
         _check_plot_format(args.plot)
     for flag, path in (("--out", args.out), ("--plot", args.plot)):
         if path:
-            _check_writable(flag, Path(path))
+            check_output_path(flag, Path(path))
     settings = SCvxSettings(
         iter_max=args.iter_max,
         tau_r_update=args.trust_update != "alg1",

@@ -178,8 +178,12 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
 # ---- dataset ------------------------------------------------------------------------------
 def cmd_dataset(args: argparse.Namespace) -> int:
     from guidance.dataset import WorkerDiedError, generate, pack, summary
+    from guidance.errors import InputError, check_output_path
     from guidance.params import SCvxSettings
 
+    if Path(args.run_dir).exists() and not Path(args.run_dir).is_dir():
+        raise InputError(f"--run-dir {args.run_dir}: is a file, not a folder")
+    check_output_path("--output", Path(args.output))  # before the solving, not after
     if not args.pack_only:
         try:
             counts = generate(

@@ -251,16 +251,38 @@ def write_sample(out_dir: Path, rec: dict[str, Any]) -> None:
     os.replace(tmp, path)
 
 
+UNREADABLE = (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile)
+
+
 def read_sample(path: Path) -> dict[str, Any]:
-    with np.load(path, allow_pickle=False) as f:
-        return {k: f[k] for k in f.files}
+    try:
+        with np.load(path, allow_pickle=False) as f:
+            return {k: f[k] for k in f.files}
+    except UNREADABLE as exc:
+        raise InputError(
+            f"sample file {path} is unreadable ({exc}): run `guidance dataset` with the same "
+            "settings again, which solves it again"
+        ) from None
 
 
-def done_ids(out_dir: Path) -> set[int]:
+def done_ids(out_dir: Path, set_aside_unreadable: bool = False) -> set[int]:
+    """The ids solved in ``out_dir``. Writes are atomic, but a file can still be damaged
+    later (a full disk, a copy cut short): with ``set_aside_unreadable`` (a run resuming)
+    such a file is renamed ``*.unreadable`` and its sample solved again."""
     d = out_dir / "samples"
     if not d.is_dir():
         return set()
-    return {int(p.name[:6]) for p in d.glob("[0-9]" * 6 + ".npz")}
+    ids = set()
+    for p in d.glob("[0-9]" * 6 + ".npz"):
+        if set_aside_unreadable:
+            try:
+                read_sample(p)
+            except InputError:
+                p.rename(p.with_suffix(".unreadable"))
+                print(f"{p}: unreadable, set aside; its sample is solved again", file=sys.stderr)
+                continue
+        ids.add(int(p.name[:6]))
+    return ids
 
 
 def _run_config_path(out_dir: Path) -> Path:
@@ -332,7 +354,7 @@ def generate(
     }
     _check_run_config(out, config)
     version = code_version()
-    todo = [i for i in range(n_base) if i not in done_ids(out)]
+    todo = [i for i in range(n_base) if i not in done_ids(out, set_aside_unreadable=True)]
     jobs = [
         (i, seed, config["ranges"], config["params"], config["scvx_settings"], config["backend"])
         for i in todo

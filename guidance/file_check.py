@@ -15,10 +15,10 @@ from pathlib import Path
 import numpy as np
 
 from guidance.errors import InputError
-from guidance.params import CONSTRAINT_NAMES, IM, NU, NX, Params
+from guidance.params import CONSTRAINT_NAMES, IM, PARAM_NAMES, Params
 from guidance.scenario import ScenarioError, params_from_dict, scenario_from_dict
 from guidance.trajectory_io import read_trajectory
-from guidance.verify import Audit, audit, engine_landing_error
+from guidance.verify import Audit, audit, checked_trajectory, engine_landing_error
 
 SAMPLES_BETWEEN_NODES = 8  # path constraints sampled inside each interval (reported only)
 
@@ -73,7 +73,11 @@ class FileVerdict:
 def _problem(data: dict[str, object], path: Path) -> tuple[Params, np.ndarray | None]:
     """The file's parameters and, when it holds its scenario, the initial state it asks for."""
     try:
-        params = params_from_dict(data["params"])  # type: ignore[arg-type]
+        recorded = data["params"]
+        missing = [n for n in PARAM_NAMES if isinstance(recorded, dict) and n not in recorded]
+        if missing:  # a trajectory file records every parameter: none is taken as a default
+            raise ScenarioError(missing[0], "missing (the file records every parameter)")
+        params = params_from_dict(recorded)  # type: ignore[arg-type]
     except ScenarioError as exc:
         raise InputError(f"{path}: params field '{exc.field}': {exc.reason}") from exc
     if "scenario" not in data:
@@ -93,16 +97,10 @@ def _problem(data: dict[str, object], path: Path) -> tuple[Params, np.ndarray | 
 
 
 def _arrays(data: dict[str, object], p: Params, path: Path) -> tuple[np.ndarray, np.ndarray, float]:
-    x, u = np.asarray(data["x"], float), np.asarray(data["u"], float)
-    t_f = float(np.asarray(data["t_f"]))
-    if x.shape != (p.N, NX) or u.shape != (p.N, NU):
-        raise InputError(
-            f"{path}: x is {x.shape} and u {u.shape}, the params ask for ({p.N}, {NX}) and "
-            f"({p.N}, {NU})"
-        )
-    if not (np.isfinite(x).all() and np.isfinite(u).all() and np.isfinite(t_f) and t_f > 0):
-        raise InputError(f"{path}: holds no trajectory (non-finite x, u or t_f <= 0)")
-    return x, u, t_f
+    try:
+        return checked_trajectory(data["x"], data["u"], data["t_f"], p)
+    except InputError as exc:
+        raise InputError(f"{path}: {exc}") from None
 
 
 def verify_file(path: str | Path, tol: Tolerances = Tolerances()) -> FileVerdict:

@@ -115,6 +115,7 @@ VECTOR_PARAM_SIZES = {
 
 
 # Integer settings and their ranges (the flight library's bounds on its fixed-size loops).
+DISCRETIZATIONS = ("auto", "c", "casadi")  # SCvxSettings.discretization
 INT_SETTING_RANGES = {
     "iter_max": (1, 100),
     "max_subproblems": (1, 500),
@@ -179,8 +180,19 @@ class SCvxSettings:
         """The ranges the flight library checks too (pdg_check_settings in pdg_scvx.c)."""
         for f in dataclasses.fields(self):
             value = getattr(self, f.name)
+            if f.type == "bool" and not isinstance(value, bool):
+                raise InputError(f"{f.name} must be True or False, got {value!r}")
+            if f.type == "float" and (
+                isinstance(value, bool) or not isinstance(value, int | float)
+            ):
+                raise InputError(f"{f.name} must be a number, got {value!r}")
             if isinstance(value, float) and not math.isfinite(value):
                 raise InputError(f"{f.name} must be finite, got {value}")
+        if self.discretization not in DISCRETIZATIONS:
+            raise InputError(
+                f"discretization must be one of {', '.join(DISCRETIZATIONS)}, "
+                f"got {self.discretization!r}"
+            )
         if not (math.isfinite(self.prox_u) and self.prox_u >= 0.0):
             raise InputError(f"prox_u must be a weight >= 0, got {self.prox_u}")
         if not self.eta_lb > 0.0:

@@ -49,6 +49,19 @@ def _shown(value: Any) -> str:
         return repr(value)
 
 
+def _finite(field: str, v: int | float) -> float:
+    """v as a finite float; an integer too large for a float is refused like infinity."""
+    try:
+        f = float(v)
+    except OverflowError:
+        raise ScenarioError(
+            field, f"must be finite, got an integer of {len(str(v))} digits"
+        ) from None
+    if not math.isfinite(f):
+        raise ScenarioError(field, f"must be finite, got {v!r}")
+    return f
+
+
 def _finite_vector(field: str, value: Any, size: int) -> tuple[float, ...]:
     if not isinstance(value, list | tuple) or len(value) != size:
         raise ScenarioError(field, f"expected a list of {size} numbers, got {_shown(value)}")
@@ -56,18 +69,14 @@ def _finite_vector(field: str, value: Any, size: int) -> tuple[float, ...]:
     for v in value:
         if isinstance(v, bool) or not isinstance(v, int | float):
             raise ScenarioError(field, f"expected numbers, got {_shown(v)}")
-        if not math.isfinite(v):
-            raise ScenarioError(field, f"must be finite, got {v!r}")
-        out.append(float(v))
+        out.append(_finite(field, v))
     return tuple(out)
 
 
 def _finite_scalar(field: str, value: Any) -> float:
     if isinstance(value, bool) or not isinstance(value, int | float):
         raise ScenarioError(field, f"expected a number, got {_shown(value)}")
-    if not math.isfinite(value):
-        raise ScenarioError(field, f"must be finite, got {value!r}")
-    return float(value)
+    return _finite(field, value)
 
 
 def _parse_param(name: str, value: Any) -> Any:
@@ -109,6 +118,27 @@ def scenario_from_dict(data: dict[str, Any]) -> Scenario:
     return scenario
 
 
+def _plain(value: Any) -> Any:
+    """numpy arrays and scalars as the JSON types they stand for (a Scenario built in Python
+    may hold them); everything else as it is, for the contract's checks to judge."""
+    if isinstance(value, np.ndarray | list | tuple):
+        return [_plain(v) for v in value]
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
+def checked(scenario: Any) -> Scenario:
+    """A scenario built in Python, checked as a scenario file is (types, sizes, finite
+    values, physics) and with its numbers as floats; ScenarioError names the field."""
+    if not isinstance(scenario, Scenario):
+        raise InputError(f"scenario: expected a guidance.Scenario, got {type(scenario).__name__}")
+    s = scenario.initial
+    data = {"r0": s.r0, "v0": s.v0, "q0": s.q0, "w0": s.w0, "m0": s.m0}
+    data |= {name: getattr(scenario.params, name) for name in PARAM_NAMES}
+    return scenario_from_dict({k: _plain(v) for k, v in data.items()})
+
+
 def params_from_dict(data: dict[str, Any]) -> Params:
     """Build and validate the parameters from a trajectory file's ``params`` dictionary (every
     field given by name, as ``Params.to_json_dict`` writes them)."""
@@ -129,10 +159,20 @@ def load_scenario(path: str | Path) -> Scenario:
     except OSError as exc:
         raise ScenarioError("<file>", f"cannot read {path}: {exc.strerror}") from exc
     try:
-        data = json.loads(text, parse_constant=_reject_constant)
+        data = json.loads(text, parse_constant=_reject_constant, object_pairs_hook=_unique_keys)
     except json.JSONDecodeError as exc:
         raise ScenarioError("<file>", f"{path} is not valid JSON: {exc}") from exc
     return scenario_from_dict(data)
+
+
+def _unique_keys(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    # json keeps the last of two equal keys; a scenario given twice is a typo, not a choice
+    seen: dict[str, Any] = {}
+    for key, value in pairs:
+        if key in seen:
+            raise ScenarioError(key, "given twice")
+        seen[key] = value
+    return seen
 
 
 def _reject_constant(name: str) -> float:

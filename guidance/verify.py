@@ -13,7 +13,13 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from guidance.constraints import path_constraint_values
-from guidance.params import IM, IQ, IR, IV, IW, Params
+from guidance.errors import InputError
+from guidance.params import IM, IQ, IR, IV, IW, NU, NX, Params
+
+# What the check propagates: a landing takes a few U_T, and its states and thrust are O(1)
+# to O(10) in the nondimensional units; far outside these the propagation does not end.
+T_F_RANGE = (1e-6, 1e4)  # U_T
+VALUE_LIMIT = 1e9
 
 
 def _dcm_bi(q: np.ndarray) -> np.ndarray:
@@ -170,10 +176,42 @@ class Audit:
     path_between_nodes: np.ndarray
 
 
+def checked_trajectory(
+    x: object, u: object, t_f: object, p: Params
+) -> tuple[np.ndarray, np.ndarray, float]:
+    """x (N x 14), u (N x 3) and t_f as audit needs them; InputError names what is wrong."""
+    out = []
+    for name, value, cols in (("x", x, NX), ("u", u, NU)):
+        a = np.asarray(value)
+        if a.dtype.kind not in "biuf":
+            raise InputError(f"{name}: expected real numbers, got {a.dtype} values")
+        a = a.astype(float)
+        if a.shape != (p.N, cols):
+            raise InputError(f"{name} is {a.shape}, the params ask for ({p.N}, {cols})")
+        if not np.isfinite(a).all():
+            raise InputError(f"{name}: holds no trajectory (values not finite)")
+        if np.abs(a).max() > VALUE_LIMIT:
+            raise InputError(f"{name}: values beyond {VALUE_LIMIT:g}, outside any landing")
+        out.append(a)
+    tf = np.asarray(t_f)
+    if tf.dtype.kind not in "biuf" or tf.size != 1:
+        raise InputError(f"t_f: expected one real number, got {t_f!r}")
+    t = float(tf.reshape(-1)[0])
+    if not T_F_RANGE[0] <= t <= T_F_RANGE[1]:
+        raise InputError(
+            f"t_f = {t:g}: holds no trajectory the check can fly (t_f within "
+            f"[{T_F_RANGE[0]:g}, {T_F_RANGE[1]:g}] U_T)"
+        )
+    return out[0], out[1], t
+
+
 def audit(x: np.ndarray, u: np.ndarray, t_f: float, p: Params, between: int = 0) -> Audit:
     """The open-loop check of a trajectory; ``between`` > 0 also samples the path constraints
-    at that many times inside each interval."""
-    prop = propagate_sampled(x[0], u, t_f, p, between)
+    at that many times inside each interval. Bad input raises InputError."""
+    if isinstance(between, bool) or not isinstance(between, int | np.integer) or between < 0:
+        raise InputError(f"between: expected an integer >= 0, got {between!r}")
+    x, u, t_f = checked_trajectory(x, u, t_f, p)
+    prop = propagate_sampled(x[0], u, t_f, p, int(between))
     xp = prop.nodes
     landing = _landing_errors(xp[-1], p)
     h = path_constraint_values(x, u, p)

@@ -54,3 +54,43 @@ def test_a_bad_setting_is_an_input_error(call) -> None:
     """What the README promises: bad input raises guidance.InputError, settings included."""
     with pytest.raises(guidance.InputError, match=r"eta_init|iter_max"):
         call()
+
+
+BAD_SCENARIOS = {
+    "m0": guidance.Scenario(guidance.InitialState(m0=1.0)),
+    "q0": guidance.Scenario(guidance.InitialState(q0=(2.0, 0.0, 0.0, 0.0))),
+    "T_min": guidance.Scenario(params=guidance.Params(T_min=6.0)),
+    "N": guidance.Scenario(params=guidance.Params(N=2)),
+    "r0": guidance.Scenario(guidance.InitialState(r0=(1.0, 4.0))),  # type: ignore[arg-type]
+}
+
+
+@pytest.mark.parametrize("backend", ["clarabel", "c-socp", "c"])
+@pytest.mark.parametrize("field", list(BAD_SCENARIOS))
+def test_a_scenario_built_in_python_is_checked_on_every_backend(field: str, backend: str) -> None:
+    """A Scenario object meets the scenario file's rules before any backend solves it (the
+    Python backends used to solve m0 below the dry mass into a negative final mass)."""
+    with pytest.raises(guidance.InputError, match=f"scenario field '{field}'"):
+        guidance.solve(BAD_SCENARIOS[field], backend=backend)
+
+
+def test_numpy_numbers_in_a_scenario_are_numbers() -> None:
+    scn = guidance.Scenario(guidance.InitialState(r0=np.array([4, 4, 0]), m0=np.float64(3.0)))
+    result = guidance.solve(scn, backend="c")
+    assert result.status == "solved" and result.m_f == pytest.approx(
+        guidance.solve(backend="c").m_f
+    )
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        ({"tau_r_update": "no"}, "tau_r_update must be True or False"),  # "no" is truthy
+        ({"socp_warm_start": 1}, "socp_warm_start must be True or False"),
+        ({"discretization": "foo"}, "discretization must be one of auto, c, casadi"),
+        ({"lam": "500"}, "lam must be a number"),
+    ],
+)
+def test_a_setting_of_the_wrong_type_is_refused(change: dict, message: str) -> None:
+    with pytest.raises(guidance.InputError, match=message):
+        guidance.SCvxSettings(**change)

@@ -6,6 +6,7 @@ tscvx_nn_run."""
 from __future__ import annotations
 
 import json
+import re
 import struct
 import subprocess
 from pathlib import Path
@@ -151,7 +152,7 @@ def test_corrupt_or_mismatched_blob_is_refused_with_the_message(blobs: dict[str,
     n_values = struct.unpack_from("<Q", good, 80)[0]
     cases = {
         "bad_magic": b"XSCVXNN\0" + good[8:],
-        "bad_version": _edit(good, 8, "<I", 2),
+        "bad_version": _edit(good, 8, "<I", 1),  # format 1: no trained-for parameters
         "truncated": good[:-8],
         "bad_checksum": _edit(good, len(good) // 2, "<d", 0.123, seal=False),
         "bad_dimensions": _edit(good, 28, "<I", 351),  # d_out no longer matches the weights
@@ -173,6 +174,40 @@ def test_corrupt_or_mismatched_blob_is_refused_with_the_message(blobs: dict[str,
     # heads that do not divide d_model
     with pytest.raises(FlightNetError, match="bad_dimensions"):
         FlightNet(_edit(good, 36, "<I", 3))
+    # a reserved byte set: a later format's field this library does not know
+    with pytest.raises(FlightNetError, match="format version"):
+        FlightNet(_edit(good, 100, "<B", 1))
+
+
+@needs_shipped
+@needs_lib
+def test_a_network_trained_for_other_parameters_is_refused_naming_them() -> None:
+    """The blob records the problem parameters the network was trained for (every one that
+    is not a network input); the C library compares each with the scenario's and names the
+    first that differs. Each of the 35 values is changed in turn, so the order written by
+    guidance/nn/infer.py and the one read by pdg_tscvx.c must be the same."""
+    import dataclasses
+
+    from guidance import cguidance
+    from guidance.catalog import SCENARIOS
+    from guidance.nn.infer import TRAINED_PARAMS, trained_vector
+    from guidance.params import Params
+
+    fw = flight.read_onnx(MODELS / "solution.onnx")
+    np.testing.assert_array_equal(fw.trained, trained_vector(Params().to_json_dict()))
+    fields = [
+        name if np.size(value) == 1 else f"{name}[{k}]"
+        for name in TRAINED_PARAMS
+        for value in [Params().to_json_dict()[name]]
+        for k in range(np.size(value))
+    ]
+    assert len(fields) == fw.trained.size == 35
+    for i, field in enumerate(fields):
+        trained = fw.trained.copy()
+        trained[i] = 2.0 * trained[i] + 0.5  # differs from every default, zeros included
+        net = FlightNet(flight.pack(dataclasses.replace(fw, trained=trained)))
+        with pytest.raises(cguidance.FlightNetsError, match=re.escape(f"parameters: {field} (")):
+            cguidance.solve_tscvx_c(SCENARIOS["default"], masks=False, nets=(net, None))
 
 
 @needs_shipped

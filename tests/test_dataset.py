@@ -102,6 +102,19 @@ def test_generation_resumes_without_redoing_samples(tiny_run) -> None:
         generate(run, 2, seed=11, ranges=EASY, workers=1, progress=False, backend="c")
 
 
+def test_a_damaged_sample_is_named_by_pack_and_solved_again_on_resume(tiny_run, tmp_path) -> None:
+    run = tmp_path / "run"
+    shutil.copytree(tiny_run[0], run)
+    damaged = sample_path(run, 1)
+    damaged.write_bytes(damaged.read_bytes()[:100])  # a copy cut short
+    with pytest.raises(InputError, match=f"sample file {damaged} is unreadable"):
+        pack(run, tmp_path / "d.npz")
+    again = generate(run, 2, seed=11, ranges=EASY, workers=1, progress=False, backend="clarabel")
+    assert sum(again.values()) == 1  # id 1 alone
+    assert damaged.with_suffix(".unreadable").exists()
+    assert pack(run, tmp_path / "d.npz")["n_base"] == 2
+
+
 def test_cli_refuses_a_resume_with_other_options(tiny_run, tmp_path, capsys) -> None:
     argv = ["dataset", "--run-dir", str(tiny_run[0]), "--output", str(tmp_path / "d.npz")]
     assert main([*argv, "--n-base", "60", "--seed", "1", "--no-progress"]) == 2
@@ -126,6 +139,19 @@ def test_pack_only_without_a_run_is_bad_input(tmp_path, capsys) -> None:
     argv = ["dataset", "--pack-only", "--run-dir", str(run), "--output", str(tmp_path / "d.npz")]
     assert main(argv) == 2
     assert "is not a dataset run directory (no run.json)" in capsys.readouterr().err
+
+
+def test_unusable_outputs_are_refused_before_solving(tmp_path, capsys) -> None:
+    (tmp_path / "a_file").write_text("")
+    for args, message in [
+        (["--run-dir", str(tmp_path / "a_file")], "is a file, not a folder"),
+        (["--output", "/proc/d.npz"], "--output /proc/d.npz: cannot write there"),
+    ]:
+        argv = ["dataset", "--n-base", "1", "--run-dir", str(tmp_path / "run"),
+                "--output", str(tmp_path / "d.npz"), *args]  # fmt: skip
+        assert main(argv) == 2
+        assert message in capsys.readouterr().err
+        assert not (tmp_path / "run").exists()
 
 
 def die_on_job_1(job):

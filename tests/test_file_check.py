@@ -169,6 +169,16 @@ def _params_json(written: Path) -> dict:
         ("nan", "holds no trajectory"),
         ("t_max", "params and scenario disagree on T_max"),
         ("n", "params field 'N'"),
+        # hand-edited files (adversarial review, 26 Nov): exit 2, not a traceback or a hang
+        ("t_f_pair", "t_f: expected one real number"),
+        ("t_f_text", "t_f: expected one real number"),
+        ("t_f_huge", "t_f = 1e+300: holds no trajectory the check can fly"),
+        ("t_f_tiny", "t_f = 1e-300: holds no trajectory the check can fly"),
+        ("x_text", "x: expected real numbers"),
+        ("x_complex", "x: expected real numbers"),
+        ("u_huge", "u: values beyond 1e+09"),
+        ("no_params", "params field 'g_I': missing"),
+        ("no_t_min", "params field 'T_min': missing"),
     ],
 )
 def test_files_that_cannot_be_checked_exit_2(
@@ -187,6 +197,19 @@ def test_files_that_cannot_be_checked_exit_2(
         _edited(written, path, params=json.dumps({**_params_json(written), "T_max": 4.0}))
     elif case == "n":
         _edited(written, path, params=json.dumps({**_params_json(written), "N": 2}))
+    elif case.startswith("t_f_"):
+        t_f = {"pair": [1.0, 2.0], "text": "abc", "huge": 1e300, "tiny": 1e-300}[case[4:]]
+        _edited(written, path, t_f=np.asarray(t_f))
+    elif case == "x_text":
+        _edited(written, path, x=x.astype(str))
+    elif case == "x_complex":
+        _edited(written, path, x=x + 1j)
+    elif case == "u_huge":
+        with np.load(written) as f:
+            _edited(written, path, u=f["u"] * 1e300)
+    elif case in ("no_params", "no_t_min"):
+        params = {k: v for k, v in _params_json(written).items() if k != "T_min"}
+        _edited(written, path, params=json.dumps({} if case == "no_params" else params))
     assert main(["verify", str(written), str(path)]) == 2
     captured = capsys.readouterr()
     assert message in captured.err

@@ -11,7 +11,7 @@ import pytest
 from guidance.cli import main
 from guidance.errors import InputError
 from guidance.params import Params, SCvxSettings
-from guidance.scenario import ScenarioError, scenario_from_dict
+from guidance.scenario import ScenarioError, load_scenario, scenario_from_dict
 
 GOOD = {
     "r0": [4, 4, 0],
@@ -28,6 +28,8 @@ BAD = [
     ({"r0": [4, 4]}, "r0"),
     ({"v0": [0, -1, "x"]}, "v0"),
     ({"m0": float("nan")}, "m0"),
+    ({"m0": 10**400}, "m0"),  # an integer no float holds (JSON allows it)
+    ({"r0": [4, 10**400, 0]}, "r0"),
     ({"r0": [4, float("inf"), 0]}, "r0"),
     ({"q0": [1, 0.1, 0, 0]}, "q0"),
     ({"m0": 2.0}, "m0"),
@@ -140,6 +142,7 @@ def test_counts_and_figure_format_are_checked_before_work(
         "--trust-update: applies to --method tscvx only": ["--trust-update", "alg1"],
         f"--out {tmp_path}: is a folder": ["--out", str(tmp_path)],
         "--plot": ["--out", str(out), "--plot", str(tmp_path / "a_file" / "fig.png")],
+        "--out /proc/t.npz: cannot write there": ["--out", "/proc/t.npz"],
     }
     for message, args in refused.items():
         assert main(["solve", *args]) == 2, args
@@ -169,6 +172,9 @@ def test_corrupt_models_and_data_exit_2(tmp_path: Path, capsys: pytest.CaptureFi
         assert code == 2, backend
         err = capsys.readouterr().err
         assert err.startswith("error: ") and "Traceback" not in err, err
+    (tmp_path / "solution.onnx").write_bytes(b"")  # parses as an empty ONNX model
+    assert main(["solve", "--method", "tscvx", "--backend", "c", "--models", str(tmp_path)]) == 2
+    assert "not a T-SCvx model export" in capsys.readouterr().err
     (tmp_path / "text.npz").write_text("garbage")
     (tmp_path / "empty.npz").write_bytes(b"")
     np.save(tmp_path / "array.npy", np.zeros(3))
@@ -185,6 +191,13 @@ def test_corrupt_models_and_data_exit_2(tmp_path: Path, capsys: pytest.CaptureFi
             assert main([*cmd, "--dataset", str(tmp_path / name)]) == 2
             err = capsys.readouterr().err
             assert err.startswith("error: ") and words in err, (name, err)
+
+
+def test_a_key_given_twice_is_refused(tmp_path: Path) -> None:
+    path = tmp_path / "twice.json"
+    path.write_text(json.dumps(GOOD)[:-1] + ', "m0": 2.5}')  # json would keep the last
+    with pytest.raises(ScenarioError, match="scenario field 'm0': given twice"):
+        load_scenario(path)
 
 
 def test_parameter_override_and_defaults() -> None:

@@ -117,3 +117,24 @@ def test_engine_landing_error_is_the_plans_when_the_thrust_stays_in_range(landin
     r, v = engine_landing_error(x, u, t_f, P)
     assert r == pytest.approx(plan.landing_position_error, rel=1e-9)
     assert v == pytest.approx(plan.landing_velocity_error, rel=1e-9)
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        ({"x": "short"}, r"x is \(49, 14\), the params ask for \(50, 14\)"),
+        ({"t_f": 0.0}, "t_f = 0: holds no trajectory"),
+        ({"t_f": float("nan")}, "t_f = nan: holds no trajectory"),  # used to hang
+        ({"between": -1}, "between: expected an integer >= 0"),
+        ({"between": 2.5}, "between: expected an integer >= 0"),
+    ],
+)
+def test_audit_refuses_what_it_cannot_check(landing, change: dict, message: str) -> None:
+    from guidance.errors import InputError
+
+    x, u, t_f = landing
+    args = {"x": x, "u": u, "t_f": t_f, "between": 0, **change}
+    if isinstance(args["x"], str):  # "short"
+        args["x"] = x[:-1]
+    with pytest.raises(InputError, match=message):
+        audit(args["x"], args["u"], args["t_f"], P, between=args["between"])

@@ -24,9 +24,85 @@ pdg_setup_status pdg_theta_of(const pdg_scenario *s, double *theta)
     return PDG_SETUP_OK;
 }
 
-/* Refuses a network that is not of `kind` or does not fit N; 0 = fits. */
-static int check_net(tscvx_nn *net, int kind, int N, char *msg)
+/* The problem parameters a network is trained for: every parameter that is not a network
+ * input (theta has the glideslope and tilt limits), in pdg_params' order, vectors by
+ * component, booleans and N as numbers. guidance/nn/infer.py TRAINED_PARAMS writes them into
+ * the blob in the same order (tests/test_cnn.py changes each one in turn). */
+static const struct {
+    const char *name;
+    int len;
+} TRAINED[] = {{"g_I", 3},        {"J_B", 3},        {"r_T_B", 3},          {"r_cp_B", 3},
+               {"alpha_mdot", 1}, {"beta_mdot", 1},  {"aero_coeff", 1},     {"m_dry", 1},
+               {"T_min", 1},      {"T_max", 1},      {"gimbal_max_deg", 1}, {"omega_max_deg", 1},
+               {"r_f", 3},        {"v_f", 3},        {"q_f", 4},            {"omega_f", 3},
+               {"final_roll_free", 1}, {"N", 1}};
+#define N_TRAINED 35
+
+static void trained_vector(const pdg_params *p, double *v)
 {
+    int i = 0, j;
+    for (j = 0; j < 3; ++j) v[i++] = p->g_I[j];
+    for (j = 0; j < 3; ++j) v[i++] = p->J_B[j];
+    for (j = 0; j < 3; ++j) v[i++] = p->r_T_B[j];
+    for (j = 0; j < 3; ++j) v[i++] = p->r_cp_B[j];
+    v[i++] = p->alpha_mdot;
+    v[i++] = p->beta_mdot;
+    v[i++] = p->aero_coeff;
+    v[i++] = p->m_dry;
+    v[i++] = p->T_min;
+    v[i++] = p->T_max;
+    v[i++] = p->gimbal_max_deg;
+    v[i++] = p->omega_max_deg;
+    for (j = 0; j < 3; ++j) v[i++] = p->r_f[j];
+    for (j = 0; j < 3; ++j) v[i++] = p->v_f[j];
+    for (j = 0; j < 4; ++j) v[i++] = p->q_f[j];
+    for (j = 0; j < 3; ++j) v[i++] = p->omega_f[j];
+    v[i++] = p->final_roll_free ? 1.0 : 0.0;
+    v[i] = (double)p->N;
+}
+
+/* Refuses a network the scenario's parameters do not match (relative 1e-12, as the ONNX
+ * check of guidance/nn/infer.py); 0 = they match. */
+static int check_trained_for(const tscvx_nn_info *info, const char *name, const pdg_params *p,
+                             char *msg)
+{
+    double v[N_TRAINED];
+    int i, k = 0, t = 0;
+    if (info->n_params != N_TRAINED || !info->params) {
+        snprintf(msg, PDG_MESSAGE_LEN,
+                 "nets: the %s network records %d trained-for problem parameters, this library "
+                 "compares %d (a blob of another exporter: convert its ONNX file again)",
+                 name, info->n_params, N_TRAINED);
+        return 1;
+    }
+    trained_vector(p, v);
+    for (i = 0; i < N_TRAINED; ++i, ++k) {
+        if (k == TRAINED[t].len) { /* next parameter */
+            ++t;
+            k = 0;
+        }
+        if (!(fabs(info->params[i] - v[i]) <= 1e-12 * fabs(v[i]))) {
+            char field[32];
+            if (TRAINED[t].len > 1) {
+                snprintf(field, sizeof field, "%s[%d]", TRAINED[t].name, k);
+            } else {
+                snprintf(field, sizeof field, "%s", TRAINED[t].name);
+            }
+            snprintf(msg, PDG_MESSAGE_LEN,
+                     "nets: the %s network was trained for other problem parameters: %s "
+                     "(network %.17g, scenario %.17g)",
+                     name, field, info->params[i], v[i]);
+            return 1;
+        }
+    }
+    return 0;
+}
+
+/* Refuses a network that is not of `kind`, does not fit N or was trained for other problem
+ * parameters than the scenario's; 0 = fits. */
+static int check_net(tscvx_nn *net, int kind, const pdg_params *p, char *msg)
+{
+    const int N = p->N;
     const char *name = kind == TSCVX_NN_KIND_SOLUTION ? "solution" : "constraint";
     const int d_in = kind == TSCVX_NN_KIND_SOLUTION ? THETA : THETA + 1;
     const long d_out = kind == TSCVX_NN_KIND_SOLUTION ? (long)N * (NX + NU) + 1 : (long)N * NC;
@@ -57,7 +133,7 @@ static int check_net(tscvx_nn *net, int kind, int N, char *msg)
                  name, info.N, info.d_out, N, d_out);
         return 1;
     }
-    return 0;
+    return check_trained_for(&info, name, p, msg);
 }
 
 /* Solution network -> ws->nn_out (x, u, t_f, contiguous) -> projection in place. */
@@ -87,7 +163,7 @@ int pdg_tscvx_guess(pdg_workspace *ws, const pdg_scenario *s, tscvx_nn *solution
         return PDG_INVALID_INPUT;
     }
     if (pdg_check_workspace_scenario(ws, s, msg) ||
-        check_net(solution, TSCVX_NN_KIND_SOLUTION, ws->N, msg)) {
+        check_net(solution, TSCVX_NN_KIND_SOLUTION, &s->params, msg)) {
         return PDG_INVALID_INPUT;
     }
     pdg_theta_of(s, theta);
@@ -156,8 +232,9 @@ pdg_status pdg_solve_tscvx(pdg_workspace *ws, const pdg_scenario *s,
     N = ws->N;
     /* every input checked before any inference */
     if (pdg_check_workspace_scenario(ws, s, res->message) ||
-        (o->solution && check_net(o->solution, TSCVX_NN_KIND_SOLUTION, N, res->message)) ||
-        (o->constraint && check_net(o->constraint, TSCVX_NN_KIND_CONSTRAINT, N, res->message))) {
+        (o->solution && check_net(o->solution, TSCVX_NN_KIND_SOLUTION, &s->params, res->message)) ||
+        (o->constraint &&
+         check_net(o->constraint, TSCVX_NN_KIND_CONSTRAINT, &s->params, res->message))) {
         return PDG_INVALID_INPUT;
     }
     /* 0 stands for Table 1's radius, which the settings' bounds must admit when it is used */

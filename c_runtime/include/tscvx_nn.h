@@ -24,7 +24,8 @@
  * little-endian): a 128-byte header -- magic "TSCVXNN\0", format version, kind, token mode,
  * dimensions, LayerNorm epsilon, decision threshold, number of values, CRC-32 -- then float64
  * arrays: normalization (in_mean, in_scale, out_mean, out_std), encoder, positional encoding,
- * layers, decoder, and self-test probes (inputs and the exporter's outputs). The exact layout
+ * layers, decoder, self-test probes (inputs and the exporter's outputs), and the problem
+ * parameters the network was trained for (tscvx_nn_info.params). The exact layout
  * is in c_runtime/nn/nn_internal.h and guidance/nn/flight.py.
  *
  * Lifecycle (memory is claimed in exactly one place, from ONE caller-provided arena):
@@ -55,13 +56,14 @@
 extern "C" {
 #endif
 
-#define TSCVX_NN_FORMAT_VERSION 1u
+#define TSCVX_NN_FORMAT_VERSION 2u /* 2: the trained-for problem parameters recorded */
 #define TSCVX_NN_HEADER_BYTES 128u
 /* Limits checked at init (they bound every loop of tscvx_nn_run). */
 #define TSCVX_NN_MAX_DIM 65536      /* d_in, d_out, d_model, d_ff */
 #define TSCVX_NN_MAX_LAYERS 64
 #define TSCVX_NN_MAX_HEADS 64
 #define TSCVX_NN_MAX_PROBES 64
+#define TSCVX_NN_MAX_PARAMS 256   /* trained-for problem parameters recorded */
 
 /* Flags of tscvx_nn_arena_size / tscvx_nn_init. */
 #define TSCVX_NN_COPY_WEIGHTS 1u /* copy the weights into the arena; the blob may be released */
@@ -109,6 +111,10 @@ typedef struct {
     double threshold; /* probability threshold of a tight bit (constraint network) */
     double ln_eps;    /* LayerNorm epsilon */
     size_t n_weights; /* values of the network (normalization included, probes not) */
+    int n_params;     /* problem parameters the network was trained for, as recorded by the
+                         exporter (guidance/nn/flight.py: every parameter that is not a
+                         network input, in its order); the caller compares them */
+    const double *params; /* n_params values, valid while the net is */
     size_t arena_bytes; /* the arena this net was sized for */
     int weights_in_arena; /* 1 when the weights were copied into the arena */
 } tscvx_nn_info;

@@ -175,6 +175,7 @@ tscvx_nn_status nn_parse(const void *blob, size_t len, nn_header *hd)
     hd->seq_len = rd_u32(p + 48);
     hd->N = rd_u32(p + 52);
     hd->n_probes = rd_u32(p + 56);
+    hd->n_params = rd_u32(p + 60);
     hd->ln_eps = rd_f64(p + 64);
     hd->threshold = rd_f64(p + 72);
     hd->n_values = rd_u64(p + 80);
@@ -190,6 +191,11 @@ tscvx_nn_status nn_parse(const void *blob, size_t len, nn_header *hd)
     if (crc != rd_u32(p + NN_CRC_OFFSET)) {
         return TSCVX_NN_BAD_CHECKSUM;
     }
+    for (i = 96; i < NN_CRC_OFFSET; ++i) { /* reserved: a later format's fields */
+        if (p[i] != 0) {
+            return TSCVX_NN_BAD_VERSION;
+        }
+    }
 
     /* dimensions */
     if ((hd->kind != TSCVX_NN_KIND_CONSTRAINT && hd->kind != TSCVX_NN_KIND_SOLUTION)
@@ -199,6 +205,7 @@ tscvx_nn_status nn_parse(const void *blob, size_t len, nn_header *hd)
         || !in_range(hd->n_heads, 1, TSCVX_NN_MAX_HEADS)
         || !in_range(hd->n_layers, 0, TSCVX_NN_MAX_LAYERS)
         || !in_range(hd->n_probes, 0, TSCVX_NN_MAX_PROBES) || !in_range(hd->N, 1, 1u << 20)
+        || !in_range(hd->n_params, 0, TSCVX_NN_MAX_PARAMS)
         || !sizes_fit_kind(hd) || hd->d_model % hd->n_heads != 0
         || hd->seq_len != (hd->tokens == TSCVX_NN_TOKENS_SINGLE ? 1u : hd->d_in)
         || (uint64_t)hd->seq_len * 3u * hd->d_model > (uint64_t)INT_MAX) { /* int indices */
@@ -207,7 +214,7 @@ tscvx_nn_status nn_parse(const void *blob, size_t len, nn_header *hd)
     n_weights = nn_count_weights(hd);
     n_probe_vals = (size_t)hd->n_probes * ((size_t)hd->d_in + hd->d_out);
     if (n_weights == 0 || hd->n_weights != (uint64_t)n_weights
-        || hd->n_values != (uint64_t)n_weights + n_probe_vals) {
+        || hd->n_values != (uint64_t)n_weights + n_probe_vals + hd->n_params) {
         return TSCVX_NN_BAD_DIMENSIONS;
     }
     if (!(hd->ln_eps > 0.0 && hd->ln_eps < 1.0)
@@ -421,6 +428,8 @@ tscvx_nn_status tscvx_nn_init(tscvx_nn **out, void *arena, size_t arena_bytes, c
     net->probe_in = w;
     w += (size_t)hd.n_probes * hd.d_in;
     net->probe_out = w;
+    w += (size_t)hd.n_probes * hd.d_out;
+    net->params = w;
     net->cookie = NN_COOKIE;
     *out = net;
     return TSCVX_NN_OK;
@@ -448,6 +457,8 @@ tscvx_nn_status tscvx_nn_get_info(const tscvx_nn *net, tscvx_nn_info *info)
     info->threshold = net->hdr.threshold;
     info->ln_eps = net->hdr.ln_eps;
     info->n_weights = (size_t)net->hdr.n_weights;
+    info->n_params = (int)net->hdr.n_params;
+    info->params = net->params;
     info->arena_bytes = net->arena_bytes;
     info->weights_in_arena = net->weights_in_arena;
     return TSCVX_NN_OK;

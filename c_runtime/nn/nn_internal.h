@@ -1,22 +1,23 @@
 /*
  * nn_internal.h -- the model blob layout and the net's arena layout (private to c_runtime/nn).
  *
- * Blob (".tnn", format version 1; every field little-endian; guidance/nn/flight.py writes it):
+ * Blob (".tnn", format version 2; every field little-endian; guidance/nn/flight.py writes it):
  *
  *   offset  type      field
  *   0       char[8]   magic "TSCVXNN\0"
- *   8       u32       format version (1)
+ *   8       u32       format version (2)
  *   12      u32       header bytes (128)
  *   16      u32       kind (1 constraint, 2 solution)
  *   20      u32       tokens (0 single, 1 scalar)
  *   24      u32 x 8   d_in, d_out, d_model, n_heads, n_layers, d_ff, seq_len, N
  *   56      u32       n_probes
- *   60      u32       reserved (0)
+ *   60      u32       n_params: trained-for problem parameters (at the end of the values)
  *   64      f64       LayerNorm epsilon
  *   72      f64       threshold (probability of a tight bit; 0.5 for a solution network)
- *   80      u64       n_values: float64 values after the header (weights + probes)
+ *   80      u64       n_values: float64 values after the header (weights, probes, params)
  *   88      u64       n_weights: of which network values (normalization included)
- *   96      u8 x 28   reserved (0)
+ *   96      u8 x 28   reserved (0; a blob with other bytes there is refused as a format
+ *                     this library does not know)
  *   124     u32       CRC-32 (IEEE 802.3, zlib's crc32) of bytes [0, 124) and [128, end)
  *   128     f64 x n_values, in this order (matrices row-major, [out][in] as torch.nn.Linear):
  *           in_mean [d_in], in_scale [d_in] (= 1 / in_std), out_mean [d_out], out_std [d_out]
@@ -29,6 +30,7 @@
  *                      ln2 gamma, beta [d_model]
  *           decoder W_d [d_out][L d_model], b_d [d_out]
  *           probes: inputs [n_probes][d_in], recorded outputs [n_probes][d_out]
+ *           params [n_params]: the problem parameters the network was trained for
  */
 #ifndef TSCVX_NN_INTERNAL_H
 #define TSCVX_NN_INTERNAL_H
@@ -52,7 +54,7 @@
 /* Header fields, decoded. */
 typedef struct {
     uint32_t version, header_bytes, kind, tokens;
-    uint32_t d_in, d_out, d_model, n_heads, n_layers, d_ff, seq_len, N, n_probes;
+    uint32_t d_in, d_out, d_model, n_heads, n_layers, d_ff, seq_len, N, n_probes, n_params;
     double ln_eps, threshold;
     uint64_t n_values, n_weights;
 } nn_header;
@@ -80,6 +82,7 @@ struct tscvx_nn {
     nn_layer *layers;           /* n_layers entries, in the arena */
     const double *W_d, *b_d;     /* d_out x (L d), d_out */
     const double *probe_in, *probe_out; /* n_probes x d_in, n_probes x d_out */
+    const double *params;               /* n_params: trained-for problem parameters */
     /* activations (double, in the arena) */
     double *z;   /* d_in: standardized input */
     double *h;   /* L x d: token states */

@@ -44,7 +44,7 @@ import numpy as np
 from guidance.errors import InputError
 
 MAGIC = b"TSCVXNN\0"
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2  # 2: the trained-for problem parameters after the probes
 HEADER_BYTES = 128
 CRC_OFFSET = 124
 KINDS = {"constraint": 1, "solution": 2}
@@ -85,6 +85,7 @@ class FlightWeights:
     arrays: list[tuple[str, np.ndarray]]  # float32, in the blob's order
     probe_in: np.ndarray  # (n_probes, d_in) float32
     probe_out: np.ndarray  # (n_probes, d_out) float32
+    trained: np.ndarray  # float64: the problem parameters trained for (infer.trained_vector)
 
     @property
     def seq_len(self) -> int:
@@ -219,12 +220,22 @@ def read_onnx(path: str | Path) -> FlightWeights:
         threshold=float(meta.get("threshold", 0.5)), arrays=arrays,
         probe_in=np.asarray(meta["probe_input"], np.float32).reshape(-1, d_in),
         probe_out=np.asarray(meta["probe_output"], np.float32).reshape(-1, d_out),
+        trained=_trained(path, meta),
     )  # fmt: skip
     got = forward(fw, fw.probe_in.astype(np.float64))
     want = fw.probe_out.astype(np.float64)
     if np.any(np.abs(got - want) > PROBE_RTOL * np.maximum(np.abs(want), 1.0)):
         raise OnnxLayoutError(f"{path}: the extracted weights do not reproduce the probes")
     return fw
+
+
+def _trained(path: str | Path, meta: dict[str, Any]) -> np.ndarray:
+    from guidance.nn.infer import trained_vector
+
+    try:
+        return trained_vector(meta.get("params", {}))
+    except InputError as exc:
+        raise OnnxLayoutError(f"{path}: metadata: {exc}") from None
 
 
 def forward(fw: FlightWeights, x: np.ndarray) -> np.ndarray:
@@ -265,12 +276,13 @@ def forward(fw: FlightWeights, x: np.ndarray) -> np.ndarray:
 def pack(fw: FlightWeights) -> bytes:
     weights = np.concatenate([np.ravel(v) for _, v in fw.arrays]).astype("<f8")
     probes = np.concatenate([np.ravel(fw.probe_in), np.ravel(fw.probe_out)]).astype("<f8")
-    payload = weights.tobytes() + probes.tobytes()
+    trained = np.asarray(fw.trained, "<f8")
+    payload = weights.tobytes() + probes.tobytes() + trained.tobytes()
     head = _HEADER.pack(
         MAGIC, FORMAT_VERSION, HEADER_BYTES, KINDS[fw.kind], TOKENS[fw.tokens],
         fw.d_in, fw.d_out, fw.d_model, fw.n_heads, fw.n_layers, fw.d_ff, fw.seq_len, fw.N,
-        len(fw.probe_in), 0, fw.ln_eps, fw.threshold,
-        weights.size + probes.size, weights.size,
+        len(fw.probe_in), trained.size, fw.ln_eps, fw.threshold,
+        weights.size + probes.size + trained.size, weights.size,
     )  # fmt: skip
     head += bytes(CRC_OFFSET - len(head))
     crc = zlib.crc32(payload, zlib.crc32(head))
@@ -320,6 +332,8 @@ class NetInfo(ctypes.Structure):
         ("threshold", ctypes.c_double),
         ("ln_eps", ctypes.c_double),
         ("n_weights", ctypes.c_size_t),
+        ("n_params", ctypes.c_int),
+        ("params", ctypes.POINTER(ctypes.c_double)),
         ("arena_bytes", ctypes.c_size_t),
         ("weights_in_arena", ctypes.c_int),
     ]  # fmt: skip
@@ -407,8 +421,9 @@ class FlightNet:
 
 def load_flight_model(path: str | Path, kind: str, params=None) -> FlightNet:
     """A weight file loaded in the C library and checked against the problem, as
-    ``guidance.nn.infer.load_model`` checks an ONNX file: kind, input/output sizes and N."""
-    from guidance.nn.infer import ModelMismatchError, expected_sizes
+    ``guidance.nn.infer.load_model`` checks an ONNX file: kind, input/output sizes, N and the
+    problem parameters it was trained for."""
+    from guidance.nn.infer import ModelMismatchError, _params_diff, expected_sizes, trained_dict
     from guidance.params import Params
 
     params = params or Params()
@@ -433,6 +448,12 @@ def load_flight_model(path: str | Path, kind: str, params=None) -> FlightNet:
         raise ModelMismatchError(
             f"model {path}: output size {net.d_out} (N = {net.info.N}) does not match the "
             f"problem's {d_out} (N = {params.N})"
+        )
+    recorded = [net.info.params[i] for i in range(net.info.n_params)]
+    diff = _params_diff(trained_dict(recorded), params)
+    if diff:
+        raise ModelMismatchError(
+            f"model {path}: trained for other problem parameters: " + "; ".join(diff)
         )
     return net
 

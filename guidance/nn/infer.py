@@ -10,7 +10,7 @@ that does not fit the problem (input/output size, trained parameters, normalizat
 from __future__ import annotations
 
 import json
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -18,13 +18,14 @@ import numpy as np
 
 from guidance.dataset import N_THETA, THETA_NAMES
 from guidance.errors import InputError
-from guidance.params import NC, NU, NX, Params, Scenario
+from guidance.params import NC, NU, NX, PARAM_NAMES, Params, Scenario
 
 META_KEY = "tscvx"
 META_FORMAT = "tscvx-onnx"
 META_VERSION = 1
 # Parameters that are network inputs (theta); every other parameter must match the model's.
 INPUT_PARAMS = ("glideslope_deg", "tilt_max_deg")
+TRAINED_PARAMS = tuple(name for name in PARAM_NAMES if name not in INPUT_PARAMS)
 PROBE_RTOL = 1e-4
 
 
@@ -42,6 +43,28 @@ def expected_sizes(kind: str, N: int) -> tuple[int, int]:
 
 def _fail(path: Path, msg: str) -> ModelMismatchError:
     return ModelMismatchError(f"model {path}: {msg}")
+
+
+def trained_vector(values: dict[str, Any]) -> np.ndarray:
+    """The problem parameters a network was trained for (``Params.to_json_dict`` form), flat
+    in TRAINED_PARAMS order, booleans as 0/1: what a .tnn blob records and the C library
+    compares with the scenario's (pdg_tscvx.c, the same order)."""
+    missing = [name for name in TRAINED_PARAMS if name not in values]
+    if missing:
+        raise InputError(f"no trained-for value of {', '.join(missing)}")
+    return np.concatenate([np.ravel(np.asarray(values[name], float)) for name in TRAINED_PARAMS])
+
+
+def trained_dict(vector: Sequence[float]) -> dict[str, Any]:
+    """trained_vector read back (a blob's record), by name; {} when it has another length."""
+    sizes = [int(np.size(Params().to_json_dict()[name])) for name in TRAINED_PARAMS]
+    if len(vector) != sum(sizes):
+        return {}
+    out, i = {}, 0
+    for name, n in zip(TRAINED_PARAMS, sizes, strict=True):
+        out[name] = list(vector[i : i + n]) if n > 1 else vector[i]
+        i += n
+    return out
 
 
 def _params_diff(trained: dict[str, Any], problem: Params) -> list[str]:

@@ -488,7 +488,7 @@ static void test_bad_blobs(void)
     CHECK_ST(try_init(b, len, 0), TSCVX_NN_BAD_MAGIC);
     CHECK_ST(try_init(good, 7, 0), TSCVX_NN_BAD_MAGIC);
     memcpy(b, good, len);
-    wr_u32(b + 8, 2);
+    wr_u32(b + 8, 1); /* format 1: no trained-for parameters */
     reseal(b, len);
     CHECK_ST(try_init(b, len, 0), TSCVX_NN_BAD_VERSION);
     memcpy(b, good, len);
@@ -515,6 +515,8 @@ static void test_bad_blobs(void)
     memcpy(b, good, len);
     b[100] = 1; /* reserved header byte: covered by the CRC */
     CHECK_ST(try_init(b, len, 0), TSCVX_NN_BAD_CHECKSUM);
+    reseal(b, len); /* not corrupt: a later format's field, which this library does not know */
+    CHECK_ST(try_init(b, len, 0), TSCVX_NN_BAD_VERSION);
 
     /* dimensions (sealed: only the dimension check can refuse them) */
 #define BAD_DIM(off, val)                                          \
@@ -525,6 +527,8 @@ static void test_bad_blobs(void)
         CHECK_ST(try_init(b, len, 0), TSCVX_NN_BAD_DIMENSIONS);    \
     } while (0)
     BAD_DIM(16, 3);         /* kind */
+    BAD_DIM(60, 1);         /* n_params: one value more than the count holds */
+    BAD_DIM(60, TSCVX_NN_MAX_PARAMS + 1);
     BAD_DIM(16, TSCVX_NN_KIND_SOLUTION); /* kind: 16 inputs and 17N + 1 outputs */
     BAD_DIM(20, 2);         /* token mode */
     BAD_DIM(20, 0);         /* single tokens: other weight count and seq_len */
