@@ -236,7 +236,9 @@ def project_guess(
     x[:, IQ] = q
     wn = np.linalg.norm(x[:, IW], axis=1, keepdims=True)
     x[:, IW] *= np.minimum(1.0, p.omega_max / np.maximum(wn, 1e-12))
-    x[:, IM] = np.maximum(x[:, IM], p.m_dry)
+    # the mass only falls: within [m_dry, m0] (a prediction above m0 is hundreds of trust
+    # radii away in the scaled mass, (m - m_dry) / (m0 - m_dry), when little propellant is left)
+    x[:, IM] = np.clip(x[:, IM], p.m_dry, scenario.initial.m0)
     horiz = np.linalg.norm(x[:, 1:3], axis=1)
     x[:, 0] = np.maximum(x[:, 0], p.tan_glideslope * horiz)
     # Thrust: into the gimbal cone about body axis 1, then into [T_min, T_max].

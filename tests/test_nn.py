@@ -263,6 +263,8 @@ def test_projected_guess_meets_boundary_conditions_and_convex_constraints() -> N
     np.testing.assert_allclose(gx[-1, 0:6], [0, 0, 0, -0.1, 0, 0], atol=1e-12)
     np.testing.assert_allclose(gx[-1, 8:13], 0.0, atol=1e-12)  # upright, at rest
     np.testing.assert_allclose(np.linalg.norm(gx[:, 6:10], axis=1), 1.0, atol=1e-12)
+    assert noisy_x[:, 13].max() > s.initial.m0 and gx[:, 13].max() == s.initial.m0  # mass falls
+    assert gx[:, 13].min() >= s.params.m_dry
     h = path_constraint_values(gx, gu, s.params)  # (N, 7), <= 0 where met
     assert h[:, :6].max() <= 1e-9  # every convex path constraint
     assert h[:, 6].max() <= 1e-9  # and the lower thrust bound

@@ -25,7 +25,7 @@ import pytest
 from guidance import cguidance
 from guidance.catalog import SCENARIOS
 from guidance.errors import InputError
-from guidance.params import NC, NU, NX, Params, Scenario, SCvxSettings
+from guidance.params import IM, NC, NU, NX, InitialState, Params, Scenario, SCvxSettings
 from guidance.scenario import ScenarioError
 from guidance.verify import audit
 
@@ -42,6 +42,8 @@ LANDINGS = ["default", "overhead", "crossing", "high", "tilted", "steep_cone"] +
 
 
 def _scenario(name: str) -> Scenario:
+    if name == "low_fuel":  # the network predicts masses above m0: the projection clips them
+        return Scenario(InitialState(r0=(4.0, 4.0, 0.0), v0=(0.0, -1.0, -2.0), m0=2.05))
     if name.startswith("sample"):
         from guidance.bench_tscvx import sample_landings
 
@@ -102,7 +104,9 @@ def test_theta_is_the_dataset_theta(name: str) -> None:
     np.testing.assert_array_equal(cguidance.theta_c(scn), theta_of(scn))
 
 
-@pytest.mark.parametrize("name", ["default", "tilted", "spinning", "steep_cone", "sample1"])
+@pytest.mark.parametrize(
+    "name", ["default", "tilted", "spinning", "steep_cone", "sample1", "low_fuel"]
+)
 def test_projected_warm_start_is_the_python_one(name: str, nets, onnx_models) -> None:
     from guidance.dataset import theta_of
     from guidance.guess import project_guess
@@ -117,6 +121,9 @@ def test_projected_warm_start_is_the_python_one(name: str, nets, onnx_models) ->
                                 y[N * NX : N * (NX + NU)].reshape(N, NU), y[-1])  # fmt: skip
     np.testing.assert_allclose(x, px, rtol=0, atol=1e-12)
     np.testing.assert_allclose(u, pu, rtol=0, atol=1e-12)
+    if name == "low_fuel":
+        assert y[IM : N * NX : NX].max() > scn.initial.m0  # what the clip is for
+        assert x[:, IM].max() == scn.initial.m0
     assert tf == pytest.approx(ptf, abs=1e-13)
     # the network: onnxruntime (float32 arithmetic) against the C inference (float64)
     ox, ou, otf = project_guess(scn, *onnx_models[0].solution(theta_of(scn)))

@@ -400,7 +400,11 @@ void pdg_project_guess(const pdg_scenario *sc, double *x, double *u, double *t_f
         for (i = 10; i < 13; ++i) {
             xk[i] *= wn;
         }
+        /* the mass only falls: within [m_dry, m0] (a prediction above m0 is hundreds of
+         * trust radii away in the scaled mass, (m - m_dry) / (m0 - m_dry), when little
+         * propellant is left) */
         xk[IM] = xk[IM] > p->m_dry ? xk[IM] : p->m_dry;
+        xk[IM] = xk[IM] < sc->m0 ? xk[IM] : sc->m0;
         horiz = sqrt(xk[1] * xk[1] + xk[2] * xk[2]);
         xk[0] = xk[0] > tg * horiz ? xk[0] : tg * horiz;
         /* thrust: into the gimbal cone about body axis 1, then into [T_min, T_max] */
