@@ -48,6 +48,9 @@ class LibraryNotBuiltError(RuntimeError):
     """The shared library is missing: run ``make lib``."""
 
 
+MESSAGE_LEN = 160  # TSCVX_MESSAGE_LEN (tscvx_socp.h)
+
+
 class _Data(ct.Structure):
     _fields_ = [
         ("n", c_int),
@@ -202,6 +205,7 @@ def load_library() -> ct.CDLL:
         "tscvx_get_info": (c_int, [ws_p, ct.POINTER(_Info)]),
         "tscvx_get_iter_log": (c_int, [ws_p, c_int, ct.POINTER(_IterLog)]),
         "tscvx_setup_status_message": (ct.c_char_p, [c_int]),
+        "tscvx_check_data": (c_int, [ct.POINTER(_Data), ct.c_char_p]),
         "tscvx_solve_status_message": (ct.c_char_p, [c_int]),
     }
     for name, (res, args) in sigs.items():
@@ -384,6 +388,10 @@ class Solver:
         self.setup_status = int(st)
         if st != 0:
             self.message = self.lib.tscvx_setup_status_message(st).decode()
+            detail = ct.create_string_buffer(MESSAGE_LEN)  # the array and entry at fault
+            if self.lib.tscvx_check_data(ct.byref(self._data), detail) == st and detail.value:
+                self.message += f" ({detail.value.decode()}; in the C runtime's terms: c is q, "
+                self.message += "A and b the zero-cone rows, G and h the other rows)"
             self.ws = ct.c_void_p()
 
     @staticmethod

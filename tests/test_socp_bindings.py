@@ -61,9 +61,10 @@ def test_small_soc_solution_and_duals() -> None:
 @pytest.mark.parametrize(
     ("mutate", "needle"),
     [
-        (lambda p: p.q.__setitem__(0, np.nan), "NaN"),
+        (lambda p: p.q.__setitem__(0, np.nan), "(c[0] = nan;"),  # the entry named
         (lambda p: p.b.__setitem__(2, np.inf), "NaN or infinity"),
-        (lambda p: p.A.data.__setitem__(0, np.nan), "NaN"),
+        (lambda p: p.b.__setitem__(2, np.inf), "(h[1] = inf;"),  # row 2: the cones' second
+        (lambda p: p.A.data.__setitem__(0, np.nan), "(Ax[0] = nan;"),
         (lambda p: p.cones.__setitem__(2, ("soc", 4)), "cones cover more rows"),
         (lambda p: p.cones.__setitem__(2, ("soc", 2)), "cones cover 4 rows"),
         (lambda p: p.cones.__setitem__(0, ("box", 1)), "unknown cone kind"),

@@ -138,6 +138,14 @@ typedef struct {
     const tscvx_int *q;          /* nsoc cone dimensions (each >= 1), in row order after l */
 } tscvx_data;
 
+/* Why setup (and the size queries) would refuse `data`: the same checks in the same order,
+ * the same status, and in `message` (TSCVX_MESSAGE_LEN bytes; may be NULL) the array and the
+ * entry at fault, e.g. "G: row index 5 in column 1 is outside 0..2" or "c[3] = nan";
+ * TSCVX_SETUP_OK and "" for data they accept. The factorization test of P at setup is not
+ * repeated here (TSCVX_SETUP_P_NOT_PSD from setup with an OK here means it). */
+#define TSCVX_MESSAGE_LEN 160
+tscvx_setup_status tscvx_check_data(const tscvx_data *data, char *message);
+
 /* KKT methods (tscvx_settings.kkt_backend): AUTO = banded when setup finds the structure,
  * else STATIC; LDL and STATIC are the sparse method's two factorizations. */
 enum { TSCVX_KKT_AUTO = 0, TSCVX_KKT_LDL = 1, TSCVX_KKT_STATIC = 2, TSCVX_KKT_BANDED = 3 };

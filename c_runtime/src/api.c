@@ -2,6 +2,8 @@
 #include <limits.h>
 #include <stdint.h>
 #include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
 #include <string.h>
 
 #include "socp_internal.h"
@@ -122,29 +124,57 @@ static tscvx_setup_status check_settings(const tscvx_settings *st) {
 
 /* ---- data validation --------------------------------------------------------------------- */
 
-static int all_finite(const tscvx_float *v, tscvx_int n) {
+/* Index of the first entry of v that is NaN or infinite, or -1. */
+static tscvx_int first_nonfinite(const tscvx_float *v, tscvx_int n) {
     for (tscvx_int i = 0; i < n; i++)
-        if (!isfinite(v[i])) return 0;
-    return 1;
+        if (!isfinite(v[i])) return i;
+    return -1;
+}
+
+static int all_finite(const tscvx_float *v, tscvx_int n) { return first_nonfinite(v, n) < 0; }
+
+/* Writes the reason for a refusal into msg (TSCVX_MESSAGE_LEN bytes; NULL: none) and
+ * returns the status, so that each check is one statement. */
+static tscvx_setup_status refuse(char *msg, tscvx_setup_status st, const char *fmt, ...) {
+    if (msg) {
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(msg, TSCVX_MESSAGE_LEN, fmt, ap);
+        va_end(ap);
+    }
+    return st;
 }
 
 /* CSC of nrow x ncol: pointers monotone from 0, indices in range, strictly increasing.
  * upper != 0 additionally demands row <= col (P). The pointers are checked whole before any
  * index is read (Mi may be NULL where the pointers say there are no entries). */
-static tscvx_setup_status check_csc(const tscvx_int *Mp, const tscvx_int *Mi, tscvx_int nrow,
-                                    tscvx_int ncol, int upper) {
-    if (Mp[0] != 0) return TSCVX_SETUP_BAD_SPARSITY;
+static tscvx_setup_status check_csc(const char *M, const tscvx_int *Mp, const tscvx_int *Mi,
+                                    tscvx_int nrow, tscvx_int ncol, int upper, char *msg) {
+    const tscvx_setup_status bad = TSCVX_SETUP_BAD_SPARSITY;
+    if (Mp[0] != 0) return refuse(msg, bad, "%s: column pointers start at %d, not 0", M, Mp[0]);
     for (tscvx_int j = 0; j < ncol; j++)
-        if (Mp[j + 1] < Mp[j]) return TSCVX_SETUP_BAD_SPARSITY;
-    if (Mp[ncol] > 0 && Mi == NULL) return TSCVX_SETUP_NULL_ARGUMENT;
+        if (Mp[j + 1] < Mp[j])
+            return refuse(msg, bad, "%s: column pointers decrease at column %d", M, j);
+    if (Mp[ncol] > 0 && Mi == NULL)
+        return refuse(msg, TSCVX_SETUP_NULL_ARGUMENT, "%s: row indices NULL for %d entries", M,
+                      Mp[ncol]);
     for (tscvx_int j = 0; j < ncol; j++) {
         for (tscvx_int k = Mp[j]; k < Mp[j + 1]; k++) {
-            if (Mi[k] < 0 || Mi[k] >= nrow) return TSCVX_SETUP_BAD_SPARSITY;
-            if (k > Mp[j] && Mi[k] <= Mi[k - 1]) return TSCVX_SETUP_BAD_SPARSITY;
-            if (upper && Mi[k] > j) return TSCVX_SETUP_P_NOT_UPPER;
+            if (Mi[k] < 0 || Mi[k] >= nrow)
+                return refuse(msg, bad, "%s: row index %d in column %d is outside 0..%d", M,
+                              Mi[k], j, nrow - 1);
+            if (k > Mp[j] && Mi[k] <= Mi[k - 1])
+                return refuse(msg, bad, "%s: row indices of column %d not strictly increasing "
+                              "(%d after %d)", M, j, Mi[k], Mi[k - 1]);
+            if (upper && Mi[k] > j)
+                return refuse(msg, TSCVX_SETUP_P_NOT_UPPER,
+                              "%s: entry (%d, %d) below the diagonal; give the upper triangle",
+                              M, Mi[k], j);
         }
     }
-    if (Mp[ncol] > INT_MAX / 4) return TSCVX_SETUP_TOO_LARGE;
+    if (Mp[ncol] > INT_MAX / 4)
+        return refuse(msg, TSCVX_SETUP_TOO_LARGE, "%s: %d entries overflow the index type", M,
+                      Mp[ncol]);
     return TSCVX_SETUP_OK;
 }
 
@@ -183,38 +213,78 @@ static int p_maybe_psd(const tscvx_int *Pp, const tscvx_int *Pi, const tscvx_flo
     return 1;
 }
 
-static tscvx_setup_status check_data(const tscvx_data *d) {
-    if (d->n < 1 || d->p < 0 || d->m < 0) return TSCVX_SETUP_BAD_DIMENSIONS;
+/* Everything setup checks in the data before building anything (the factorization test of
+ * P comes later); msg (may be NULL) receives the array and entry at fault. */
+static tscvx_setup_status check_data(const tscvx_data *d, char *msg) {
+    if (msg) msg[0] = '\0';
+    if (d->n < 1 || d->p < 0 || d->m < 0)
+        return refuse(msg, TSCVX_SETUP_BAD_DIMENSIONS, "n = %d, p = %d, m = %d: need n >= 1, "
+                      "p >= 0, m >= 0", d->n, d->p, d->m);
     if (d->n > INT_MAX / 8 || d->p > INT_MAX / 8 || d->m > INT_MAX / 8)
-        return TSCVX_SETUP_TOO_LARGE;
-    if (d->c == NULL) return TSCVX_SETUP_NULL_ARGUMENT;
+        return refuse(msg, TSCVX_SETUP_TOO_LARGE, "n, p or m above %d", INT_MAX / 8);
+    if (d->c == NULL) return refuse(msg, TSCVX_SETUP_NULL_ARGUMENT, "c is NULL");
     if (d->p > 0 && (d->Ap == NULL || d->Ai == NULL || d->Ax == NULL || d->b == NULL))
-        return TSCVX_SETUP_NULL_ARGUMENT;
+        return refuse(msg, TSCVX_SETUP_NULL_ARGUMENT, "Ap, Ai, Ax or b is NULL with p = %d",
+                      d->p);
     if (d->m > 0 && (d->Gp == NULL || d->Gi == NULL || d->Gx == NULL || d->h == NULL))
-        return TSCVX_SETUP_NULL_ARGUMENT;
-    if (d->Pp != NULL && (d->Pi == NULL || d->Px == NULL)) return TSCVX_SETUP_NULL_ARGUMENT;
-    if (d->l < 0 || d->nsoc < 0 || (d->nsoc > 0 && d->q == NULL)) return TSCVX_SETUP_BAD_CONES;
+        return refuse(msg, TSCVX_SETUP_NULL_ARGUMENT, "Gp, Gi, Gx or h is NULL with m = %d",
+                      d->m);
+    if (d->Pp != NULL && (d->Pi == NULL || d->Px == NULL))
+        return refuse(msg, TSCVX_SETUP_NULL_ARGUMENT, "Pp given, Pi or Px NULL");
+    if (d->l < 0 || d->nsoc < 0 || (d->nsoc > 0 && d->q == NULL))
+        return refuse(msg, TSCVX_SETUP_BAD_CONES, "l = %d, nsoc = %d%s: need l, nsoc >= 0",
+                      d->l, d->nsoc, d->nsoc > 0 && d->q == NULL ? ", q NULL" : "");
     long long rows = d->l;
     for (tscvx_int k = 0; k < d->nsoc; k++) {
-        if (d->q[k] < 1) return TSCVX_SETUP_BAD_CONES;
+        if (d->q[k] < 1)
+            return refuse(msg, TSCVX_SETUP_BAD_CONES, "q[%d] = %d: a cone has at least 1 row",
+                          k, d->q[k]);
         rows += d->q[k];
-        if (rows > d->m) return TSCVX_SETUP_BAD_CONES; /* cones larger than the rows */
+        if (rows > d->m) /* cones larger than the rows */
+            return refuse(msg, TSCVX_SETUP_BAD_CONES, "the cones up to q[%d] need %lld rows, "
+                          "G has m = %d", k, rows, d->m);
     }
-    if (rows != d->m) return TSCVX_SETUP_BAD_CONES;
+    if (rows != d->m)
+        return refuse(msg, TSCVX_SETUP_BAD_CONES, "l + sum(q) = %lld rows, G has m = %d", rows,
+                      d->m);
     tscvx_setup_status s;
-    if (d->Pp && (s = check_csc(d->Pp, d->Pi, d->n, d->n, 1)) != TSCVX_SETUP_OK) return s;
-    if (d->Ap && d->p == 0 && d->Ap[d->n] != 0) return TSCVX_SETUP_BAD_SPARSITY;
-    if (d->Ap && (s = check_csc(d->Ap, d->Ai, d->p, d->n, 0)) != TSCVX_SETUP_OK) return s;
-    if (d->Gp && d->m == 0 && d->Gp[d->n] != 0) return TSCVX_SETUP_BAD_SPARSITY;
-    if (d->Gp && (s = check_csc(d->Gp, d->Gi, d->m, d->n, 0)) != TSCVX_SETUP_OK) return s;
-    if (!all_finite(d->c, d->n) || (d->p > 0 && !all_finite(d->b, d->p)) ||
-        (d->m > 0 && !all_finite(d->h, d->m)) ||
-        (d->Pp && !all_finite(d->Px, nnz_of(d->Pp, d->n))) ||
-        (d->Ap && !all_finite(d->Ax, nnz_of(d->Ap, d->n))) ||
-        (d->Gp && !all_finite(d->Gx, nnz_of(d->Gp, d->n))))
-        return TSCVX_SETUP_NONFINITE_DATA;
-    if (d->Pp && !p_maybe_psd(d->Pp, d->Pi, d->Px, d->n)) return TSCVX_SETUP_P_NOT_PSD;
+    if (d->Pp && (s = check_csc("P", d->Pp, d->Pi, d->n, d->n, 1, msg)) != TSCVX_SETUP_OK)
+        return s;
+    if (d->Ap && d->p == 0 && d->Ap[d->n] != 0)
+        return refuse(msg, TSCVX_SETUP_BAD_SPARSITY, "A: %d entries with p = 0 rows",
+                      d->Ap[d->n]);
+    if (d->Ap && (s = check_csc("A", d->Ap, d->Ai, d->p, d->n, 0, msg)) != TSCVX_SETUP_OK)
+        return s;
+    if (d->Gp && d->m == 0 && d->Gp[d->n] != 0)
+        return refuse(msg, TSCVX_SETUP_BAD_SPARSITY, "G: %d entries with m = 0 rows",
+                      d->Gp[d->n]);
+    if (d->Gp && (s = check_csc("G", d->Gp, d->Gi, d->m, d->n, 0, msg)) != TSCVX_SETUP_OK)
+        return s;
+    const struct {
+        const char *name;
+        const tscvx_float *v;
+        tscvx_int len;
+    } arrays[] = {{"c", d->c, d->n},
+                  {"b", d->b, d->p > 0 ? d->p : 0},
+                  {"h", d->h, d->m > 0 ? d->m : 0},
+                  {"Px", d->Px, d->Pp ? nnz_of(d->Pp, d->n) : 0},
+                  {"Ax", d->Ax, d->Ap ? nnz_of(d->Ap, d->n) : 0},
+                  {"Gx", d->Gx, d->Gp ? nnz_of(d->Gp, d->n) : 0}};
+    for (size_t a = 0; a < sizeof arrays / sizeof arrays[0]; a++) {
+        const tscvx_int i = arrays[a].len > 0 ? first_nonfinite(arrays[a].v, arrays[a].len) : -1;
+        if (i >= 0)
+            return refuse(msg, TSCVX_SETUP_NONFINITE_DATA, "%s[%d] = %g", arrays[a].name, i,
+                          arrays[a].v[i]);
+    }
+    if (d->Pp && !p_maybe_psd(d->Pp, d->Pi, d->Px, d->n))
+        return refuse(msg, TSCVX_SETUP_P_NOT_PSD, "P: a negative diagonal entry or an entry with "
+                      "P_ij^2 > P_ii P_jj");
     return TSCVX_SETUP_OK;
+}
+
+tscvx_setup_status tscvx_check_data(const tscvx_data *data, char *message) {
+    if (data == NULL) return refuse(message, TSCVX_SETUP_NULL_ARGUMENT, "data is NULL");
+    return check_data(data, message);
 }
 
 /* KKT upper-triangle entries, from the data (the order of kkt.c's enumerate()). */
@@ -363,7 +433,7 @@ static tscvx_setup_status build(const tscvx_data *d, const tscvx_settings *st, t
                                 int mode, tscvx_workspace **out, size_t *need) {
     if (d == NULL || st == NULL) return TSCVX_SETUP_NULL_ARGUMENT;
     tscvx_setup_status status = check_settings(st);
-    if (status == TSCVX_SETUP_OK) status = check_data(d);
+    if (status == TSCVX_SETUP_OK) status = check_data(d, NULL);
     if (status != TSCVX_SETUP_OK) return status;
     const tscvx_setup_status short_memory =
         mode == MODE_SETUP ? TSCVX_SETUP_ARENA_TOO_SMALL : TSCVX_SETUP_SCRATCH_TOO_SMALL;

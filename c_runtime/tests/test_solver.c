@@ -88,10 +88,17 @@ static void test_bad_input(void) {
     tscvx_float Px[] = {1, 1}, Gx[] = {-1, -1}, h[] = {1, 0, 0}, c[] = {-1, -1};
     tscvx_data ok = {2, 0, 3, Pp, Pi, Px, c, NULL, NULL, NULL, NULL, Gp, Gi, Gx, h, 0, 1, q};
     CHECK(try_setup(&ok) == TSCVX_SETUP_OK, "valid data refused");
+    char msg[TSCVX_MESSAGE_LEN];
+    CHECK(tscvx_check_data(&ok, msg) == TSCVX_SETUP_OK && msg[0] == '\0', "check_data(ok)");
     tscvx_data d = ok;
     tscvx_float cnan[] = {NAN, 1};
     d.c = cnan;
     CHECK(try_setup(&d) == TSCVX_SETUP_NONFINITE_DATA, "NaN accepted");
+    /* tscvx_check_data: the status of setup, and the array and entry at fault */
+#define NAMES(data, status, text)                                                        \
+    CHECK(tscvx_check_data(&(data), msg) == (status) && strstr(msg, (text)) != NULL,       \
+          "check_data: '%s', expected '%s'", msg, (text))
+    NAMES(d, TSCVX_SETUP_NONFINITE_DATA, "c[0] = nan");
     d = ok;
     tscvx_float hinf[] = {INFINITY, 0, 0};
     d.h = hinf;
@@ -100,14 +107,17 @@ static void test_bad_input(void) {
     tscvx_int qbig[] = {4};
     d.q = qbig;
     CHECK(try_setup(&d) == TSCVX_SETUP_BAD_CONES, "cone larger than the rows accepted");
+    NAMES(d, TSCVX_SETUP_BAD_CONES, "the cones up to q[0] need 4 rows, G has m = 3");
     d = ok;
     tscvx_int Pp2[] = {0, 2, 2}, Pi2[] = {0, 1};
     d.Pp = Pp2, d.Pi = Pi2;
     CHECK(try_setup(&d) == TSCVX_SETUP_P_NOT_UPPER, "lower-triangular P accepted");
+    NAMES(d, TSCVX_SETUP_P_NOT_UPPER, "P: entry (1, 0) below the diagonal");
     d = ok;
     tscvx_int Gi3[] = {5, 2};
     d.Gi = Gi3;
     CHECK(try_setup(&d) == TSCVX_SETUP_BAD_SPARSITY, "row index out of range accepted");
+    NAMES(d, TSCVX_SETUP_BAD_SPARSITY, "G: row index 5 in column 0 is outside 0..2");
     d = ok;
     d.m = 4;
     CHECK(try_setup(&d) == TSCVX_SETUP_BAD_CONES, "dimension mismatch accepted");
@@ -141,6 +151,7 @@ static void test_bad_input(void) {
     tscvx_float Gx4[] = {-1, -1, -1};
     d.Gp = Gp4, d.Gi = Gi4, d.Gx = Gx4;
     CHECK(try_setup(&d) == TSCVX_SETUP_BAD_SPARSITY, "duplicate row index accepted");
+    NAMES(d, TSCVX_SETUP_BAD_SPARSITY, "G: row indices of column 0 not strictly increasing");
     /* p = 0 with A's pointers given, not monotone, and no row indices: refused, not read */
     d = ok;
     tscvx_int Ap5[] = {0, 1, 0};
@@ -152,6 +163,9 @@ static void test_bad_input(void) {
     d = ok;
     d.Gi = NULL;
     CHECK(try_setup(&d) == TSCVX_SETUP_NULL_ARGUMENT, "NULL row indices accepted");
+    NAMES(d, TSCVX_SETUP_NULL_ARGUMENT, "Gp, Gi, Gx or h is NULL with m = 3");
+    CHECK(tscvx_check_data(NULL, msg) == TSCVX_SETUP_NULL_ARGUMENT, "check_data(NULL)");
+#undef NAMES
     tscvx_default_settings(&st);
     CHECK(tscvx_setup(&ws, arena, 64, &ok, &st) == TSCVX_SETUP_ARENA_TOO_SMALL, "tiny arena");
     CHECK(tscvx_solve(NULL) == TSCVX_INVALID_INPUT, "solve(NULL)");
