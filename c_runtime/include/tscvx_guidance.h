@@ -82,7 +82,11 @@ typedef enum {
     PDG_INFEASIBLE,        /* virtual control still > vc_tol after iter_max iterations */
     PDG_MAX_ITERATIONS,    /* virtual control zero but not converged */
     PDG_SOLVER_ERROR,      /* a subproblem could not be solved (or the model failed) */
-    PDG_INVALID_INPUT,     /* bad scenario, guess, mask or workspace: nothing was solved */
+    PDG_INVALID_INPUT,     /* bad scenario, guess (NaN/inf, t_f <= 0, one of x, u alone),
+                              mask or workspace: nothing was solved. A finite guess where
+                              the model cannot be evaluated (m <= 0, far outside the model's
+                              range) is PDG_SOLVER_ERROR, "model evaluation failed at the
+                              initial guess", as in the Python reference */
     PDG_NSTATUS
 } pdg_status;
 
