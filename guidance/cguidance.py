@@ -299,22 +299,34 @@ def solve_c(
         gu = np.ascontiguousarray(guess[1], dtype=float).reshape(N, NU)
         keep += [gx, gu]
         opt.guess_x, opt.guess_u, opt.guess_t_f = _dptr(gx), _dptr(gu), float(guess[2])
+    callback_errors: list[str] = []
     if masks is not None:
         if callable(masks):
 
             def _cb(ctx, k, out, n, fn=masks):
-                m = fn(int(k))
-                if m is None:
-                    return 0
-                m = np.asarray(m, dtype=bool).reshape(-1)
-                ct.memmove(out, m.astype(np.uint8).ctypes.data, n)
-                return 1
+                # an exception would be lost inside ctypes (it answers 0, the full problem):
+                # kept, and -1 answered, which stops the solve
+                try:
+                    m = fn(int(k))
+                    if m is None:
+                        return 0
+                    m = np.ascontiguousarray(np.asarray(m, dtype=bool).reshape(-1), np.uint8)
+                    if m.size != n:
+                        raise InputError(f"masks: iteration {int(k)}'s mask has {m.size} "
+                                         f"entries, not 7N = {n}")  # fmt: skip
+                    ct.memmove(out, m.ctypes.data, n)
+                    return 1
+                except Exception as exc:  # reported after the C call
+                    callback_errors.append(str(exc) or type(exc).__name__)
+                    return -1
 
             cb = MASK_FN(_cb)
             keep.append(cb)
             opt.mask_fn = cb
         else:
             table = np.ascontiguousarray(np.asarray(masks, dtype=bool), dtype=np.uint8)
+            if table.size != len(masks) * NC * N:
+                raise InputError(f"masks: {table.shape} entries, not rows of 7N = {NC * N}")
             table = table.reshape(len(masks), NC * N)
             keep.append(table)
             opt.masks = table.ctypes.data_as(_ucp)
@@ -324,6 +336,8 @@ def solve_c(
     t_start = time.perf_counter()  # the guidance call only (set-up is a one-time init)
     status = lib.pdg_solve(ws.ws, ct.byref(cs), ct.byref(opt), ct.byref(res))
     solve_time = time.perf_counter() - t_start
+    if callback_errors:
+        raise InputError(callback_errors[0])
     return _collect(ws, status, res, x, u, solve_time, _ran_with(settings, socp))
 
 

@@ -202,7 +202,7 @@ class SCvxSettings:
         if not (self.eta_lb <= self.eta_init <= self.eta_ub):
             raise InputError(
                 f"eta_init must lie within [eta_lb, eta_ub] = [{self.eta_lb:g}, "
-                f"{self.eta_ub:g}], got {self.eta_init:g}"
+                f"{self.eta_ub:g}], got {self.eta_init!r}"
             )
         for name, (lo, hi) in INT_SETTING_RANGES.items():
             value = getattr(self, name)

@@ -199,18 +199,27 @@ def scenario_to_dict(scenario: Scenario) -> dict[str, Any]:
     return out
 
 
+def _norm(v: Any) -> float:
+    """|v| as the C library's validation computes it (squares summed in order, then sqrt), so
+    that both take the same side of every limit, to the last bit."""
+    total = 0.0
+    for x in np.ravel(np.asarray(v, float)):
+        total += float(x) * float(x)
+    return math.sqrt(total)
+
+
 def validate(scenario: Scenario) -> None:
     """Reject parameters and initial states that cannot give a meaningful landing."""
     p = scenario.params
     _validate_params(p)
     s = scenario.initial
     q0 = np.asarray(s.q0)
-    if abs(np.linalg.norm(q0) - 1.0) > UNIT_QUATERNION_TOL:
-        raise ScenarioError("q0", f"must be a unit quaternion, |q0| = {np.linalg.norm(q0):.9g}")
+    if abs(_norm(q0) - 1.0) > UNIT_QUATERNION_TOL:
+        raise ScenarioError("q0", f"must be a unit quaternion, |q0| = {_norm(q0):.9g}")
     if s.m0 <= p.m_dry:
         raise ScenarioError("m0", f"m0 = {s.m0:g} must exceed the dry mass m_dry = {p.m_dry:g}")
     r0 = np.asarray(s.r0)
-    horizontal = float(np.linalg.norm(r0[1:]))
+    horizontal = float(_norm(r0[1:]))
     gs = math.radians(p.glideslope_deg)
     # tan(gs) |(r2, r3)| <= r1 written as sin(gs) |h| <= cos(gs) r1 (valid up to 90 deg).
     if math.sin(gs) * horizontal > math.cos(gs) * r0[0] + 1e-12:
@@ -219,17 +228,17 @@ def validate(scenario: Scenario) -> None:
             f"start is below the {p.glideslope_deg:g} deg glideslope cone "
             f"(altitude {r0[0]:g}, horizontal distance {horizontal:g})",
         )
-    tilt_q = float(np.linalg.norm(q0[2:4]))
+    tilt_q = float(_norm(q0[2:4]))
     if tilt_q > p.tilt_q_max + 1e-12:
         raise ScenarioError(
             "q0",
             f"initial tilt {_tilt_deg(tilt_q):.3f} deg exceeds tilt_max_deg = {p.tilt_max_deg:g}",
         )
     w0 = np.asarray(s.w0)
-    if np.linalg.norm(w0) > p.omega_max + 1e-12:
+    if _norm(w0) > p.omega_max + 1e-12:
         raise ScenarioError(
             "w0",
-            f"|w0| = {math.degrees(np.linalg.norm(w0)):.3f} deg/U_T exceeds "
+            f"|w0| = {math.degrees(_norm(w0)):.3f} deg/U_T exceeds "
             f"omega_max_deg = {p.omega_max_deg:g}",
         )
     if p.roll_decoupled and w0[0] != p.omega_f[0]:
@@ -251,13 +260,19 @@ def _validate_params(p: Params) -> None:
         raise ScenarioError("J_B", f"inertia diagonal must be positive, got {p.J_B}")
     if p.T_min >= p.T_max:
         raise ScenarioError("T_min", f"T_min = {p.T_min:g} must be below T_max = {p.T_max:g}")
+    if not p.r_T_B[0] < 0.0:  # the gimbal's lever arm; the guess divides by it
+        raise ScenarioError(
+            "r_T_B",
+            f"r_T_B[0] = {p.r_T_B[0]!r}: the engine sits below the centre of mass on the body "
+            "axis (r_T_B[0] < 0, DESIGN.md: -0.01)",
+        )
     if not 0.0 < p.gimbal_max_deg < 90.0:
         raise ScenarioError("gimbal_max_deg", "must lie in (0, 90) degrees")
     if not 0.0 < p.tilt_max_deg <= 180.0:
         raise ScenarioError("tilt_max_deg", "must lie in (0, 180] degrees")
     if not 0.0 <= p.glideslope_deg < 90.0:
         raise ScenarioError("glideslope_deg", "must lie in [0, 90) degrees")
-    if abs(np.linalg.norm(p.q_f) - 1.0) > UNIT_QUATERNION_TOL:
+    if abs(_norm(p.q_f) - 1.0) > UNIT_QUATERNION_TOL:
         raise ScenarioError("q_f", "must be a unit quaternion")
     if p.g_I[0] >= 0.0 or p.g_I[1] != 0.0 or p.g_I[2] != 0.0:
         raise ScenarioError("g_I", "gravity must point along -e1 (e1 is up)")
@@ -272,17 +287,17 @@ def _validate_terminal(p: Params) -> None:
     """The terminal state must meet the path constraints it is held to at the last node."""
     r_f = np.asarray(p.r_f)
     gs = math.radians(p.glideslope_deg)
-    if math.sin(gs) * float(np.linalg.norm(r_f[1:])) > math.cos(gs) * r_f[0] + 1e-12:
+    if math.sin(gs) * float(_norm(r_f[1:])) > math.cos(gs) * r_f[0] + 1e-12:
         raise ScenarioError(
             "r_f", f"landing point is outside the {p.glideslope_deg:g} deg glideslope cone"
         )
-    if np.linalg.norm(p.omega_f) > p.omega_max + 1e-12:
+    if _norm(p.omega_f) > p.omega_max + 1e-12:
         raise ScenarioError(
             "omega_f",
-            f"|omega_f| = {math.degrees(np.linalg.norm(p.omega_f)):.3f} deg/U_T exceeds "
+            f"|omega_f| = {math.degrees(_norm(p.omega_f)):.3f} deg/U_T exceeds "
             f"omega_max_deg = {p.omega_max_deg:g}",
         )
-    tilt_q = float(np.linalg.norm(p.q_f[2:4]))
+    tilt_q = float(_norm(p.q_f[2:4]))
     if p.final_roll_free and tilt_q > 1e-12:
         raise ScenarioError(
             "q_f",

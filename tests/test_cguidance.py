@@ -429,6 +429,33 @@ def test_a_bad_setting_is_named_alike_in_python_and_c(field: str, value: float) 
         cguidance.Workspace(Params(), st)
 
 
+def test_the_unit_quaternion_limit_is_judged_alike_to_the_last_bit() -> None:
+    """|q0| within 1e-6 of 1: numpy's norm and a sum of squares in order differ in the last
+    bit, which near the limit gave C and Python opposite verdicts (73 of 3,000 quaternions in
+    an adversarial review). Python now sums as C does."""
+    rng = np.random.default_rng(3)
+    split = []
+    for _ in range(20000):
+        q = rng.standard_normal(4)
+        q *= (1.0 + 1e-6 * (1.0 + rng.uniform(-1e-9, 1e-9)) * rng.choice([-1.0, 1.0])) / np.sqrt(
+            np.sum(q * q)
+        )
+        in_order = np.sqrt(((q[0] * q[0] + q[1] * q[1]) + q[2] * q[2]) + q[3] * q[3])
+        if (abs(np.linalg.norm(q) - 1.0) > 1e-6) != (abs(in_order - 1.0) > 1e-6):
+            split.append(q)
+    assert len(split) >= 5  # cases where the two ways of summing disagree
+    base = SCENARIOS["default"]
+    for q in split:
+        scn = Scenario(InitialState(base.initial.r0, base.initial.v0, tuple(q), base.initial.w0,
+                                    base.initial.m0), base.params)  # fmt: skip
+        try:
+            validate(scn)
+            python_refuses = False
+        except ScenarioError:
+            python_refuses = True
+        assert python_refuses == (cguidance.validate_c(scn) is not None), q
+
+
 def test_external_guess_is_used_as_given() -> None:
     """With the reference's own guess passed in, the C solve is the same solve."""
     scn = SCENARIOS["default"]
@@ -547,6 +574,8 @@ BAD_DICTS = [
     ({"q_f": [2.0, 0, 0, 0]}, "q_f"),
     ({"r_f": [-1.0, 0, 0]}, "r_f"),
     ({"beta_mdot": -0.1}, "beta_mdot"),
+    ({"r_T_B": [0.0, 0.0, 0.0]}, "r_T_B"),  # no lever arm: the guess divided by zero
+    ({"r_T_B": [0.01, 0.0, 0.0]}, "r_T_B"),
     ({"N": 2}, "N"),
     # terminal states that break the path constraints they are held to at the last node
     ({"omega_f": [0.0, 0.0, 5.0]}, "omega_f"),
@@ -822,3 +851,23 @@ def test_trust_radius_never_exceeds_eta_ub() -> None:
     assert grown and grown[0] == 0
     for i in grown:
         assert rows[i + 1].eta == min(st.beta * rows[i].eta, st.eta_ub)
+
+
+def test_a_mask_callback_that_fails_or_answers_the_wrong_size_stops_the_solve() -> None:
+    """An exception inside the callback used to vanish in ctypes (read as "the full
+    problem"), a short mask to be copied past its end; both now stop the solve with the
+    reason, and a wrong-sized table is refused before it."""
+    N = Params().N
+
+    def short(k: int) -> np.ndarray:
+        return np.ones(NC * N - 1, bool)
+
+    def broken(k: int) -> np.ndarray:
+        raise RuntimeError("network down")
+
+    with pytest.raises(InputError, match=r"iteration 1's mask has 349 entries, not 7N = 350"):
+        cguidance.solve_c(SCENARIOS["default"], masks=short)
+    with pytest.raises(InputError, match="network down"):
+        cguidance.solve_c(SCENARIOS["default"], masks=broken)
+    with pytest.raises(InputError, match="not rows of 7N = 350"):
+        cguidance.solve_c(SCENARIOS["default"], masks=np.ones((2, NC * N - 1), bool))

@@ -111,8 +111,9 @@ struct pdg_workspace {
 };
 
 /* pdg_scvx.c */
-/* Clears `res` to "invalid input" and checks that `ws` is set up: 0 to go on, -1 (message set) if not. */
-int pdg_result_begin(const pdg_workspace *ws, pdg_result *res);
+/* Clears `res` to "invalid input" and, when `ws` is set up, the record of its last solve (log
+ * and masks: a refused call leaves none to read): 0 to go on, -1 (message set) if not set up. */
+int pdg_result_begin(pdg_workspace *ws, pdg_result *res);
 int pdg_check_workspace_scenario(const pdg_workspace *ws, const pdg_scenario *s, char *msg);
 /* pdg_solve from the trust radius eta_init (> 0) instead of the settings' */
 pdg_status pdg_solve_from(pdg_workspace *ws, const pdg_scenario *scenario,

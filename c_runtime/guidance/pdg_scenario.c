@@ -284,6 +284,11 @@ static int check_params(const pdg_params *p, char *msg)
         snprintf(text, sizeof text, "T_min = %g must be below T_max = %g", p->T_min, p->T_max);
         return fail(msg, "T_min", text);
     }
+    if (!(p->r_T_B[0] < 0.0)) { /* the gimbal's lever arm; the guess divides by it */
+        snprintf(text, sizeof text, "r_T_B[0] = %.17g: the engine sits below the centre of "
+                 "mass on the body axis (r_T_B[0] < 0, DESIGN.md: -0.01)", p->r_T_B[0]);
+        return fail(msg, "r_T_B", text);
+    }
     if (!(0.0 < p->gimbal_max_deg && p->gimbal_max_deg < 90.0)) {
         return fail(msg, "gimbal_max_deg", "must lie in (0, 90) degrees");
     }

@@ -154,8 +154,9 @@ static pdg_setup_status check_settings(const pdg_settings *s, char *msg)
         return bad_setting(msg, text);
     }
     if (!(s->eta_lb <= s->eta_init && s->eta_init <= s->eta_ub)) {
-        snprintf(text, sizeof text, "eta_init: must lie within [eta_lb, eta_ub] = [%g, %g], got %g",
-                 s->eta_lb, s->eta_ub, s->eta_init);
+        snprintf(text, sizeof text,
+                 "eta_init: must lie within [eta_lb, eta_ub] = [%g, %g], got %.17g", s->eta_lb,
+                 s->eta_ub, s->eta_init);
         return bad_setting(msg, text);
     }
     if (!(s->lam > 0)) {
@@ -901,7 +902,9 @@ static pdg_status diagnose(pdg_workspace *ws, double vc, double defect, double v
 }
 
 /* Mask for iteration k into ws->mask; returns 1 when there is one (0: full problem). */
-static int mask_for(pdg_workspace *ws, const pdg_options *o, int k)
+/* 1: ws->mask holds iteration k's mask; 0: the full problem; -1: the callback answered
+ * neither (its answer in *answer), which stops the solve. */
+static int mask_for(pdg_workspace *ws, const pdg_options *o, int k, int *answer)
 {
     const int n = NC * ws->N;
     int i;
@@ -913,7 +916,11 @@ static int mask_for(pdg_workspace *ws, const pdg_options *o, int k)
         return 1;
     }
     if (o->mask_fn) {
-        if (!o->mask_fn(o->mask_ctx, k, ws->mask, n)) {
+        *answer = o->mask_fn(o->mask_ctx, k, ws->mask, n);
+        if (*answer != 0 && *answer != 1) {
+            return -1; /* an error code, not a mask: whatever the buffer holds is not used */
+        }
+        if (!*answer) {
             return 0;
         }
         for (i = 0; i < n; ++i) {
@@ -1077,7 +1084,7 @@ pdg_status pdg_solve(pdg_workspace *ws, const pdg_scenario *scenario, const pdg_
     return pdg_solve_from(ws, scenario, opt, res, PDG_WS_READY(ws) ? ws->st.eta_init : 1.0);
 }
 
-int pdg_result_begin(const pdg_workspace *ws, pdg_result *res)
+int pdg_result_begin(pdg_workspace *ws, pdg_result *res)
 {
     if (!res) {
         return -1;
@@ -1090,6 +1097,7 @@ int pdg_result_begin(const pdg_workspace *ws, pdg_result *res)
         snprintf(res->message, PDG_MESSAGE_LEN, "workspace not set up (call pdg_setup)");
         return -1;
     }
+    ws->n_log = ws->n_masks_out = 0;
     return 0;
 }
 
@@ -1106,7 +1114,6 @@ pdg_status pdg_solve_from(pdg_workspace *ws, const pdg_scenario *scenario,
     if (pdg_result_begin(ws, res) != 0) {
         return PDG_INVALID_INPUT;
     }
-    ws->n_log = ws->n_masks_out = 0;
     opt = opt ? opt : &no_options;
     st = &ws->st;
     status = start(ws, scenario, opt, res, &J, &defect, &viol);
@@ -1121,12 +1128,23 @@ pdg_status pdg_solve_from(pdg_workspace *ws, const pdg_scenario *scenario,
     /* k counts successions (accepted steps); a rejection retries the same k (Algorithm 1) */
     for (it = 0; it < st->max_subproblems && k < st->iter_max; ++it) {
         pdg_log_row *r = &ws->log[ws->n_log++];
-        const int has_mask = have_masks ? mask_for(ws, opt, k + 1) : 0;
+        int answer = 0;
+        const int has_mask = have_masks ? mask_for(ws, opt, k + 1, &answer) : 0;
         const unsigned char *keep = NULL;
         candidate cd;
         tscvx_info info;
         double dJ, dL, rho, tau_r = 0.0, eta_new, t_solve = 0.0;
         int sst, i, accepted, converged, newly_forced, restored;
+
+        if (has_mask < 0) {
+            ws->n_log--;
+            status = PDG_INVALID_INPUT;
+            snprintf(res->message, PDG_MESSAGE_LEN,
+                     "masks: the mask callback answered %d for iteration %d (1: it wrote a "
+                     "mask, 0: the full problem); the solve stops at its last accepted step",
+                     answer, k + 1);
+            break;
+        }
 
         /* 1. mask (T-SCvx): the caller's, plus what the full-constraint guard put back */
         if (has_mask) {

@@ -242,8 +242,8 @@ pdg_status pdg_solve_tscvx(pdg_workspace *ws, const pdg_scenario *s,
     if ((o->eta_init != 0.0 || o->solution) &&
         !(warm_eta >= ws->st.eta_lb && warm_eta <= ws->st.eta_ub)) {
         snprintf(res->message, PDG_MESSAGE_LEN,
-                 "eta_init: must be 0 (Table 1's %g) or within [eta_lb, eta_ub] = [%g, %g], got %g"
-                 "%s",
+                 "eta_init: must be 0 (Table 1's %g) or within [eta_lb, eta_ub] = [%g, %g], got "
+                 "%.17g%s",
                  PDG_TSCVX_ETA_INIT, ws->st.eta_lb, ws->st.eta_ub, o->eta_init,
                  o->eta_init == 0.0 ? " (Table 1's radius is outside the settings' bounds)" : "");
         return PDG_INVALID_INPUT;
@@ -252,7 +252,8 @@ pdg_status pdg_solve_tscvx(pdg_workspace *ws, const pdg_scenario *s,
     opt.clock_s = o->clock_s;
     memset(&mc, 0, sizeof mc);
     pdg_theta_of(s, mc.input);
-    eta = ws->st.eta_init;
+    /* the caller's radius when given, with or without the warm start */
+    eta = o->eta_init != 0.0 ? o->eta_init : ws->st.eta_init;
     if (o->solution) {
         if (predict_guess(ws, s, o->solution, mc.input, res->message)) {
             res->status = PDG_SOLVER_ERROR;

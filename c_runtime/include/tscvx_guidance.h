@@ -154,7 +154,10 @@ typedef struct {
 } pdg_settings;
 
 /* Returns k-th mask (7N bytes, nonzero = keep) into `mask` for SCvx iteration k = 1, 2, ...;
- * returns 1 when it wrote a mask, 0 to solve the full problem at that iteration. */
+ * returns 1 when it wrote a mask, 0 to solve the full problem at that iteration. Any other
+ * answer (an error code) stops the solve with PDG_INVALID_INPUT and a "masks:" message; the
+ * result holds the last accepted iterate. A solve with masks (table or callback) is T-SCvx
+ * even where a mask is full: its trust radius follows Algorithm 2 (pdg_settings.tau_r_update). */
 typedef int (*pdg_mask_fn)(void *ctx, int k, unsigned char *mask, int n_entries);
 
 typedef struct {
@@ -284,9 +287,10 @@ typedef struct {
                                     NULL: the built-in guess and the settings' eta_init */
     struct tscvx_nn *constraint; /* constraint network: theta + k (17) -> 7N logits.
                                     NULL: no masks (every subproblem is the full one) */
-    double eta_init;             /* initial trust radius with the warm start, within
-                                    [eta_lb, eta_ub]; 0: PDG_TSCVX_ETA_INIT. Anything else
-                                    is refused (PDG_INVALID_INPUT) */
+    double eta_init;             /* initial trust radius, within [eta_lb, eta_ub]; 0: with a
+                                    solution network PDG_TSCVX_ETA_INIT, without it the
+                                    settings' eta_init. Anything else is refused
+                                    (PDG_INVALID_INPUT) */
     double (*clock_s)(void);     /* optional clock for the log's subproblem times */
 } pdg_tscvx_options;
 

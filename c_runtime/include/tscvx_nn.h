@@ -77,7 +77,8 @@ typedef enum {
     TSCVX_NN_BAD_CHECKSUM,     /* CRC-32 mismatch: the blob is corrupt */
     TSCVX_NN_BAD_DIMENSIONS,   /* dimensions out of range or inconsistent with each other (the
                                   input and output sizes with the kind and N) */
-    TSCVX_NN_BAD_WEIGHTS,      /* a weight or normalization value is NaN/inf (or a scale <= 0) */
+    TSCVX_NN_BAD_WEIGHTS,      /* a weight or normalization value is NaN/inf, a scale <= 0,
+                                  or the threshold or LayerNorm epsilon is outside (0, 1) */
     TSCVX_NN_BAD_ALIGNMENT,    /* in-place weights need an 8-byte aligned blob */
     TSCVX_NN_ARENA_TOO_SMALL,  /* arena smaller than tscvx_nn_arena_size() */
     TSCVX_NN_NOT_READY,        /* the net was not initialized (or its arena was overwritten) */

@@ -21,7 +21,8 @@ static const char *const status_messages[TSCVX_NN_NSTATUS] = {
     "network blob checksum (CRC-32) mismatch: the blob is corrupt",
     "network dimensions out of range or inconsistent (token mode, sequence length, heads, or "
     "input/output sizes that do not fit the kind and N)",
-    "network blob holds a NaN/inf value or a non-positive normalization scale",
+    "network blob holds a NaN/inf value, a non-positive normalization scale, or a decision "
+    "threshold or LayerNorm epsilon outside (0, 1)",
     "in-place weights need an 8-byte aligned blob (or the TSCVX_NN_COPY_WEIGHTS flag)",
     "arena smaller than tscvx_nn_arena_size()",
     "network not initialized (tscvx_nn_init) or its arena was overwritten",

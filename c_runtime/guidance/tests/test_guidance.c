@@ -208,6 +208,15 @@ static void test_stale_workspace(pdg_workspace *ws, void *arena, size_t bytes)
     CHECK(pdg_theta_of(&s, NULL) == PDG_SETUP_NULL_ARGUMENT);
 }
 
+/* Mask callback that fails with an error code at its second call (iteration 2). */
+static int fail_second(void *ctx, int k, unsigned char *mask, int n)
+{
+    (void)ctx;
+    (void)mask;
+    (void)n;
+    return k >= 2 ? -1 : 0;
+}
+
 /* Mask callback: keep everything except every constraint c = 1 (glideslope). */
 static int drop_glideslope(void *ctx, int k, unsigned char *mask, int n)
 {
@@ -280,6 +289,15 @@ static void test_solve(pdg_workspace *ws, int with_masks)
         if (r.status == PDG_SOLVED) {
             CHECK(r.max_violation <= 1e-5);
         }
+    }
+    {   /* a callback answering an error code: refused, not taken as a mask (the buffer holds
+         * whatever it held), the solve stopped there, the record that of its subproblems */
+        pdg_options o;
+        memset(&o, 0, sizeof o);
+        o.mask_fn = fail_second;
+        CHECK(pdg_solve(ws, &s, &o, &r) == PDG_INVALID_INPUT);
+        CHECK(strstr(r.message, "masks: the mask callback answered -1 for iteration 2") != NULL);
+        CHECK(r.iterations == 1 && pdg_log_length(ws) == r.subproblems_solved);
     }
 }
 
