@@ -329,10 +329,11 @@ def test_example_program_refuses_a_bad_command_line_with_its_usage(args: list[st
     assert run.returncode == 2 and run.stderr.startswith("usage: ") and run.stdout == ""
 
 
-def test_a_radius_given_without_the_solution_network_is_used(nets) -> None:
-    """pdg_tscvx_options.eta_init is the starting radius with or without the warm start (it
-    used to be checked and then dropped when no solution network was given)."""
+def test_the_reduced_radius_goes_with_the_warm_start_only(nets) -> None:
+    """pdg_tscvx_options.eta_init is the radius of the warm start; without a solution network
+    the solve starts from the built-in guess at the settings' radius (as SCvx), and the value
+    is still checked, with all its digits in the message."""
     res = cguidance.solve_tscvx_c(SCENARIOS["default"], nets=(None, nets[1]), eta_init=0.5)
-    assert res.history[0].eta == 0.5
+    assert res.history[0].eta == SCvxSettings().eta_init
     with pytest.raises(InputError, match=r"got 10\.000000999999999"):  # all its digits
         cguidance.solve_tscvx_c(SCENARIOS["default"], nets=(None, nets[1]), eta_init=10.000001)

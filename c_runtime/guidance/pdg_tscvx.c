@@ -252,8 +252,7 @@ pdg_status pdg_solve_tscvx(pdg_workspace *ws, const pdg_scenario *s,
     opt.clock_s = o->clock_s;
     memset(&mc, 0, sizeof mc);
     pdg_theta_of(s, mc.input);
-    /* the caller's radius when given, with or without the warm start */
-    eta = o->eta_init != 0.0 ? o->eta_init : ws->st.eta_init;
+    eta = ws->st.eta_init; /* the reduced radius goes with the warm start only */
     if (o->solution) {
         if (predict_guess(ws, s, o->solution, mc.input, res->message)) {
             res->status = PDG_SOLVER_ERROR;

@@ -287,10 +287,11 @@ typedef struct {
                                     NULL: the built-in guess and the settings' eta_init */
     struct tscvx_nn *constraint; /* constraint network: theta + k (17) -> 7N logits.
                                     NULL: no masks (every subproblem is the full one) */
-    double eta_init;             /* initial trust radius, within [eta_lb, eta_ub]; 0: with a
-                                    solution network PDG_TSCVX_ETA_INIT, without it the
-                                    settings' eta_init. Anything else is refused
-                                    (PDG_INVALID_INPUT) */
+    double eta_init;             /* initial trust radius with the warm start, within
+                                    [eta_lb, eta_ub]; 0: PDG_TSCVX_ETA_INIT. Anything else
+                                    is refused (PDG_INVALID_INPUT), with or without a
+                                    solution network; without one the solve starts from the
+                                    built-in guess at the settings' eta_init, as SCvx */
     double (*clock_s)(void);     /* optional clock for the log's subproblem times */
 } pdg_tscvx_options;
 
