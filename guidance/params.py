@@ -177,7 +177,8 @@ class SCvxSettings:
     tau_r_update: bool = True
 
     def __post_init__(self) -> None:
-        """The ranges the flight library checks too (pdg_check_settings in pdg_scvx.c)."""
+        """The ranges the flight library checks too, in its order (pdg_check_settings in
+        pdg_scvx.c): with two bad settings both name the same one."""
         for f in dataclasses.fields(self):
             value = getattr(self, f.name)
             if f.type == "bool" and not isinstance(value, bool):
@@ -193,8 +194,10 @@ class SCvxSettings:
                 f"discretization must be one of {', '.join(DISCRETIZATIONS)}, "
                 f"got {self.discretization!r}"
             )
-        if not (math.isfinite(self.prox_u) and self.prox_u >= 0.0):
-            raise InputError(f"prox_u must be a weight >= 0, got {self.prox_u}")
+        for name, (lo, hi) in INT_SETTING_RANGES.items():
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int) or not lo <= value <= hi:
+                raise InputError(f"{name} must be an integer within {lo}..{hi}, got {value!r}")
         if not self.eta_lb > 0.0:
             raise InputError(f"eta_lb must be > 0, got {self.eta_lb!r}")
         if not self.eta_ub >= self.eta_lb:
@@ -204,10 +207,6 @@ class SCvxSettings:
                 f"eta_init must lie within [eta_lb, eta_ub] = [{self.eta_lb:g}, "
                 f"{self.eta_ub:g}], got {self.eta_init!r}"
             )
-        for name, (lo, hi) in INT_SETTING_RANGES.items():
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int) or not lo <= value <= hi:
-                raise InputError(f"{name} must be an integer within {lo}..{hi}, got {value!r}")
         if not self.lam > 0.0:
             raise InputError(f"lam must be > 0, got {self.lam!r}")
         if not self.rho0 <= self.rho1:
@@ -223,7 +222,7 @@ class SCvxSettings:
                 raise InputError(
                     f"{name} must be >= 1 (a trust-region factor), got {getattr(self, name)!r}"
                 )
-        for name in ("step_tol", "vc_tol", "defect_tol", "tight_tol"):
+        for name in ("step_tol", "vc_tol", "defect_tol", "tight_tol", "prox_u"):
             if not getattr(self, name) >= 0.0:
                 raise InputError(f"{name} must be >= 0, got {getattr(self, name)!r}")
         if not 0.0 < self.socp_tol < 1.0:

@@ -456,6 +456,20 @@ def test_the_unit_quaternion_limit_is_judged_alike_to_the_last_bit() -> None:
         assert python_refuses == (cguidance.validate_c(scn) is not None), q
 
 
+def test_two_bad_settings_are_reported_by_the_same_one() -> None:
+    """Python checks in the C library's order, so both name the same setting first."""
+    bad = {"eta_lb": 0.0, "iter_max": 0, "lam": 0.0, "prox_u": -1.0}
+    with pytest.raises(InputError, match=r"^iter_max must"):
+        SCvxSettings(**bad)
+    with pytest.raises(InputError, match=r"settings\.iter_max: must"):
+        cguidance.Workspace(Params(), cguidance.c_settings(**bad))
+    del bad["iter_max"]
+    with pytest.raises(InputError, match=r"^eta_lb must"):
+        SCvxSettings(**bad)
+    with pytest.raises(InputError, match=r"settings\.eta_lb: must"):
+        cguidance.Workspace(Params(), cguidance.c_settings(**bad))
+
+
 def test_external_guess_is_used_as_given() -> None:
     """With the reference's own guess passed in, the C solve is the same solve."""
     scn = SCENARIOS["default"]

@@ -244,3 +244,15 @@ def test_a_dip_below_t_min_between_nodes_is_flown_by_the_engine_too(
     assert v.engine is not None
     assert main(["verify", str(tmp_path / "turn.npz")]) == 1
     assert "flown by an engine held at T_min there" in capsys.readouterr().out
+
+
+def test_a_file_without_its_scenario_says_what_is_not_checked(
+    written: Path, tmp_path: Path, capsys
+) -> None:
+    with np.load(written) as f:
+        data = {k: f[k] for k in f.files if k != "scenario"}
+    np.savez(tmp_path / "bare.npz", **data)
+    assert main(["verify", str(tmp_path / "bare.npz")]) == 0
+    out = capsys.readouterr().out
+    assert "no scenario in the file: x[0] not checked against one" in out
+    assert "initial state vs scenario" not in out
