@@ -254,7 +254,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="clarabel: Python SCvx + Clarabel; c-socp: Python SCvx + the C SOCP runtime; "
         "c: the whole solve in the C library",
     )
-    s.add_argument("--models", default=str(MODELS_DIR), help="folder of the ONNX networks")
+    s.add_argument(
+        "--models",
+        default=str(MODELS_DIR),
+        help="folder of the networks: solution.onnx and constraint.onnx (with --backend c "
+        "also the .tnn blobs of make lib, e.g. build/models)",
+    )
     s.add_argument("--out", help="trajectory .npz to write")
     s.add_argument("--plot", help="figure (.png) to write")
     s.add_argument(
