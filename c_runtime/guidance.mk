@@ -46,7 +46,8 @@ $(BUILD)/pdg_budget_driver: c_runtime/examples/pdg_budget_driver.c c_runtime/exa
 
 $(BUILD)/ctest/%: c_runtime/guidance/tests/%.c c_runtime/guidance/tests/gnc_test.h c_runtime/include/tscvx_guidance.h c_runtime/examples/host_io.h $(BUILD)/libtscvx_gnc.a $(BUILD)/libtscvx.a
 	@mkdir -p $(BUILD)/ctest
-	$(CC) -std=c99 -Wall -Wextra -Werror -O1 -g -Ic_runtime/include -Ic_runtime/examples $< -o $@ $(GNC_LINK)
+	$(CC) -std=c99 -Wall -Wextra -Werror -O1 -g -Ic_runtime/include -Ic_runtime/examples \
+	  -Ic_runtime/guidance -I$(GEN_DIR) $< -o $@ $(GNC_LINK)
 
 gnc: $(BUILD)/libtscvx_gnc.a $(BUILD)/libtscvx_gnc.so
 lib: gnc

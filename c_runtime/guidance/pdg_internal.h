@@ -3,6 +3,7 @@
 #define PDG_INTERNAL_H
 
 #include <stddef.h>
+#include <stdint.h>
 
 #include "foh.h"
 #include "tscvx_guidance.h"
@@ -64,9 +65,11 @@ typedef struct {
 } pdg_values;
 
 /* Set by a successful pdg_setup: a workspace whose arena was reused or never set up is
- * refused instead of trusted (an int flag would pass on leftover bytes). */
+ * refused instead of trusted (an int flag would pass on leftover bytes), and so is one whose
+ * set-up constants (sizes, settings, layout, the pointers into the arena) no longer match
+ * their checksum (a bit flipped in them would send a loop out of bounds). */
 #define PDG_WS_MAGIC 0x50444757u /* "PDGW" */
-#define PDG_WS_READY(ws) ((ws) && (ws)->magic == PDG_WS_MAGIC)
+#define PDG_WS_READY(ws) pdg_ws_ready(ws)
 
 struct pdg_workspace {
     unsigned magic;
@@ -108,7 +111,11 @@ struct pdg_workspace {
     unsigned char *masks_out;
     int n_masks_out;
     size_t arena_bytes, arena_high;
+    uint64_t layout_sum; /* FNV-1a of the set-up constants above (pdg_layout_sum) */
 };
+
+uint64_t pdg_layout_sum(const pdg_workspace *ws);
+int pdg_ws_ready(const pdg_workspace *ws);
 
 /* pdg_scvx.c */
 /* Clears `res` to "invalid input" and, when `ws` is set up, the record of its last solve (log

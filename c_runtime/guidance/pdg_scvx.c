@@ -319,6 +319,35 @@ enum { BUILD_SIZE, BUILD_SETUP };
 
 /* Sizes of the subproblem for the vehicle's N, terminal condition and A_k pattern (no memory
  * needed). */
+/* Member by member, so that the padding of the copy keeps the zeros it was cleared to (the
+ * caller's padding is indeterminate, and the layout checksum reads the copy's bytes). A
+ * field added to pdg_settings must be added here (test_guidance compares the copy with the
+ * caller's settings byte for byte). */
+static void copy_settings(pdg_settings *d, const pdg_settings *s)
+{
+    d->lam = s->lam;
+    d->rho0 = s->rho0;
+    d->rho1 = s->rho1;
+    d->rho2 = s->rho2;
+    d->alpha = s->alpha;
+    d->beta = s->beta;
+    d->eta_init = s->eta_init;
+    d->eta_lb = s->eta_lb;
+    d->eta_ub = s->eta_ub;
+    d->iter_max = s->iter_max;
+    d->max_subproblems = s->max_subproblems;
+    d->step_tol = s->step_tol;
+    d->vc_tol = s->vc_tol;
+    d->defect_tol = s->defect_tol;
+    d->rk4_substeps = s->rk4_substeps;
+    d->tight_tol = s->tight_tol;
+    d->socp_tol = s->socp_tol;
+    d->socp_max_iter = s->socp_max_iter;
+    d->socp_warm_start = s->socp_warm_start;
+    d->tau_r_update = s->tau_r_update;
+    d->prox_u = s->prox_u;
+}
+
 static void problem_dims(pdg_workspace *w, const pdg_params *vehicle, const pdg_settings *st)
 {
     const int N = vehicle->N;
@@ -329,7 +358,7 @@ static void problem_dims(pdg_workspace *w, const pdg_params *vehicle, const pdg_
     w->roll_free = vehicle->final_roll_free ? 1 : 0;
     pdg_param_vector(vehicle, pvec);
     w->phi_a = pdg_phi_a_pattern(pvec, &w->phi_a_nnz);
-    w->st = *st;
+    copy_settings(&w->st, st);
     pdg_layout_init(&w->lay, N);
     w->n = w->lay.n;
     w->p = pdg_rows_eq(N, w->roll_free);
@@ -434,7 +463,7 @@ static pdg_setup_status build(void *mem, size_t bytes, const pdg_params *vehicle
     problem_dims(&dims, vehicle, st);
     ws = (pdg_workspace *)take(&a, 1, sizeof(pdg_workspace));
     if (ws) {
-        *ws = dims;
+        memcpy(ws, &dims, sizeof *ws); /* the padding too (zeros): the checksum reads it */
     } else {
         ws = &dims; /* count only */
     }
@@ -527,9 +556,47 @@ static pdg_setup_status build(void *mem, size_t bytes, const pdg_params *vehicle
         ws->arena_high = skip + (hw > a.high ? hw : a.high);
     }
     ws->arena_bytes = bytes;
+    ws->layout_sum = pdg_layout_sum(ws);
     ws->magic = PDG_WS_MAGIC;
     *out = ws;
     return PDG_SETUP_OK;
+}
+
+static uint64_t fnv1a(uint64_t h, const void *p, size_t n)
+{
+    const unsigned char *b = (const unsigned char *)p;
+    size_t i;
+    for (i = 0; i < n; ++i) {
+        h = (h ^ b[i]) * 0x100000001B3ull;
+    }
+    return h;
+}
+
+/* The fields pdg_setup fixes and no call changes: from N to the SOCP workspace pointer
+ * (sizes, settings, layout, the pattern and data pointers), the buffer pointers from z to
+ * log but the two discretization buffers (swapped on acceptance, as a pair: checked for
+ * being the pair), the masks pointer and the arena size. About 1 KB: a few thousand
+ * instructions per call. */
+uint64_t pdg_layout_sum(const pdg_workspace *ws)
+{
+    const char *base = (const char *)ws;
+    const uintptr_t a = (uintptr_t)ws->disc, b = (uintptr_t)ws->disc_new;
+    const uintptr_t pair[2] = {a < b ? a : b, a < b ? b : a};
+    uint64_t h = 0xCBF29CE484222325ull;
+    h = fnv1a(h, base + offsetof(pdg_workspace, N),
+              offsetof(pdg_workspace, scn) - offsetof(pdg_workspace, N));
+    h = fnv1a(h, base + offsetof(pdg_workspace, z),
+              offsetof(pdg_workspace, disc) - offsetof(pdg_workspace, z));
+    h = fnv1a(h, pair, sizeof pair);
+    h = fnv1a(h, base + offsetof(pdg_workspace, aug),
+              offsetof(pdg_workspace, n_log) - offsetof(pdg_workspace, aug));
+    h = fnv1a(h, &ws->masks_out, sizeof ws->masks_out);
+    return fnv1a(h, &ws->arena_bytes, sizeof ws->arena_bytes);
+}
+
+int pdg_ws_ready(const pdg_workspace *ws)
+{
+    return ws && ws->magic == PDG_WS_MAGIC && ws->layout_sum == pdg_layout_sum(ws);
 }
 
 pdg_setup_status pdg_workspace_size(const pdg_params *vehicle, const pdg_settings *settings,

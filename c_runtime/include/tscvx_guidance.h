@@ -29,6 +29,12 @@
  *   5. pdg_get_log / pdg_get_mask / pdg_arena_high_water  -- the last solve's record.
  *   6. cleanup is trivial: the caller owns the arena.
  *
+ * Every call taking the workspace checks its mark and a checksum of what pdg_setup fixed (the
+ * sizes, settings and layout, the pointers into the arena): a workspace whose arena was
+ * reused, or where one of those took a bit flip, is refused (PDG_SETUP_NOT_READY,
+ * PDG_INVALID_INPUT from the solves), never followed. The SOCP workspace inside it checks
+ * its mark only (tscvx_socp.h).
+ *
  * Each SCvx iteration writes new numbers into the fixed pattern: FOH discretization of the
  * N-1 intervals from the CasADi-generated model, the subproblem data (equalities A z = b:
  * dynamics with virtual control, boundary conditions; cone rows G z + s = h: virtual-control

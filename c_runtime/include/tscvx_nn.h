@@ -81,7 +81,9 @@ typedef enum {
                                   or the threshold or LayerNorm epsilon is outside (0, 1) */
     TSCVX_NN_BAD_ALIGNMENT,    /* in-place weights need an 8-byte aligned blob */
     TSCVX_NN_ARENA_TOO_SMALL,  /* arena smaller than tscvx_nn_arena_size() */
-    TSCVX_NN_NOT_READY,        /* the net was not initialized (or its arena was overwritten) */
+    TSCVX_NN_NOT_READY,        /* the net was not initialized, its arena was overwritten, or
+                                  a field init fixed (a dimension, a weight pointer) changed
+                                  since: every call checks a checksum of them */
     TSCVX_NN_BAD_SIZE,         /* n_in / n_out differ from the network's input / output size */
     TSCVX_NN_BAD_INPUT,        /* an input value is NaN or infinite */
     TSCVX_NN_NUMERICAL_ERROR,  /* the output is not finite (overflow inside the network) */

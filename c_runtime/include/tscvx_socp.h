@@ -57,9 +57,10 @@
  * that setup writes last and cleanup clears (and that the KKT method pointer is one of the
  * library's), so a workspace whose arena was reused or overwritten is refused
  * (TSCVX_SETUP_NOT_READY; tscvx_solve: TSCVX_INVALID_INPUT) before any of its pointers is
- * followed. The workspace is not checksummed: a bit flipped inside it with the mark intact (a
- * single-event upset) is not detected, and can make a call read or write out of bounds; flight
- * memory needs EDAC for that, as for any code. The library never calls malloc, has no
+ * followed. This workspace is not checksummed (the guidance workspace and the networks are:
+ * tscvx_guidance.h, tscvx_nn.h): a bit flipped inside it with the mark intact (a single-event
+ * upset) is not detected, and can make a call read or write out of bounds; flight memory
+ * needs EDAC for that, as for any code. The library never calls malloc, has no
  * recursion and no global mutable state. Every public function returns a status code.
  */
 #ifndef TSCVX_SOCP_H

@@ -432,8 +432,31 @@ tscvx_nn_status tscvx_nn_init(tscvx_nn **out, void *arena, size_t arena_bytes, c
     w += (size_t)hd.n_probes * hd.d_out;
     net->params = w;
     net->cookie = NN_COOKIE;
+    net->layout_sum = nn_layout_sum(net);
     *out = net;
     return TSCVX_NN_OK;
+}
+
+static uint64_t fnv1a(uint64_t h, const void *p, size_t n)
+{
+    const unsigned char *b = (const unsigned char *)p;
+    size_t i;
+    for (i = 0; i < n; ++i) {
+        h = (h ^ b[i]) * 0x100000001B3ull;
+    }
+    return h;
+}
+
+uint64_t nn_layout_sum(const tscvx_nn *net)
+{
+    const uint64_t h = fnv1a(0xCBF29CE484222325ull, net, offsetof(tscvx_nn, layout_sum));
+    return fnv1a(h, net->layers, sizeof(nn_layer) * net->hdr.n_layers);
+}
+
+int nn_live(const tscvx_nn *net)
+{
+    return net->cookie == NN_COOKIE && net->hdr.n_layers <= TSCVX_NN_MAX_LAYERS &&
+           net->layout_sum == nn_layout_sum(net);
 }
 
 tscvx_nn_status tscvx_nn_get_info(const tscvx_nn *net, tscvx_nn_info *info)
@@ -441,7 +464,7 @@ tscvx_nn_status tscvx_nn_get_info(const tscvx_nn *net, tscvx_nn_info *info)
     if (!net || !info) {
         return TSCVX_NN_NULL_ARGUMENT;
     }
-    if (net->cookie != NN_COOKIE) {
+    if (!nn_live(net)) {
         return TSCVX_NN_NOT_READY;
     }
     info->kind = (int)net->hdr.kind;
@@ -472,7 +495,7 @@ tscvx_nn_status tscvx_nn_tight_mask(const tscvx_nn *net, const double *logits, i
     if (!net || !logits || !mask) {
         return TSCVX_NN_NULL_ARGUMENT;
     }
-    if (net->cookie != NN_COOKIE) {
+    if (!nn_live(net)) {
         return TSCVX_NN_NOT_READY;
     }
     if (net->hdr.kind != TSCVX_NN_KIND_CONSTRAINT || n != net->d_out) {
@@ -498,7 +521,7 @@ tscvx_nn_status tscvx_nn_self_test(tscvx_nn *net, double *max_rel_err)
     if (!net) {
         return TSCVX_NN_NULL_ARGUMENT;
     }
-    if (net->cookie != NN_COOKIE) {
+    if (!nn_live(net)) {
         return TSCVX_NN_NOT_READY;
     }
     for (k = 0; k < net->hdr.n_probes; ++k) {

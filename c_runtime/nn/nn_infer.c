@@ -181,7 +181,7 @@ tscvx_nn_status tscvx_nn_run(tscvx_nn *net, const double *input, int n_in, doubl
     if (!net || !input || !output) {
         return TSCVX_NN_NULL_ARGUMENT;
     }
-    if (net->cookie != NN_COOKIE) {
+    if (!nn_live(net)) {
         return TSCVX_NN_NOT_READY;
     }
     if (n_in != net->d_in || n_out != net->d_out) {

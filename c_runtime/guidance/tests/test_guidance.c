@@ -14,6 +14,7 @@
 #include <string.h>
 
 #include "gnc_test.h"
+#include "pdg_internal.h" /* the workspace's set-up constants (layout checksum) */
 #include "tscvx_guidance.h"
 
 static pdg_workspace *make_ws(int N, int roll_free, const pdg_settings *st, void **arena,
@@ -195,6 +196,21 @@ static void test_stale_workspace(pdg_workspace *ws, void *arena, size_t bytes)
                              NULL, NULL) == PDG_INVALID_INPUT);
     CHECK(pdg_debug_assemble(ws, &s, x, u, tf, 0.5, NULL, NULL, NULL, NULL, NULL, NULL, NULL,
                              NULL, NULL) == 0);
+    /* a bit flipped in a set-up constant (a loop bound, a setting): refused until restored */
+    {
+        const int n = ws->n, max_sub = ws->st.max_subproblems;
+        r.x = x;
+        r.u = u;
+        ws->n ^= 1 << 20;
+        CHECK(pdg_solve(ws, &s, NULL, &r) == PDG_INVALID_INPUT);
+        CHECK(strstr(r.message, "workspace not set up") != NULL);
+        CHECK(pdg_get_log(ws, 0, &row) == PDG_SETUP_NOT_READY);
+        ws->n = n;
+        ws->st.max_subproblems ^= 1 << 12;
+        CHECK(pdg_solve(ws, &s, NULL, &r) == PDG_INVALID_INPUT);
+        ws->st.max_subproblems = max_sub;
+        CHECK(pdg_solve(ws, &s, NULL, &r) == PDG_SOLVED);
+    }
     memset(arena, 0x5A, bytes);
     r.x = x;
     r.u = u;
@@ -309,9 +325,12 @@ int main(void)
     pdg_workspace *ws;
     const int full = getenv("PDG_TEST_QUICK") == NULL;
     test_settings_and_sizes();
+    memset(&st, 0, sizeof st); /* padding zero, as the workspace's copy */
     pdg_default_settings(&st);
     ws = make_ws(50, 1, &st, &arena, &bytes);
     if (ws) {
+        /* every field copied (copy_settings goes member by member) */
+        CHECK(memcmp(&ws->st, &st, sizeof st) == 0);
         test_bad_input(ws);
         test_solve(ws, full);
         test_stale_workspace(ws, arena, bytes);

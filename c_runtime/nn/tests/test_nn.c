@@ -449,8 +449,20 @@ static void test_model(const char *path)
             free(b);
         }
     }
-    memset(arena, 0, need); /* an overwritten arena is noticed */
     for (i = 0; i < info.d_in; ++i) x[i] = i < 17 ? theta[i] : 0.0;
+    { /* a bit flipped in a dimension or a weight pointer, the cookie intact: refused (it
+       * used to run, writing past the activations), and runs again once restored */
+        const int d = net->d;
+        const double *W_d = net->W_d;
+        net->d ^= 1 << 10;
+        CHECK_ST(tscvx_nn_run(net, x, info.d_in, y, info.d_out), TSCVX_NN_NOT_READY);
+        net->d = d;
+        net->W_d = (const double *)((uintptr_t)W_d ^ 64u);
+        CHECK_ST(tscvx_nn_run(net, x, info.d_in, y, info.d_out), TSCVX_NN_NOT_READY);
+        net->W_d = W_d;
+        CHECK_ST(tscvx_nn_run(net, x, info.d_in, y, info.d_out), TSCVX_NN_OK);
+    }
+    memset(arena, 0, need); /* an overwritten arena is noticed */
     CHECK_ST(tscvx_nn_run(net, x, info.d_in, y, info.d_out), TSCVX_NN_NOT_READY);
     CHECK_ST(tscvx_nn_self_test(net, NULL), TSCVX_NN_NOT_READY);
     CHECK_ST(tscvx_nn_get_info(net, &info), TSCVX_NN_NOT_READY);
