@@ -11,7 +11,7 @@ GNC_OBJDIR := $(BUILD)/obj/gnc
 GNC_SRCS   := $(wildcard c_runtime/guidance/*.c)
 GNC_HDRS   := $(wildcard c_runtime/guidance/*.h) c_runtime/include/tscvx_guidance.h \
               c_runtime/include/tscvx_socp.h c_runtime/include/tscvx_types.h \
-              c_runtime/include/tscvx_nn.h
+              c_runtime/include/tscvx_nn.h c_runtime/include/tscvx_fnv1a.h
 GNC_OBJS   := $(patsubst c_runtime/guidance/%.c,$(GNC_OBJDIR)/%.o,$(GNC_SRCS)) $(GNC_OBJDIR)/tscvx_model.o $(NN_OBJS)
 GNC_CFLAGS := $(FLIGHT_CFLAGS) -fPIC -Ic_runtime/include -Ic_runtime/guidance -I$(GEN_DIR)
 # static link line of a flight application: guidance, SOCP runtime, SuiteSparse, libm

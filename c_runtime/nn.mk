@@ -9,7 +9,7 @@
 
 NN_OBJDIR  := $(BUILD)/obj/nn
 NN_SRCS    := $(wildcard c_runtime/nn/*.c)
-NN_HDRS    := $(wildcard c_runtime/nn/*.h) c_runtime/include/tscvx_nn.h
+NN_HDRS    := $(wildcard c_runtime/nn/*.h) c_runtime/include/tscvx_nn.h c_runtime/include/tscvx_fnv1a.h
 NN_OBJS    := $(patsubst c_runtime/nn/%.c,$(NN_OBJDIR)/%.o,$(NN_SRCS))
 NN_CFLAGS  := $(FLIGHT_CFLAGS) -fPIC -Ic_runtime/include
 NN_MODELS  := $(BUILD)/models/constraint.tnn $(BUILD)/models/solution.tnn

@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "pdg_internal.h"
+#include "tscvx_fnv1a.h"
 
 /* ---- message tables ---------------------------------------------------------------------- */
 
@@ -562,16 +563,6 @@ static pdg_setup_status build(void *mem, size_t bytes, const pdg_params *vehicle
     return PDG_SETUP_OK;
 }
 
-static uint64_t fnv1a(uint64_t h, const void *p, size_t n)
-{
-    const unsigned char *b = (const unsigned char *)p;
-    size_t i;
-    for (i = 0; i < n; ++i) {
-        h = (h ^ b[i]) * 0x100000001B3ull;
-    }
-    return h;
-}
-
 /* The fields pdg_setup fixes and no call changes: from N to the SOCP workspace pointer
  * (sizes, settings, layout, the pattern and data pointers), the buffer pointers from z to
  * log but the two discretization buffers (swapped on acceptance, as a pair: checked for
@@ -582,16 +573,16 @@ uint64_t pdg_layout_sum(const pdg_workspace *ws)
     const char *base = (const char *)ws;
     const uintptr_t a = (uintptr_t)ws->disc, b = (uintptr_t)ws->disc_new;
     const uintptr_t pair[2] = {a < b ? a : b, a < b ? b : a};
-    uint64_t h = 0xCBF29CE484222325ull;
-    h = fnv1a(h, base + offsetof(pdg_workspace, N),
+    uint64_t h = TSCVX_FNV1A_START;
+    h = tscvx_fnv1a(h, base + offsetof(pdg_workspace, N),
               offsetof(pdg_workspace, scn) - offsetof(pdg_workspace, N));
-    h = fnv1a(h, base + offsetof(pdg_workspace, z),
+    h = tscvx_fnv1a(h, base + offsetof(pdg_workspace, z),
               offsetof(pdg_workspace, disc) - offsetof(pdg_workspace, z));
-    h = fnv1a(h, pair, sizeof pair);
-    h = fnv1a(h, base + offsetof(pdg_workspace, aug),
+    h = tscvx_fnv1a(h, pair, sizeof pair);
+    h = tscvx_fnv1a(h, base + offsetof(pdg_workspace, aug),
               offsetof(pdg_workspace, n_log) - offsetof(pdg_workspace, aug));
-    h = fnv1a(h, &ws->masks_out, sizeof ws->masks_out);
-    return fnv1a(h, &ws->arena_bytes, sizeof ws->arena_bytes);
+    h = tscvx_fnv1a(h, &ws->masks_out, sizeof ws->masks_out);
+    return tscvx_fnv1a(h, &ws->arena_bytes, sizeof ws->arena_bytes);
 }
 
 int pdg_ws_ready(const pdg_workspace *ws)
@@ -1148,7 +1139,7 @@ static void failed_row(pdg_log_row *r, double J)
 pdg_status pdg_solve(pdg_workspace *ws, const pdg_scenario *scenario, const pdg_options *opt,
                      pdg_result *res)
 {
-    return pdg_solve_from(ws, scenario, opt, res, PDG_WS_READY(ws) ? ws->st.eta_init : 1.0);
+    return pdg_solve_from(ws, scenario, opt, res, 0.0); /* the settings' radius */
 }
 
 int pdg_result_begin(pdg_workspace *ws, pdg_result *res)
@@ -1190,7 +1181,7 @@ pdg_status pdg_solve_from(pdg_workspace *ws, const pdg_scenario *scenario,
     }
     status = PDG_MAX_ITERATIONS;
     have_masks = opt->masks != NULL || opt->mask_fn != NULL;
-    eta = eta_init;
+    eta = eta_init > 0.0 ? eta_init : st->eta_init;
 
     /* k counts successions (accepted steps); a rejection retries the same k (Algorithm 1) */
     for (it = 0; it < st->max_subproblems && k < st->iter_max; ++it) {

@@ -11,6 +11,7 @@
 #include <string.h>
 
 #include "nn_internal.h"
+#include "tscvx_fnv1a.h"
 
 static const char *const status_messages[TSCVX_NN_NSTATUS] = {
     "ok",
@@ -437,20 +438,10 @@ tscvx_nn_status tscvx_nn_init(tscvx_nn **out, void *arena, size_t arena_bytes, c
     return TSCVX_NN_OK;
 }
 
-static uint64_t fnv1a(uint64_t h, const void *p, size_t n)
-{
-    const unsigned char *b = (const unsigned char *)p;
-    size_t i;
-    for (i = 0; i < n; ++i) {
-        h = (h ^ b[i]) * 0x100000001B3ull;
-    }
-    return h;
-}
-
 uint64_t nn_layout_sum(const tscvx_nn *net)
 {
-    const uint64_t h = fnv1a(0xCBF29CE484222325ull, net, offsetof(tscvx_nn, layout_sum));
-    return fnv1a(h, net->layers, sizeof(nn_layer) * net->hdr.n_layers);
+    const uint64_t h = tscvx_fnv1a(TSCVX_FNV1A_START, net, offsetof(tscvx_nn, layout_sum));
+    return tscvx_fnv1a(h, net->layers, sizeof(nn_layer) * net->hdr.n_layers);
 }
 
 int nn_live(const tscvx_nn *net)
