@@ -210,12 +210,40 @@ static void profile_solve(const tscvx_banded *bd, tscvx_int p, tscvx_float *x) {
 /* ---- the groups' small dense kernels ------------------------------------------------------
  * Each takes the group size s; the callers dispatch s = 1..4 (nearly every group of an
  * optimal-control problem) to calls with a constant s, whose inner loops (SMALL_LOOP) GCC
- * unrolls completely. */
+ * unrolls completely: the same operations in the same order, without the loop control.
+ * KERNEL_INLINE makes sure a kernel is inlined where its size is a constant. */
 #if defined(__GNUC__) && !defined(__clang__)
 #define SMALL_LOOP _Pragma("GCC unroll 4")
+#define KERNEL_INLINE __attribute__((always_inline))
 #else
 #define SMALL_LOOP
+#define KERNEL_INLINE
 #endif
+
+/* A kernel called with s = 1..4 as a constant (call(S) expands the call). */
+#define DISPATCH_S(s, call) \
+    switch (s) {            \
+    case 1: call(1); break; \
+    case 2: call(2); break; \
+    case 3: call(3); break; \
+    case 4: call(4); break; \
+    default: call(s);       \
+    }
+
+/* The same with the group size s and its equality part se both constants for the landing's
+ * groups: se = s (states, thrust), and s = se + 1 (a virtual control and its epigraph
+ * variable, which has no equality entries). */
+#define DISPATCH_S_SE(s, se, call)   \
+    switch ((s) * 8 + (se)) {        \
+    case 1 * 8 + 1: call(1, 1); break; \
+    case 2 * 8 + 2: call(2, 2); break; \
+    case 3 * 8 + 3: call(3, 3); break; \
+    case 4 * 8 + 4: call(4, 4); break; \
+    case 2 * 8 + 1: call(2, 1); break; \
+    case 3 * 8 + 2: call(3, 2); break; \
+    case 4 * 8 + 3: call(4, 3); break; \
+    default: call(s, se);            \
+    }
 
 /* C_g' (R x s, row-major) := (L^-1 C_g')': forward substitution on all R columns of C_g at
  * once, by columns of L (leading dimension ld; dinv: 1 / diagonal) */
@@ -263,8 +291,10 @@ static inline void group_forward(const tscvx_float *restrict L,
                                  tscvx_float *restrict w, const tscvx_int *restrict rows,
                                  const tscvx_float *restrict CT, tscvx_int R,
                                  tscvx_float *restrict yb) {
+    SMALL_LOOP
     for (tscvx_int i = 0; i < s; i++) {
         tscvx_float v = w[i];
+        SMALL_LOOP
         for (tscvx_int k = 0; k < i; k++) v -= L[k * s + i] * w[k];
         w[i] = v * dinv[i];
     }
@@ -291,8 +321,10 @@ static inline void group_backward(const tscvx_float *restrict L,
         SMALL_LOOP
         for (tscvx_int a = 0; a < se; a++) we[a] -= cu[a] * yu;
     }
+    SMALL_LOOP
     for (tscvx_int i = s - 1; i >= 0; i--) {
         tscvx_float v = w[i];
+        SMALL_LOOP
         for (tscvx_int k = i + 1; k < s; k++) v -= L[i * s + k] * w[k];
         w[i] = v * dinv[i];
     }
@@ -693,18 +725,44 @@ int tscvx_banded_analyse(tscvx_workspace *ws, tscvx_arena *a) {
 
 /* R := the triangular factor of [R; b] (R upper s x s, row-major, positive diagonal; b a
  * dense row, clobbered): one Givens rotation per entry of b. */
-static void givens_absorb(tscvx_float *R, tscvx_int s, tscvx_float *b) {
+static inline KERNEL_INLINE void givens_absorb(tscvx_float *R, tscvx_int s, tscvx_float *b) {
     for (tscvx_int k = 0; k < s; k++) {
         if (b[k] == 0.0) continue;
         tscvx_float *Rk = R + (size_t)k * s;
         const tscvx_float r = sqrt(Rk[k] * Rk[k] + b[k] * b[k]);
         const tscvx_float c = Rk[k] / r, sn = b[k] / r;
         Rk[k] = r;
+        SMALL_LOOP
         for (tscvx_int i = k + 1; i < s; i++) {
             const tscvx_float t = Rk[i];
             Rk[i] = c * t + sn * b[i];
             b[i] = c * b[i] - sn * t;
         }
+    }
+}
+
+/* An SOC's rows in a group's factor: B = W^-1 G_c (q x s dense, column by column) kept for
+ * the solves, its rows absorbed into R (q a constant where it is one, as s) */
+static inline KERNEL_INLINE void soc_absorb(const tscvx_banded *bd, const tscvx_float *Gx,
+                                            const tscvx_int *Grp, const tscvx_float *wb,
+                                            tscvx_float eta, const tscvx_int q,
+                                            const tscvx_int s, tscvx_float *B, tscvx_float *R,
+                                            tscvx_float *b) {
+    for (tscvx_int e = 0; e < q * s; e++) B[e] = 0.0;
+    for (tscvx_int r = 0; r < q; r++)
+        for (tscvx_int e = Grp[r]; e < Grp[r + 1]; e++) B[r * s + bd->Gr_loc[e]] = Gx[bd->Gr_k[e]];
+    /* W^-1 v = (1/eta) (wb0 v0 - wb1'v1, v1 + (-v0 + wb1'v1/(1 + wb0)) wb1) (cones.c) */
+    for (tscvx_int col = 0; col < s; col++) {
+        tscvx_float w1v1 = 0.0;
+        for (tscvx_int r = 1; r < q; r++) w1v1 += wb[r] * B[r * s + col];
+        const tscvx_float v0 = B[col];
+        const tscvx_float coef = -v0 + w1v1 / (1.0 + wb[0]);
+        for (tscvx_int r = 1; r < q; r++) B[r * s + col] = (B[r * s + col] + coef * wb[r]) / eta;
+        B[col] = (wb[0] * v0 - w1v1) / eta;
+    }
+    for (tscvx_int r = 0; r < q; r++) { /* absorbing clobbers its row: a copy */
+        for (tscvx_int i = 0; i < s; i++) b[i] = B[r * s + i];
+        givens_absorb(R, s, b);
     }
 }
 
@@ -714,11 +772,11 @@ static void givens_absorb(tscvx_float *R, tscvx_int s, tscvx_float *b) {
  * W^-1 G is not squared as forming H_g would. R_g (row-major upper) is L_g' and is stored as
  * L_g (column-major lower): the same array. Returns the largest |entry| of W over the
  * group's cones (refinement floor). */
-static tscvx_float factor_group(tscvx_workspace *ws, tscvx_int g, tscvx_float d) {
+static inline KERNEL_INLINE tscvx_float factor_group_s(tscvx_workspace *ws, tscvx_int g,
+                                                     tscvx_float d, const tscvx_int s) {
     tscvx_banded *bd = &ws->bd;
     const tscvx_cones *K = &ws->K;
     const tscvx_float *Gx = ws->G.x;
-    const tscvx_int s = bd->gp[g + 1] - bd->gp[g];
     tscvx_float *R = bd->H + bd->hp[g], b[TSCVX_BANDED_GROUP_MAX], wmax = 0.0;
     for (tscvx_int t = 0; t < s * s; t++) R[t] = 0.0;
     for (tscvx_int k = 0; k < s; k++) R[k * s + k] = sqrt(d);
@@ -743,24 +801,23 @@ static tscvx_float factor_group(tscvx_workspace *ws, tscvx_int g, tscvx_float d)
         const tscvx_float big = eta * (wb[0] + sqrt(tscvx_dot(wb + 1, wb + 1, q - 1)));
         wmax = big > wmax ? big : wmax;
         tscvx_float *B = bd->B + bd->bp[k];
-        for (tscvx_int e = 0; e < q * s; e++) B[e] = 0.0;
-        for (tscvx_int r = 0; r < q; r++)
-            for (tscvx_int e = bd->Grp[o + r]; e < bd->Grp[o + r + 1]; e++)
-                B[r * s + bd->Gr_loc[e]] = Gx[bd->Gr_k[e]];
-        /* W^-1 v = (1/eta) (wb0 v0 - wb1'v1, v1 + (-v0 + wb1'v1/(1 + wb0)) wb1) (cones.c) */
-        for (tscvx_int col = 0; col < s; col++) {
-            tscvx_float w1v1 = 0.0;
-            for (tscvx_int r = 1; r < q; r++) w1v1 += wb[r] * B[r * s + col];
-            const tscvx_float v0 = B[col];
-            const tscvx_float coef = -v0 + w1v1 / (1.0 + wb[0]);
-            for (tscvx_int r = 1; r < q; r++) B[r * s + col] = (B[r * s + col] + coef * wb[r]) / eta;
-            B[col] = (wb[0] * v0 - w1v1) / eta;
-        }
-        for (tscvx_int r = 0; r < q; r++) { /* absorbing clobbers its row: a copy */
-            for (tscvx_int i = 0; i < s; i++) b[i] = B[r * s + i];
-            givens_absorb(R, s, b);
-        }
+        const tscvx_int *Grp = bd->Grp + o;
+        if (q == 3)
+            soc_absorb(bd, Gx, Grp, wb, eta, 3, s, B, R, b);
+        else if (q == 4)
+            soc_absorb(bd, Gx, Grp, wb, eta, 4, s, B, R, b);
+        else
+            soc_absorb(bd, Gx, Grp, wb, eta, q, s, B, R, b);
     }
+    return wmax;
+}
+
+static tscvx_float factor_group(tscvx_workspace *ws, tscvx_int g, tscvx_float d) {
+    const tscvx_int s = ws->bd.gp[g + 1] - ws->bd.gp[g];
+    tscvx_float wmax = 0.0;
+#define FACTOR(S) wmax = factor_group_s(ws, g, d, S)
+    DISPATCH_S(s, FACTOR)
+#undef FACTOR
     return wmax;
 }
 
@@ -779,16 +836,6 @@ static inline void soc_gather(const tscvx_float *restrict B, tscvx_int q, tscvx_
                               tscvx_float *restrict out) {
     for (tscvx_int r = 0; r < q; r++) out[r] = tscvx_dot(B + (size_t)r * s, xgg, s) - tk[r];
 }
-
-/* The group kernels with s = 1..4 as constants (see above). */
-#define DISPATCH_S(s, call) \
-    switch (s) {            \
-    case 1: call(1); break; \
-    case 2: call(2); break; \
-    case 3: call(3); break; \
-    case 4: call(4); break; \
-    default: call(s);       \
-    }
 
 /* C_g' = (L_g^-1 A_g')' and Y = d I + sum_g C_g' C_g. Only the last se = s - ga0 variables
  * of a group have equality entries: C_g's rows above them are zero, and the rest is
@@ -954,9 +1001,9 @@ static void base_solve(tscvx_workspace *ws, const tscvx_float *rx, const tscvx_f
         const tscvx_float *CT = bd->CT + bd->cp[g];
         const tscvx_int *rows = bd->rrow + bd->rp[g];
         tscvx_float *wg = xg + bd->gp[g];
-#define FORWARD(S) group_forward(L, dinv, s, S, wg, rows, CT, R, yb)
+#define FORWARD(S, SE) group_forward(L, dinv, S, SE, wg, rows, CT, R, yb)
         if (R > 0) {
-            DISPATCH_S(se, FORWARD)
+            DISPATCH_S_SE(s, se, FORWARD)
         } else {
             group_forward(L, dinv, s, 0, wg, rows, CT, 0, yb);
         }
@@ -987,8 +1034,8 @@ static void base_solve(tscvx_workspace *ws, const tscvx_float *rx, const tscvx_f
         const tscvx_float *CT = bd->CT + bd->cp[g];
         const tscvx_int *rows = bd->rrow + bd->rp[g];
         tscvx_float *wg = xg + bd->gp[g];
-#define BACKWARD(S) group_backward(L, dinv, s, S, wg, rows, CT, R, yb)
-        DISPATCH_S(se, BACKWARD)
+#define BACKWARD(S, SE) group_backward(L, dinv, S, SE, wg, rows, CT, R, yb)
+        DISPATCH_S_SE(s, se, BACKWARD)
 #undef BACKWARD
     }
     for (tscvx_int b = 0; b < nb; b++) xg[bd->gp[bd->bgroup[b]] + bd->loc[bd->bvar[b]]] = dxb[b];
