@@ -1,47 +1,108 @@
-"""Benchmark of the reference SCvx on the default and ten further scenarios."""
+"""Benchmark of the reference SCvx on the default and ten further scenarios, and of the other
+backends against it (same scenarios, same run)."""
 
 from __future__ import annotations
 
 import os
 import platform
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from guidance.catalog import SCENARIOS
 from guidance.params import SCvxSettings
 
+if TYPE_CHECKING:
+    from guidance.scvx import SCvxResult
 
-def run_scvx_bench(backends: list[str], repeats: int = 1, method: str = "scvx") -> None:
+REFERENCE = "clarabel"  # the ground reference: Python SCvx on Clarabel
+# Issue 4's target for the whole solve in the C library, against the reference in the same run
+TARGET_SPEED_UP = 30.0
+TARGET_SECONDS = 0.050
+
+
+def run_scvx_bench(
+    backends: list[str], repeats: int = 1, method: str = "scvx"
+) -> dict[str, dict[str, SCvxResult]]:
+    """Solves every catalog scenario on each backend (best of ``repeats`` wall times), prints a
+    table per backend, then each backend against the reference if it ran. Returns the results
+    by backend and scenario."""
     from guidance.api import solve
 
     print(
         f"SCvx benchmark: {len(SCENARIOS)} scenarios, N = 50, host {platform.machine()}, "
         f"{os.cpu_count()} cores, repeats {repeats}"
     )
+    results: dict[str, dict[str, SCvxResult]] = {}
     for backend in backends:
         print(f"\nmethod: {method}, backend: {backend}")
         print(
             f"{'scenario':12s} {'status':10s} {'k':>3s} {'solves':>6s} {'t_f':>7s} "
             f"{'m_f':>8s} {'total[s]':>9s} {'sub[ms]':>8s}"
         )
-        totals, subs, iters = [], [], []
+        subs = []
+        results[backend] = {}
         for name, scenario in SCENARIOS.items():
             best = None
             for _ in range(repeats):
                 r = solve(scenario, method, backend, SCvxSettings())
                 if best is None or r.solve_time_s < best.solve_time_s:
                     best = r
-            assert best is not None
+            if best is None:  # repeats 0: nothing timed
+                continue
+            results[backend][name] = best
             sub = [h.subproblem_time_s for h in best.history]
-            totals.append(best.solve_time_s)
             subs.extend(sub)
-            iters.append(best.iterations)
             print(
                 f"{name:12s} {best.status:10s} {best.iterations:3d} "
                 f"{best.subproblems_solved:6d} {best.t_f:7.3f} {best.m_f:8.5f} "
                 f"{best.solve_time_s:9.3f} {1e3 * np.median(sub):8.1f}"
             )
-        print(
-            f"median: total {np.median(totals):.3f} s per solve, subproblem "
-            f"{1e3 * np.median(subs):.1f} ms, iterations {np.median(iters):.0f}"
+        done = results[backend].values()
+        if done:
+            print(
+                f"median: total {np.median([r.solve_time_s for r in done]):.3f} s per solve, "
+                f"subproblem {1e3 * np.median(subs):.1f} ms, "
+                f"iterations {np.median([r.iterations for r in done]):.0f}"
+            )
+    for line in against_reference(results):
+        print(line)
+    return results
+
+
+def against_reference(results: dict[str, dict[str, SCvxResult]]) -> list[str]:
+    """Each backend against the reference on the scenarios both solved in this run: how many
+    end on the reference's trajectory (``agreement.same_trajectory``), the median time per
+    landing, and the speed-up (ratio of mean times, with its 95 % bootstrap interval over the
+    scenarios); for the C library, issue 4's target next to it. Empty without the reference
+    or another backend."""
+    from guidance.agreement import same_trajectory
+    from guidance.bench_tscvx import ratio_interval
+
+    ref = results.get(REFERENCE, {})
+    others = [b for b in results if b != REFERENCE and results[b]]
+    if not ref or not others:
+        return []
+    lines = [
+        f"\nagainst the reference (Python SCvx on {REFERENCE}), same scenarios, this run:",
+        f"{'backend':10s} {'same trajectory':>15s} {'median[s]':>10s} {'speed-up':>9s} "
+        f"{'95% interval':>14s}",
+    ]
+    for backend in others:
+        names = [n for n in ref if n in results[backend]]
+        t_ref = np.array([ref[n].solve_time_s for n in names])
+        t = np.array([results[backend][n].solve_time_s for n in names])
+        same = sum(same_trajectory(results[backend][n], ref[n]) for n in names)
+        speed_up = float(t_ref.mean() / t.mean())
+        lo, hi = ratio_interval(t_ref, t)
+        lines.append(
+            f"{backend:10s} {f'{same} of {len(names)}':>15s} {np.median(t):10.3f} "
+            f"{speed_up:8.2f}x {f'[{lo:.2f}, {hi:.2f}]':>14s}"
         )
+        if backend == "c":
+            met = speed_up >= TARGET_SPEED_UP and float(np.median(t)) < TARGET_SECONDS
+            lines.append(
+                f"  issue 4's target for the C library: >= {TARGET_SPEED_UP:.0f}x and "
+                f"< {TARGET_SECONDS:.3f} s per landing: {'met' if met else 'not met'}"
+            )
+    return lines
