@@ -9,7 +9,9 @@ this runtime, the arena bytes; where this runtime takes its banded KKT method, t
 with its sparse LDL' method too. On the landing sets a second row of this runtime solves the
 sequence as the SCvx loop does, each subproblem warm-started from the last one's answer (the
 other solvers have no warm start). ``--callgrind`` adds instruction and floating-point
-operation counts per solve (valgrind, objdump).
+operation counts per solve (valgrind, objdump). The report ends with issue 3's targets
+(faster than every other solver on (a) and (b), an arena within 2 MB, a fifth of QOCO's
+instructions on (a)), each "met" or "not met" on this run's figures.
 
     python -m guidance.bench_socp [--quick] [--callgrind]
 """
@@ -448,7 +450,17 @@ def _median(xs: list[float]) -> float:
     return statistics.median(xs) if xs else math.nan
 
 
-def bench_set(name: str, probs: list[ConicProblem], reps: int, sequence: bool = False) -> list[str]:
+@dataclass
+class SetResult:
+    """One set's table and the figures issue 3's targets are judged on."""
+
+    lines: list[str]
+    seconds: float  # this runtime's median solve time
+    others: dict[str, float]  # the other solvers' median times (those that ran)
+    arena_bytes: int  # this runtime's largest arena over the set
+
+
+def bench_set(name: str, probs: list[ConicProblem], reps: int, sequence: bool = False) -> SetResult:
     """The table of one set; ``sequence``: the problems are one SCvx solve's subproblems in
     order, and a row adds this runtime warm-started along them."""
     solvers: dict[str, Callable[[ConicProblem, int], Run | None]] = {
@@ -502,14 +514,50 @@ def bench_set(name: str, probs: list[ConicProblem], reps: int, sequence: bool = 
             f"   tscvx, each from the last one's answer (not solved: "
             f"{sum(r.status not in ('solved', 'solved_inaccurate') for r in runs)})"
         )
-    for key, (ts, its) in others.items():
-        if ts:
-            t = _median(ts)
+    medians = {key: _median(ts) for key, (ts, _) in others.items() if ts}
+    for key, (_, its) in others.items():
+        if key in medians:
+            t = medians[key]
             lines.append(
                 f"  {key:<10}{1e3 * t:>11.3f}{t / t_ours:>8.2f}{_median(its):>7.0f}{'heap':>10}"
             )
         else:
             lines.append(f"  {key:<10}{'n/a':>11}")
+    return SetResult(lines, t_ours, medians, max(arena))
+
+
+# Issue 3's targets for this runtime
+ARENA_TARGET_BYTES = 2_000_000  # at most 2 MB of arena on the landing subproblems (N = 50)
+QOCO_INSTRUCTION_TARGET = 5.0  # at most a fifth of QOCO's instructions per solve on (a)
+
+
+def targets(landing: SetResult, lcvx: SetResult, qoco_ratio: float | None) -> list[str]:
+    """Issue 3's targets next to this run's figures: faster than every other solver on the
+    landing subproblems (a) and the 3-DoF problem (b), the arena of (a) within 2 MB, and on (a)
+    at most a fifth of QOCO's instructions per solve (``qoco_ratio`` = QOCO's instructions over
+    this runtime's; None without ``--callgrind``)."""
+
+    def verdict(ok: bool) -> str:
+        return "met" if ok else "not met"
+
+    lines = ["issue 3's targets, this run:"]
+    for label, r in (("(a)", landing), ("(b)", lcvx)):
+        nearest = min(r.others.values(), default=math.nan) / r.seconds
+        lines.append(
+            f"  {label} faster than {', '.join(r.others) or 'no other solver'}: the nearest "
+            f"takes {nearest:.2f}x this runtime's time: {verdict(nearest > 1.0)}"
+        )
+    lines.append(
+        f"  (a) arena <= {ARENA_TARGET_BYTES / 1e6:.0f} MB: {landing.arena_bytes} bytes: "
+        f"{verdict(landing.arena_bytes <= ARENA_TARGET_BYTES)}"
+    )
+    if qoco_ratio is None:
+        lines.append("  (a) at most 1/5 of QOCO's instructions: not measured (--callgrind)")
+    else:
+        lines.append(
+            f"  (a) at most 1/{QOCO_INSTRUCTION_TARGET:.0f} of QOCO's instructions: "
+            f"1/{qoco_ratio:.2f}: {verdict(qoco_ratio >= QOCO_INSTRUCTION_TARGET)}"
+        )
     return lines
 
 
@@ -542,9 +590,11 @@ def main(argv: list[str] | None = None) -> int:
         f"SOCP benchmark: median of per-problem best-of-{reps} solve-call times "
         f"(set-up excluded); ratio = solver time / tscvx time"
     )
+    results = []
     for name, probs in sets:
-        for line in bench_set(name, probs, reps, sequence=name.startswith("(a")):
-            print(line)
+        results.append(bench_set(name, probs, reps, sequence=name.startswith("(a")))
+        print("\n".join(results[-1].lines))
+    qoco_ratio = None
     if args.callgrind:
         print(
             "instructions per solve (callgrind, first problem of each set); flops: the solver's "
@@ -557,12 +607,15 @@ def main(argv: list[str] | None = None) -> int:
             sparse = instructions_ours(probs[0], KKT_SPARSE, flops=False)
             qoco = instructions_qoco(probs[0])
             ratio = f"{qoco.instructions / ours.instructions:.2f}x" if ours and qoco else "n/a"
+            if name.startswith("(a)") and ours and qoco:
+                qoco_ratio = qoco.instructions / ours.instructions
             print(
                 f"  {name[:4]:4} tscvx {_count(ours)}  qoco {_count(qoco)}  qoco/tscvx {ratio}"
                 f"  (tscvx's sparse method {sparse.instructions if sparse else 'n/a'})"
             )
         for name, probs in sets[:2]:
             print(f"  {name[:4]:4} {_warm_counts(probs[: WARM_COUNTED + 1])}")
+    print("\n".join(targets(results[0], results[2], qoco_ratio)))
     return 0
 
 

@@ -79,3 +79,26 @@ def test_flops_of_a_known_kernel(tmp_path: Path) -> None:
     # loop's increment, compare and branch
     assert count.instructions >= 3 * n
     assert count.per_flop() == pytest.approx(count.instructions / (2 * n + 2))
+
+
+def test_issue_3_targets_are_judged_on_the_run_s_figures() -> None:
+    """`python -m guidance.bench_socp` ends with issue 3's targets: faster than every other
+    solver on (a) and (b), the arena of (a) within 2 MB, a fifth of QOCO's instructions."""
+    from guidance.bench_socp import SetResult, targets
+
+    def result(seconds: float, others: dict[str, float], arena: int = 1_800_000) -> SetResult:
+        return SetResult([], seconds, others, arena)
+
+    fast = result(0.010, {"clarabel": 0.030, "qoco": 0.021})
+    lines = targets(fast, result(0.003, {"ecos": 0.008}), 2.09)
+    assert lines[1].endswith("2.10x this runtime's time: met")  # the nearest one, QOCO
+    assert lines[2].endswith("2.67x this runtime's time: met")
+    assert lines[3] == "  (a) arena <= 2 MB: 1800000 bytes: met"
+    assert lines[4].endswith("1/2.09: not met")
+    assert targets(fast, fast, 5.0)[4].endswith("1/5.00: met")
+    assert targets(result(0.01, {"qoco": 0.02}, arena=2_000_000), fast, None)[3].endswith(": met")
+    assert "not measured" in targets(fast, fast, None)[4]
+    beaten = result(0.010, {"clarabel": 0.030, "qoco": 0.009}, arena=2_000_001)
+    lines = targets(beaten, fast, None)
+    assert lines[1].endswith("0.90x this runtime's time: not met")
+    assert lines[3].endswith("2000001 bytes: not met")
