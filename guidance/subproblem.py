@@ -29,6 +29,12 @@ from guidance.params import IM, IR, IV, IW, NC, NU, NX, Scenario
 # Cone dimension of each path constraint (mask order); 1 = a linear row.
 CONE_DIMS = (1, 3, 3, 4, 4, 4, 1)
 SIGMA_MIN = 1e-2  # lower bound on t_f (keeps the time dilation positive)
+# The mass is scaled by the propellant m0 - m_dry, but by no less than MASS_SCALE_FLOOR m0.
+# With almost no propellant the scaled mass rows of the dynamics would carry (mass flow x
+# time step) / (m0 - m_dry), 2e7 at 1e-9 of propellant; both conic solvers then certified a
+# subproblem infeasible that its virtual control makes feasible, and T-SCvx (whose start
+# leaves little room) stopped with a solver error instead of an infeasible landing.
+MASS_SCALE_FLOOR = 1e-3
 # Trust region |z - z_ref| <= eta: the infinity norm over the scalar components and over the
 # 2-norms of the pairs that a rotation about the up axis mixes (horizontal position and
 # velocity; (q0, q1) and (q2, q3) of the quaternion). That keeps every subproblem, and so the
@@ -55,7 +61,8 @@ class Scaling:
         Sr = max(float(np.linalg.norm(s.r0)), 1.0)
         Sv = max(float(np.linalg.norm(s.v0)), 1.0)
         Sx = np.ones(NX)
-        Sx[IR], Sx[IV], Sx[IW], Sx[IM] = Sr, Sv, p.omega_max, s.m0 - p.m_dry
+        Sx[IR], Sx[IV], Sx[IW] = Sr, Sv, p.omega_max
+        Sx[IM] = max(s.m0 - p.m_dry, MASS_SCALE_FLOOR * s.m0)
         cx = np.zeros(NX)
         cx[IM] = p.m_dry
         return Scaling(Sx=Sx, cx=cx, Su=p.T_max, Ss=t_f_guess)

@@ -44,3 +44,16 @@ def test_an_extreme_landing_ends_with_a_status_in_python_and_in_c(name: str) -> 
         assert c.reason == python_c.reason == reference.reason
     if expected == "solved":
         assert audit(c.x, c.u, c.t_f, scenario.params).max_path_violation <= 1e-6
+
+
+@pytest.mark.parametrize("backend", ["clarabel", "c"])
+def test_tscvx_without_propellant_is_an_infeasible_landing(backend: str) -> None:
+    """T-SCvx from the networks' warm start (trust radius 0.01) on the landing with no fuel
+    to spare: an infeasible landing, as SCvx says. With the mass scaled by the propellant
+    itself (1e-9) both conic solvers certified the first reduced subproblem infeasible, which
+    stopped the solve with a solver error (subproblem.MASS_SCALE_FLOOR)."""
+    from guidance.api import solve
+
+    scenario = CASES["no fuel to spare"][0]
+    result = solve(scenario, method="tscvx", backend=backend)
+    assert result.status == "infeasible", result.reason

@@ -17,6 +17,7 @@
 #define N_TR_PAIRS 4          /* rotation-invariant pairs */
 #define N_NU_BLOCKS (N_TR_SCALAR + N_TR_PAIRS)
 #define SIGMA_MIN 1e-2        /* lower bound on t_f (guidance/subproblem.py) */
+#define MASS_SCALE_FLOOR 1e-3 /* mass scale >= this x m0 (guidance/subproblem.py says why) */
 #define TIGHT_DUAL_TOL 1e-5   /* guidance/constraints.py */
 #define N_DISC (NX + NX * NX + 2 * NX * NU + 2 * NX) /* per interval: x_next A Bm Bp S z */
 

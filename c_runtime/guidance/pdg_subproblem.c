@@ -89,7 +89,8 @@ void pdg_scaling_init(pdg_scaling *sc, const pdg_scenario *s, double t_f_guess)
         sc->Sx[3 + i] = Sv;
         sc->Sx[10 + i] = pdg_omega_max(p);
     }
-    sc->Sx[IM] = s->m0 - p->m_dry;
+    sc->Sx[IM] = s->m0 - p->m_dry; /* the propellant, but at least MASS_SCALE_FLOOR m0 */
+    if (sc->Sx[IM] < MASS_SCALE_FLOOR * s->m0) sc->Sx[IM] = MASS_SCALE_FLOOR * s->m0;
     sc->cx[IM] = p->m_dry;
     sc->Su = p->T_max;
     sc->Ss = t_f_guess;
