@@ -527,7 +527,7 @@ def bench_set(name: str, probs: list[ConicProblem], reps: int, sequence: bool = 
 
 
 # Issue 3's targets for this runtime
-ARENA_TARGET_BYTES = 2_000_000  # at most 2 MB of arena on the landing subproblems (N = 50)
+ARENA_TARGET_BYTES = 2_000_000  # 2 MB of arena at most at N = 50, read in decimal (the stricter)
 QOCO_INSTRUCTION_TARGET = 5.0  # at most a fifth of QOCO's instructions per solve on (a)
 
 
