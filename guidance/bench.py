@@ -21,12 +21,9 @@ TARGET_SPEED_UP = 30.0
 TARGET_SECONDS = 0.050
 
 
-def run_scvx_bench(
-    backends: list[str], repeats: int = 1, method: str = "scvx"
-) -> dict[str, dict[str, SCvxResult]]:
+def run_scvx_bench(backends: list[str], repeats: int = 1, method: str = "scvx") -> None:
     """Solves every catalog scenario on each backend (best of ``repeats`` wall times), prints a
-    table per backend, then each backend against the reference if it ran. Returns the results
-    by backend and scenario."""
+    table per backend, then each backend against the reference if it ran."""
     from guidance.api import solve
 
     print(
@@ -48,8 +45,7 @@ def run_scvx_bench(
                 r = solve(scenario, method, backend, SCvxSettings())
                 if best is None or r.solve_time_s < best.solve_time_s:
                     best = r
-            if best is None:  # repeats 0: nothing timed
-                continue
+            assert best is not None
             results[backend][name] = best
             sub = [h.subproblem_time_s for h in best.history]
             subs.extend(sub)
@@ -59,15 +55,13 @@ def run_scvx_bench(
                 f"{best.solve_time_s:9.3f} {1e3 * np.median(sub):8.1f}"
             )
         done = results[backend].values()
-        if done:
-            print(
-                f"median: total {np.median([r.solve_time_s for r in done]):.3f} s per solve, "
-                f"subproblem {1e3 * np.median(subs):.1f} ms, "
-                f"iterations {np.median([r.iterations for r in done]):.0f}"
-            )
+        print(
+            f"median: total {np.median([r.solve_time_s for r in done]):.3f} s per solve, "
+            f"subproblem {1e3 * np.median(subs):.1f} ms, "
+            f"iterations {np.median([r.iterations for r in done]):.0f}"
+        )
     for line in against_reference(results):
         print(line)
-    return results
 
 
 def against_reference(results: dict[str, dict[str, SCvxResult]]) -> list[str]:

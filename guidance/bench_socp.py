@@ -615,7 +615,8 @@ def main(argv: list[str] | None = None) -> int:
             )
         for name, probs in sets[:2]:
             print(f"  {name[:4]:4} {_warm_counts(probs[: WARM_COUNTED + 1])}")
-    print("\n".join(targets(results[0], results[2], qoco_ratio)))
+    landing, _, lcvx, _ = results  # (a), (a'), (b), (c)
+    print("\n".join(targets(landing, lcvx, qoco_ratio)))
     return 0
 
 

@@ -127,8 +127,11 @@ def test_c_subproblem_equals_python_subproblem(name: str) -> None:
         assert abs(py[key] - c[key]).max() <= 1e-13
         # C keeps structural entries of the fixed pattern, Python may store them as zeros
         assert c[key].nnz >= (py[key] != 0).sum()
-    for key in ("b", "h", "c"):  # relative too: at the mass scale's floor entries reach 7
-        np.testing.assert_allclose(c[key], py[key], rtol=1e-13, atol=1e-13)
+    # at the mass scale's floor the mass rows are divided by 3e-3: right-hand sides reach 7
+    # and the two languages' orders of summation part by 2.2e-13
+    tol = 1e-12 if name == "no propellant" else 1e-13
+    for key in ("b", "h", "c"):
+        np.testing.assert_allclose(c[key], py[key], rtol=0, atol=tol)
 
 
 # ---- the whole solve ------------------------------------------------------------------------
