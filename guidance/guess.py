@@ -138,6 +138,9 @@ def _omega_from_quaternions(q: np.ndarray, t: np.ndarray) -> np.ndarray:
     qdot = np.gradient(q, t, axis=0)
     w = np.zeros((len(q), 3))
     for k, (qk, dk) in enumerate(zip(q, qdot, strict=True)):
+        if not (np.all(np.isfinite(qk)) and np.all(np.isfinite(dk))):
+            w[k] = np.nan  # an overflowed guess (see initial_guess); lstsq would raise
+            continue
         q0, q1, q2, q3 = qk
         # Omega(omega) q = M(q) omega with M from DESIGN.md's Omega
         M = np.array([[-q1, -q2, -q3], [q0, -q3, q2], [q3, q0, -q1], [-q2, q1, q0]])
@@ -145,8 +148,9 @@ def _omega_from_quaternions(q: np.ndarray, t: np.ndarray) -> np.ndarray:
     return w
 
 
-# A landing far outside the model's range (r0 = 1e6) overflows here; the discretization then
-# refuses the guess (ModelEvaluationError), so the overflow needs no warning of its own.
+# A landing far beyond validation's envelope (r0 = 1e6 or 1e9 in a Scenario that skipped it)
+# overflows here; the discretization then refuses the guess (ModelEvaluationError), so the
+# overflow needs no warning of its own.
 @np.errstate(over="ignore", invalid="ignore")
 def initial_guess(scenario: Scenario) -> tuple[np.ndarray, np.ndarray, float]:
     p, st = scenario.params, scenario.initial

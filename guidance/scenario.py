@@ -6,6 +6,7 @@ into exit code 2 before anything is written or solved.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 from pathlib import Path
@@ -25,6 +26,11 @@ from guidance.params import (
 STATE_KEYS = {"r0": 3, "v0": 3, "q0": 4, "w0": 3}
 SCALAR_STATE_KEYS = ("m0",)
 UNIT_QUATERNION_TOL = 1e-6
+# Largest magnitude of any number in a scenario (C: PDG_MAGNITUDE_MAX). Table 1's landing and
+# vehicle are O(1) in its nondimensional units; at 1e4 every loop still ends with a status, and
+# the same one on every backend. Far beyond it the initial guess and the networks' float32
+# inputs overflow (r0 = 1e9 raised inside numpy), so such input is refused, not solved.
+MAGNITUDE_MAX = 1e4
 INT_PARAMS = {"N"}
 BOOL_PARAMS = {"final_roll_free"}
 # The keys DESIGN.md's scenario format always has; a missing one is an error, not a default.
@@ -211,6 +217,7 @@ def _norm(v: Any) -> float:
 def validate(scenario: Scenario) -> None:
     """Reject parameters and initial states that cannot give a meaningful landing."""
     p = scenario.params
+    _validate_magnitudes(scenario.initial)
     _validate_params(p)
     s = scenario.initial
     q0 = np.asarray(s.q0)
@@ -249,7 +256,22 @@ def validate(scenario: Scenario) -> None:
         )
 
 
+def _validate_magnitudes(part: InitialState | Params) -> None:
+    """Every real number within MAGNITUDE_MAX, in the fields' order (the C library's)."""
+    for f in dataclasses.fields(part):
+        if isinstance(f.default, bool | int):  # N, final_roll_free: checked on their own
+            continue
+        largest = max(abs(float(v)) for v in np.ravel(getattr(part, f.name)))
+        if largest > MAGNITUDE_MAX:
+            raise ScenarioError(
+                f.name,
+                f"magnitude {largest:g} is beyond the library's envelope "
+                f"(|value| <= {MAGNITUDE_MAX:g} in nondimensional units)",
+            )
+
+
 def _validate_params(p: Params) -> None:
+    _validate_magnitudes(p)
     positive = ("alpha_mdot", "aero_coeff", "m_dry", "T_min", "T_max", "omega_max_deg")
     for name in positive:
         if getattr(p, name) <= 0.0:

@@ -21,7 +21,7 @@ import numpy as np
 from guidance import conic
 from guidance.conic import ConicProblem, ConicSolution
 from guidance.constraints import constraint_scales, path_constraint_values, tight_mask
-from guidance.errors import ModelEvaluationError
+from guidance.errors import InputError, ModelEvaluationError
 from guidance.guess import initial_guess
 from guidance.model import discretize, vehicle_pattern
 from guidance.params import IM, NC, NU, NX, Scenario, SCvxSettings
@@ -168,7 +168,13 @@ class SCvxSolver:
         """
         t_start = time.perf_counter()
         st, p = self.st, self.p
-        x, u, t_f = guess if guess is not None else initial_guess(self.scn)
+        if guess is not None:  # used as given; the C library refuses the same (pdg_solve)
+            x, u, t_f = np.asarray(guess[0], float), np.asarray(guess[1], float), float(guess[2])
+            finite = np.isfinite(x).all() and np.isfinite(u).all() and np.isfinite(t_f)
+            if not (finite and t_f > 0.0):
+                raise InputError("guess: x, u and t_f must be finite and t_f positive")
+        else:
+            x, u, t_f = initial_guess(self.scn)
         self.sc = Scaling.for_scenario(self.scn, t_f)
         self.scales = constraint_scales(p, self.sc.Sx, self.sc.Su)
         self.lay = self.template(None).lay

@@ -37,7 +37,13 @@ from guidance.errors import InputError
 from guidance.guess import initial_guess
 from guidance.model import discretize
 from guidance.params import NC, InitialState, Params, Scenario, SCvxSettings
-from guidance.scenario import ScenarioError, scenario_from_dict, scenario_to_dict, validate
+from guidance.scenario import (
+    MAGNITUDE_MAX,
+    ScenarioError,
+    scenario_from_dict,
+    scenario_to_dict,
+    validate,
+)
 from guidance.scvx import SCvxResult, SCvxSolver, solve_scvx
 from guidance.subproblem import Scaling, SubproblemTemplate, physical, scaled
 from guidance.trajectory_io import read_trajectory
@@ -602,6 +608,14 @@ BAD_DICTS = [
     ({"q_f": [0.0, 0.0, 1.0, 0.0], "final_roll_free": False}, "q_f"),
     ({"q_f": [math.cos(0.1), 0.0, math.sin(0.1), 0.0]}, "q_f"),  # roll-free ends upright
     ({"r_f": [0.0, 1.0, 0.0]}, "r_f"),
+    # beyond the envelope of magnitudes (scenario.MAGNITUDE_MAX = PDG_MAGNITUDE_MAX)
+    ({"r0": [1e9, 0.0, 0.0]}, "r0"),  # was a numpy LinAlgError in the reference's guess
+    ({"v0": [0.0, -10000.5, 0.0]}, "v0"),
+    ({"m0": 1e300}, "m0"),
+    ({"T_max": 2e4}, "T_max"),
+    ({"aero_coeff": 1e5}, "aero_coeff"),
+    ({"m0": 1e300, "T_max": 2e4}, "m0"),  # the initial state's fields first
+    ({"J_B": [0.001, 0.01, 1e5], "r_cp_B": [1e5, 0.0, 0.0]}, "J_B"),  # then Params' order
 ]
 
 
@@ -646,6 +660,14 @@ def test_valid_scenarios_are_accepted_by_both() -> None:
     for scn in SCENARIOS.values():
         validate(scn)
         assert cguidance.validate_c(scn) is None
+
+
+def test_the_envelope_edge_is_accepted_by_both() -> None:
+    edge = MAGNITUDE_MAX
+    for data in ({"r0": [edge, 0.0, 0.0]}, {"v0": [0.0, -edge, 0.0]}, {"m0": edge},
+                 {"T_max": edge, "J_B": [edge, edge, edge]}):  # fmt: skip
+        scn = scenario_from_dict({**scenario_to_dict(Scenario()), **data})
+        assert cguidance.validate_c(scn) is None, data
 
 
 def test_validation_agrees_on_random_scenarios() -> None:

@@ -15,7 +15,10 @@ import warnings
 import pytest
 
 from guidance import cguidance
+from guidance.errors import InputError
+from guidance.guess import initial_guess
 from guidance.params import InitialState, Params, Scenario
+from guidance.scenario import MAGNITUDE_MAX, validate
 from guidance.scvx import SCvxSolver
 from guidance.verify import audit
 
@@ -27,7 +30,12 @@ CASES = {
     "three nodes": (Scenario(params=Params(N=3)), "infeasible"),
     "weak engine": (Scenario(params=Params(T_max=1e-3, T_min=1e-4)), "infeasible"),
     "tiny inertia": (Scenario(params=Params(J_B=(1e-9, 1e-8, 1e-8))), "solved"),
+    # at the edge of validation's envelope of magnitudes (scenario.MAGNITUDE_MAX)
+    "far above the pad": (Scenario(InitialState(r0=(MAGNITUDE_MAX, 0.0, 0.0))), "solver_error"),
+    "thrown sideways": (Scenario(InitialState(v0=(0.0, MAGNITUDE_MAX, 0.0))), "solver_error"),
+    "heavy": (Scenario(InitialState(m0=MAGNITUDE_MAX)), "infeasible"),
 }
+EDGE = ("far above the pad", "thrown sideways", "heavy")
 
 
 @pytest.mark.parametrize("name", list(CASES))
@@ -57,3 +65,41 @@ def test_tscvx_without_propellant_is_an_infeasible_landing(backend: str) -> None
     scenario = CASES["no fuel to spare"][0]
     result = solve(scenario, method="tscvx", backend=backend)
     assert result.status == "infeasible", result.reason
+
+
+@pytest.mark.parametrize("name", EDGE)
+def test_tscvx_at_the_envelope_edge_ends_with_the_same_status(name: str) -> None:
+    """The networks' warm start far outside their training data still ends in a status,
+    the same in the Python loop and in C."""
+    from guidance.api import solve
+
+    scenario, _ = CASES[name]
+    validate(scenario)  # inside the envelope
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        reference = solve(scenario, method="tscvx", backend="clarabel")
+        c = solve(scenario, method="tscvx", backend="c")
+    assert reference.status == c.status != "solved", (reference.reason, c.reason)
+
+
+def test_a_scenario_that_skipped_validation_ends_with_a_status() -> None:
+    """r0 = 1e9 (refused by validation) overflows the cubic guess; the reference's own loop
+    then says so instead of raising numpy's LinAlgError from inside the guess."""
+    scenario = Scenario(InitialState(r0=(1e9, 0.0, 0.0)))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        result = SCvxSolver(scenario).solve()
+    assert result.status == "solver_error"
+    assert result.reason == "model evaluation failed at the initial guess"
+
+
+@pytest.mark.parametrize("broken", ["x", "t_f"])
+def test_a_non_finite_guess_is_refused(broken: str) -> None:
+    scenario = Scenario()
+    x, u, t_f = initial_guess(scenario)
+    if broken == "x":
+        x[5, 3] = float("nan")
+    else:
+        t_f = float("inf")
+    with pytest.raises(InputError, match="guess: x, u and t_f must be finite"):
+        SCvxSolver(scenario).solve(guess=(x, u, t_f))

@@ -191,8 +191,21 @@ static double norm(const double *v, int n)
 }
 
 /* Finiteness of every number (the JSON parser's check in Python), field by field. */
-static int check_finite(const pdg_scenario *s, char *msg)
+static double largest_magnitude(const double *v, int n)
 {
+    double largest = 0.0;
+    int i;
+    for (i = 0; i < n; ++i) {
+        largest = fabs(v[i]) > largest ? fabs(v[i]) : largest;
+    }
+    return largest;
+}
+
+/* Every real number finite and within PDG_MAGNITUDE_MAX, field by field in the order of
+ * guidance/scenario.py (its dataclasses' fields). */
+static int check_numbers(const pdg_scenario *s, char *msg)
+{
+    char text[200];
     const pdg_params *p = &s->params;
     struct {
         const char *name;
@@ -212,6 +225,15 @@ static int check_finite(const pdg_scenario *s, char *msg)
     for (i = 0; i < sizeof f / sizeof f[0]; ++i) {
         if (!finite_all(f[i].v, f[i].n)) {
             return fail(msg, f[i].name, "must be finite");
+        }
+    }
+    for (i = 0; i < sizeof f / sizeof f[0]; ++i) {
+        const double largest = largest_magnitude(f[i].v, f[i].n);
+        if (largest > PDG_MAGNITUDE_MAX) {
+            snprintf(text, sizeof text,
+                     "magnitude %g is beyond the library's envelope (|value| <= %g in "
+                     "nondimensional units)", largest, PDG_MAGNITUDE_MAX);
+            return fail(msg, f[i].name, text);
         }
     }
     return 0;
@@ -326,7 +348,7 @@ int pdg_check_scenario(const pdg_scenario *s, char *msg)
         return fail(msg, "<root>", "no scenario given (NULL)");
     }
     p = &s->params;
-    if (check_finite(s, msg) || check_params(p, msg)) {
+    if (check_numbers(s, msg) || check_params(p, msg)) {
         return 1;
     }
     nq = norm(s->q0, 4);

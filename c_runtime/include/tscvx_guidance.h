@@ -65,6 +65,9 @@ extern "C" {
 #define PDG_N_MIN 3
 #define PDG_N_MAX 400
 #define PDG_MESSAGE_LEN 256
+/* Largest magnitude of any real number in a scenario (guidance/scenario.py MAGNITUDE_MAX):
+ * Table 1's landing is O(1) in these nondimensional units; beyond this input is refused. */
+#define PDG_MAGNITUDE_MAX 1e4
 
 /* ---- status codes ------------------------------------------------------------------------ */
 
@@ -238,8 +241,9 @@ pdg_setup_status pdg_workspace_size(const pdg_params *vehicle, const pdg_setting
 pdg_setup_status pdg_setup(pdg_workspace **ws, void *arena, size_t arena_bytes,
                            const pdg_params *vehicle, const pdg_settings *settings);
 
-/* Validates the scenario as guidance/scenario.py does; 0 = valid, otherwise writes the
- * message ("scenario field 'm0': ...") into `message` (PDG_MESSAGE_LEN bytes). */
+/* Validates the scenario as guidance/scenario.py does (every number finite and within
+ * PDG_MAGNITUDE_MAX, then the physics); 0 = valid, otherwise writes the message
+ * ("scenario field 'm0': ...") into `message` (PDG_MESSAGE_LEN bytes). */
 int pdg_validate_scenario(const pdg_scenario *scenario, char *message);
 
 /* Runs SCvx (T-SCvx with masks). `options` may be NULL. result->x and result->u must point

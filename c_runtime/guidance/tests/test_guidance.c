@@ -70,6 +70,9 @@ static void test_bad_input(pdg_workspace *ws)
     BAD(s.v0[2] = INFINITY, "v0");
     BAD(s.m0 = NAN, "m0");
     BAD(s.params.T_max = -INFINITY, "T_max");
+    BAD(s.m0 = 1e300, "m0");                          /* beyond PDG_MAGNITUDE_MAX */
+    BAD(s.v0[0] = -1.0001 * PDG_MAGNITUDE_MAX, "v0");
+    BAD(s.params.aero_coeff = 2.0 * PDG_MAGNITUDE_MAX, "aero_coeff");
     BAD(s.q0[0] = 0.9, "q0");                         /* not a unit quaternion */
     BAD(s.m0 = 2.0, "m0");                            /* m0 <= m_dry */
     BAD(s.r0[0] = 0.5, "r0");                         /* below the glideslope cone */
