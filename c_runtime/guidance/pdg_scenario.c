@@ -169,9 +169,9 @@ static int fail(char *msg, const char *field, const char *text)
     return 1;
 }
 
-static int finite_all(const double *v, int n)
+int pdg_all_finite(const double *v, size_t n)
 {
-    int i;
+    size_t i;
     for (i = 0; i < n; ++i) {
         if (!isfinite(v[i])) {
             return 0;
@@ -223,7 +223,7 @@ static int check_numbers(const pdg_scenario *s, char *msg)
     };
     size_t i;
     for (i = 0; i < sizeof f / sizeof f[0]; ++i) {
-        if (!finite_all(f[i].v, f[i].n)) {
+        if (!pdg_all_finite(f[i].v, (size_t)f[i].n)) {
             return fail(msg, f[i].name, "must be finite");
         }
     }

@@ -989,17 +989,6 @@ static int mask_for(pdg_workspace *ws, const pdg_options *o, int k, int *answer)
     return 0;
 }
 
-static int all_finite(const double *v, size_t n)
-{
-    size_t i;
-    for (i = 0; i < n; ++i) {
-        if (!isfinite(v[i])) {
-            return 0;
-        }
-    }
-    return 1;
-}
-
 /* ---- Algorithm 1 / 2 --------------------------------------------------------------------- */
 
 /* The candidate z_new of one subproblem, evaluated on the FULL constraint set. */
@@ -1038,8 +1027,8 @@ static pdg_status start(pdg_workspace *ws, const pdg_scenario *scn, const pdg_op
         return PDG_INVALID_INPUT;
     }
     if (opt->guess_x) { /* used as given, as the reference's solve(guess=...) does */
-        if (!all_finite(opt->guess_x, (size_t)N * NX) ||
-            !all_finite(opt->guess_u, (size_t)N * NU) || !isfinite(opt->guess_t_f) ||
+        if (!pdg_all_finite(opt->guess_x, (size_t)N * NX) ||
+            !pdg_all_finite(opt->guess_u, (size_t)N * NU) || !isfinite(opt->guess_t_f) ||
             !(opt->guess_t_f > 0.0)) {
             snprintf(res->message, PDG_MESSAGE_LEN,
                      "guess: x, u and t_f must be finite and t_f positive");

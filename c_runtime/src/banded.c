@@ -958,6 +958,26 @@ static int banded_factor(tscvx_workspace *ws) {
 
 /* ---- solves ------------------------------------------------------------------------------ */
 
+/* A group's factor L_g (with 1 / its diagonal) and its coupling C_g to the R equality rows
+ * `rows`, stored over the group's last se variables, as the solves read them. */
+typedef struct {
+    tscvx_int s, se, R;
+    const tscvx_float *L, *dinv, *CT;
+    const tscvx_int *rows;
+} group_blocks;
+
+static inline group_blocks group_blocks_of(const tscvx_banded *bd, tscvx_int g) {
+    group_blocks b;
+    b.s = bd->gp[g + 1] - bd->gp[g];
+    b.se = b.s - bd->ga0[g];
+    b.R = bd->rp[g + 1] - bd->rp[g];
+    b.L = bd->H + bd->hp[g];
+    b.dinv = bd->Hdinv + bd->gp[g];
+    b.CT = bd->CT + bd->cp[g];
+    b.rows = bd->rrow + bd->rp[g];
+    return b;
+}
+
 /* One solve of the regularized system (no refinement) into (dx, dy, dz) and wdz = W dz;
  * outputs do not alias inputs. The cone rows NT-scaled (CVXOPT's condensed solver), with
  * Gt = W^-1 G (orthant rows G_i / w_i, SOC blocks kept from the factorization):
@@ -995,17 +1015,13 @@ static void base_solve(tscvx_workspace *ws, const tscvx_float *rx, const tscvx_f
     for (tscvx_int i = 0; i < p; i++) yb[bd->iperm[i]] = ry[i];
     for (tscvx_int g = 0; g < bd->ngroup; g++) {
         if (bd->border[g]) continue;
-        const tscvx_int s = bd->gp[g + 1] - bd->gp[g], se = s - bd->ga0[g];
-        const tscvx_int R = bd->rp[g + 1] - bd->rp[g];
-        const tscvx_float *L = bd->H + bd->hp[g], *dinv = bd->Hdinv + bd->gp[g];
-        const tscvx_float *CT = bd->CT + bd->cp[g];
-        const tscvx_int *rows = bd->rrow + bd->rp[g];
+        const group_blocks b = group_blocks_of(bd, g);
         tscvx_float *wg = xg + bd->gp[g];
-#define FORWARD(S, SE) group_forward(L, dinv, S, SE, wg, rows, CT, R, yb)
-        if (R > 0) {
-            DISPATCH_S_SE(s, se, FORWARD)
+#define FORWARD(S, SE) group_forward(b.L, b.dinv, S, SE, wg, b.rows, b.CT, b.R, yb)
+        if (b.R > 0) {
+            DISPATCH_S_SE(b.s, b.se, FORWARD)
         } else {
-            group_forward(L, dinv, s, 0, wg, rows, CT, 0, yb);
+            group_forward(b.L, b.dinv, b.s, 0, wg, b.rows, b.CT, 0, yb);
         }
 #undef FORWARD
     }
@@ -1028,14 +1044,10 @@ static void base_solve(tscvx_workspace *ws, const tscvx_float *rx, const tscvx_f
     /* groups back: dx_g = L_g'^-1 (w_g - C_g dy) */
     for (tscvx_int g = 0; g < bd->ngroup; g++) {
         if (bd->border[g]) continue;
-        const tscvx_int s = bd->gp[g + 1] - bd->gp[g], se = s - bd->ga0[g];
-        const tscvx_int R = bd->rp[g + 1] - bd->rp[g];
-        const tscvx_float *L = bd->H + bd->hp[g], *dinv = bd->Hdinv + bd->gp[g];
-        const tscvx_float *CT = bd->CT + bd->cp[g];
-        const tscvx_int *rows = bd->rrow + bd->rp[g];
+        const group_blocks b = group_blocks_of(bd, g);
         tscvx_float *wg = xg + bd->gp[g];
-#define BACKWARD(S, SE) group_backward(L, dinv, S, SE, wg, rows, CT, R, yb)
-        DISPATCH_S_SE(s, se, BACKWARD)
+#define BACKWARD(S, SE) group_backward(b.L, b.dinv, S, SE, wg, b.rows, b.CT, b.R, yb)
+        DISPATCH_S_SE(b.s, b.se, BACKWARD)
 #undef BACKWARD
     }
     for (tscvx_int b = 0; b < nb; b++) xg[bd->gp[bd->bgroup[b]] + bd->loc[bd->bvar[b]]] = dxb[b];
