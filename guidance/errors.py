@@ -20,7 +20,7 @@ class InputError(ValueError):
 
 class ModelEvaluationError(ArithmeticError):
     """The dynamics or their discretization are not finite at a trajectory (an iterate or a
-    guess far outside the range the model is meant for, e.g. r0 = 1e6)."""
+    guess at the edge of the range the model is meant for, e.g. v0 = 1e4)."""
 
 
 def check_output_path(flag: str, path: Path) -> None:

@@ -286,11 +286,12 @@ def test_infeasible_start_gets_the_same_diagnosis() -> None:
 
 
 def test_model_failure_at_the_guess_is_the_same_status_and_reason() -> None:
-    """r0 = 1e6 overflows the guess's dynamics: C and Python stop with the same status and
-    reason, t_f NaN and x, u untouched (NaN), before any subproblem."""
-    far = Scenario(InitialState(r0=(1e6, 4.0, 0.0)))
-    c = cguidance.solve_c(far)
-    py = SCvxSolver(far).solve()
+    """v0 = 1e4 (the edge of validation's envelope) overflows the guess's dynamics: C and
+    Python stop with the same status and reason, t_f NaN and x, u untouched (NaN), before any
+    subproblem."""
+    fast = Scenario(InitialState(v0=(0.0, 1e4, 0.0)))
+    c = cguidance.solve_c(fast)
+    py = SCvxSolver(fast).solve()
     assert (c.status, c.reason) == (py.status, py.reason) == (
         "solver_error", "model evaluation failed at the initial guess")  # fmt: skip
     assert c.subproblems_solved == 0 and math.isnan(c.t_f) and np.isnan(c.x).all()

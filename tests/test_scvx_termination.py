@@ -152,15 +152,16 @@ def test_mass_floor_is_named_only_at_the_floor(
 
 
 # ---- a model that cannot be evaluated -------------------------------------------------------
-FAR = dataclasses.replace(SCN, initial=dataclasses.replace(SCN.initial, r0=(1e6, 4.0, 0.0)))
+# at the edge of validation's envelope (|value| <= 1e4): the guess's dynamics are not finite
+FAST = dataclasses.replace(SCN, initial=dataclasses.replace(SCN.initial, v0=(0.0, 1e4, 0.0)))
 
 
-def test_a_landing_far_outside_the_model_range_stops_before_its_first_subproblem() -> None:
-    """r0 = 1e6: the guess's dynamics overflow. The solve stops with solver_error and no
-    trajectory (NaN, as the C library leaves it), without a traceback or a numpy warning."""
+def test_a_landing_at_the_edge_of_the_model_range_stops_before_its_first_subproblem() -> None:
+    """v0 = 1e4 sideways: the guess's dynamics overflow. The solve stops with solver_error and
+    no trajectory (NaN, as the C library leaves it), without a traceback or a numpy warning."""
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        r = SCvxSolver(FAR).solve()
+        r = SCvxSolver(FAST).solve()
     assert (r.status, r.reason) == ("solver_error", "model evaluation failed at the initial guess")
     assert r.subproblems_solved == 0 and r.iterations == 0
     assert np.isnan(r.t_f) and np.isnan(r.x).all() and np.isnan(r.u).all()
@@ -202,11 +203,11 @@ def test_a_model_failure_at_the_subproblem_solution_ends_with_the_last_reference
 def test_cli_solve_without_a_trajectory_exits_3_and_writes_nothing(
     tmp_path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    """`guidance solve` on the far landing: the status line, no trajectory, nothing written,
+    """`guidance solve` on the fast landing: the status line, no trajectory, nothing written,
     exit 3, for the reference and for the C library. An infeasible landing is an answer:
     exit 0, its trajectory written."""
-    scn_file = tmp_path / "far.json"
-    scn_file.write_text(json.dumps(scenario_to_dict(FAR)))
+    scn_file = tmp_path / "fast.json"
+    scn_file.write_text(json.dumps(scenario_to_dict(FAST)))
     for backend in ("clarabel", "c"):
         out = tmp_path / f"{backend}.npz"
         assert main(["solve", str(scn_file), "--backend", backend, "--out", str(out)]) == 3
@@ -214,7 +215,7 @@ def test_cli_solve_without_a_trajectory_exits_3_and_writes_nothing(
         assert "solver_error (model evaluation failed at the initial guess)" in text
         assert "no trajectory: nothing written" in text and "final mass" not in text
         assert not out.exists()
-    near = dataclasses.replace(FAR, initial=dataclasses.replace(FAR.initial, r0=(1e3, 4.0, 0.0)))
+    near = dataclasses.replace(SCN, initial=dataclasses.replace(SCN.initial, r0=(1e3, 4.0, 0.0)))
     scn_file.write_text(json.dumps(scenario_to_dict(near)))
     out = tmp_path / "near.npz"
     assert main(["solve", str(scn_file), "--backend", "c", "--out", str(out)]) == 0
