@@ -190,7 +190,6 @@ static double norm(const double *v, int n)
     return sqrt(s);
 }
 
-/* Finiteness of every number (the JSON parser's check in Python), field by field. */
 static double largest_magnitude(const double *v, int n)
 {
     double largest = 0.0;
@@ -201,8 +200,8 @@ static double largest_magnitude(const double *v, int n)
     return largest;
 }
 
-/* Every real number finite and within PDG_MAGNITUDE_MAX, field by field in the order of
- * guidance/scenario.py (its dataclasses' fields). */
+/* Every real number finite (the JSON parser's check in Python), then within
+ * PDG_MAGNITUDE_MAX, field by field in the order of guidance/scenario.py's dataclasses. */
 static int check_numbers(const pdg_scenario *s, char *msg)
 {
     char text[200];
