@@ -706,6 +706,101 @@ static void test_warm_start(void) {
     CHECK(info.warm_started == 1, "the warm point was not used");
 }
 
+/* Corrupted structure never crashes: random mutations of the index arrays (row indices,
+ * interior column pointers), the cone dimensions and the orthant size of a small problem with
+ * P, A, an orthant and two SOCs. Every array and the arena are malloc'ed at their exact sizes,
+ * so that valgrind flags any read or write outside them. Each mutant is refused with a status
+ * or, if still valid, solved to one of the solve statuses, with every KKT method. (The
+ * lengths the caller promises, n + 1 pointers and nnz = Gp[n] entries, are the caller's
+ * contract: a C API cannot check them, so the last pointer and n are not mutated.) */
+#define FUZZ_N 6
+#define FUZZ_P 2
+#define FUZZ_M 9 /* l = 3, q = {3, 3} */
+#define FUZZ_TRIALS 3000
+
+static void *dup_exact(const void *src, size_t bytes) {
+    void *d = malloc(bytes);
+    CHECK(d != NULL, "malloc");
+    if (d) memcpy(d, src, bytes);
+    return d;
+}
+
+static tscvx_int fuzz_value(tscvx_int old, tscvx_int range) {
+    const tscvx_int pick[] = {-1, 0, 1, range - 1, range, range + 1, old - 1, old + 1,
+                              1 << 30, -(1 << 30)};
+    return pick[(int)(ct_rand() * (sizeof pick / sizeof pick[0]))];
+}
+
+static void test_fuzz_structure(void) {
+    /* columns: x0..x5; A rows {0, 1}; G: orthant rows 0..2, SOC rows 3..5 and 6..8 */
+    const tscvx_int Pp0[FUZZ_N + 1] = {0, 1, 2, 3, 4, 5, 6}, Pi0[6] = {0, 1, 2, 3, 4, 5};
+    const tscvx_int Ap0[FUZZ_N + 1] = {0, 1, 2, 3, 4, 4, 4}, Ai0[4] = {0, 0, 1, 1};
+    const tscvx_int Gp0[FUZZ_N + 1] = {0, 2, 4, 6, 7, 8, 9};
+    const tscvx_int Gi0[9] = {0, 4, 1, 5, 2, 7, 3, 6, 8}, q0[2] = {3, 3};
+    const tscvx_float Px[6] = {1, 1, 1, 1, 1, 1}, c[FUZZ_N] = {-1, 1, -1, 1, 0, 0};
+    const tscvx_float Ax[4] = {1, 1, 1, -1}, b[FUZZ_P] = {1, 0};
+    const tscvx_float Gx[9] = {-1, -1, -1, -1, -1, -1, -1, -1, -1};
+    const tscvx_float h[FUZZ_M] = {1, 1, 1, 2, 0, 0, 2, 0, 0};
+    const int backends[] = {TSCVX_KKT_AUTO, TSCVX_KKT_STATIC, TSCVX_KKT_LDL};
+    int solved = 0, refused = 0;
+    for (int trial = 0; trial < FUZZ_TRIALS; trial++) {
+        tscvx_int *Pp = dup_exact(Pp0, sizeof Pp0), *Pi = dup_exact(Pi0, sizeof Pi0);
+        tscvx_int *Ap = dup_exact(Ap0, sizeof Ap0), *Ai = dup_exact(Ai0, sizeof Ai0);
+        tscvx_int *Gp = dup_exact(Gp0, sizeof Gp0), *Gi = dup_exact(Gi0, sizeof Gi0);
+        tscvx_int *q = dup_exact(q0, sizeof q0);
+        tscvx_float *vPx = dup_exact(Px, sizeof Px), *vc = dup_exact(c, sizeof c);
+        tscvx_float *vAx = dup_exact(Ax, sizeof Ax), *vb = dup_exact(b, sizeof b);
+        tscvx_float *vGx = dup_exact(Gx, sizeof Gx), *vh = dup_exact(h, sizeof h);
+        tscvx_data d = {FUZZ_N, FUZZ_P, FUZZ_M, Pp, Pi, vPx, vc, Ap, Ai, vAx, vb,
+                        Gp, Gi, vGx, vh, 3, 2, q};
+        const int mutations = 1 + (int)(ct_rand() * 3);
+        for (int k = 0; k < mutations; k++) {
+            const int j = (int)(ct_rand() * FUZZ_N); /* a column or an entry */
+            switch ((int)(ct_rand() * 8)) {
+            case 0: Pi[j] = fuzz_value(Pi[j], FUZZ_N); break;
+            case 1: Ai[j % 4] = fuzz_value(Ai[j % 4], FUZZ_P); break;
+            case 2: Gi[j] = fuzz_value(Gi[j], FUZZ_M); break;
+            case 3: Pp[j] = fuzz_value(Pp[j], 6); break; /* pointers 0..n-1 */
+            case 4: Ap[j] = fuzz_value(Ap[j], 4); break;
+            case 5: Gp[j] = fuzz_value(Gp[j], 9); break;
+            case 6: q[j % 2] = fuzz_value(q[j % 2], FUZZ_M); break;
+            default: d.l = fuzz_value(d.l, FUZZ_M); break;
+            }
+        }
+        tscvx_settings st;
+        tscvx_default_settings(&st);
+        st.kkt_backend = backends[trial % 3];
+        st.max_iter = 30;
+        size_t nscratch = 0, narena = 0;
+        char msg[TSCVX_MESSAGE_LEN];
+        const tscvx_setup_status checked = tscvx_check_data(&d, msg);
+        tscvx_setup_status r = tscvx_scratch_size(&d, &st, &nscratch);
+        CHECK((checked == TSCVX_SETUP_OK) == (r == TSCVX_SETUP_OK), "trial %d: check_data %d, "
+              "scratch_size %d", trial, (int)checked, (int)r);
+        void *scratch = r == TSCVX_SETUP_OK ? malloc(nscratch) : NULL;
+        if (scratch) r = tscvx_workspace_size(&d, &st, scratch, nscratch, &narena);
+        free(scratch);
+        void *mem = r == TSCVX_SETUP_OK ? malloc(narena) : NULL;
+        tscvx_workspace *ws = NULL;
+        if (mem) r = tscvx_setup(&ws, mem, narena, &d, &st);
+        if (mem && r == TSCVX_SETUP_OK) {
+            const tscvx_solve_status s = tscvx_solve(ws);
+            CHECK(s >= TSCVX_SOLVED && s < TSCVX_NSTATUS, "trial %d: solve status %d", trial,
+                  (int)s);
+            solved++;
+        } else {
+            CHECK(r > TSCVX_SETUP_OK && r < TSCVX_SETUP_NSTATUS, "trial %d: status %d", trial,
+                  (int)r);
+            refused++;
+        }
+        free(mem);
+        free(Pp), free(Pi), free(Ap), free(Ai), free(Gp), free(Gi), free(q);
+        free(vPx), free(vc), free(vAx), free(vb), free(vGx), free(vh);
+    }
+    CHECK(solved > 0 && refused > FUZZ_TRIALS / 2, "solved %d, refused %d", solved, refused);
+    printf("fuzzed structure: %d mutants refused, %d still valid and solved\n", refused, solved);
+}
+
 int main(void) {
     test_soc();
     test_qp();
@@ -718,5 +813,6 @@ int main(void) {
     test_ill_conditioned_p_every_method();
     test_equilibration_reference();
     test_warm_start();
+    test_fuzz_structure();
     return ct_report("test_solver");
 }
