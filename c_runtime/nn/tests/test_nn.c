@@ -618,6 +618,66 @@ static void test_messages(void)
     CHECK(nn_crc32((const unsigned char *)"123456789", 9, 0) == 0xCBF43926u);
 }
 
+/* A header fuzz: 1 to 3 of the header's counts and dimensions (offsets 16..60, and the
+ * 64-bit counts at 80 and 88) set to edge values, the CRC recomputed so that only the
+ * dimension checks stand between them and the arena. Blob and arena are malloc'ed at their
+ * exact sizes (valgrind flags any access outside); every mutant is refused with a status, or
+ * accepted and then runs to a status. */
+static void test_fuzz_header(void)
+{
+    static const arch a = {TSCVX_NN_KIND_CONSTRAINT, TSCVX_NN_TOKENS_SCALAR, 17, 7, 8, 2, 1, 10, 2,
+                           1};
+    const uint32_t pick[] = {0u, 1u, 2u, 3u, 7u, 8u, 16u, 17u, 255u, 65535u, 0x7FFFFFFFu,
+                             0x80000000u, 0xFFFFFFFFu};
+    const int n_pick = (int)(sizeof pick / sizeof pick[0]);
+    size_t len = 0;
+    unsigned char *good = make_blob(&a, &len);
+    double x[17] = {0.1, -0.2, 0.3}, y[7];
+    int trial, accepted = 0, refused = 0;
+    CHECK(good != NULL);
+    for (trial = 0; good && trial < 2000; ++trial) {
+        unsigned char *b = dup_blob(good, len);
+        const int mutations = 1 + (int)((urand() + 1.0) * 1.5);
+        size_t need = 0;
+        tscvx_nn *net = NULL;
+        tscvx_nn_status st;
+        int k;
+        for (k = 0; k < mutations; ++k) {
+            const int field = (int)((urand() + 1.0) * 6.5); /* 0..12 */
+            const uint32_t v = pick[(int)((urand() + 1.0) * 0.5 * n_pick)];
+            if (field < 12) {
+                wr_u32(b + 16 + 4 * field, v);
+            } else {
+                wr_u64(b + (urand() < 0.0 ? 80 : 88), (uint64_t)v * (urand() < 0.0 ? 1u : 3u));
+            }
+        }
+        reseal(b, len);
+        st = tscvx_nn_arena_size(b, len, 0, &need);
+        if (st == TSCVX_NN_OK) {
+            void *arena = malloc(need);
+            st = tscvx_nn_init(&net, arena, need, b, len, 0);
+            if (st == TSCVX_NN_OK) {
+                tscvx_nn_info info;
+                CHECK(tscvx_nn_get_info(net, &info) == TSCVX_NN_OK);
+                if (info.d_in <= 17 && info.d_out <= 7) {
+                    st = tscvx_nn_run(net, x, info.d_in, y, info.d_out);
+                    CHECK(st == TSCVX_NN_OK || st == TSCVX_NN_NUMERICAL_ERROR);
+                }
+                ++accepted;
+            }
+            free(arena);
+        }
+        if (st != TSCVX_NN_OK && st != TSCVX_NN_NUMERICAL_ERROR) {
+            CHECK(st > TSCVX_NN_OK && st < TSCVX_NN_NSTATUS);
+            ++refused;
+        }
+        free(b);
+    }
+    CHECK(refused > 1000);
+    printf("fuzzed header: %d mutants refused, %d accepted\n", refused, accepted);
+    free(good);
+}
+
 int main(int argc, char **argv)
 {
     int i;
@@ -625,6 +685,7 @@ int main(int argc, char **argv)
     test_synthetic();
     test_mask_threshold_boundary();
     test_bad_blobs();
+    test_fuzz_header();
     for (i = 1; i < argc; ++i) {
         test_model(argv[i]);
     }
