@@ -154,6 +154,11 @@ def format_verdict(v: FileVerdict) -> str:
             "    flown by an engine held at T_min there: landing position error "
             f"{v.engine[0]:.2e}, velocity error {v.engine[1]:.2e}"
         )
+    if v.audit.propagation_stopped:
+        lines.append(
+            f"  open-loop propagation stopped in {v.audit.propagation_stopped}: the propagated "
+            "figures are NaN and fail"
+        )
     lines.append(f"  verdict: {'pass' if v.ok else 'FAIL'}")
     return "\n".join(lines)
 

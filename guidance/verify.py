@@ -20,6 +20,18 @@ from guidance.params import IM, IQ, IR, IV, IW, NU, NX, Params
 # to O(10) in the nondimensional units; far outside these the propagation does not end.
 T_F_RANGE = (1e-6, 1e4)  # U_T
 VALUE_LIMIT = 1e9
+# Right-hand-side evaluations allowed per interval. The default landing needs at most 47 at
+# rtol 1e-10; a thrust or rate far outside any landing (u = 1e5, inside VALUE_LIMIT) makes the
+# integrator crawl (such a file ran for more than ten minutes), so it is stopped and reported.
+MAX_EVALUATIONS = 20_000
+
+
+class PropagationError(ArithmeticError):
+    """The open-loop integration of an interval could not reach its end."""
+
+
+class _EvaluationLimitError(Exception):
+    pass
 
 
 def _dcm_bi(q: np.ndarray) -> np.ndarray:
@@ -75,27 +87,40 @@ def _interval(
     dense: bool,
     engine: bool = False,
 ):  # -> scipy's OdeResult
+    """One interval; PropagationError says why it did not reach dt."""
     du = u_k1 - u_k
+    evaluations = 0
 
-    def thrust(t: float) -> np.ndarray:
+    def rhs(t: float, x: np.ndarray) -> np.ndarray:
+        nonlocal evaluations
+        evaluations += 1
+        if evaluations > MAX_EVALUATIONS:
+            raise _EvaluationLimitError
         u = u_k + (t / dt) * du
-        return engine_thrust(u, p) if engine else u
+        return dynamics_numpy(x, engine_thrust(u, p) if engine else u, p)
 
-    return solve_ivp(
-        lambda t, x: dynamics_numpy(x, thrust(t), p),
-        (0.0, dt),
-        x0,
-        rtol=rtol,
-        atol=rtol,
-        method="DOP853",
-        dense_output=dense,
-    )
+    # an overflow shows as a non-finite state below, not as numpy's warnings on the way
+    with np.errstate(all="ignore"):
+        try:
+            sol = solve_ivp(
+                rhs, (0.0, dt), x0, rtol=rtol, atol=rtol, method="DOP853", dense_output=dense
+            )
+        except _EvaluationLimitError:
+            raise PropagationError(
+                f"more than {MAX_EVALUATIONS} evaluations of the dynamics"
+            ) from None
+    if sol.status != 0:
+        raise PropagationError(f"the integrator failed ({sol.message.rstrip('.')})")
+    if not np.isfinite(sol.y[:, -1]).all():
+        raise PropagationError("the state is no longer finite")
+    return sol
 
 
 def integrate_interval(
     x0: np.ndarray, u_k: np.ndarray, u_k1: np.ndarray, dt: float, p: Params, rtol: float
 ) -> np.ndarray:
-    """x(dt) from x0 under the first-order hold from u_k (t = 0) to u_k1 (t = dt)."""
+    """x(dt) from x0 under the first-order hold from u_k (t = 0) to u_k1 (t = dt);
+    PropagationError when the integration cannot reach dt."""
     return _interval(x0, u_k, u_k1, dt, p, rtol, False).y[:, -1]
 
 
@@ -104,6 +129,9 @@ class Propagation:
     nodes: np.ndarray  # (N, 14) propagated states at the node times
     x_between: np.ndarray  # (N - 1, s, 14) at s equally spaced times inside each interval
     u_between: np.ndarray  # (N - 1, s, 3) the first-order-hold thrust there
+    # why the integration stopped before t_f ("" when it did not); the states from there
+    # on are NaN
+    stopped: str = ""
 
 
 def propagate_sampled(
@@ -126,12 +154,15 @@ def propagate_sampled(
     N = u.shape[0]
     dt = t_f / (N - 1)
     s = np.arange(1, between + 1) / (between + 1)  # fractions of the interval
-    nodes = np.empty((N, len(x0)))
-    xb = np.empty((N - 1, between, len(x0)))
+    nodes = np.full((N, len(x0)), np.nan)
+    xb = np.full((N - 1, between, len(x0)), np.nan)
     ub = u[:-1, None, :] + s[None, :, None] * (u[1:] - u[:-1])[:, None, :]
     nodes[0] = x0
     for k in range(N - 1):
-        sol = _interval(nodes[k], u[k], u[k + 1], dt, p, rtol, between > 0, engine)
+        try:
+            sol = _interval(nodes[k], u[k], u[k + 1], dt, p, rtol, between > 0, engine)
+        except PropagationError as exc:
+            return Propagation(nodes, xb, ub, f"interval {k} of {N - 1}: {exc}")
         nodes[k + 1] = sol.y[:, -1]
         if between > 0:
             xb[k] = sol.sol(s * dt).T
@@ -174,6 +205,9 @@ class Audit:
     # (7,) max of h on the propagated trajectory between the nodes (NaN when not sampled):
     # the method imposes the constraints at the nodes only
     path_between_nodes: np.ndarray
+    # why the open-loop propagation stopped before t_f ("" when it reached t_f); the
+    # propagated figures are then NaN, which fails every check on them
+    propagation_stopped: str = ""
 
 
 def checked_trajectory(
@@ -230,6 +264,7 @@ def audit(x: np.ndarray, u: np.ndarray, t_f: float, p: Params, between: int = 0)
         final_rate_error=float(np.linalg.norm(xp[-1, IW] - np.array(p.omega_f))),
         path_at_nodes=h.max(axis=0),
         path_between_nodes=hb,
+        propagation_stopped=prop.stopped,
     )
 
 

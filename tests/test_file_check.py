@@ -21,7 +21,7 @@ from guidance.file_check import SAMPLES_BETWEEN_NODES, Tolerances, verify_file
 from guidance.model import dynamics_functions, param_vector
 from guidance.params import IR, IV
 from guidance.trajectory_io import write_trajectory
-from guidance.verify import final_attitude_error
+from guidance.verify import MAX_EVALUATIONS, final_attitude_error
 
 SCN = SCENARIOS["default"]
 P = SCN.params
@@ -129,6 +129,56 @@ def test_a_node_below_the_thrust_minimum_fails(written: Path, tmp_path: Path) ->
     check = next(c for c in v.checks if c.name == "path constraints at the nodes")
     assert check.value == pytest.approx(0.01, abs=1e-9) and not check.ok
     assert not v.ok
+
+
+EVALUATION_LIMIT = f"more than {MAX_EVALUATIONS} evaluations of the dynamics"
+
+
+@pytest.mark.parametrize(
+    ("array", "entry", "value", "reason"),
+    [
+        ("u", (0, 0), 1e5, "the integrator failed (Required step size"),
+        ("u", (10, 1), 1e5, "the integrator failed (Required step size"),
+        ("x", (0, 10), 1e9, EVALUATION_LIMIT),  # omega_1
+        ("x", (0, 6), 1e9, EVALUATION_LIMIT),  # q0: overflows on the way
+    ],
+)
+def test_a_trajectory_far_outside_any_landing_stops_the_propagation_with_its_reason(
+    written: Path, tmp_path: Path, capsys, array: str, entry: tuple, value: float, reason: str
+) -> None:
+    """Numbers inside VALUE_LIMIT but far outside any landing: the integration cannot cross
+    an interval. The check says where and why, fails every propagated figure, prints no
+    numpy warning, and returns in seconds. (It went on interval after interval from the
+    broken state of the one before: u = 1e5 ran for more than ten minutes.)"""
+    import warnings
+
+    with np.load(written) as f:
+        a = f[array].copy()
+    a[entry] = value
+    bad = _edited(written, tmp_path / "wild.npz", **{array: a})
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        v = verify_file(bad)
+    where = f"interval {max(entry[0] - 1, 0)} of 49: "
+    assert v.audit.propagation_stopped.startswith(where + reason), v.audit.propagation_stopped
+    propagated = [c for c in v.checks if c.name not in
+                  ("initial state vs scenario", "path constraints at the nodes")]  # fmt: skip
+    assert len(propagated) == 5 and all(np.isnan(c.value) and not c.ok for c in propagated)
+    assert main(["verify", str(bad)]) == 1
+    assert f"open-loop propagation stopped in {where}" in capsys.readouterr().out
+
+
+def test_the_propagation_is_stopped_after_its_evaluation_budget(written: Path, monkeypatch) -> None:
+    """The budget of dynamics evaluations per interval ends a crawl (the reference landing
+    needs 32 to 47 per interval)."""
+    from guidance import verify
+
+    monkeypatch.setattr(verify, "MAX_EVALUATIONS", 20)
+    v = verify_file(written)
+    assert v.audit.propagation_stopped.startswith("interval 0 of 49: more than 20 evaluations")
+    assert not v.ok
+    monkeypatch.setattr(verify, "MAX_EVALUATIONS", 100)
+    assert verify_file(written).ok
 
 
 def test_the_tolerances_come_from_the_command_line(written: Path, capsys) -> None:
