@@ -32,6 +32,8 @@ def check_output_path(flag: str, path: Path) -> None:
         raise InputError(f"{flag} {path}: cannot create its folder ({exc.strerror})") from None
     if path.is_dir():
         raise InputError(f"{flag} {path}: is a folder, not a file")
+    if path.exists() and not path.is_file():  # the writers replace what is there
+        raise InputError(f"{flag} {path}: is a device, pipe or socket, not a regular file")
     try:  # a file written and removed beside it, as the writers do (root passes os.access)
         with tempfile.NamedTemporaryFile(dir=path.parent, prefix=".write-check-"):
             pass

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import json
+import os
+import stat
 from pathlib import Path
 
 import numpy as np
@@ -138,17 +140,20 @@ def test_counts_and_figure_format_are_checked_before_work(
     assert "unknown figure format 'xyz'" in capsys.readouterr().err
     assert not out.exists()
     (tmp_path / "a_file").write_text("")
+    os.mkfifo(tmp_path / "a_pipe")  # as /dev/full would be: a root run replaced the device
     refused = {
         "--trust-update: applies to --method tscvx only": ["--trust-update", "alg1"],
         f"--out {tmp_path}: is a folder": ["--out", str(tmp_path)],
         "--plot": ["--out", str(out), "--plot", str(tmp_path / "a_file" / "fig.png")],
         "--out /proc/t.npz: cannot write there": ["--out", "/proc/t.npz"],
+        "a_pipe: is a device, pipe or socket": ["--out", str(tmp_path / "a_pipe")],
     }
     for message, args in refused.items():
         assert main(["solve", *args]) == 2, args
         err = capsys.readouterr().err
         assert message in err and "Traceback" not in err, err
         assert not out.exists()
+    assert stat.S_ISFIFO((tmp_path / "a_pipe").stat().st_mode)  # left as it was
 
 
 def test_missing_models_and_data_exit_2(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
