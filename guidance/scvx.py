@@ -183,7 +183,7 @@ class SCvxSolver:
             disc = self._discretize(z)
         except ModelEvaluationError:
             # No trajectory to return (the C library leaves x, u as given and t_f NaN).
-            return self._no_trajectory("model evaluation failed at the initial guess", t_start)
+            return self.no_trajectory("model evaluation failed at the initial guess", t_start)
         J, defect, viol = self.penalty(z, disc)
         eta = st.eta_init
         history: list[IterationRecord] = []
@@ -325,8 +325,9 @@ class SCvxSolver:
             settings=st,
         )
 
-    def _no_trajectory(self, reason: str, t_start: float) -> SCvxResult:
-        """The result of a solve that stopped before its first subproblem."""
+    def no_trajectory(self, reason: str, t_start: float) -> SCvxResult:
+        """The result of a solve that stopped before its first subproblem (``t_start``:
+        its time.perf_counter() start)."""
         nan = float("nan")
         N = self.p.N
         return SCvxResult(

@@ -14,6 +14,7 @@ the iteration goes on (guidance.scvx), so T-SCvx never returns what the full pro
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable
 
 import numpy as np
@@ -44,10 +45,17 @@ def solve_tscvx(
     at ``settings.eta_init``. ``predict_mask(scenario, k)`` gives the 7N mask bits of
     succession k (a network's probabilities thresholded by the caller, at the threshold its
     model card states); without it every subproblem is the full one."""
+    t_start = time.perf_counter()
     st = settings or SCvxSettings()
     guess = None
     if predict_solution is not None:
         x, u, t_f = predict_solution(scenario)
+        if not (np.isfinite(x).all() and np.isfinite(u).all() and np.isfinite(t_f)):
+            # a status, as the flight library's T-SCvx gives (pdg_solve_tscvx)
+            return SCvxSolver(scenario, st, backend=backend).no_trajectory(
+                "solution network: the network output is not finite (overflow inside the network)",
+                t_start,
+            )
         guess = project_guess(scenario, x, u, t_f)
         st = st.replace(eta_init=eta_init)
     masks = None

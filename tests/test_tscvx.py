@@ -248,3 +248,20 @@ def test_mask_probabilities_are_refused() -> None:
     probs = np.full(NC * scenario.params.N, 0.7)
     with pytest.raises(ValueError, match="0/1 bits"):
         solve_tscvx(scenario, None, lambda s, k: probs)
+
+
+@pytest.mark.parametrize("backend", ["clarabel", "c-socp"])
+def test_a_non_finite_prediction_ends_with_the_flight_librarys_status(
+    reference: SCvxResult, backend: str
+) -> None:
+    """A warm start with an overflow in it (NaN) stops before the first subproblem with
+    pdg_solve_tscvx's status and reason, not an exception from inside the discretization."""
+    u = reference.u.copy()
+    u[7, 1] = np.nan
+    r = solve_tscvx(SCENARIOS["north"], lambda s: (reference.x, u, reference.t_f), None,
+                    backend=backend)  # fmt: skip
+    assert (r.status, r.subproblems_solved) == ("solver_error", 0)
+    assert r.reason == (
+        "solution network: the network output is not finite (overflow inside the network)"
+    )
+    assert np.isnan(r.t_f) and np.isnan(r.x).all()
