@@ -207,6 +207,11 @@ def initial_guess(scenario: Scenario) -> tuple[np.ndarray, np.ndarray, float]:
     return project_guess(scenario, x, u, t_f)
 
 
+def is_finite_guess(x: np.ndarray, u: np.ndarray, t_f: float) -> bool:
+    """No NaN or inf in a guess (x, u, t_f), as pdg_solve checks a given one."""
+    return bool(np.isfinite(x).all() and np.isfinite(u).all() and np.isfinite(t_f))
+
+
 def project_guess(
     scenario: Scenario, x: np.ndarray, u: np.ndarray, t_f: float
 ) -> tuple[np.ndarray, np.ndarray, float]:

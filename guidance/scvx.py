@@ -22,7 +22,7 @@ from guidance import conic
 from guidance.conic import ConicProblem, ConicSolution
 from guidance.constraints import constraint_scales, path_constraint_values, tight_mask
 from guidance.errors import InputError, ModelEvaluationError
-from guidance.guess import initial_guess
+from guidance.guess import initial_guess, is_finite_guess
 from guidance.model import discretize, vehicle_pattern
 from guidance.params import IM, NC, NU, NX, Scenario, SCvxSettings
 from guidance.subproblem import (
@@ -170,8 +170,7 @@ class SCvxSolver:
         st, p = self.st, self.p
         if guess is not None:  # used as given; the C library refuses the same (pdg_solve)
             x, u, t_f = np.asarray(guess[0], float), np.asarray(guess[1], float), float(guess[2])
-            finite = np.isfinite(x).all() and np.isfinite(u).all() and np.isfinite(t_f)
-            if not (finite and t_f > 0.0):
+            if not (is_finite_guess(x, u, t_f) and t_f > 0.0):
                 raise InputError("guess: x, u and t_f must be finite and t_f positive")
         else:
             x, u, t_f = initial_guess(self.scn)

@@ -19,7 +19,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from guidance.guess import project_guess
+from guidance.guess import is_finite_guess, project_guess
 from guidance.params import Scenario, SCvxSettings
 from guidance.scvx import SCvxResult, SCvxSolver
 
@@ -50,7 +50,7 @@ def solve_tscvx(
     guess = None
     if predict_solution is not None:
         x, u, t_f = predict_solution(scenario)
-        if not (np.isfinite(x).all() and np.isfinite(u).all() and np.isfinite(t_f)):
+        if not is_finite_guess(x, u, t_f):
             # a status, as the flight library's T-SCvx gives (pdg_solve_tscvx)
             return SCvxSolver(scenario, st, backend=backend).no_trajectory(
                 "solution network: the network output is not finite (overflow inside the network)",

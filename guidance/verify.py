@@ -31,10 +31,6 @@ class PropagationError(ArithmeticError):
     """The open-loop integration of an interval could not reach its end."""
 
 
-class _EvaluationLimitError(Exception):
-    pass
-
-
 def _dcm_bi(q: np.ndarray) -> np.ndarray:
     q0, q1, q2, q3 = q
     return np.array(
@@ -95,21 +91,16 @@ def _interval(
     def rhs(t: float, x: np.ndarray) -> np.ndarray:
         nonlocal evaluations
         evaluations += 1
-        if evaluations > MAX_EVALUATIONS:
-            raise _EvaluationLimitError
+        if evaluations > MAX_EVALUATIONS:  # solve_ivp passes the exception on
+            raise PropagationError(f"more than {MAX_EVALUATIONS} evaluations of the dynamics")
         u = u_k + (t / dt) * du
         return dynamics_numpy(x, engine_thrust(u, p) if engine else u, p)
 
     # an overflow shows as a non-finite state below, not as numpy's warnings on the way
     with np.errstate(all="ignore"):
-        try:
-            sol = solve_ivp(
-                rhs, (0.0, dt), x0, rtol=rtol, atol=rtol, method="DOP853", dense_output=dense
-            )
-        except _EvaluationLimitError:
-            raise PropagationError(
-                f"more than {MAX_EVALUATIONS} evaluations of the dynamics"
-            ) from None
+        sol = solve_ivp(
+            rhs, (0.0, dt), x0, rtol=rtol, atol=rtol, method="DOP853", dense_output=dense
+        )
     if sol.status != 0:
         raise PropagationError(f"the integrator failed ({sol.message.rstrip('.')})")
     if not np.isfinite(sol.y[:, -1]).all():
