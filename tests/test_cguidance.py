@@ -426,6 +426,19 @@ def test_a_landing_from_rest_solves_in_both_loops() -> None:
     assert audit(c.x, c.u, c.t_f, scn.params).landing_position_error <= 1e-3
 
 
+def test_a_penalty_weight_of_1e8_solves_as_the_clarabel_reference() -> None:
+    """lam = 1e8 (Table 1: 500) puts costs of 1e8 on the virtual control and buffers of every
+    subproblem. The runtime took the first subproblem's second iterate for a certificate of
+    unboundedness (its residual was as large as the direction itself, but small against
+    c'x = -1) and the C solve stopped with solver_error where Clarabel solves; its
+    certificate tests now weigh the residual against the data (ipm.c)."""
+    settings = SCvxSettings(lam=1e8)
+    ref = solve_scvx(Scenario(), settings)
+    c = cguidance.solve_c(Scenario(), settings)
+    assert ref.status == c.status == "solved", (ref.reason, c.reason)
+    assert same_trajectory(c, ref)
+
+
 @pytest.mark.parametrize(
     ("field", "value"),
     [("eta_lb", 0.0), ("eta_ub", 5e-4), ("lam", 0.0), ("rho1", -0.1), ("rho2", 0.05),

@@ -403,10 +403,13 @@ static void copy_csc(tscvx_csc *M, const tscvx_int *Mp, const tscvx_int *Mi,
 
 /* inf-norms of the caller's (unscaled) numbers, for relative residuals; NULL = unchanged */
 static void data_norms(tscvx_workspace *ws, const tscvx_float *Px, const tscvx_float *c,
-                       const tscvx_float *b, const tscvx_float *h) {
+                       const tscvx_float *Ax, const tscvx_float *b, const tscvx_float *Gx,
+                       const tscvx_float *h) {
     if (Px) ws->norm_P = tscvx_max_abs(Px, ws->P.nnz, 0.0);
     if (c) ws->norm_c = tscvx_max_abs(c, ws->n, 0.0);
+    if (Ax) ws->norm_A = tscvx_max_abs(Ax, ws->A.nnz, 0.0);
     if (b) ws->norm_b = tscvx_max_abs(b, ws->p, 0.0);
+    if (Gx) ws->norm_G = tscvx_max_abs(Gx, ws->G.nnz, 0.0);
     if (h) ws->norm_h = tscvx_max_abs(h, ws->m, 0.0);
 }
 
@@ -501,7 +504,7 @@ static tscvx_setup_status build(const tscvx_data *d, const tscvx_settings *st, t
     }
     if (a->overflow) return TSCVX_SETUP_ARENA_TOO_SMALL;
 
-    data_norms(ws, d->Pp ? d->Px : NULL, d->c, d->b, d->h);
+    data_norms(ws, d->Pp ? d->Px : NULL, d->c, d->Ax, d->b, d->Gx, d->h);
     tscvx_equilibrate(ws);
     if (ws->P.nnz > 0 && ws->method->check_p(ws) != 0) return TSCVX_SETUP_P_NOT_PSD;
     ws->arena_used = a->top, ws->arena_high = a->high;
@@ -590,7 +593,7 @@ tscvx_setup_status tscvx_update_data(tscvx_workspace *ws, const tscvx_float *Px,
         ws->info.status = TSCVX_INVALID_INPUT;
         return s;
     }
-    data_norms(ws, Px, c, b, h);
+    data_norms(ws, Px, c, Ax, b, Gx, h);
     tscvx_update_equilibrate(ws, Px, c, Ax, b, Gx, h);
     /* the factorization test sees P only once it is stored: a P it refused stays refused, and
      * is tested again, until an update replaces it */

@@ -112,23 +112,39 @@ static int converged(const tscvx_workspace *ws, const measures *r, int reduced) 
     return r->pres <= feas && r->dres <= feas && (r->gap_abs <= ga || r->gap_rel <= gr);
 }
 
-/* Primal infeasibility: |A'y + G'z| <= tol (-(b'y + h'z)), original units, kappa > tau. */
+/* A certificate is judged against the data it is made of. Normalized to a unit objective
+ * (c'x = -1, say), a direction's residual |Ax| is small whenever c is large, whether or not the
+ * direction lies in the recession cone: with costs of 1e8 (a penalty weight) directions whose
+ * residual was as large as themselves passed, on feasible, bounded problems. So the residual
+ * relative to the constraint data, |Ax| / |A, G|, is held against the descent relative to the
+ * objective's data, -c'x / |c| (for the primal certificate, -(b'y + h'z) / |b, h|): the plain
+ * test times this factor. It never loosens the plain test; a problem whose numbers are at most
+ * 1, or whose objective is no larger than its constraints, sees no change. */
+static tscvx_float certificate_factor(const tscvx_workspace *ws, tscvx_float objective_norm) {
+    const tscvx_float constraints = fmax(1.0, fmax(ws->norm_A, ws->norm_G));
+    return fmin(1.0, constraints / fmax(1.0, objective_norm));
+}
+
+/* Primal infeasibility: |A'y + G'z| <= tol (-(b'y + h'z)) f, f = certificate_factor, original
+ * units, kappa > tau. */
 static int primal_infeasible(tscvx_workspace *ws) {
     const tscvx_int n = ws->n;
     const tscvx_float rho = -(tscvx_dot(ws->b, ws->y, ws->p) + tscvx_dot(ws->h, ws->z, ws->m)) / ws->cs;
     if (!(rho > 0.0) || !(ws->kappa > ws->tau)) return 0;
     tscvx_float *aty = ws->wn; /* A'y + G'z = rx - Px - c tau (scaled) */
     for (tscvx_int j = 0; j < n; j++) aty[j] = ws->rx[j] - ws->Px[j] - ws->c[j] * ws->tau;
-    return vnorm_inf_div(aty, ws->D, n) / ws->cs <= ws->st.tol_infeas * rho;
+    const tscvx_float f = certificate_factor(ws, fmax(ws->norm_b, ws->norm_h));
+    return vnorm_inf_div(aty, ws->D, n) / ws->cs <= ws->st.tol_infeas * rho * f;
 }
 
-/* Dual infeasibility: |Ax|, |Gx + s| <= tol (-c'x) and |Px| <= tol max(-c'x, |P| |x|)
- * (x in the null space of a P perturbed by tol |P|), original units, kappa > tau. */
+/* Dual infeasibility: |Ax|, |Gx + s| <= tol (-c'x) f (f = certificate_factor) and
+ * |Px| <= max(that, tol |P| |x|) (x in the null space of a P perturbed by tol |P|), original
+ * units, kappa > tau. */
 static int dual_infeasible(tscvx_workspace *ws) {
     const tscvx_int n = ws->n, p = ws->p, m = ws->m;
     const tscvx_float rho = -tscvx_dot(ws->c, ws->x, n) / ws->cs;
     if (!(rho > 0.0) || !(ws->kappa > ws->tau)) return 0;
-    const tscvx_float tol = ws->st.tol_infeas * rho;
+    const tscvx_float tol = ws->st.tol_infeas * rho * certificate_factor(ws, ws->norm_c);
     tscvx_float r = 0.0, xnorm = 0.0;
     for (tscvx_int i = 0; i < p; i++)
         r = tscvx_max(r, fabs((ws->ry[i] + ws->b[i] * ws->tau) / ws->EA[i]));

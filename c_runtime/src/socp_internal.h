@@ -297,6 +297,7 @@ struct tscvx_workspace {
     tscvx_float *D, *EA, *EG; /* n, p, m: Ruiz scalings (EG constant on each SOC) */
     tscvx_float cs;           /* cost scaling */
     tscvx_float norm_b, norm_h, norm_c, norm_P; /* inf-norms of the original b, h, c, P */
+    tscvx_float norm_A, norm_G; /* ... and of the original A and G (certificate tests) */
     const tscvx_kkt_method *method; /* how the Newton systems are solved */
     tscvx_kkt kkt;                  /* the sparse method's KKT matrix and factor */
     tscvx_banded bd;                /* the banded method */

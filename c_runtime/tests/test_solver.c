@@ -76,6 +76,68 @@ static void test_infeasible(void) {
     CHECK(solve(&d2, NULL, &info) == TSCVX_DUAL_INFEASIBLE, "dual infeasible");
 }
 
+/* Scaling the objective (c) or the right-hand sides (b, h) of a feasible, bounded problem by
+ * 1e8 or 1e10 leaves it feasible and bounded, with the same x (c scaled) or x scaled likewise
+ * (b, h scaled): no certificate may be claimed. Both problems are random_feasible(142) and
+ * (450) of tests/socp_problems.py (a strictly feasible primal and dual by construction), in
+ * the C form; with the certificate tests unscaled by the data, the first was certified dual
+ * infeasible at c x 1e8 and the second primal infeasible at b, h x 1e10. */
+typedef struct {
+    tscvx_int n, p, m, l, nsoc;
+    tscvx_int q[1], Ap[5], Ai[4], Gp[5], Gi[11];
+    tscvx_float Ax[4], b[2], Gx[11], h[9], c[4];
+} scaled_case;
+
+static void check_scaled(const scaled_case *k, const char *name) {
+    tscvx_float c[4], b[2], h[9], x1[4], x[4];
+    tscvx_info info;
+    tscvx_data d = {k->n, k->p, k->m, NULL, NULL, NULL, c, (tscvx_int *)k->Ap, (tscvx_int *)k->Ai,
+                    (tscvx_float *)k->Ax, b, (tscvx_int *)k->Gp, (tscvx_int *)k->Gi,
+                    (tscvx_float *)k->Gx, h, k->l, k->nsoc, (tscvx_int *)k->q};
+    const double scales[] = {1e8, 1e10};
+    memcpy(c, k->c, sizeof c), memcpy(b, k->b, sizeof b), memcpy(h, k->h, sizeof h);
+    CHECK(solve(&d, x1, &info) == TSCVX_SOLVED, "%s: unscaled status %d", name, (int)info.status);
+    for (int t = 0; t < 4; t++) {
+        const double sigma = scales[t % 2], xs = t < 2 ? 1.0 : sigma;
+        for (int j = 0; j < k->n; j++) c[j] = (t < 2 ? sigma : 1.0) * k->c[j];
+        for (int i = 0; i < k->p; i++) b[i] = xs * k->b[i];
+        for (int i = 0; i < k->m; i++) h[i] = xs * k->h[i];
+        const tscvx_solve_status st = solve(&d, x, &info);
+        CHECK(st == TSCVX_SOLVED, "%s, %s x %g: status %d (%s)", name, t < 2 ? "c" : "b, h",
+              sigma, (int)st, tscvx_solve_status_message(st));
+        double err = 0.0, ref = 1.0;
+        for (int j = 0; j < k->n; j++) err = fmax(err, fabs(x[j] - xs * x1[j])), ref = fmax(ref, fabs(xs * x1[j]));
+        CHECK(st != TSCVX_SOLVED || err <= 1e-6 * ref, "%s, scale %g: x off by %g", name, sigma, err / ref);
+    }
+}
+
+static void test_no_false_certificate_when_scaled(void) {
+    static const scaled_case cone_only = {
+        3, 0, 9, 3, 1, {6}, {0, 0, 0, 0}, {0}, {0, 5, 7, 11},
+        {0, 1, 5, 6, 8, 0, 1, 0, 1, 2, 7}, {0},  {0},
+        {0.4951618319949431, 0.46478873676452725, 0.9537126427457258, 1.2264244461902316,
+         0.4018092464445234, 1.5953175346398967, 1.0, -1.4571115550435068,
+         -0.45821642402202123, 1.0, 0.15629217154375186},
+        {-1.988827577731574, -0.03912014821583365, 2.2018905107219675, 3.6622952898653427,
+         -0.7864615164354726, -0.9298534856220507, 3.603289636772952, 0.4129822493991595,
+         0.8599864149149063},
+        {-2.621278455742447, -3.531719440525511, 1.1485190439085087}};
+    static const scaled_case with_equalities = {
+        4, 2, 9, 5, 1, {4}, {0, 1, 2, 4, 4}, {0, 1, 0, 1}, {0, 3, 4, 8, 11},
+        {0, 3, 6, 1, 0, 3, 4, 6, 1, 2, 4},
+        {1.0, 1.0, 0.4396555843900086, 1.0099104023039271},
+        {0.08202922453355416, 1.4470663646722621},
+        {-0.1345429617997881, 1.3368020199455426, -0.5942822162789441, 0.2591329870878727, 1.0,
+         0.8688277815327541, 0.42245486355636785, 1.9912420081704167, 1.0,
+         0.14911858985757978, 0.11859072351359756},
+        {1.3623672043180712, -0.1312474072295628, 0.42928977660983525, 0.4078144182795981,
+         2.0723706208280186, 2.5386402456492365, 2.602352594790859, 0.2543154262231661,
+         0.4535170169701874},
+        {-3.6566623345038276, -0.16553482317817678, -1.4933010887367797, -1.2776060978401982}};
+    check_scaled(&cone_only, "cones only");
+    check_scaled(&with_equalities, "with equalities");
+}
+
 static tscvx_setup_status try_setup(const tscvx_data *d) {
     tscvx_settings st;
     tscvx_default_settings(&st);
@@ -805,6 +867,7 @@ int main(void) {
     test_soc();
     test_qp();
     test_infeasible();
+    test_no_false_certificate_when_scaled();
     test_bad_input();
     test_update();
     test_stale_workspace();
