@@ -7,6 +7,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from guidance.errors import InputError
+from guidance.guess import given_guess
 from guidance.params import Scenario, SCvxSettings
 from guidance.scenario import checked
 from guidance.scvx import SCvxResult, SCvxSolver, format_log
@@ -27,6 +28,7 @@ def solve(
     models_dir: Path | str = MODELS_DIR,
     log: Callable[[str], None] | None = None,
     eta_init: float | None = None,
+    guess: tuple[object, object, object] | None = None,
 ) -> SCvxResult:
     """Solve ``scenario`` (default: the default landing) by ``method`` on ``backend``:
 
@@ -38,6 +40,9 @@ def solve(
     ``method="tscvx"`` starts from the shipped networks' warm start and masks (``models_dir``).
     ``eta_init`` overrides the initial trust radius; without it SCvx starts from
     settings.eta_init and T-SCvx (from the networks' warm start) from Table 1's reduced radius.
+    ``guess`` (x, u, t_f), a trajectory of the scenario's N such as an earlier solve's, starts
+    SCvx instead of the cubic guess, projected onto the scenario's boundary conditions and
+    convex path constraints (``guess.given_guess``): re-planning from a neighbouring landing.
     ``log`` receives one line per subproblem. An infeasible landing is a result (its
     ``status`` and ``reason`` say so); bad input raises InputError.
     """
@@ -45,8 +50,13 @@ def solve(
         raise InputError(f"method {method!r}: use one of {', '.join(METHODS)}")
     if backend not in BACKENDS:
         raise InputError(f"backend {backend!r}: use one of {', '.join(BACKENDS)}")
+    if guess is not None and method == "tscvx":
+        raise InputError("guess: T-SCvx starts from its solution network; give a guess to SCvx")
+    if guess is not None and (not isinstance(guess, tuple | list) or len(guess) != 3):
+        raise InputError("guess: give (x, u, t_f)")
     # checked as a scenario file is: a Scenario built in Python skips no rule
     scenario = checked(Scenario() if scenario is None else scenario)
+    start = None if guess is None else given_guess(scenario, *guess)
     settings = SCvxSettings() if settings is None else settings
     models_dir = Path(models_dir)
     if method == "tscvx":
@@ -65,7 +75,7 @@ def solve(
                 scenario, settings, models_dir=models_dir, eta_init=settings.eta_init
             )
         else:
-            result = solve_c(scenario, settings)
+            result = solve_c(scenario, settings, guess=start)
         if log:
             for line in format_log(result.history):
                 log(line)
@@ -86,4 +96,4 @@ def solve(
             log,
             eta_init=settings.eta_init,
         )
-    return SCvxSolver(scenario, settings, backend=conic, log=log).solve()
+    return SCvxSolver(scenario, settings, backend=conic, log=log).solve(guess=start)

@@ -99,11 +99,21 @@ def _check_plot_format(path: str) -> None:
 
 
 def cmd_solve(args: argparse.Namespace) -> int:
-    from guidance.trajectory_io import write_trajectory
+    from guidance.trajectory_io import read_trajectory, write_trajectory
+    from guidance.verify import checked_trajectory
 
     scenario = _load(args.scenario, args.pin_final_attitude)
     if args.trust_update is not None and args.method != "tscvx":
         raise InputError("--trust-update: applies to --method tscvx only (SCvx has no masks)")
+    if args.guess and args.method != "scvx":
+        raise InputError("--guess: applies to --method scvx only (T-SCvx starts from its network)")
+    guess = None
+    if args.guess:  # checked here to name the file; solve projects it
+        data = read_trajectory(args.guess)
+        try:
+            guess = checked_trajectory(data["x"], data["u"], data["t_f"], scenario.params)
+        except InputError as exc:
+            raise InputError(f"--guess {args.guess}: {exc}") from None
     if args.plot:
         _check_plot_format(args.plot)
     for flag, path in (("--out", args.out), ("--plot", args.plot)):
@@ -121,8 +131,17 @@ def cmd_solve(args: argparse.Namespace) -> int:
         f"method: {args.method}, backend: {args.backend}, N = {scenario.params.N}, "
         f"subproblem objective: {objective}"
     )
+    if args.guess:
+        print(f"initial guess: {args.guess} (projected onto the boundary and path constraints)")
     result = solve(
-        scenario, args.method, args.backend, settings, Path(args.models), print, args.eta_init
+        scenario,
+        args.method,
+        args.backend,
+        settings,
+        Path(args.models),
+        print,
+        args.eta_init,
+        guess,
     )
     p = scenario.params
     print()
@@ -143,10 +162,12 @@ def cmd_solve(args: argparse.Namespace) -> int:
         f"(conic solves {sum(sub_times):.3f} s, median {1e3 * np.median(sub_times):.1f} ms)"
     )
     if args.out:
-        networks = None
+        inputs = None  # the files the solve started from, in the file's provenance
         if args.method == "tscvx":  # the files the networks were read from
-            networks = _network_files(Path(args.models), args.backend)
-        write_trajectory(args.out, result, p, scenario, args.method, args.backend, networks)
+            inputs = _network_files(Path(args.models), args.backend)
+        if args.guess:
+            inputs = {"initial_guess": Path(args.guess)}
+        write_trajectory(args.out, result, p, scenario, args.method, args.backend, inputs)
         print(f"wrote {args.out}")
     if args.plot:
         from guidance.plots import landing_figure
@@ -282,6 +303,13 @@ def build_parser() -> argparse.ArgumentParser:
         default=None,
         help=f"initial trust radius (default: Table 1's, {SCvxSettings().eta_init:g} for scvx, "
         f"{REDUCED_ETA_INIT:g} for tscvx from the networks' warm start)",
+    )
+    s.add_argument(
+        "--guess",
+        metavar="TRAJECTORY",
+        help="start SCvx from this trajectory file's x, u and t_f (same N; e.g. an earlier "
+        "solve of a neighbouring landing: re-planning) instead of the cubic guess, projected "
+        "onto the scenario's boundary conditions and convex path constraints",
     )
     s.add_argument(
         "--pin-final-attitude",

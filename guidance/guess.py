@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from guidance.errors import InputError
 from guidance.model import dcm_bi_numpy
 from guidance.params import IM, IQ, IR, IV, IW, NX, Scenario
 
@@ -210,6 +211,23 @@ def initial_guess(scenario: Scenario) -> tuple[np.ndarray, np.ndarray, float]:
 def is_finite_guess(x: np.ndarray, u: np.ndarray, t_f: float) -> bool:
     """No NaN or inf in a guess (x, u, t_f), as pdg_solve checks a given one."""
     return bool(np.isfinite(x).all() and np.isfinite(u).all() and np.isfinite(t_f))
+
+
+def given_guess(
+    scenario: Scenario, x: object, u: object, t_f: object
+) -> tuple[np.ndarray, np.ndarray, float]:
+    """A guess from outside (a trajectory: a file's, or the caller's, of the scenario's N) as
+    SCvx starts from it: checked as a trajectory file's arrays are (shapes, real and finite
+    values, t_f in range: ``verify.checked_trajectory``), then projected as the solution
+    network's prediction is (``project_guess``), so that a trajectory of a neighbouring landing
+    starts this one (re-planning). Bad input raises InputError."""
+    from guidance.verify import checked_trajectory  # verify needs nothing from here
+
+    try:
+        x, u, t_f = checked_trajectory(x, u, t_f, scenario.params)
+    except InputError as exc:
+        raise InputError(f"guess: {exc}") from None
+    return project_guess(scenario, x, u, t_f)
 
 
 def project_guess(
