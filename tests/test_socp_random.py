@@ -175,27 +175,33 @@ def test_badly_scaled(seed: int) -> None:
 
 
 @pytest.mark.parametrize("seed", range(20))
-@pytest.mark.parametrize(("part", "scale"), [("q", 1e8), ("q", 1e10), ("b", 1e8), ("b", 1e10)])
+@pytest.mark.parametrize(
+    ("part", "scale"), [("q", 1e8), ("q", 1e10), ("b", 1e8), ("b", 1e10), ("A", 1e-10)]
+)
 def test_no_certificate_for_a_feasible_problem_however_scaled(
     seed: int, part: str, scale: float
 ) -> None:
-    """A strictly feasible primal and dual (random_feasible) stay so with the objective, or
-    the right-hand side, scaled by 1e8 or 1e10: any certificate is false. Normalized to a unit
-    objective, a direction of such a problem has a tiny residual whatever it is; before the
-    certificate tests weighed the residual against the data, 245 of 1,200 such solves (seeds
-    0-299, 1e6 and 1e8) ended in a false certificate. (Clarabel, at these scales, claims some
-    itself, so it is no reference here.) Where the runtime says solved, its optimal value is
-    the unscaled problem's, scaled (q and P scaled; or b, without P)."""
+    """A strictly feasible primal and dual (random_feasible) stay so with the objective or the
+    right-hand side scaled by 1e8 or 1e10, or the constraints (A and b) by 1e-10: any
+    certificate is false. Normalized to a unit objective, a direction of such a problem has a
+    tiny residual whatever it is; before the certificate tests weighed the residual against the
+    data, 245 of 1,200 such solves (seeds 0-299, q or b by 1e6 and 1e8) and 9 of 40 (A by
+    1e-10) ended in a false certificate. (Clarabel, at these scales, claims some itself, so it
+    is no reference here.) Where the runtime says solved, its optimal value is the unscaled
+    problem's, scaled (q and P scaled; b, without P; A and b): to 1e-5, as residuals of
+    1e-13 are what a tolerance of 1e-9 (1 + |b|) leaves of constraints of size 1e-10."""
     base = random_feasible(seed)
     P = base.P * scale if base.P is not None and part == "q" else base.P
     q = base.q * scale if part == "q" else base.q
-    b = base.b * scale if part == "b" else base.b
-    sol = csocp.solve(ConicProblem(P, q, base.A, b, base.cones))
+    A = base.A * scale if part == "A" else base.A
+    b = base.b * scale if part in ("b", "A") else base.b
+    sol = csocp.solve(ConicProblem(P, q, A, b, base.cones))
     assert sol.status not in ("primal_infeasible", "dual_infeasible"), sol.status
-    if sol.status == "solved" and (part == "q" or base.P is None):
+    if sol.status == "solved" and (part != "b" or base.P is None):
         ref = solve_clarabel(base)  # a few unscaled ones end solved_inaccurate, to 1e-9
         assert ref.status in ("solved", "solved_inaccurate")
-        assert sol.obj / scale == pytest.approx(ref.obj, rel=1e-6, abs=1e-6)
+        value = sol.obj / scale if part in ("q", "b") else sol.obj
+        assert value == pytest.approx(ref.obj, rel=1e-5, abs=1e-6)
 
 
 @pytest.mark.parametrize(("c", "lo"), [(1e-9, 1e9), (1e-6, 1e8), (1e-12, 1e12)])

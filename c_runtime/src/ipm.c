@@ -113,16 +113,16 @@ static int converged(const tscvx_workspace *ws, const measures *r, int reduced) 
 }
 
 /* A certificate is judged against the data it is made of. Normalized to a unit objective
- * (c'x = -1, say), a direction's residual |Ax| is small whenever c is large, whether or not the
- * direction lies in the recession cone: with costs of 1e8 (a penalty weight) directions whose
- * residual was as large as themselves passed, on feasible, bounded problems. So the residual
- * relative to the constraint data, |Ax| / |A, G|, is held against the descent relative to the
- * objective's data, -c'x / |c| (for the primal certificate, -(b'y + h'z) / |b, h|): the plain
- * test times this factor. It never loosens the plain test; a problem whose numbers are at most
- * 1, or whose objective is no larger than its constraints, sees no change. */
+ * (c'x = -1, say), a direction's residual |Ax| is small whenever c is large against A, whether
+ * or not the direction lies in the recession cone: with costs of 1e8 (a penalty weight), or
+ * constraint rows of 1e-10, directions whose residual was as large as themselves passed, on
+ * feasible, bounded problems. So the residual relative to the constraint data, |Ax| / |A, G|,
+ * is held against the descent relative to the objective's data, -c'x / |c| (for the primal
+ * certificate, -(b'y + h'z) / |b, h|): the plain test times this factor. It never loosens the
+ * plain test; a problem whose objective is no larger than its constraints sees no change. */
 static tscvx_float certificate_factor(const tscvx_workspace *ws, tscvx_float objective_norm) {
-    const tscvx_float constraints = fmax(1.0, fmax(ws->norm_A, ws->norm_G));
-    return fmin(1.0, constraints / fmax(1.0, objective_norm));
+    const tscvx_float constraints = fmax(ws->norm_A, ws->norm_G);
+    return objective_norm > constraints ? constraints / objective_norm : 1.0;
 }
 
 /* Primal infeasibility: |A'y + G'z| <= tol (-(b'y + h'z)) f, f = certificate_factor, original
