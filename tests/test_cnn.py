@@ -166,14 +166,25 @@ def test_corrupt_or_mismatched_blob_is_refused_with_the_message(blobs: dict[str,
         "bad_dimensions": "dimensions",
         "bad_weights": "NaN/inf",
     }
+    # and what tscvx_nn_check_blob says of the field at fault
+    fields = {
+        "bad_magic": "the first 8 bytes are not",
+        "bad_version": "format 1 with a 128-byte header",
+        "truncated": f"n_values = {n_values} asks for 128 + 8 x {n_values}",
+        "bad_checksum": "CRC-32 of the blob is",
+        "bad_dimensions": "d_in = 17, d_out = 351 do not fit a constraint network of N = 50",
+        "bad_weights": f"value 1000 of {n_values} is NaN or infinite",
+    }
     for status, blob in cases.items():
         with pytest.raises(FlightNetError, match=messages[status]) as info:
             FlightNet(blob)
         assert info.value.status == status
+        assert fields[status] in str(info.value)
     assert n_values > 1000
     # heads that do not divide d_model
-    with pytest.raises(FlightNetError, match="bad_dimensions"):
+    with pytest.raises(FlightNetError, match="bad_dimensions") as info:
         FlightNet(_edit(good, 36, "<I", 3))
+    assert "d_model = 256 is not a multiple of n_heads = 3" in str(info.value)
     # a reserved byte set: a later format's field this library does not know
     with pytest.raises(FlightNetError, match="format version"):
         FlightNet(_edit(good, 100, "<B", 1))

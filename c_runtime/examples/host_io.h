@@ -49,7 +49,12 @@ static inline int load_net(const char *path, unsigned char **blob, size_t *len, 
                     : TSCVX_NN_ARENA_TOO_SMALL;
     }
     if (st != TSCVX_NN_OK) {
-        fprintf(stderr, "%s: %s\n", path, tscvx_nn_status_message(st));
+        char why[TSCVX_NN_MESSAGE_LEN] = "";
+        if (tscvx_nn_check_blob(*blob, *len, why) == st) { /* the blob itself: say where */
+            fprintf(stderr, "%s: %s (%s)\n", path, tscvx_nn_status_message(st), why);
+        } else {
+            fprintf(stderr, "%s: %s\n", path, tscvx_nn_status_message(st));
+        }
         return 1;
     }
     return 0;

@@ -126,6 +126,13 @@ typedef struct tscvx_nn tscvx_nn; /* opaque, lives in the arena */
 
 const char *tscvx_nn_status_message(tscvx_nn_status status);
 
+/* Validates `blob` (len bytes) as tscvx_nn_init does and, when `message` is not NULL, writes
+ * into it (TSCVX_NN_MESSAGE_LEN bytes) what is wrong, naming the field and its value
+ * ("d_model = 300 is not a multiple of n_heads = 7"), or "ok". For a refused blob's report;
+ * the status is the one tscvx_nn_arena_size and tscvx_nn_init return. */
+#define TSCVX_NN_MESSAGE_LEN 160
+tscvx_nn_status tscvx_nn_check_blob(const void *blob, size_t len, char *message);
+
 /* Validates `blob` (len bytes) and writes the arena size it needs into *bytes. */
 tscvx_nn_status tscvx_nn_arena_size(const void *blob, size_t len, unsigned flags, size_t *bytes);
 

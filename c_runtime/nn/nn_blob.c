@@ -8,6 +8,8 @@
  */
 #include <limits.h>
 #include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
 #include <string.h>
 
 #include "nn_internal.h"
@@ -144,27 +146,97 @@ static int f64_bits_positive(uint64_t u)
     return !(u >> 63) && (u & 0x7FFFFFFFFFFFFFFFull) != 0;
 }
 
-tscvx_nn_status nn_parse(const void *blob, size_t len, nn_header *hd)
+/* Writes what is wrong into why (NN_WHY_LEN bytes, may be NULL) and returns the status. */
+static tscvx_nn_status refuse(char *why, tscvx_nn_status st, const char *fmt, ...)
+{
+    va_list ap;
+    if (why) {
+        va_start(ap, fmt);
+        vsnprintf(why, TSCVX_NN_MESSAGE_LEN, fmt, ap);
+        va_end(ap);
+    }
+    return st;
+}
+
+/* The header's dimensions, each with its range: the first one outside is named. */
+static tscvx_nn_status check_dimensions(const nn_header *hd, char *why)
+{
+    const struct {
+        const char *name;
+        uint32_t value, lo, hi;
+    } dims[] = {
+        {"d_in", hd->d_in, 1, TSCVX_NN_MAX_DIM},
+        {"d_out", hd->d_out, 1, TSCVX_NN_MAX_DIM},
+        {"d_model", hd->d_model, 1, TSCVX_NN_MAX_DIM},
+        {"d_ff", hd->d_ff, 1, TSCVX_NN_MAX_DIM},
+        {"n_heads", hd->n_heads, 1, TSCVX_NN_MAX_HEADS},
+        {"n_layers", hd->n_layers, 0, TSCVX_NN_MAX_LAYERS},
+        {"n_probes", hd->n_probes, 0, TSCVX_NN_MAX_PROBES},
+        {"N", hd->N, 1, 1u << 20},
+        {"n_params", hd->n_params, 0, TSCVX_NN_MAX_PARAMS},
+    };
+    const uint32_t seq_len = hd->tokens == TSCVX_NN_TOKENS_SINGLE ? 1u : hd->d_in;
+    size_t i;
+    if (hd->kind != TSCVX_NN_KIND_CONSTRAINT && hd->kind != TSCVX_NN_KIND_SOLUTION) {
+        return refuse(why, TSCVX_NN_BAD_DIMENSIONS,
+                      "kind %u is neither 1 (constraint) nor 2 (solution)", hd->kind);
+    }
+    if (hd->tokens != TSCVX_NN_TOKENS_SINGLE && hd->tokens != TSCVX_NN_TOKENS_SCALAR) {
+        return refuse(why, TSCVX_NN_BAD_DIMENSIONS,
+                      "tokens %u is neither 0 (single) nor 1 (scalar)", hd->tokens);
+    }
+    for (i = 0; i < sizeof dims / sizeof dims[0]; ++i) {
+        if (!in_range(dims[i].value, dims[i].lo, dims[i].hi)) {
+            return refuse(why, TSCVX_NN_BAD_DIMENSIONS, "%s = %u is outside %u..%u",
+                          dims[i].name, dims[i].value, dims[i].lo, dims[i].hi);
+        }
+    }
+    if (!sizes_fit_kind(hd)) {
+        return refuse(why, TSCVX_NN_BAD_DIMENSIONS,
+                      "d_in = %u, d_out = %u do not fit a %s network of N = %u", hd->d_in,
+                      hd->d_out, hd->kind == TSCVX_NN_KIND_CONSTRAINT ? "constraint" : "solution",
+                      hd->N);
+    }
+    if (hd->d_model % hd->n_heads != 0) {
+        return refuse(why, TSCVX_NN_BAD_DIMENSIONS, "d_model = %u is not a multiple of n_heads = %u",
+                      hd->d_model, hd->n_heads);
+    }
+    if (hd->seq_len != seq_len) {
+        return refuse(why, TSCVX_NN_BAD_DIMENSIONS, "seq_len = %u, its token mode gives %u",
+                      hd->seq_len, seq_len);
+    }
+    if ((uint64_t)hd->seq_len * 3u * hd->d_model > (uint64_t)INT_MAX) { /* int indices */
+        return refuse(why, TSCVX_NN_BAD_DIMENSIONS, "seq_len x 3 d_model exceeds INT_MAX");
+    }
+    return TSCVX_NN_OK;
+}
+
+tscvx_nn_status nn_parse(const void *blob, size_t len, nn_header *hd, char *why)
 {
     const unsigned char *p = (const unsigned char *)blob;
     const unsigned char *w;
     size_t n_weights, n_probe_vals, n_values, i;
     uint32_t crc;
+    tscvx_nn_status st;
 
     if (!blob || !hd) {
-        return TSCVX_NN_NULL_ARGUMENT;
+        return refuse(why, TSCVX_NN_NULL_ARGUMENT, "blob is NULL");
     }
     if (len < 8 || memcmp(p, NN_MAGIC, 8) != 0) {
-        return TSCVX_NN_BAD_MAGIC;
+        return refuse(why, TSCVX_NN_BAD_MAGIC, "the first 8 bytes are not \"TSCVXNN\\0\"");
     }
     if (len < TSCVX_NN_HEADER_BYTES) {
-        return TSCVX_NN_TRUNCATED;
+        return refuse(why, TSCVX_NN_TRUNCATED, "%zu bytes, shorter than the %u-byte header", len,
+                      TSCVX_NN_HEADER_BYTES);
     }
     memset(hd, 0, sizeof *hd);
     hd->version = rd_u32(p + 8);
     hd->header_bytes = rd_u32(p + 12);
     if (hd->version != TSCVX_NN_FORMAT_VERSION || hd->header_bytes != TSCVX_NN_HEADER_BYTES) {
-        return TSCVX_NN_BAD_VERSION;
+        return refuse(why, TSCVX_NN_BAD_VERSION,
+                      "format %u with a %u-byte header; this library reads format %u, %u bytes",
+                      hd->version, hd->header_bytes, TSCVX_NN_FORMAT_VERSION,
+                      TSCVX_NN_HEADER_BYTES);
     }
     hd->kind = rd_u32(p + 16);
     hd->tokens = rd_u32(p + 20);
@@ -186,42 +258,45 @@ tscvx_nn_status nn_parse(const void *blob, size_t len, nn_header *hd)
     /* length first (a truncated blob says so, whatever its other fields), then the CRC */
     if (hd->n_values > ((uint64_t)(size_t)-1 - TSCVX_NN_HEADER_BYTES) / 8u
         || (uint64_t)len != TSCVX_NN_HEADER_BYTES + 8u * hd->n_values) {
-        return TSCVX_NN_TRUNCATED;
+        return refuse(why, TSCVX_NN_TRUNCATED, "%zu bytes; n_values = %llu asks for %u + 8 x %llu",
+                      len, (unsigned long long)hd->n_values, TSCVX_NN_HEADER_BYTES,
+                      (unsigned long long)hd->n_values);
     }
     crc = nn_crc32(p, NN_CRC_OFFSET, 0);
     crc = nn_crc32(p + TSCVX_NN_HEADER_BYTES, len - TSCVX_NN_HEADER_BYTES, crc);
     if (crc != rd_u32(p + NN_CRC_OFFSET)) {
-        return TSCVX_NN_BAD_CHECKSUM;
+        return refuse(why, TSCVX_NN_BAD_CHECKSUM, "CRC-32 of the blob is %08x, its header says %08x",
+                      (unsigned)crc, (unsigned)rd_u32(p + NN_CRC_OFFSET));
     }
     for (i = 96; i < NN_CRC_OFFSET; ++i) { /* reserved: a later format's fields */
         if (p[i] != 0) {
-            return TSCVX_NN_BAD_VERSION;
+            return refuse(why, TSCVX_NN_BAD_VERSION,
+                          "reserved header byte %zu is %u: a later format's field", i,
+                          (unsigned)p[i]);
         }
     }
 
-    /* dimensions */
-    if ((hd->kind != TSCVX_NN_KIND_CONSTRAINT && hd->kind != TSCVX_NN_KIND_SOLUTION)
-        || (hd->tokens != TSCVX_NN_TOKENS_SINGLE && hd->tokens != TSCVX_NN_TOKENS_SCALAR)
-        || !in_range(hd->d_in, 1, TSCVX_NN_MAX_DIM) || !in_range(hd->d_out, 1, TSCVX_NN_MAX_DIM)
-        || !in_range(hd->d_model, 1, TSCVX_NN_MAX_DIM) || !in_range(hd->d_ff, 1, TSCVX_NN_MAX_DIM)
-        || !in_range(hd->n_heads, 1, TSCVX_NN_MAX_HEADS)
-        || !in_range(hd->n_layers, 0, TSCVX_NN_MAX_LAYERS)
-        || !in_range(hd->n_probes, 0, TSCVX_NN_MAX_PROBES) || !in_range(hd->N, 1, 1u << 20)
-        || !in_range(hd->n_params, 0, TSCVX_NN_MAX_PARAMS)
-        || !sizes_fit_kind(hd) || hd->d_model % hd->n_heads != 0
-        || hd->seq_len != (hd->tokens == TSCVX_NN_TOKENS_SINGLE ? 1u : hd->d_in)
-        || (uint64_t)hd->seq_len * 3u * hd->d_model > (uint64_t)INT_MAX) { /* int indices */
-        return TSCVX_NN_BAD_DIMENSIONS;
+    st = check_dimensions(hd, why);
+    if (st != TSCVX_NN_OK) {
+        return st;
     }
     n_weights = nn_count_weights(hd);
     n_probe_vals = (size_t)hd->n_probes * ((size_t)hd->d_in + hd->d_out);
-    if (n_weights == 0 || hd->n_weights != (uint64_t)n_weights
-        || hd->n_values != (uint64_t)n_weights + n_probe_vals + hd->n_params) {
-        return TSCVX_NN_BAD_DIMENSIONS;
+    if (n_weights == 0 || hd->n_weights != (uint64_t)n_weights) {
+        return refuse(why, TSCVX_NN_BAD_DIMENSIONS, "n_weights = %llu, the dimensions give %zu",
+                      (unsigned long long)hd->n_weights, n_weights);
     }
-    if (!(hd->ln_eps > 0.0 && hd->ln_eps < 1.0)
-        || !(hd->threshold > 0.0 && hd->threshold < 1.0)) {
-        return TSCVX_NN_BAD_WEIGHTS;
+    if (hd->n_values != (uint64_t)n_weights + n_probe_vals + hd->n_params) {
+        return refuse(why, TSCVX_NN_BAD_DIMENSIONS,
+                      "n_values = %llu, weights, probes and parameters give %zu",
+                      (unsigned long long)hd->n_values, n_weights + n_probe_vals + hd->n_params);
+    }
+    if (!(hd->ln_eps > 0.0 && hd->ln_eps < 1.0)) {
+        return refuse(why, TSCVX_NN_BAD_WEIGHTS, "ln_eps = %g is outside (0, 1)", hd->ln_eps);
+    }
+    if (!(hd->threshold > 0.0 && hd->threshold < 1.0)) {
+        return refuse(why, TSCVX_NN_BAD_WEIGHTS, "threshold = %g is outside (0, 1)",
+                      hd->threshold);
     }
 
     /* values: all finite; in_scale and out_std positive */
@@ -229,20 +304,30 @@ tscvx_nn_status nn_parse(const void *blob, size_t len, nn_header *hd)
     w = p + TSCVX_NN_HEADER_BYTES;
     for (i = 0; i < n_values; ++i) {
         if (!f64_bits_finite(rd_u64(w + 8 * i))) {
-            return TSCVX_NN_BAD_WEIGHTS;
+            return refuse(why, TSCVX_NN_BAD_WEIGHTS, "value %zu of %zu is NaN or infinite", i,
+                          n_values);
         }
     }
     for (i = 0; i < hd->d_in; ++i) { /* in_scale */
         if (!f64_bits_positive(rd_u64(w + 8 * (hd->d_in + i)))) {
-            return TSCVX_NN_BAD_WEIGHTS;
+            return refuse(why, TSCVX_NN_BAD_WEIGHTS, "in_scale[%zu] = %g is not positive", i,
+                          rd_f64(w + 8 * (hd->d_in + i)));
         }
     }
     for (i = 0; i < hd->d_out; ++i) { /* out_std */
-        if (!f64_bits_positive(rd_u64(w + 8 * (2 * (size_t)hd->d_in + hd->d_out + i)))) {
-            return TSCVX_NN_BAD_WEIGHTS;
+        const size_t k = 2 * (size_t)hd->d_in + hd->d_out + i;
+        if (!f64_bits_positive(rd_u64(w + 8 * k))) {
+            return refuse(why, TSCVX_NN_BAD_WEIGHTS, "out_std[%zu] = %g is not positive", i,
+                          rd_f64(w + 8 * k));
         }
     }
-    return TSCVX_NN_OK;
+    return refuse(why, TSCVX_NN_OK, "ok");
+}
+
+tscvx_nn_status tscvx_nn_check_blob(const void *blob, size_t len, char *message)
+{
+    nn_header hd;
+    return nn_parse(blob, len, &hd, message);
 }
 
 /* ---- arena layout ------------------------------------------------------------------------ */
@@ -286,7 +371,7 @@ tscvx_nn_status tscvx_nn_arena_size(const void *blob, size_t len, unsigned flags
     if (flags & ~TSCVX_NN_COPY_WEIGHTS) {
         return TSCVX_NN_BAD_FLAGS;
     }
-    st = nn_parse(blob, len, &hd);
+    st = nn_parse(blob, len, &hd, NULL);
     if (st != TSCVX_NN_OK) {
         return st;
     }
@@ -325,7 +410,7 @@ tscvx_nn_status tscvx_nn_init(tscvx_nn **out, void *arena, size_t arena_bytes, c
     if (flags & ~TSCVX_NN_COPY_WEIGHTS) {
         return TSCVX_NN_BAD_FLAGS;
     }
-    st = nn_parse(blob, len, &hd);
+    st = nn_parse(blob, len, &hd, NULL);
     if (st != TSCVX_NN_OK) {
         return st;
     }

@@ -103,8 +103,9 @@ int nn_live(const tscvx_nn *net);
 uint64_t nn_layout_sum(const tscvx_nn *net);
 
 /* nn_blob.c: decodes and validates a blob (magic, version, sizes, CRC-32, input and output
- * sizes against the kind and N, finite weights, positive scales). */
-tscvx_nn_status nn_parse(const void *blob, size_t len, nn_header *hdr);
+ * sizes against the kind and N, finite weights, positive scales); `why` (NULL, or
+ * TSCVX_NN_MESSAGE_LEN bytes) receives what is wrong, naming the field and its value. */
+tscvx_nn_status nn_parse(const void *blob, size_t len, nn_header *hdr, char *why);
 /* Float32 values of the network (normalization included) for the given dimensions, or 0
  * when a size overflows. */
 size_t nn_count_weights(const nn_header *hdr);

@@ -52,6 +52,7 @@ TOKENS = {"single": 0, "scalar": 1}
 _HEADER = struct.Struct("<8sIIII8IIIddQQ")  # up to the reserved bytes (96 bytes)
 PROBE_RTOL = 1e-4
 COPY_WEIGHTS = 1
+MESSAGE_LEN = 160  # TSCVX_NN_MESSAGE_LEN (tscvx_nn.h)
 
 # tscvx_nn_status, in the order of the C enum
 STATUS_NAMES = (
@@ -352,13 +353,14 @@ def library() -> ctypes.CDLL:
     vp, sz = ctypes.c_void_p, ctypes.c_size_t
     lib.tscvx_nn_status_message.restype = ctypes.c_char_p
     lib.tscvx_nn_status_message.argtypes = [ctypes.c_int]
+    lib.tscvx_nn_check_blob.argtypes = [vp, sz, ctypes.c_char_p]
     lib.tscvx_nn_arena_size.argtypes = [vp, sz, ctypes.c_uint, ctypes.POINTER(sz)]
     lib.tscvx_nn_init.argtypes = [ctypes.POINTER(vp), vp, sz, vp, sz, ctypes.c_uint]
     lib.tscvx_nn_run.argtypes = [vp, _dp, ctypes.c_int, _dp, ctypes.c_int]
     lib.tscvx_nn_tight_mask.argtypes = [vp, _dp, ctypes.c_int, ctypes.c_char_p]
     lib.tscvx_nn_get_info.argtypes = [vp, ctypes.POINTER(NetInfo)]
     lib.tscvx_nn_self_test.argtypes = [vp, _dp]
-    for f in ("arena_size", "init", "run", "tight_mask", "get_info", "self_test"):
+    for f in ("check_blob", "arena_size", "init", "run", "tight_mask", "get_info", "self_test"):
         getattr(lib, f"tscvx_nn_{f}").restype = ctypes.c_int
     return lib
 
@@ -381,6 +383,11 @@ class FlightNet:
             blob = Path(blob).read_bytes()
         self._blob = ctypes.create_string_buffer(bytes(blob), len(blob))  # malloc: aligned
         flags = COPY_WEIGHTS if copy_weights else 0
+        why = ctypes.create_string_buffer(MESSAGE_LEN)
+        status = lib.tscvx_nn_check_blob(self._blob, len(blob), why)
+        if status != 0:  # the blob itself is refused: the field at fault and its value
+            message = f"{status_message(status)} ({why.value.decode()})"
+            raise FlightNetError(status, message, "tscvx_nn_check_blob")
         size = ctypes.c_size_t()
         _check(lib.tscvx_nn_arena_size(self._blob, len(blob), flags, ctypes.byref(size)),
                "tscvx_nn_arena_size")  # fmt: skip

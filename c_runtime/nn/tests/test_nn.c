@@ -95,12 +95,19 @@ static unsigned char *dup_blob(const unsigned char *b, size_t len)
     return c;
 }
 
+/* The blob's own verdict, from tscvx_nn_check_blob, and the text it gives in last_why. */
+static char last_why[TSCVX_NN_MESSAGE_LEN];
+
 static tscvx_nn_status try_init(const unsigned char *blob, size_t len, unsigned flags)
 {
     size_t need = 0;
     void *arena;
     tscvx_nn *net = NULL;
     tscvx_nn_status st = tscvx_nn_arena_size(blob, len, flags, &need);
+    const tscvx_nn_status own = tscvx_nn_check_blob(blob, len, last_why);
+    /* what the blob alone decides, check_blob decides alike (flags and alignment aside) */
+    if (st != TSCVX_NN_BAD_FLAGS) CHECK(own == st || (own == TSCVX_NN_OK && st == TSCVX_NN_OK));
+    CHECK(strlen(last_why) > 1 && strlen(last_why) < TSCVX_NN_MESSAGE_LEN);
     if (st != TSCVX_NN_OK) return st;
     arena = malloc(need);
     st = tscvx_nn_init(&net, arena, need, blob, len, flags);
@@ -562,6 +569,36 @@ static void test_bad_blobs(void)
     wr_u64(b + 88, n_weights_of(&a) - 1);
     reseal(b, len);
     CHECK_ST(try_init(b, len, 0), TSCVX_NN_BAD_DIMENSIONS);
+    CHECK(strstr(last_why, "n_weights = ") != NULL);
+
+    /* tscvx_nn_check_blob names the field at fault and its value */
+#define WHY(off, val, text)                                       \
+    do {                                                          \
+        memcpy(b, good, len);                                     \
+        wr_u32(b + (off), (uint32_t)(val));                       \
+        reseal(b, len);                                           \
+        (void)try_init(b, len, 0);                                \
+        if (strstr(last_why, (text)) == NULL) {                   \
+            fprintf(stderr, "%s:%d: \"%s\" lacks \"%s\"\n", __FILE__, __LINE__, last_why, \
+                    (text));                                      \
+            ++failures;                                           \
+        }                                                         \
+    } while (0)
+    WHY(16, 3, "kind 3 is neither");
+    WHY(20, 2, "tokens 2 is neither");
+    WHY(36, 3, "d_model = 8 is not a multiple of n_heads = 3");
+    WHY(40, 1000, "n_layers = 1000 is outside 0..64");
+    WHY(44, 0x7FFFFFFF, "d_ff = 2147483647 is outside 1..65536");
+    WHY(48, 1, "seq_len = 1, its token mode gives 17");
+    WHY(52, 2, "do not fit a constraint network of N = 2");
+    WHY(40, 2, "n_weights = ");
+    WHY(8, 1, "format 1");
+    CHECK_ST(tscvx_nn_check_blob(good, len - 8, last_why), TSCVX_NN_TRUNCATED);
+    CHECK(strstr(last_why, "asks for") != NULL);
+    CHECK_ST(tscvx_nn_check_blob(good, len, last_why), TSCVX_NN_OK);
+    CHECK(strcmp(last_why, "ok") == 0);
+    CHECK_ST(tscvx_nn_check_blob(NULL, len, last_why), TSCVX_NN_NULL_ARGUMENT);
+    CHECK_ST(tscvx_nn_check_blob(good, len, NULL), TSCVX_NN_OK); /* no text wanted */
 
     /* values */
 #define BAD_VAL(off, val, want)                                    \
@@ -581,7 +618,14 @@ static void test_bad_blobs(void)
     BAD_VAL(64, 1.0, TSCVX_NN_BAD_WEIGHTS);                       /* epsilon < 1 */
     BAD_VAL(64, 0.5, TSCVX_NN_OK);
     BAD_VAL(72, 1.5, TSCVX_NN_BAD_WEIGHTS);                       /* threshold */
+    CHECK(strstr(last_why, "threshold = 1.5 is outside (0, 1)") != NULL);
     BAD_VAL(72, NAN, TSCVX_NN_BAD_WEIGHTS);
+    BAD_VAL(w0 + 8 * 40, NAN, TSCVX_NN_BAD_WEIGHTS);
+    CHECK(strstr(last_why, "value 40 of ") != NULL);
+    BAD_VAL(w0 + 8 * (a.d_in + 1), 0.0, TSCVX_NN_BAD_WEIGHTS);
+    CHECK(strstr(last_why, "in_scale[1] = 0 is not positive") != NULL);
+    BAD_VAL(w0 + 8 * (2 * a.d_in + a.d_out + 5), -1.0, TSCVX_NN_BAD_WEIGHTS);
+    CHECK(strstr(last_why, "out_std[5] = -1 is not positive") != NULL);
 
     /* alignment: in place needs 8 bytes; a copy does not */
     memcpy(big + 1, good, len);
