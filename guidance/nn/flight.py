@@ -383,14 +383,14 @@ class FlightNet:
             blob = Path(blob).read_bytes()
         self._blob = ctypes.create_string_buffer(bytes(blob), len(blob))  # malloc: aligned
         flags = COPY_WEIGHTS if copy_weights else 0
-        why = ctypes.create_string_buffer(MESSAGE_LEN)
-        status = lib.tscvx_nn_check_blob(self._blob, len(blob), why)
-        if status != 0:  # the blob itself is refused: the field at fault and its value
-            message = f"{status_message(status)} ({why.value.decode()})"
-            raise FlightNetError(status, message, "tscvx_nn_check_blob")
         size = ctypes.c_size_t()
-        _check(lib.tscvx_nn_arena_size(self._blob, len(blob), flags, ctypes.byref(size)),
-               "tscvx_nn_arena_size")  # fmt: skip
+        status = lib.tscvx_nn_arena_size(self._blob, len(blob), flags, ctypes.byref(size))
+        if status != 0:
+            message = status_message(status)
+            why = ctypes.create_string_buffer(MESSAGE_LEN)
+            if lib.tscvx_nn_check_blob(self._blob, len(blob), why) == status:  # the blob's fault
+                message += f" ({why.value.decode()})"  # the field at fault and its value
+            raise FlightNetError(status, message, "tscvx_nn_arena_size")
         self.arena_bytes = size.value
         self._arena = ctypes.create_string_buffer(size.value)
         self._net = ctypes.c_void_p()
