@@ -35,6 +35,16 @@ lib: nn-models
 # the card's C inference figures (guidance export) need the driver after a plain `make lib`
 lib: $(BUILD)/nn_budget_driver
 
+# The network tests again under AddressSanitizer + UBSan (part of `make ctest-asan`).
+ctest-asan-nn: lib
+	@mkdir -p $(BUILD)/ctest-asan
+	@$(CC) -std=c99 -g -O1 -fsanitize=address,undefined -fno-sanitize-recover=undefined \
+	  -Ic_runtime/include -Ic_runtime/nn -Ic_runtime/examples c_runtime/nn/tests/test_nn.c \
+	  $(NN_SRCS) -o $(BUILD)/ctest-asan/test_nn -lm
+	@echo "== test_nn (ASan/UBSan)"; $(BUILD)/ctest-asan/test_nn $(NN_MODELS)
+ctest-asan: ctest-asan-nn
+.PHONY: ctest-asan-nn
+
 ctest-nn: lib $(BUILD)/ctest/test_nn $(BUILD)/nn_budget_driver
 	@echo "== test_nn (valgrind)"
 	@$(VALGRIND) $(BUILD)/ctest/test_nn $(NN_MODELS)
