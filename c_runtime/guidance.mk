@@ -4,6 +4,7 @@
 #   $(BUILD)/libtscvx_gnc.so              the same + the SOCP runtime (for the Python bindings)
 #   $(BUILD)/pdg_example                  plain C example: static libraries + Debian deps only
 #   make ctest-gnc                        guidance C tests under valgrind + no-malloc check
+#   make ctest-asan-gnc                   the same tests under ASan/UBSan (in make ctest-asan)
 #   make budget-gnc                       RAD750 budget table (guidance/budget.py)
 
 GEN_DIR    := $(BUILD)/generated
@@ -68,8 +69,21 @@ ctest-gnc: lib $(addprefix $(BUILD)/ctest/,$(GNC_TESTS)) $(BUILD)/pdg_budget_dri
 	  && grep -q '^mode tscvx_masks$$' $(BUILD)/ctest/pdg_budget_driver_tscvx.out \
 	  || { cat $(BUILD)/ctest/pdg_budget_driver_tscvx.out; echo "heap allocation inside pdg_solve_tscvx"; exit 1; }
 
+# The guidance C tests again under AddressSanitizer + UBSan, from the sources (guidance,
+# generated model, networks, SOCP runtime; part of `make ctest-asan`).
+ctest-asan-gnc: lib
+	@mkdir -p $(BUILD)/ctest-asan
+	@set -e; for t in $(GNC_TESTS); do \
+	  $(CC) -std=c99 -g -O1 -fno-var-tracking-assignments -fsanitize=address,undefined \
+	    -fno-sanitize-recover=undefined -Ic_runtime/include -Ic_runtime/examples \
+	    -Ic_runtime/guidance -I$(GEN_DIR) -I/usr/include/suitesparse \
+	    c_runtime/guidance/tests/$$t.c $(GNC_SRCS) $(GEN_DIR)/tscvx_model.c $(NN_SRCS) \
+	    $(CRT_SRCS) -o $(BUILD)/ctest-asan/$$t -lamd -lldl -lsuitesparseconfig -lm; \
+	  echo "== $$t (ASan/UBSan)"; $(BUILD)/ctest-asan/$$t; done
+ctest-asan: ctest-asan-gnc
+
 budget-gnc: setup lib $(BUILD)/pdg_budget_driver
 	$(PY) -m guidance.budget
 
-.PHONY: gnc example ctest-gnc budget-gnc
+.PHONY: gnc example ctest-gnc ctest-asan-gnc budget-gnc
 ctest: ctest-gnc

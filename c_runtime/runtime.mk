@@ -3,8 +3,8 @@
 #   make ctest  -> C unit tests under valgrind (memcheck, --error-exitcode=1) and the
 #                  no-allocation-in-solve test (malloc interposition, run natively);
 #                  also builds build/ctest/bench_driver (callgrind driver of guidance.bench_socp)
-#   make ctest-asan -> the unit tests again under AddressSanitizer + UBSan (and the network
-#                  tests: nn.mk)
+#   make ctest-asan -> the unit tests again under AddressSanitizer + UBSan (with the network
+#                  and guidance tests: nn.mk, guidance.mk)
 
 CRT_DIR     := c_runtime
 CRT_SRCS    := $(wildcard $(CRT_DIR)/src/*.c)
