@@ -56,7 +56,7 @@ lint: setup
 	$(VENV)/bin/ruff check guidance tests codegen
 	$(VENV)/bin/ruff format --check guidance tests codegen
 
-test: setup lib ctest lint pytest
+test: setup lib ctest ctest-asan lint pytest
 
 # ---- user-facing jobs ----------------------------------------------------------------------
 # The default landing three ways: the ground reference, the flight library, and T-SCvx with
