@@ -16,6 +16,7 @@ import numpy as np
 from guidance.errors import InputError
 from guidance.model import dcm_bi_numpy
 from guidance.params import IM, IQ, IR, IV, IW, NX, Scenario
+from guidance.verify import checked_trajectory
 
 BLEND_FRACTION = 0.25
 TF_GRID = np.geomspace(0.5, 20.0, 60)
@@ -221,8 +222,6 @@ def given_guess(
     values, t_f in range: ``verify.checked_trajectory``), then projected as the solution
     network's prediction is (``project_guess``), so that a trajectory of a neighbouring landing
     starts this one (re-planning). Bad input raises InputError."""
-    from guidance.verify import checked_trajectory  # verify needs nothing from here
-
     try:
         x, u, t_f = checked_trajectory(x, u, t_f, scenario.params)
     except InputError as exc:
