@@ -16,6 +16,7 @@ from pathlib import Path
 
 import casadi as ca
 
+from guidance.atomic import write_text_atomic
 from guidance.model import (
     CONSTRAINT_PARAM_NAMES,
     N_AUG,
@@ -100,7 +101,7 @@ def generate(outdir: Path) -> list[Path]:
         target = outdir / name
         new = stamp + text
         if not target.exists() or target.read_text() != new:  # keep mtimes for make
-            target.write_text(new)
+            write_text_atomic(target, new)  # an interrupted make leaves no half file
         written.append(target)
         (tmp / name).unlink()
     tmp.rmdir()

@@ -18,6 +18,7 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from guidance.atomic import write_text_atomic
 from guidance.errors import InputError
 
 if TYPE_CHECKING:
@@ -288,13 +289,7 @@ def _claim_train_dir(out: Path, dataset: str, digest: str) -> None:
         return
     out.mkdir(parents=True, exist_ok=True)
     entry = {"path": str(dataset), "content_sha256": digest, "sha256": file_digest(dataset)}
-    _write_atomic(record, json.dumps(entry, indent=1))
-
-
-def _write_atomic(path: Path, text: str) -> None:
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(text)
-    os.replace(tmp, path)
+    write_text_atomic(record, json.dumps(entry, indent=1))
 
 
 def _train_config(args: argparse.Namespace, kind: str, size: str) -> TrainConfig:
@@ -356,7 +351,7 @@ def _train_one(
         "heldout_val_loss": _fold1_val(res.metrics["history"]),
         **{k: v for k, v in res.metrics.items() if k not in ("history", "test_bases")},
     }
-    _write_atomic(report, json.dumps(entry, indent=1, default=float))
+    write_text_atomic(report, json.dumps(entry, indent=1, default=float))
     state.unlink(missing_ok=True)
     print(summarize(res), flush=True)
 
@@ -451,7 +446,7 @@ def cmd_export(args: argparse.Namespace) -> int:
             "arch": res.arch.to_dict(),
         }
         print(f"wrote {path} ({name}, {path.stat().st_size:,} bytes): {ort}")
-    (models / "metrics.json").write_text(json.dumps(metrics, indent=1, default=float))
+    write_text_atomic(models / "metrics.json", json.dumps(metrics, indent=1, default=float))
     write_card(models)
     print(f"wrote {models / 'metrics.json'} and {models / 'MODEL_CARD.md'}")
     return 0
@@ -514,7 +509,7 @@ def cmd_baselines(args: argparse.Namespace) -> int:
     models = Path(args.models_dir)
     out = Path(args.json) if args.json else models / "baselines.json"
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(results_json({"dataset": ds.header, "results": res}))
+    write_text_atomic(out, results_json({"dataset": ds.header, "results": res}))
     print(f"wrote {out}")
     if not args.json and (models / "metrics.json").exists():
         write_card(models)
@@ -572,7 +567,7 @@ def cmd_mask_ceiling(args: argparse.Namespace) -> int:
     out = Path(args.json) if args.json else models / "mask_ceiling.json"
     run = dict(landings=args.landings, neighbours=args.neighbours, backend=backend, seed=args.seed)
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps(results_dict(scores, spacing, n_train, **run), indent=1))
+    write_text_atomic(out, json.dumps(results_dict(scores, spacing, n_train, **run), indent=1))
     print(f"wrote {out}")
     if not args.json and metrics.exists():
         write_card(models)

@@ -38,6 +38,7 @@ from typing import Any
 
 import numpy as np
 
+from guidance.atomic import atomic_write
 from guidance.errors import InputError
 from guidance.params import NC, NU, NX, InitialState, Params, Scenario, SCvxSettings
 from guidance.provenance import code_version, provenance, record_code_version
@@ -246,9 +247,8 @@ def sample_path(out_dir: Path, i: int) -> Path:
 
 def write_sample(out_dir: Path, rec: dict[str, Any]) -> None:
     path = sample_path(out_dir, rec["id"])
-    tmp = path.with_suffix(".tmp.npz")
-    np.savez(tmp, **{k: np.asarray(v) for k, v in rec.items()})
-    os.replace(tmp, path)
+    with atomic_write(path) as f:
+        np.savez(f, **{k: np.asarray(v) for k, v in rec.items()})
 
 
 UNREADABLE = (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile)
@@ -536,24 +536,23 @@ def pack(out_dir: str | Path, dataset_path: str | Path, n_base: int | None = Non
     }
     path = Path(dataset_path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + ".tmp.npz")
-    np.savez_compressed(
-        tmp,
-        header=np.array(json.dumps(header)),
-        theta=theta,
-        x=x,
-        u=u,
-        t_f=t_f,
-        masks=masks,
-        n_masks=n_masks,
-        status=status,
-        iterations=iterations,
-        subproblems=subproblems,
-        solve_time_s=solve_time,
-        base_id=base_id,
-        rotation=rot,
-    )
-    os.replace(tmp, path)
+    with atomic_write(path) as f:
+        np.savez_compressed(
+            f,
+            header=np.array(json.dumps(header)),
+            theta=theta,
+            x=x,
+            u=u,
+            t_f=t_f,
+            masks=masks,
+            n_masks=n_masks,
+            status=status,
+            iterations=iterations,
+            subproblems=subproblems,
+            solve_time_s=solve_time,
+            base_id=base_id,
+            rotation=rot,
+        )
     return header
 
 

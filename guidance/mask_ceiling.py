@@ -29,6 +29,7 @@ from typing import Any
 
 import numpy as np
 
+from guidance.atomic import atomic_write
 from guidance.dataset import (
     ROTATION_DEG,
     SamplingRanges,
@@ -207,9 +208,8 @@ def measure(
             for eps, i, masks in results:
                 found[eps, i] = masks
                 if cache is not None:
-                    tmp = cache / f".tmp{eps:g}_{i}.npz"
-                    np.savez(tmp, *masks)
-                    tmp.replace(_cache_file(cache, eps, i))
+                    with atomic_write(_cache_file(cache, eps, i)) as f:
+                        np.savez(f, *masks)
                 bar.update()
         except BrokenProcessPool as exc:
             raise worker_died(len(found), len(eps_values) * n_landings, cache) from exc

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from guidance.atomic import atomic_write
 from guidance.model import dcm_bi_numpy
 from guidance.params import IM, IR, Params
 
@@ -76,5 +77,6 @@ def landing_figure(
             a.set_xlabel("time [U_T]")
     fig.suptitle(title or "6-DoF powered descent")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    with atomic_write(path) as f:  # a file object: the format comes from the name
+        fig.savefig(f, dpi=110, format=Path(path).suffix.lstrip(".").lower() or None)
     plt.close(fig)

@@ -5,13 +5,14 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
 import platform
 import subprocess
 import sys
 from datetime import datetime, timezone
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
+
+from guidance.atomic import write_text_atomic
 
 ROOT = Path(__file__).resolve().parent.parent
 # The libraries whose arithmetic a trajectory depends on.
@@ -43,9 +44,7 @@ def code_version() -> str:
 
 def write_json_atomic(path: Path, obj: dict) -> None:
     """JSON through a temporary file: an interruption leaves the old file or the new."""
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(json.dumps(obj, indent=2))
-    os.replace(tmp, path)
+    write_text_atomic(path, json.dumps(obj, indent=2))
 
 
 def record_code_version(run_json: Path, record: dict) -> list[str]:

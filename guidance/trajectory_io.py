@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
+from guidance.atomic import atomic_write
 from guidance.errors import InputError
 from guidance.params import Params
 from guidance.provenance import provenance
@@ -33,29 +34,28 @@ def write_trajectory(
     sha256 of each file in ``inputs``, such as the networks of a T-SCvx solve)."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + ".tmp.npz")
-    np.savez(
-        tmp,
-        t_f=np.float64(result.t_f),
-        x=result.x,
-        u=result.u,
-        status=np.str_(result.status),
-        iterations=np.int64(result.iterations),
-        solve_time_s=np.float64(result.solve_time_s),
-        params=np.str_(json.dumps(params.to_json_dict())),
-        reason=np.str_(result.reason),
-        masks=result.masks,
-        scenario=np.str_(json.dumps(scenario_to_dict(scenario))),  # type: ignore[arg-type]
-        method=np.str_(method),
-        backend=np.str_(backend),
-        provenance=np.str_(json.dumps(provenance(inputs))),
-        **(
-            {}
-            if result.settings is None
-            else {"settings": np.str_(json.dumps(dataclasses.asdict(result.settings)))}
-        ),
-    )
-    tmp.replace(path)  # never leave a half-written file under the final name
+    with atomic_write(path) as f:
+        np.savez(
+            f,
+            t_f=np.float64(result.t_f),
+            x=result.x,
+            u=result.u,
+            status=np.str_(result.status),
+            iterations=np.int64(result.iterations),
+            solve_time_s=np.float64(result.solve_time_s),
+            params=np.str_(json.dumps(params.to_json_dict())),
+            reason=np.str_(result.reason),
+            masks=result.masks,
+            scenario=np.str_(json.dumps(scenario_to_dict(scenario))),  # type: ignore[arg-type]
+            method=np.str_(method),
+            backend=np.str_(backend),
+            provenance=np.str_(json.dumps(provenance(inputs))),
+            **(
+                {}
+                if result.settings is None
+                else {"settings": np.str_(json.dumps(dataclasses.asdict(result.settings)))}
+            ),
+        )
 
 
 def read_trajectory(path: str | Path) -> dict[str, object]:

@@ -81,7 +81,7 @@ def tiny_run(tmp_path_factory: pytest.TempPathFactory):
     # rounding to 6e-4 on these landings; test_cguidance bounds that drift).
     first = generate(run, 1, seed=11, ranges=EASY, workers=1, progress=False, backend="clarabel")
     # a stray temporary file from a killed run must not count as a finished sample
-    (run / "samples" / "000001.tmp.npz").write_bytes(b"partial")
+    (run / "samples" / ".000001.npz.tmp").write_bytes(b"partial")
     second = generate(  # only id 1
         run, 2, seed=11, ranges=EASY, workers=2, progress=False, backend="clarabel"
     )

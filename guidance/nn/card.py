@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from guidance.atomic import write_text_atomic
 from guidance.cli_learning import INSTR_BUDGET, INSTR_PER_MAC, est_instructions, fits_budget
 
 
@@ -351,7 +352,7 @@ def write_card(models: Path) -> Path:
     add("  feasible for this fuel-tight vehicle); outside them the networks extrapolate and")
     add("  T-SCvx's full-constraint guard, not the network, guarantees the answer.")
     path = models / "MODEL_CARD.md"
-    path.write_text("\n".join(L) + "\n")
+    write_text_atomic(path, "\n".join(L) + "\n")
     return path
 
 

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import json
 import logging
-import os
 import warnings
 from pathlib import Path
 from typing import Any
@@ -21,6 +20,7 @@ from typing import Any
 import numpy as np
 import torch
 
+from guidance.atomic import atomic_write
 from guidance.dataset import THETA_NAMES
 from guidance.nn.model import Normalized
 from guidance.nn.train import TrainResult
@@ -106,11 +106,6 @@ def export_onnx(
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     onnx.checker.check_model(proto)
-    # through a temporary file: an interrupted export leaves the previous model whole
-    tmp = path.with_name(path.name + ".tmp")
-    try:
-        onnx.save_model(proto, str(tmp), save_as_external_data=False)
-        os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
+    with atomic_write(path) as f:  # an interrupted export leaves the previous model whole
+        onnx.save_model(proto, f, save_as_external_data=False)
     return meta

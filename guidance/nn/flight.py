@@ -41,6 +41,7 @@ from typing import Any
 
 import numpy as np
 
+from guidance.atomic import write_bytes_atomic
 from guidance.errors import InputError
 
 MAGIC = b"TSCVXNN\0"
@@ -308,9 +309,7 @@ def write_tnn(onnx_path: str | Path, out_path: str | Path) -> bool:
     if out.is_file() and out.read_bytes() == blob:
         return False
     out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = out.with_suffix(out.suffix + ".tmp")
-    tmp.write_bytes(blob)
-    tmp.replace(out)
+    write_bytes_atomic(out, blob)
     return True
 
 

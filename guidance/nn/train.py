@@ -34,7 +34,6 @@ import dataclasses
 import hashlib
 import json
 import math
-import os
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -45,6 +44,7 @@ import numpy as np
 import torch
 from torch import nn
 
+from guidance.atomic import atomic_write
 from guidance.dataset import Dataset
 from guidance.errors import InputError
 from guidance.nn.model import ArchConfig, Transformer, n_params
@@ -231,9 +231,8 @@ class TrainResult:
 
 def save_atomic(obj: Any, path: Path) -> None:
     """torch.save through a temporary file: an interruption leaves the old file or the new."""
-    tmp = path.with_name(path.name + ".tmp")
-    torch.save(obj, tmp)
-    os.replace(tmp, path)
+    with atomic_write(path) as f:
+        torch.save(obj, f)
 
 
 # ---- resumable runs -----------------------------------------------------------------------

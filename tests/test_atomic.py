@@ -1,0 +1,72 @@
+"""Files are written whole or not at all, and through symbolic links (guidance/atomic.py)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from guidance.atomic import atomic_write, write_text_atomic
+from guidance.catalog import SCENARIOS
+from guidance.params import Params
+from guidance.plots import landing_figure
+from guidance.provenance import write_json_atomic
+from guidance.scvx import SCvxResult, SCvxSolver
+from guidance.trajectory_io import read_trajectory, write_trajectory
+
+
+def test_an_interrupted_write_leaves_the_previous_file_and_no_temporary(tmp_path: Path) -> None:
+    path = tmp_path / "run.json"
+    path.write_text("old")
+    with pytest.raises(KeyboardInterrupt), atomic_write(path) as f:
+        f.write(b"half of the n")
+        raise KeyboardInterrupt
+    assert path.read_text() == "old"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run.json"]
+
+
+def test_a_symbolic_link_is_written_through(tmp_path: Path) -> None:
+    target = tmp_path / "store" / "run.json"
+    target.parent.mkdir()
+    target.write_text("old")
+    link = tmp_path / "run.json"
+    link.symlink_to(target)
+    write_json_atomic(link, {"a": 1})
+    assert link.is_symlink() and link.resolve() == target
+    assert json.loads(target.read_text()) == {"a": 1}
+    assert sorted(p.name for p in target.parent.iterdir()) == ["run.json"]
+
+
+def test_a_new_file_appears_only_when_complete(tmp_path: Path) -> None:
+    path = tmp_path / "new.txt"
+    with atomic_write(path) as f:
+        f.write(b"first half, ")
+        assert not path.exists()
+        f.write(b"second half")
+    assert path.read_text() == "first half, second half"
+    write_text_atomic(path, "replaced")
+    assert path.read_text() == "replaced"
+
+
+def test_a_trajectory_written_to_a_link_lands_in_its_target(
+    tmp_path: Path, default_solved: tuple[SCvxSolver, SCvxResult]
+) -> None:
+    _, result = default_solved
+    target = tmp_path / "archive" / "landing.npz"
+    target.parent.mkdir()
+    link = tmp_path / "latest.npz"
+    link.symlink_to(target)
+    write_trajectory(link, result, Params(), SCENARIOS["default"], "scvx", "clarabel")
+    assert link.is_symlink()
+    assert float(read_trajectory(target)["t_f"]) == result.t_f
+
+
+@pytest.mark.parametrize(("name", "magic"), [("f.png", b"\x89PNG"), ("f.pdf", b"%PDF")])
+def test_a_figure_is_written_in_the_format_its_name_says(
+    tmp_path: Path, default_solved: tuple[SCvxSolver, SCvxResult], name: str, magic: bytes
+) -> None:
+    _, r = default_solved
+    landing_figure(r.x, r.u, r.t_f, Params(), tmp_path / name)
+    assert (tmp_path / name).read_bytes().startswith(magic)
+    assert [p.name for p in tmp_path.iterdir()] == [name]
