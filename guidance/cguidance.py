@@ -23,8 +23,10 @@ from __future__ import annotations
 
 import ctypes as ct
 import dataclasses
+import threading
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import ExitStack, contextmanager
 from functools import lru_cache
 from pathlib import Path
 
@@ -244,17 +246,29 @@ class Workspace:
         return dict(zip(("n", "p", "m", "nnz_A", "nnz_G"), [v.value for v in vals], strict=True))
 
 
-_WORKSPACES: dict[tuple, Workspace] = {}
+# A guidance workspace or a network is used by one C call at a time, and ctypes releases the
+# GIL during the call: each thread keeps its own (solves in threads run in parallel).
+_PER_THREAD = threading.local()
+
+
+def _thread_cache(name: str) -> dict:
+    cache = getattr(_PER_THREAD, name, None)
+    if cache is None:
+        cache = {}
+        setattr(_PER_THREAD, name, cache)
+    return cache
 
 
 def workspace(scenario: Scenario, settings: SCvxSettings | None = None,
               **socp: float | int) -> Workspace:  # fmt: skip
+    """This thread's workspace for the scenario's vehicle and the settings (made once)."""
     st = c_settings(settings, **socp)
     p = scenario.params
     key = (p.N, p.final_roll_free, pattern_index(param_vector(p)), bytes(st))
-    if key not in _WORKSPACES:
-        _WORKSPACES[key] = Workspace(p, st)
-    return _WORKSPACES[key]
+    cache = _thread_cache("workspaces")
+    if key not in cache:
+        cache[key] = Workspace(p, st)
+    return cache[key]
 
 
 def validate_c(scenario: Scenario) -> str | None:
@@ -427,25 +441,23 @@ def net_source(models_dir: Path, kind: str) -> Path:
     raise FlightNetsError(f"no {kind}.tnn or {kind}.onnx in {models_dir} (run `make lib`)")
 
 
-_NETS: dict[tuple, object] = {}
-
-
 def flight_net(models_dir: Path | str, kind: str):
     """One network of ``models_dir`` loaded in the C library (guidance.nn.flight.FlightNet),
-    cached by file and modification time. An ONNX file is converted to the flight blob
+    cached (per thread) by file and modification time. An ONNX file is converted to the flight blob
     (guidance.nn.flight.tnn_bytes: the bytes `make lib` writes to build/models)."""
     from guidance.nn.flight import FlightNet, FlightNetError, tnn_bytes
 
     path = net_source(Path(models_dir), kind)
     stat = path.stat()
     key = (str(path.resolve()), stat.st_mtime_ns, stat.st_size)
-    if key not in _NETS:
+    nets = _thread_cache("nets")
+    if key not in nets:
         try:
             blob = tnn_bytes(path) if path.suffix == ".onnx" else path.read_bytes()
-            _NETS[key] = FlightNet(blob)
+            nets[key] = FlightNet(blob)
         except FlightNetError as exc:
             raise FlightNetsError(f"model {path}: refused by the C library: {exc}") from exc
-    return _NETS[key]
+    return nets[key]
 
 
 _TRAINED: dict[tuple, dict] = {}
@@ -477,6 +489,19 @@ def check_trained_params(models_dir: Path | str, kind: str, params: Params) -> N
         raise FlightNetsError(
             f"model {path}: trained for other problem parameters: " + "; ".join(diff)
         )
+
+
+@contextmanager
+def _holding(*nets: object) -> Iterator[None]:
+    """The locks of the given FlightNets, always in this order; None and a network given
+    twice (one network in both roles) skipped."""
+    with ExitStack() as stack:
+        held: list[object] = []
+        for net in nets:
+            if net is not None and all(net is not h for h in held):
+                stack.enter_context(net.lock)  # type: ignore[attr-defined]
+                held.append(net)
+        yield
 
 
 def _nets(models_dir: Path | str | None, masks: bool, params: Params | None = None) -> tuple:
@@ -516,10 +541,11 @@ def solve_tscvx_c(
     opt.clock_s = _CLOCK
     x, u, res = _result_buffers(N)
     rep = _TscvxReport()
-    t_start = time.perf_counter()  # the whole guidance call, network inference included
-    status = lib.pdg_solve_tscvx(ws.ws, ct.byref(cs), ct.byref(opt), ct.byref(res),
-                                 ct.byref(rep))  # fmt: skip
-    solve_time = time.perf_counter() - t_start
+    with _holding(sol, con if masks else None):  # the call runs them: no other user meanwhile
+        t_start = time.perf_counter()  # the whole guidance call, network inference included
+        status = lib.pdg_solve_tscvx(ws.ws, ct.byref(cs), ct.byref(opt), ct.byref(res),
+                                     ct.byref(rep))  # fmt: skip
+        solve_time = time.perf_counter() - t_start
     if status == 4 and res.message.startswith(b"nets: "):
         raise FlightNetsError(res.message.decode())
     ran_with = _ran_with(settings, socp)
@@ -544,8 +570,9 @@ def tscvx_guess_c(
     N = scenario.params.N
     x, u, tf = np.zeros((N, NX)), np.zeros((N, NU)), ct.c_double(0.0)
     msg = ct.create_string_buffer(MESSAGE_LEN)
-    st = library().pdg_tscvx_guess(ws.ws, ct.byref(c_scenario(scenario)), sol._net, _dptr(x),
-                                   _dptr(u), ct.byref(tf), msg)  # fmt: skip
+    with _holding(sol):
+        st = library().pdg_tscvx_guess(ws.ws, ct.byref(c_scenario(scenario)), sol._net,
+                                       _dptr(x), _dptr(u), ct.byref(tf), msg)  # fmt: skip
     if st != 0:
         text = msg.value.decode()
         raise (FlightNetsError if text.startswith("nets: ") else InputError)(text)

@@ -13,6 +13,9 @@ equality constraints ``A_eq x = b_eq``, the nonnegative rows (first) and the sec
     S.update(q=q2, A_values=A2.data, b=b2); S.solve()    # ... new numbers, same sparsity
     session = Session(); session.solve(prob_k)           # SCvx: re-setup only on new patterns
 
+A Solver (and a Session) holds one C workspace: use it from one thread at a time; solvers in
+different threads run in parallel (the C call releases the GIL).
+
 Statuses: solved, solved_inaccurate, primal_infeasible (z holds the certificate, b'z = -1),
 dual_infeasible (x, s hold the certificate, q'x = -1), max_iterations, numerical_error,
 invalid_input (``info["message"]`` says why). ``solve(prob, log=True)`` adds the iteration log

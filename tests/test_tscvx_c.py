@@ -17,6 +17,7 @@ guidance.guess.project_guess, eta_init 0.01, the C solver).
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -91,6 +92,20 @@ def runs(onnx_models, nets) -> dict:
             c = cguidance.solve_tscvx_c(scn, masks=masks, nets=nets)
             out[name, masks] = (scn, guess, ref, c)
     return out
+
+
+def test_threads_sharing_the_networks_get_the_sequential_answers(runs, nets) -> None:
+    """An inference writes its activations into the network's arena: threads given the same
+    networks take turns with them (each thread has its own guidance workspace)."""
+    names = LANDINGS[:6]
+    with ThreadPoolExecutor(3) as pool:
+        threaded = list(
+            pool.map(lambda n: cguidance.solve_tscvx_c(_scenario(n), masks=True, nets=nets), names)
+        )
+    for name, r in zip(names, threaded, strict=True):
+        alone = runs[name, True][3]
+        assert r.status == alone.status, (name, r.reason)
+        np.testing.assert_array_equal(r.x, alone.x, err_msg=name)
 
 
 # ---- pieces ---------------------------------------------------------------------------------

@@ -33,6 +33,7 @@ import ctypes
 import json
 import struct
 import sys
+import threading
 import zlib
 from dataclasses import dataclass
 from functools import lru_cache
@@ -399,17 +400,21 @@ class FlightNet:
         _check(lib.tscvx_nn_get_info(self._net, ctypes.byref(info)), "tscvx_nn_get_info")
         self.info = info
         self.d_in, self.d_out = info.d_in, info.d_out
+        # an inference writes its activations into the arena: one at a time per network
+        # (held by run and by the guidance calls that run this network in C)
+        self.lock = threading.Lock()
 
     def run(self, inputs: np.ndarray) -> np.ndarray:
         x = np.atleast_2d(np.asarray(inputs, np.float64))
         out = np.empty((len(x), self.d_out))
-        for i, row in enumerate(x):
-            r = np.ascontiguousarray(row)
-            y = out[i]
-            st = library().tscvx_nn_run(
-                self._net, r.ctypes.data_as(_dp), r.size, y.ctypes.data_as(_dp), y.size
-            )
-            _check(st, "tscvx_nn_run")
+        with self.lock:
+            for i, row in enumerate(x):
+                r = np.ascontiguousarray(row)
+                y = out[i]
+                st = library().tscvx_nn_run(
+                    self._net, r.ctypes.data_as(_dp), r.size, y.ctypes.data_as(_dp), y.size
+                )
+                _check(st, "tscvx_nn_run")
         return out
 
     def tight_mask(self, logits: np.ndarray) -> np.ndarray:
