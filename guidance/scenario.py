@@ -9,6 +9,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -217,6 +218,8 @@ def _norm(v: Any) -> float:
 def validate(scenario: Scenario) -> None:
     """Reject parameters and initial states that cannot give a meaningful landing."""
     p = scenario.params
+    _validate_finite(scenario.initial)  # every field first, as the C library
+    _validate_finite(p)
     _validate_magnitudes(scenario.initial)
     _validate_params(p)
     s = scenario.initial
@@ -256,15 +259,29 @@ def validate(scenario: Scenario) -> None:
         )
 
 
+def _real_fields(part: InitialState | Params) -> Iterator[tuple[str, np.ndarray]]:
+    """Each field of real numbers (not N or final_roll_free) with its values, in field order."""
+    for f in dataclasses.fields(part):
+        if not isinstance(f.default, bool | int):
+            yield f.name, np.ravel(np.asarray(getattr(part, f.name), dtype=float))
+
+
+def _validate_finite(part: InitialState | Params) -> None:
+    """Every real number finite (what a scenario file's parsing checks; validate() runs it
+    too, for a Scenario built in Python)."""
+    for name, values in _real_fields(part):
+        if not np.all(np.isfinite(values)):
+            got = values.tolist() if values.size > 1 else float(values[0])
+            raise ScenarioError(name, f"must be finite, got {_shown(got)}")
+
+
 def _validate_magnitudes(part: InitialState | Params) -> None:
     """Every real number within MAGNITUDE_MAX, in the fields' order (the C library's)."""
-    for f in dataclasses.fields(part):
-        if isinstance(f.default, bool | int):  # N, final_roll_free: checked on their own
-            continue
-        largest = max(abs(float(v)) for v in np.ravel(getattr(part, f.name)))
+    for name, values in _real_fields(part):
+        largest = float(np.max(np.abs(values)))
         if largest > MAGNITUDE_MAX:
             raise ScenarioError(
-                f.name,
+                name,
                 f"magnitude {largest:g} is beyond the library's envelope "
                 f"(|value| <= {MAGNITUDE_MAX:g} in nondimensional units)",
             )
