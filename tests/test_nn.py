@@ -13,6 +13,7 @@ torch = pytest.importorskip("torch")
 onnx = pytest.importorskip("onnx")
 
 from guidance.dataset import random_dataset  # noqa: E402
+from guidance.errors import InputError  # noqa: E402
 from guidance.nn.export import META_KEY, export_onnx, normalized_module  # noqa: E402
 from guidance.nn.infer import ModelMismatchError, load_model  # noqa: E402
 from guidance.nn.model import ArchConfig, Transformer  # noqa: E402
@@ -426,6 +427,38 @@ def test_export_matches_a_checkpoint_without_a_digest_by_its_recorded_header(
     assert "has the header it recorded" in capsys.readouterr().out
     meta = load_model(models / "solution.onnx", "solution").meta
     assert meta["dataset_content_sha256"] == dataset_digest(load_dataset(a))
+
+
+class _RunsCode:
+    """Unpickling it opens (creates) the file ``path``: a stand-in for code in a checkpoint."""
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+
+    def __reduce__(self):
+        return (open, (str(self.path), "w"))
+
+
+def test_a_checkpoint_that_would_run_code_is_refused_unrun(tmp_path: Path, capsys) -> None:
+    """Checkpoints are loaded weights-only: a file with pickled code in it (as a checkpoint
+    passed on by someone else could be) is refused with its name, and the code never runs."""
+    from guidance.cli import main
+    from guidance.nn.train import load_checkpoint
+
+    data = _write_dataset(random_dataset(n_base=12, seed=1), tmp_path / "a.npz")
+    out, marker = tmp_path / "train", tmp_path / "code_ran"
+    assert _train_cli(data, out, "--solution-epochs", "1") == 0
+    (checkpoint,) = out.glob("solution-*.pt")
+    good = load_checkpoint(checkpoint)  # what the package writes loads weights-only
+    assert good.kind == "solution" and good.in_mean.dtype == np.float64
+    ck = torch.load(checkpoint, weights_only=True)
+    torch.save({**ck, "metrics": _RunsCode(marker)}, checkpoint)
+    with pytest.raises(InputError, match=f"{checkpoint.name}: not a checkpoint this package"):
+        load_checkpoint(checkpoint)
+    assert main(["export", "--train-dir", str(out), "--dataset", str(data),
+                 "--models-dir", str(tmp_path / "models")]) == 2  # fmt: skip
+    assert "not a checkpoint this package wrote" in capsys.readouterr().err
+    assert not marker.exists()
 
 
 def test_an_interrupted_export_leaves_the_previous_file(trained, monkeypatch) -> None:

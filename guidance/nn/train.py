@@ -34,6 +34,8 @@ import dataclasses
 import hashlib
 import json
 import math
+import pickle
+import re
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -218,21 +220,52 @@ class TrainResult:
                 "kind": self.kind,
                 "arch": self.arch.to_dict(),
                 "state_dict": self.net.state_dict(),
-                "in_mean": self.in_mean,
-                "in_std": self.in_std,
-                "out_mean": self.out_mean,
-                "out_std": self.out_std,
-                "threshold": self.threshold,
-                "metrics": self.metrics,
+                **{
+                    n: torch.from_numpy(np.ascontiguousarray(getattr(self, n)))
+                    for n in NORMALIZATION
+                },
+                "threshold": float(self.threshold),
+                "metrics": plain(self.metrics),
             },
             Path(path),
         )
 
 
+NORMALIZATION = ("in_mean", "in_std", "out_mean", "out_std")
+
+
+def plain(obj: Any) -> Any:
+    """obj with numpy scalars and arrays made Python numbers and lists (dictionaries, lists
+    and tuples kept as they are): what a weights-only load accepts."""
+    if isinstance(obj, dict):
+        return {k: plain(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return type(obj)(plain(v) for v in obj)
+    if isinstance(obj, np.ndarray | np.generic):
+        return obj.tolist()
+    return obj
+
+
 def save_atomic(obj: Any, path: Path) -> None:
-    """torch.save through a temporary file: an interruption leaves the old file or the new."""
+    """torch.save through a temporary file: an interruption leaves the old file or the new.
+    Only tensors and plain Python data go in, so that loading needs no pickled code."""
     with atomic_write(path) as f:
         torch.save(obj, f)
+
+
+def load_plain(path: str | Path) -> dict[str, Any]:
+    """A file save_atomic wrote. ``weights_only``: tensors and plain data only, so a
+    checkpoint from elsewhere cannot run code on loading (torch's default since 2.6)."""
+    try:
+        return torch.load(path, weights_only=True)
+    except pickle.UnpicklingError as exc:
+        # torch's text is mostly advice to load unsafely; keep what it refused
+        found = re.search(r"Unsupported global: GLOBAL (\S+)", str(exc))
+        first = f"it refers to {found.group(1)}" if found else str(exc).strip().splitlines()[0]
+        raise InputError(
+            f"{path}: not a checkpoint this package wrote: it holds more than tensors and plain "
+            f"data (checkpoints before 26 Nov held numpy arrays: retrain with --restart) ({first})"
+        ) from None
 
 
 # ---- resumable runs -----------------------------------------------------------------------
@@ -293,7 +326,7 @@ class TrainingInterrupted(KeyboardInterrupt):
 
 
 def load_checkpoint(path: str | Path) -> TrainResult:
-    ck = torch.load(path, weights_only=False)
+    ck = load_plain(path)
     arch = ArchConfig(**ck["arch"])
     net = Transformer(arch)
     net.load_state_dict(ck["state_dict"])
@@ -302,10 +335,7 @@ def load_checkpoint(path: str | Path) -> TrainResult:
         ck["kind"],
         arch,
         net,
-        ck["in_mean"],
-        ck["in_std"],
-        ck["out_mean"],
-        ck["out_std"],
+        *(ck[name].numpy() for name in NORMALIZATION),
         ck["threshold"],
         ck["metrics"],
     )
@@ -516,15 +546,15 @@ class _RunState:
             "net": self.net.state_dict(),
             "opt": self.opt.state_dict(),
             "sched": self.sched.state_dict(),
-            "numpy_rng": self.rng.bit_generator.state,
+            "numpy_rng": plain(self.rng.bit_generator.state),
             "torch_rng": torch.get_rng_state(),
-            **progress,
+            **plain(progress),
         }
         save_atomic(state, self.path)
 
     def load(self) -> dict[str, Any]:
         """Restores the saved state into the run's objects; returns the saved progress."""
-        state = torch.load(self.path, weights_only=False)
+        state = load_plain(self.path)
         why = identity_mismatch(state.get("identity"), self.identity)
         if why:
             raise InputError(
