@@ -1,9 +1,10 @@
 """Every file this package writes goes through here: written whole or not at all.
 
-The bytes go to a hidden temporary file beside the target (``.NAME.tmp``: no glob of the
-package's own files picks it up), which then replaces the target in one step. An interruption
-(Ctrl-C, a killed job, an exception in the writer) leaves the previous file or the new one,
-never a truncated one, and no temporary file. A target that is a symbolic link is written
+The bytes go to a hidden temporary file beside the target (``.NAME.PID-THREAD.tmp``: no glob
+of the package's own files picks it up, and two writers of one file never share it), which
+then replaces the target in one step. An interruption (Ctrl-C, a killed job, an exception in
+the writer) leaves the previous file or the new one, never a truncated one, and no temporary
+file. A target that is a symbolic link is written
 through the link: the link stays and the file it points to gets the new content, as a shell
 redirection would do (a plain rename would replace the link by a regular file).
 """
@@ -11,6 +12,7 @@ redirection would do (a plain rename would replace the link by a regular file).
 from __future__ import annotations
 
 import os
+import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -21,7 +23,7 @@ from typing import BinaryIO
 def atomic_write(path: str | Path) -> Iterator[BinaryIO]:
     """``with atomic_write(path) as f: np.savez(f, ...)``: the binary file to write."""
     target = Path(os.path.realpath(path))
-    tmp = target.with_name(f".{target.name}.tmp")
+    tmp = target.with_name(f".{target.name}.{os.getpid()}-{threading.get_ident()}.tmp")
     try:
         with open(tmp, "wb") as f:
             yield f

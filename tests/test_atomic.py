@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import json
+import threading
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from guidance.atomic import atomic_write, write_text_atomic
@@ -70,3 +72,26 @@ def test_a_figure_is_written_in_the_format_its_name_says(
     landing_figure(r.x, r.u, r.t_f, Params(), tmp_path / name)
     assert (tmp_path / name).read_bytes().startswith(magic)
     assert [p.name for p in tmp_path.iterdir()] == [name]
+
+
+def test_two_writers_of_one_file_never_share_a_temporary(tmp_path: Path) -> None:
+    """Threads (or processes) writing the same file at once: each write lands whole, none
+    fails (a shared temporary name made one writer remove the other's file midway)."""
+    path, errors = tmp_path / "out.npz", []
+
+    def write(value: float) -> None:
+        try:
+            for _ in range(30):
+                with atomic_write(path) as f:
+                    np.savez(f, a=np.full(100_000, value))
+        except Exception as exc:  # reported below
+            errors.append(exc)
+
+    threads = [threading.Thread(target=write, args=(v,)) for v in (1.0, 2.0)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert errors == []
+    assert len(np.unique(np.load(path)["a"])) == 1
+    assert [p.name for p in tmp_path.iterdir()] == ["out.npz"]

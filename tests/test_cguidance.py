@@ -716,15 +716,18 @@ def test_validation_agrees_on_random_scenarios() -> None:
             glideslope_deg=float(rng.uniform(0, 89)),
             omega_max_deg=float(rng.uniform(1, 180)),
         )
-        scn = Scenario(init, params)
-        try:
-            validate(scn)
-            py_field = None
-        except ScenarioError as exc:
-            py_field = exc.field
-        msg = cguidance.validate_c(scn)
-        c_field = None if msg is None else msg.split("'")[1]
-        assert c_field == py_field, (scn, msg)
+        _assert_same_verdict(Scenario(init, params))
+
+
+def _assert_same_verdict(scn: Scenario) -> None:
+    """Python's validate and C's accept scn alike, or name the same field."""
+    try:
+        validate(scn)
+        py_field = None
+    except ScenarioError as exc:
+        py_field = exc.field
+    msg = cguidance.validate_c(scn)
+    assert (None if msg is None else msg.split("'")[1]) == py_field, (scn, msg)
 
 
 # values at and across the edges the checks draw, and non-finite ones
@@ -762,14 +765,7 @@ def test_validation_agrees_with_fields_at_their_edges() -> None:
             else:
                 name = str(rng.choice(param_fields))
                 params = params.replace(**{name: _edge_value(rng, getattr(params, name))})
-        scn = Scenario(init, params)
-        try:
-            validate(scn)
-            py_field = None
-        except ScenarioError as exc:
-            py_field = exc.field
-        msg = cguidance.validate_c(scn)
-        assert (None if msg is None else msg.split("'")[1]) == py_field, (scn, msg)
+        _assert_same_verdict(Scenario(init, params))
 
 
 def test_bad_guess_and_masks_are_refused() -> None:
