@@ -4,9 +4,9 @@ The bytes go to a hidden temporary file beside the target (``.NAME.PID-THREAD.tm
 of the package's own files picks it up, and two writers of one file never share it), which
 then replaces the target in one step. An interruption (Ctrl-C, a killed job, an exception in
 the writer) leaves the previous file or the new one, never a truncated one, and no temporary
-file. A target that is a symbolic link is written
-through the link: the link stays and the file it points to gets the new content, as a shell
-redirection would do (a plain rename would replace the link by a regular file).
+file. A target that is a symbolic link is written through the link: the link stays and the
+file it points to gets the new content, as a shell redirection would do (a plain rename would
+replace the link by a regular file).
 """
 
 from __future__ import annotations
