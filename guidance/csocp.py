@@ -13,8 +13,9 @@ equality constraints ``A_eq x = b_eq``, the nonnegative rows (first) and the sec
     S.update(q=q2, A_values=A2.data, b=b2); S.solve()    # ... new numbers, same sparsity
     session = Session(); session.solve(prob_k)           # SCvx: re-setup only on new patterns
 
-A Solver (and a Session) holds one C workspace: use it from one thread at a time; solvers in
-different threads run in parallel (the C call releases the GIL).
+A Solver (and a Session) holds one C workspace. Its calls take turns: threads sharing one
+are served one call at a time (unguarded, two solves at once corrupted the workspace and
+crashed), while solvers in different threads run in parallel (the C call releases the GIL).
 
 Statuses: solved, solved_inaccurate, primal_infeasible (z holds the certificate, b'z = -1),
 dual_infeasible (x, s hold the certificate, q'x = -1), max_iterations, numerical_error,
@@ -28,10 +29,14 @@ the fields of ``tscvx_settings`` (e.g. ``max_iter``, ``tol_feas``, ``soc_dense_m
 from __future__ import annotations
 
 import ctypes as ct
+import functools
 import os
+import threading
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TypeVar
 
 import numpy as np
 import scipy.sparse as sp
@@ -325,10 +330,25 @@ def c_point(
     )
 
 
+_R = TypeVar("_R")
+
+
+def _one_at_a_time(method: Callable[..., _R]) -> Callable[..., _R]:
+    """The method runs under the object's lock (a re-entrant one: methods call each other)."""
+
+    @functools.wraps(method)
+    def serialized(self, *args: object, **kwargs: object) -> _R:
+        with self._lock:
+            return method(self, *args, **kwargs)
+
+    return serialized
+
+
 class Solver:
     """A set-up workspace: one arena, fixed sparsity, repeated solves."""
 
     def __init__(self, prob: ConicProblem, **settings: float | int):
+        self._lock = threading.RLock()
         self.lib = load_library()
         self.prob = prob
         n, m = prob.n, prob.m
@@ -431,6 +451,7 @@ class Solver:
     def arena_bytes(self) -> int:
         return int(self.arena.nbytes)
 
+    @_one_at_a_time
     def update(
         self,
         q: np.ndarray | None = None,
@@ -466,6 +487,7 @@ class Solver:
             self.message = self.lib.tscvx_setup_status_message(st).decode()
         return int(st)
 
+    @_one_at_a_time
     def warm_start(self, sol: ConicSolution) -> int:
         """Start the next solve from ``sol`` (Clarabel's form, e.g. the last solve's answer),
         centred into the cones (tscvx_warm_start). Returns the C setup status (0 = ok);
@@ -479,12 +501,14 @@ class Solver:
         x, y, z, s = c_point(self.split, sol)
         return int(self.lib.tscvx_warm_start(self.ws, _dptr(x), _dptr(y), _dptr(z), _dptr(s)))
 
+    @_one_at_a_time
     def info(self) -> dict[str, float]:
         inf = _Info()
         if self.ready:
             self.lib.tscvx_get_info(self.ws, ct.byref(inf))
         return {name: float(getattr(inf, name)) for name, _ in _Info._fields_}
 
+    @_one_at_a_time
     def iteration_log(self) -> list[dict[str, float]]:
         rows = []
         if not self.ready:
@@ -498,6 +522,7 @@ class Solver:
             rows.append({name: getattr(row, name) for name, _ in _IterLog._fields_})
         return rows
 
+    @_one_at_a_time
     def solve(self, log: bool = False) -> ConicSolution:
         n, m = self.prob.n, self.prob.m
         if not self.ready:
@@ -555,10 +580,12 @@ class Session:
     problems of the same pattern only update the numbers (no new symbolic work)."""
 
     def __init__(self, **settings: float | int) -> None:
+        self._lock = threading.RLock()
         self.settings = settings
         self.solver: Solver | None = None
         self.setups = 0
 
+    @_one_at_a_time
     def solve(self, prob: ConicProblem, warm: ConicSolution | None = None) -> ConicSolution:
         """Solve ``prob``; ``warm``, a solution of a problem of the same size, is where the
         interior-point method starts (Solver.warm_start)."""
