@@ -400,6 +400,7 @@ def cmd_export(args: argparse.Namespace) -> int:
     from guidance.nn.card import measure_onnx, write_card
     from guidance.nn.export import export_onnx
     from guidance.nn.train import dataset_digest, load_checkpoint
+    from guidance.provenance import provenance
 
     train_dir, models = Path(args.train_dir), Path(args.models_dir)
     best = best_checkpoints(train_dir)
@@ -415,6 +416,7 @@ def cmd_export(args: argparse.Namespace) -> int:
         _check_trained_on(report[name], name, ds, args.dataset, digest)
     models.mkdir(parents=True, exist_ok=True)
     metrics: dict = {
+        "provenance": provenance(),  # the export's code, solver versions and time
         "sweep": report,
         "shipped": {},
         "dataset_header": ds.header,
@@ -493,6 +495,7 @@ def cmd_baselines(args: argparse.Namespace) -> int:
     from guidance.baselines import format_table, results_json, run_baselines
     from guidance.dataset import load_dataset
     from guidance.nn.card import write_card
+    from guidance.provenance import provenance
 
     ds = load_dataset(args.dataset)
     res = run_baselines(
@@ -509,7 +512,8 @@ def cmd_baselines(args: argparse.Namespace) -> int:
     models = Path(args.models_dir)
     out = Path(args.json) if args.json else models / "baselines.json"
     out.parent.mkdir(parents=True, exist_ok=True)
-    write_text_atomic(out, results_json({"dataset": ds.header, "results": res}))
+    report = {"provenance": provenance(), "dataset": ds.header, "results": res}
+    write_text_atomic(out, results_json(report))
     print(f"wrote {out}")
     if not args.json and (models / "metrics.json").exists():
         write_card(models)

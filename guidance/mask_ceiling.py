@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import time
 from collections.abc import Callable, Sequence
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
@@ -43,7 +42,7 @@ from guidance.dataset import (
 )
 from guidance.errors import InputError
 from guidance.params import Scenario, SCvxSettings
-from guidance.provenance import code_version, record_code_version
+from guidance.provenance import provenance, record_code_version
 from guidance.scenario import ScenarioError, validate
 
 # theta components moved by a perturbation: r0, v0, the pitch and yaw rates, m0, glideslope
@@ -254,8 +253,7 @@ def results_dict(
 ) -> dict[str, Any]:
     """What ``guidance mask-ceiling`` writes (models/mask_ceiling.json) for the model card."""
     return {
-        "created_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
-        "code_version": code_version(),
+        "provenance": provenance(),
         "run": run,
         "scores": [
             {**dataclasses.asdict(s), "precision": s.precision, "recall": s.recall} for s in scores

@@ -22,6 +22,7 @@ from guidance.mask_ceiling import (
     neighbour,
     theta_spread,
 )
+from guidance.provenance import code_version
 
 
 def test_leave_one_out_counts_by_hand() -> None:
@@ -76,6 +77,8 @@ def test_identical_neighbours_score_one_and_a_rerun_solves_nothing(tmp_path, mon
     assert again == scores
     with pytest.raises(InputError, match="another run"):
         measure(1, 4, [0.0], backend="c", std=std, progress=False, run_dir=tmp_path)
+    made_by = mask_ceiling.results_dict(scores, None, None)["provenance"]  # mask_ceiling.json
+    assert made_by["generator"] == code_version() and "numpy" in made_by["packages"]
 
 
 def test_a_resume_with_other_options_is_bad_input(tmp_path) -> None:
@@ -88,7 +91,6 @@ def test_a_resume_with_other_options_is_bad_input(tmp_path) -> None:
 
 def test_run_records_every_code_version(tmp_path, capsys) -> None:
     """run.json lists the code versions that solved into the run; a resume by another warns."""
-    from guidance.provenance import code_version
 
     config = {"seed": 1, "neighbours": 3, "backend": "c"}
     assert mask_ceiling._check_run(tmp_path, config) == [code_version()]

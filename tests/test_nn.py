@@ -396,6 +396,25 @@ def test_export_takes_the_training_datasets_params_and_refuses_another(
         load_model(models / "solution.onnx", "solution")  # trained for T_max 4.5, not default
 
 
+def test_export_and_baselines_record_their_provenance(tmp_path: Path) -> None:
+    """models/metrics.json and baselines.json say which code, solvers and time made them
+    (before, only the dataset's header did)."""
+    from guidance.cli import main
+    from guidance.provenance import code_version
+
+    a = _write_dataset(random_dataset(n_base=12, seed=1), tmp_path / "a.npz")
+    out, models = tmp_path / "train", tmp_path / "models"
+    assert _train_cli(a, out, "--solution-epochs", "1") == 0
+    assert main(["export", "--train-dir", str(out), "--dataset", str(a),
+                 "--models-dir", str(models)]) == 0  # fmt: skip
+    small = ["--max-queries", "20", "--interp-train", "20", "--interp-test", "5"]
+    assert main(["baselines", "--dataset", str(a), "--models-dir", str(models), *small]) == 0
+    for name in ("metrics.json", "baselines.json"):
+        made_by = json.loads((models / name).read_text())["provenance"]
+        assert made_by["generator"] == code_version(), name
+        assert made_by["created_utc"] and "numpy" in made_by["packages"], name
+
+
 def test_export_matches_a_checkpoint_without_a_digest_by_its_recorded_header(
     tmp_path: Path, capsys
 ) -> None:
