@@ -25,10 +25,12 @@ import ctypes as ct
 import dataclasses
 import threading
 import time
+from collections import OrderedDict
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import ExitStack, contextmanager
 from functools import lru_cache
 from pathlib import Path
+from typing import TypeVar
 
 import numpy as np
 
@@ -247,16 +249,27 @@ class Workspace:
 
 
 # A guidance workspace or a network is used by one C call at a time, and ctypes releases the
-# GIL during the call: each thread keeps its own (solves in threads run in parallel).
+# GIL during the call: each thread keeps its own (solves in threads run in parallel). Each
+# thread keeps the CACHE_SIZE last used of each kind: a sweep over settings or model files
+# would otherwise keep every workspace (2.5 MB each at N = 50) or network (9 MB) it made.
 _PER_THREAD = threading.local()
+CACHE_SIZE = 4
+_T = TypeVar("_T")
 
 
-def _thread_cache(name: str) -> dict:
-    cache = getattr(_PER_THREAD, name, None)
+def _thread_cached(kind: str, key: tuple, make: Callable[[], _T]) -> _T:
+    """This thread's object of ``kind`` for ``key``, made by ``make`` when not kept."""
+    cache = getattr(_PER_THREAD, kind, None)
     if cache is None:
-        cache = {}
-        setattr(_PER_THREAD, name, cache)
-    return cache
+        cache = OrderedDict()
+        setattr(_PER_THREAD, kind, cache)
+    if key in cache:
+        cache.move_to_end(key)
+    else:
+        cache[key] = make()
+        while len(cache) > CACHE_SIZE:
+            cache.popitem(last=False)  # callers still holding it keep it alive
+    return cache[key]
 
 
 def workspace(scenario: Scenario, settings: SCvxSettings | None = None,
@@ -265,10 +278,7 @@ def workspace(scenario: Scenario, settings: SCvxSettings | None = None,
     st = c_settings(settings, **socp)
     p = scenario.params
     key = (p.N, p.final_roll_free, pattern_index(param_vector(p)), bytes(st))
-    cache = _thread_cache("workspaces")
-    if key not in cache:
-        cache[key] = Workspace(p, st)
-    return cache[key]
+    return _thread_cached("workspaces", key, lambda: Workspace(p, st))
 
 
 def validate_c(scenario: Scenario) -> str | None:
@@ -443,21 +453,21 @@ def net_source(models_dir: Path, kind: str) -> Path:
 
 def flight_net(models_dir: Path | str, kind: str):
     """One network of ``models_dir`` loaded in the C library (guidance.nn.flight.FlightNet),
-    cached (per thread) by file and modification time. An ONNX file is converted to the flight blob
-    (guidance.nn.flight.tnn_bytes: the bytes `make lib` writes to build/models)."""
+    cached (per thread) by file and modification time. An ONNX file is converted to the flight
+    blob (guidance.nn.flight.tnn_bytes: the bytes `make lib` writes to build/models)."""
     from guidance.nn.flight import FlightNet, FlightNetError, tnn_bytes
 
     path = net_source(Path(models_dir), kind)
     stat = path.stat()
     key = (str(path.resolve()), stat.st_mtime_ns, stat.st_size)
-    nets = _thread_cache("nets")
-    if key not in nets:
+
+    def load() -> FlightNet:
         try:
-            blob = tnn_bytes(path) if path.suffix == ".onnx" else path.read_bytes()
-            nets[key] = FlightNet(blob)
+            return FlightNet(tnn_bytes(path) if path.suffix == ".onnx" else path.read_bytes())
         except FlightNetError as exc:
             raise FlightNetsError(f"model {path}: refused by the C library: {exc}") from exc
-    return nets[key]
+
+    return _thread_cached("nets", key, load)
 
 
 _TRAINED: dict[tuple, dict] = {}

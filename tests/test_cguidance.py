@@ -19,9 +19,11 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import gc
 import math
 import re
 import subprocess
+import weakref
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
@@ -73,6 +75,21 @@ def test_solves_in_threads_are_the_sequential_solves(pairs) -> None:
         alone = pairs[name][0]
         assert r.status == alone.status, (name, r.reason)
         np.testing.assert_array_equal(r.x, alone.x, err_msg=name)  # the same arithmetic
+
+
+def test_a_sweep_over_settings_frees_the_workspaces_it_no_longer_uses() -> None:
+    """Each thread keeps its last few workspaces (one per vehicle and settings). Before, it
+    kept every one it made: 2.5 MB per settings value of a sweep, never freed."""
+    scenario = SCENARIOS["default"]
+    made = [
+        weakref.ref(cguidance.workspace(scenario, SCvxSettings(lam=500.0 + i))) for i in range(12)
+    ]
+    gc.collect()
+    alive = [ref() for ref in made if ref() is not None]
+    assert 0 < len(alive) <= cguidance.CACHE_SIZE
+    assert cguidance.workspace(scenario, SCvxSettings(lam=511.0)) is made[-1]()  # still kept
+    again = cguidance.solve_c(scenario, SCvxSettings(lam=500.0))  # its workspace made anew
+    assert again.status == "solved"
 
 
 def assert_same_solve(c: SCvxResult, ref: SCvxResult) -> None:
