@@ -177,17 +177,14 @@ static double gradient_at(const double *f, int stride, const double *t, int N, i
            (hs * hd * (hd + hs));
 }
 
-void pdg_initial_guess(const pdg_scenario *sc, double *x, double *u, double *t_f_out,
-                       double *work)
+/* t_f: the cheapest profile within T_max on the grid; key (over, fuel or max thrust). The
+ * arrays are the profile's scratch (required_thrust). */
+static double cheapest_t_f(const pdg_scenario *sc, double *r, double *v, double *T, double *m)
 {
     const pdg_params *p = &sc->params;
     const int N = p->N;
-    double *r = work, *v = r + 3 * N, *T = v + 3 * N, *m = T + 3 * N, *d = m + N;
-    double *q = d + 3 * N, *t = q + 4 * N, *w = t + N, *qd = w + 3 * N; /* 25 N doubles */
-    double C0[3][3], b0[3], t_f = TF_GRID_LO, best_over = 0, best_val = 0;
-    int i, k, j, have = 0;
-
-    /* t_f: cheapest profile within T_max on the grid; key (over, fuel or max thrust). */
+    double t_f = TF_GRID_LO, best_over = 0, best_val = 0;
+    int i, k, have = 0;
     for (i = 0; i < TF_GRID_N; ++i) {
         const double tf = tf_grid(i);
         double tmax = 0.0, val;
@@ -206,8 +203,17 @@ void pdg_initial_guess(const pdg_scenario *sc, double *x, double *u, double *t_f
             t_f = tf;
         }
     }
-    required_thrust(sc, t_f, r, v, T, m);
-    /* desired body axis 1: from the initial one, along the thrust, to upright at the end */
+    return t_f;
+}
+
+/* q (N x 4): body axis 1 from the initial one, along the thrust T, to upright at the end
+ * (d: N x 3 scratch) */
+static void attitude_along_thrust(const pdg_scenario *sc, const double *T, double *d,
+                                  double *q)
+{
+    const int N = sc->params.N;
+    double C0[3][3], b0[3];
+    int i, k, j;
     pdg_dcm_bi(sc->q0, C0); /* C_BI; C_IB = C0^T, so b0 = first column of C_IB = row 0 */
     for (i = 0; i < 3; ++i) {
         b0[i] = C0[0][i];
@@ -241,52 +247,52 @@ void pdg_initial_guess(const pdg_scenario *sc, double *x, double *u, double *t_f
         }
         quat_from_dcm_bi(CBI, q + 4 * k);
     }
-    /* sign continuity from q0 */
-    {
-        double dot = 0.0;
+}
+
+/* q_k := -q_k where it points away from `ref` (the same attitude) */
+static void same_hemisphere(double *qk, const double *ref)
+{
+    double dot = 0.0;
+    int i;
+    for (i = 0; i < 4; ++i) {
+        dot += qk[i] * ref[i];
+    }
+    if (dot < 0) {
         for (i = 0; i < 4; ++i) {
-            dot += q[i] * sc->q0[i];
-        }
-        if (dot < 0) {
-            for (i = 0; i < 4; ++i) {
-                q[i] = -q[i];
-            }
-        }
-        for (k = 1; k < N; ++k) {
-            dot = 0.0;
-            for (i = 0; i < 4; ++i) {
-                dot += q[4 * k + i] * q[4 * (k - 1) + i];
-            }
-            if (dot < 0) {
-                for (i = 0; i < 4; ++i) {
-                    q[4 * k + i] = -q[4 * k + i];
-                }
-            }
+            qk[i] = -qk[i];
         }
     }
-    if (!p->final_roll_free) {
-        for (k = 0; k < N; ++k) {
-            const double s = node_s(k, N);
-            const double we = smoothstep((s - (1.0 - BLEND_FRACTION)) / BLEND_FRACTION);
-            double dot = 0.0, sg, nq;
-            for (i = 0; i < 4; ++i) {
-                dot += q[4 * k + i] * p->q_f[i];
-            }
-            sg = dot < 0 ? -1.0 : 1.0;
-            for (i = 0; i < 4; ++i) {
-                q[4 * k + i] = (1.0 - we) * q[4 * k + i] + we * sg * p->q_f[i];
-            }
-            nq = sqrt(q[4 * k] * q[4 * k] + q[4 * k + 1] * q[4 * k + 1] +
-                      q[4 * k + 2] * q[4 * k + 2] + q[4 * k + 3] * q[4 * k + 3]);
-            for (i = 0; i < 4; ++i) {
-                q[4 * k + i] /= nq;
-            }
+}
+
+/* Pinned final attitude: q blended into q_f over the last BLEND_FRACTION, renormalized */
+static void blend_to_final_attitude(const pdg_params *p, double *q)
+{
+    int k, i;
+    for (k = 0; k < p->N; ++k) {
+        const double s = node_s(k, p->N);
+        const double we = smoothstep((s - (1.0 - BLEND_FRACTION)) / BLEND_FRACTION);
+        double dot = 0.0, sg, nq;
+        for (i = 0; i < 4; ++i) {
+            dot += q[4 * k + i] * p->q_f[i];
+        }
+        sg = dot < 0 ? -1.0 : 1.0;
+        for (i = 0; i < 4; ++i) {
+            q[4 * k + i] = (1.0 - we) * q[4 * k + i] + we * sg * p->q_f[i];
+        }
+        nq = sqrt(q[4 * k] * q[4 * k] + q[4 * k + 1] * q[4 * k + 1] +
+                  q[4 * k + 2] * q[4 * k + 2] + q[4 * k + 3] * q[4 * k + 3]);
+        for (i = 0; i < 4; ++i) {
+            q[4 * k + i] /= nq;
         }
     }
-    for (k = 0; k < N; ++k) {
-        t[k] = node_s(k, N) * t_f;
-    }
-    /* omega: least squares of q' = 1/2 Omega(omega) q, i.e. 2 M(q)' q' / |q|^2 */
+}
+
+/* omega (N x 3) at the times t: least squares of q' = 1/2 Omega(omega) q, i.e.
+ * 2 M(q)' q' / |q|^2; the roll rate stays w0's (no roll torque) */
+static void body_rates(const pdg_scenario *sc, const double *q, const double *t, double *w)
+{
+    const int N = sc->params.N;
+    int k, i, j;
     for (k = 0; k < N; ++k) {
         const double *qk = q + 4 * k;
         double dq[4], nq2 = 0.0;
@@ -307,9 +313,57 @@ void pdg_initial_guess(const pdg_scenario *sc, double *x, double *u, double *t_f
                 w[3 * k + j] = 2.0 * acc / nq2;
             }
         }
-        w[3 * k] = sc->w0[0]; /* no roll torque: the roll rate is constant */
+        w[3 * k] = sc->w0[0];
+    }
+}
+
+/* The lateral thrust (u2, u3) whose gimbal torque gives the rates w at the times t:
+ * r_T x T_B = J w' + w x J w (wd: N x 3 scratch) */
+static void gimbal_for_rates(const pdg_params *p, const double *w, const double *t, double *wd,
+                             double *u)
+{
+    int k, i;
+    for (k = 0; k < p->N; ++k) {
+        const double *wk = w + 3 * k;
+        double Jw[3], wxJw[3], tau[3];
+        for (i = 0; i < 3; ++i) {
+            wd[i] = gradient_at(w + i, 3, t, p->N, k);
+            Jw[i] = p->J_B[i] * wk[i];
+        }
+        cross(wk, Jw, wxJw);
+        for (i = 0; i < 3; ++i) {
+            tau[i] = p->J_B[i] * wd[i] + wxJw[i];
+        }
+        u[3 * k + 1] = tau[2] / p->r_T_B[0];
+        u[3 * k + 2] = -tau[1] / p->r_T_B[0];
+    }
+}
+
+void pdg_initial_guess(const pdg_scenario *sc, double *x, double *u, double *t_f_out,
+                       double *work)
+{
+    const pdg_params *p = &sc->params;
+    const int N = p->N;
+    double *r = work, *v = r + 3 * N, *T = v + 3 * N, *m = T + 3 * N, *d = m + N;
+    double *q = d + 3 * N, *t = q + 4 * N, *w = t + N, *wd = w + 3 * N; /* 25 N doubles */
+    double t_f;
+    int i, k;
+
+    t_f = cheapest_t_f(sc, r, v, T, m);
+    required_thrust(sc, t_f, r, v, T, m);
+    attitude_along_thrust(sc, T, d, q);
+    same_hemisphere(q, sc->q0); /* sign continuity from q0 */
+    for (k = 1; k < N; ++k) {
+        same_hemisphere(q + 4 * k, q + 4 * (k - 1));
+    }
+    if (!p->final_roll_free) {
+        blend_to_final_attitude(p, q);
     }
     for (k = 0; k < N; ++k) {
+        t[k] = node_s(k, N) * t_f;
+    }
+    body_rates(sc, q, t, w);
+    for (k = 0; k < N; ++k) { /* the states, and the thrust T_I in the body frame */
         double *xk = x + NX * k, C[3][3];
         for (i = 0; i < 3; ++i) {
             xk[i] = r[3 * k + i];
@@ -325,112 +379,112 @@ void pdg_initial_guess(const pdg_scenario *sc, double *x, double *u, double *t_f
             u[3 * k + i] = C[i][0] * T[3 * k] + C[i][1] * T[3 * k + 1] + C[i][2] * T[3 * k + 2];
         }
     }
-    /* gimbal that makes the angular rate consistent: r_T x T_B = J w' + w x J w */
-    for (k = 0; k < N; ++k) {
-        const double *wk = w + 3 * k;
-        double Jw[3], wxJw[3], tau[3];
-        for (i = 0; i < 3; ++i) {
-            qd[i] = gradient_at(w + i, 3, t, N, k);
-            Jw[i] = p->J_B[i] * wk[i];
-        }
-        cross(wk, Jw, wxJw);
-        for (i = 0; i < 3; ++i) {
-            tau[i] = p->J_B[i] * qd[i] + wxJw[i];
-        }
-        u[3 * k + 1] = tau[2] / p->r_T_B[0];
-        u[3 * k + 2] = -tau[1] / p->r_T_B[0];
-    }
+    gimbal_for_rates(p, w, t, wd, u);
     *t_f_out = t_f;
     pdg_project_guess(sc, x, u, t_f_out);
 }
 
-void pdg_project_guess(const pdg_scenario *sc, double *x, double *u, double *t_f)
+/* The boundary conditions on the first and last node: x_0 the initial state; r, v, omega and
+ * q (q2 = q3 = 0 when the final roll is free) the final target's */
+static void pin_boundary(const pdg_scenario *sc, double *x)
 {
     const pdg_params *p = &sc->params;
-    const int N = p->N;
-    const double qmax = pdg_tilt_q_max(p), wmax = pdg_omega_max(p);
-    const double tg = pdg_tan_glideslope(p), cg = pdg_cos_gimbal(p);
-    const double tan_d = tan(acos(cg)), cone0 = cg, cone1 = sqrt(1 - cg * cg);
-    double xf[NX];
-    int k, i;
+    double xf[NX], *xl = x + NX * (p->N - 1);
+    int i;
     pdg_x_final_target(sc, xf);
     pdg_initial_state(sc, x);
-    {
-        double *xl = x + NX * (N - 1);
-        for (i = 0; i < 6; ++i) {
+    for (i = 0; i < 6; ++i) {
+        xl[i] = xf[i];
+    }
+    for (i = 10; i < 13; ++i) {
+        xl[i] = xf[i];
+    }
+    if (p->final_roll_free) {
+        xl[8] = xl[9] = 0.0;
+    } else {
+        for (i = 6; i < 10; ++i) {
             xl[i] = xf[i];
-        }
-        for (i = 10; i < 13; ++i) {
-            xl[i] = xf[i];
-        }
-        if (p->final_roll_free) {
-            xl[8] = xl[9] = 0.0;
-        } else {
-            for (i = 6; i < 10; ++i) {
-                xl[i] = xf[i];
-            }
         }
     }
-    for (k = 0; k < N; ++k) {
-        double *xk = x + NX * k, *q = xk + 6, nq, tilt, wn, horiz, un, lateral, axial;
-        double *uk = u + 3 * k;
-        nq = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-        nq = nq > 1e-12 ? nq : 1e-12;
-        for (i = 0; i < 4; ++i) {
-            q[i] /= nq;
+}
+
+/* One node's state into the convex constraints: q normalized and within the tilt limit,
+ * omega within omega_max, the mass within [m_dry, m0], r1 above the glideslope */
+static void project_state(const pdg_scenario *sc, double *xk)
+{
+    const pdg_params *p = &sc->params;
+    const double qmax = pdg_tilt_q_max(p), wmax = pdg_omega_max(p);
+    const double tg = pdg_tan_glideslope(p);
+    double *q = xk + 6, nq, tilt, wn, horiz;
+    int i;
+    nq = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    nq = nq > 1e-12 ? nq : 1e-12;
+    for (i = 0; i < 4; ++i) {
+        q[i] /= nq;
+    }
+    tilt = sqrt(q[2] * q[2] + q[3] * q[3]);
+    if (tilt > qmax) { /* shrink (q2, q3) onto the tilt limit, keep (q0, q1) direction */
+        const double rest = sqrt(q[0] * q[0] + q[1] * q[1]);
+        const double room = sqrt(1.0 - qmax * qmax);
+        q[2] *= qmax / tilt;
+        q[3] *= qmax / tilt;
+        if (rest > 1e-12) {
+            q[0] = q[0] / rest * room;
+            q[1] = q[1] / rest * room;
+        } else {
+            q[0] = room;
+            q[1] = 0.0;
         }
-        tilt = sqrt(q[2] * q[2] + q[3] * q[3]);
-        if (tilt > qmax) { /* shrink (q2, q3) onto the tilt limit, keep (q0, q1) direction */
-            const double rest = sqrt(q[0] * q[0] + q[1] * q[1]);
-            const double room = sqrt(1.0 - qmax * qmax);
-            q[2] *= qmax / tilt;
-            q[3] *= qmax / tilt;
-            if (rest > 1e-12) {
-                const double rr = rest > 1e-12 ? rest : 1e-12;
-                q[0] = q[0] / rr * room;
-                q[1] = q[1] / rr * room;
-            } else {
-                q[0] = room;
-                q[1] = 0.0;
-            }
-        }
-        wn = norm3(xk + 10);
-        wn = wmax / (wn > 1e-12 ? wn : 1e-12);
-        wn = wn < 1.0 ? wn : 1.0;
-        for (i = 10; i < 13; ++i) {
-            xk[i] *= wn;
-        }
-        /* the mass only falls: within [m_dry, m0] (a prediction above m0 is hundreds of
-         * trust radii away in the scaled mass, (m - m_dry) / (m0 - m_dry), when little
-         * propellant is left) */
-        xk[IM] = xk[IM] > p->m_dry ? xk[IM] : p->m_dry;
-        xk[IM] = xk[IM] < sc->m0 ? xk[IM] : sc->m0;
-        horiz = sqrt(xk[1] * xk[1] + xk[2] * xk[2]);
-        xk[0] = xk[0] > tg * horiz ? xk[0] : tg * horiz;
-        /* thrust: into the gimbal cone about body axis 1, then into [T_min, T_max] */
-        lateral = sqrt(uk[1] * uk[1] + uk[2] * uk[2]);
-        axial = uk[0] > 0.0 ? uk[0] : 0.0;
-        {
-            double new_axial = uk[0], new_lat = lateral, scale_lat;
-            if (lateral > tan_d * axial) {
-                double proj = uk[0] * cone0 + lateral * cone1;
-                proj = proj > 1e-9 ? proj : 1e-9;
-                new_axial = proj * cone0;
-                new_lat = proj * cone1;
-            }
-            scale_lat = lateral > 1e-12 ? new_lat / lateral : 0.0;
-            uk[0] = new_axial;
-            uk[1] *= scale_lat;
-            uk[2] *= scale_lat;
-        }
-        un = norm3(uk);
-        un = un > 1e-12 ? un : 1e-12;
-        {
-            const double cl = un < p->T_min ? p->T_min : (un > p->T_max ? p->T_max : un);
-            for (i = 0; i < 3; ++i) {
-                uk[i] *= cl / un;
-            }
-        }
+    }
+    wn = norm3(xk + 10);
+    wn = wmax / (wn > 1e-12 ? wn : 1e-12);
+    wn = wn < 1.0 ? wn : 1.0;
+    for (i = 10; i < 13; ++i) {
+        xk[i] *= wn;
+    }
+    /* the mass only falls: within [m_dry, m0] (a prediction above m0 is hundreds of trust
+     * radii away in the scaled mass, (m - m_dry) / (m0 - m_dry), when little propellant is
+     * left) */
+    xk[IM] = xk[IM] > p->m_dry ? xk[IM] : p->m_dry;
+    xk[IM] = xk[IM] < sc->m0 ? xk[IM] : sc->m0;
+    horiz = sqrt(xk[1] * xk[1] + xk[2] * xk[2]);
+    xk[0] = xk[0] > tg * horiz ? xk[0] : tg * horiz;
+}
+
+/* One node's thrust: into the gimbal cone about body axis 1, then into [T_min, T_max] */
+static void project_thrust(const pdg_params *p, double *uk)
+{
+    const double cg = pdg_cos_gimbal(p);
+    const double tan_d = tan(acos(cg)), cone0 = cg, cone1 = sqrt(1 - cg * cg);
+    const double lateral = sqrt(uk[1] * uk[1] + uk[2] * uk[2]);
+    const double axial = uk[0] > 0.0 ? uk[0] : 0.0;
+    double new_axial = uk[0], new_lat = lateral, scale_lat, un, cl;
+    int i;
+    if (lateral > tan_d * axial) {
+        double proj = uk[0] * cone0 + lateral * cone1;
+        proj = proj > 1e-9 ? proj : 1e-9;
+        new_axial = proj * cone0;
+        new_lat = proj * cone1;
+    }
+    scale_lat = lateral > 1e-12 ? new_lat / lateral : 0.0;
+    uk[0] = new_axial;
+    uk[1] *= scale_lat;
+    uk[2] *= scale_lat;
+    un = norm3(uk);
+    un = un > 1e-12 ? un : 1e-12;
+    cl = un < p->T_min ? p->T_min : (un > p->T_max ? p->T_max : un);
+    for (i = 0; i < 3; ++i) {
+        uk[i] *= cl / un;
+    }
+}
+
+void pdg_project_guess(const pdg_scenario *sc, double *x, double *u, double *t_f)
+{
+    int k;
+    pin_boundary(sc, x);
+    for (k = 0; k < sc->params.N; ++k) {
+        project_state(sc, x + NX * k);
+        project_thrust(&sc->params, u + 3 * k);
     }
     *t_f = *t_f > 1e-2 ? *t_f : 1e-2;
 }

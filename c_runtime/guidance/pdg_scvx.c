@@ -318,8 +318,6 @@ static int build_csc(pdg_workspace *ws, const int *row, const int *col, int *ent
 
 enum { BUILD_SIZE, BUILD_SETUP };
 
-/* Sizes of the subproblem for the vehicle's N, terminal condition and A_k pattern (no memory
- * needed). */
 /* Member by member, so that the padding of the copy keeps the zeros it was cleared to (the
  * caller's padding is indeterminate, and the layout checksum reads the copy's bytes). A
  * field added to pdg_settings must be added here (test_guidance compares the copy with the
@@ -349,6 +347,8 @@ static void copy_settings(pdg_settings *d, const pdg_settings *s)
     d->prox_u = s->prox_u;
 }
 
+/* Sizes of the subproblem for the vehicle's N, terminal condition and A_k pattern (no memory
+ * needed). */
 static void problem_dims(pdg_workspace *w, const pdg_params *vehicle, const pdg_settings *st)
 {
     const int N = vehicle->N;
@@ -425,6 +425,106 @@ static void claim_arrays(pdg_workspace *t, arena *a)
     t->masks_out = (unsigned char *)take(a, (size_t)t->st.iter_max * N * NC, 1);
 }
 
+/* The status of too little memory: the arena's at set-up, the scratch's in the size query */
+static pdg_setup_status short_memory(int mode)
+{
+    return mode == BUILD_SETUP ? PDG_SETUP_ARENA_TOO_SMALL : PDG_SETUP_SCRATCH_TOO_SMALL;
+}
+
+/* Step 2 of build: the subproblem's sparsity pattern, fixed from here on (row, col, ent:
+ * nnz temporaries each), and finite placeholder numbers; every solve writes the real ones. */
+static pdg_setup_status fix_pattern(pdg_workspace *ws, int *row, int *col, int *ent)
+{
+    pdg_emitter em;
+    int e, i, l, nsoc, n_eq = 0;
+    pdg_cone_dims(ws->N, &l, &nsoc, ws->q);
+    em.mode = 1;
+    em.cnt = 0;
+    em.p = ws->p;
+    em.phi_a = ws->phi_a;
+    em.row = row;
+    em.col = col;
+    pdg_emit(&em, &ws->lay, ws->roll_free, NULL);
+    for (e = 0; e < ws->nnz; ++e) {
+        n_eq += row[e] < ws->p;
+    }
+    if (em.cnt != ws->nnz || n_eq != ws->nnz_A || build_csc(ws, row, col, ent) != 0) {
+        return PDG_SETUP_SOCP_ERROR; /* an inconsistent pattern is a bug: report, never crash */
+    }
+    if (ws->st.prox_u > 0.0) {
+        prox_pattern(ws);
+    }
+    for (i = 0; i < ws->nnz_A; ++i) {
+        ws->Ax[i] = 1.0;
+    }
+    for (i = 0; i < ws->nnz_G; ++i) {
+        ws->Gx[i] = -1.0;
+    }
+    for (i = 0; i < ws->p; ++i) {
+        ws->b[i] = 0.0;
+    }
+    for (i = 0; i < ws->m; ++i) {
+        ws->h[i] = 1.0;
+    }
+    for (i = 0; i < ws->n; ++i) {
+        ws->c[i] = 1.0;
+    }
+    return PDG_SETUP_OK;
+}
+
+/* Step 3 of build: the SOCP workspace, its symbolic analysis in the rest of the arena, then
+ * (BUILD_SETUP) its set-up there. The subproblem has stage structure by construction (every
+ * variable under the trust region or a penalty cone, the dynamics coupling neighbouring
+ * nodes): the banded KKT method first, whose analysis needs far less scratch than the sparse
+ * method's AMD; the sparse method only should the runtime refuse it. *need as build's. */
+static pdg_setup_status socp_workspace(pdg_workspace *ws, const arena *a,
+                                       const pdg_settings *st, int mode, size_t skip,
+                                       size_t *need)
+{
+    const size_t socp_at = (a->top + (ALIGN - 1)) & ~(size_t)(ALIGN - 1);
+    size_t nscr = 0, nsocp = 0, total, hw;
+    tscvx_settings ts;
+    tscvx_data d;
+    tscvx_info info;
+    int i;
+    socp_settings(st, &ts);
+    socp_data(ws, &d);
+    for (i = 0; i < 2; ++i) {
+        tscvx_setup_status sz;
+        ts.kkt_backend = i == 0 ? TSCVX_KKT_BANDED : TSCVX_KKT_STATIC;
+        if (tscvx_scratch_size(&d, &ts, &nscr) != TSCVX_SETUP_OK) {
+            return PDG_SETUP_SOCP_ERROR;
+        }
+        if (socp_at + nscr > a->cap) {
+            *need = (socp_at + nscr > a->high ? socp_at + nscr : a->high) + ALIGN;
+            return short_memory(mode);
+        }
+        sz = tscvx_workspace_size(&d, &ts, a->base + socp_at, a->cap - socp_at, &nsocp);
+        if (sz == TSCVX_SETUP_OK) {
+            break;
+        }
+        if (sz != TSCVX_SETUP_NOT_BANDED || i == 1) {
+            return PDG_SETUP_SOCP_ERROR;
+        }
+    }
+    total = socp_at + (nsocp > nscr ? nsocp : nscr);
+    *need = (total > a->high ? total : a->high) + ALIGN;
+    if (mode == BUILD_SIZE) {
+        return PDG_SETUP_OK;
+    }
+    if (socp_at + nsocp > a->cap) {
+        return PDG_SETUP_ARENA_TOO_SMALL;
+    }
+    if (tscvx_setup(&ws->socp, a->base + socp_at, a->cap - socp_at, &d, &ts) !=
+        TSCVX_SETUP_OK) {
+        return PDG_SETUP_SOCP_ERROR;
+    }
+    tscvx_get_info(ws->socp, &info);
+    hw = socp_at + (info.arena_high_water > nscr ? info.arena_high_water : nscr);
+    ws->arena_high = skip + (hw > a->high ? hw : a->high);
+    return PDG_SETUP_OK;
+}
+
 /* The one set-up path. BUILD_SIZE stops after the SOCP's analysis and returns the arena size
  * in *need; BUILD_SETUP builds the workspace. When the memory is short, *need is a size that
  * gets further (the exact one once the pattern fits). */
@@ -432,15 +532,11 @@ static pdg_setup_status build(void *mem, size_t bytes, const pdg_params *vehicle
                               const pdg_settings *st, int mode, pdg_workspace **out,
                               size_t *need)
 {
-    const pdg_setup_status short_memory =
-        mode == BUILD_SETUP ? PDG_SETUP_ARENA_TOO_SMALL : PDG_SETUP_SCRATCH_TOO_SMALL;
     arena a;
     pdg_workspace dims, *ws;
-    pdg_emitter em;
-    tscvx_settings ts;
-    tscvx_data d;
-    size_t mark, skip = 0, nscr = 0, nsocp = 0, socp_at, total;
-    int *row, *col, *ent, e, i, n_eq = 0, l, nsoc;
+    pdg_setup_status status;
+    size_t mark, skip = 0;
+    int *row, *col, *ent;
 
     if (!vehicle || !st || !need) {
         return PDG_SETUP_NULL_ARGUMENT;
@@ -475,86 +571,17 @@ static pdg_setup_status build(void *mem, size_t bytes, const pdg_params *vehicle
     ent = (int *)take(&a, (size_t)ws->nnz, sizeof(int));
     if (a.overflow) {
         *need = a.high + ALIGN;
-        return short_memory;
+        return short_memory(mode);
     }
-    /* 2. the sparsity pattern, fixed from here on */
-    pdg_cone_dims(ws->N, &l, &nsoc, ws->q);
-    em.mode = 1;
-    em.cnt = 0;
-    em.p = ws->p;
-    em.phi_a = ws->phi_a;
-    em.row = row;
-    em.col = col;
-    pdg_emit(&em, &ws->lay, ws->roll_free, NULL);
-    for (e = 0; e < ws->nnz; ++e) {
-        n_eq += row[e] < ws->p;
-    }
-    if (em.cnt != ws->nnz || n_eq != ws->nnz_A || build_csc(ws, row, col, ent) != 0) {
-        return PDG_SETUP_SOCP_ERROR; /* an inconsistent pattern is a bug: report, never crash */
+    /* 2. the sparsity pattern, then 3. the SOCP workspace in the memory left */
+    status = fix_pattern(ws, row, col, ent);
+    if (status != PDG_SETUP_OK) {
+        return status;
     }
     a.top = mark; /* temporaries released */
-    if (ws->st.prox_u > 0.0) {
-        prox_pattern(ws);
-    }
-    /* placeholder numbers (finite); every solve writes the real ones */
-    for (i = 0; i < ws->nnz_A; ++i) {
-        ws->Ax[i] = 1.0;
-    }
-    for (i = 0; i < ws->nnz_G; ++i) {
-        ws->Gx[i] = -1.0;
-    }
-    for (i = 0; i < ws->p; ++i) {
-        ws->b[i] = 0.0;
-    }
-    for (i = 0; i < ws->m; ++i) {
-        ws->h[i] = 1.0;
-    }
-    for (i = 0; i < ws->n; ++i) {
-        ws->c[i] = 1.0;
-    }
-    /* 3. the SOCP workspace: symbolic analysis in the rest of the memory, then set-up there.
-     * The subproblem has stage structure by construction (every variable under the trust
-     * region or a penalty cone, the dynamics coupling neighbouring nodes): the banded KKT
-     * method first, whose analysis needs far less scratch than the sparse method's AMD; the
-     * sparse method only should the runtime refuse it. */
-    socp_settings(st, &ts);
-    socp_data(ws, &d);
-    socp_at = (a.top + (ALIGN - 1)) & ~(size_t)(ALIGN - 1);
-    for (i = 0; i < 2; ++i) {
-        tscvx_setup_status sz;
-        ts.kkt_backend = i == 0 ? TSCVX_KKT_BANDED : TSCVX_KKT_STATIC;
-        if (tscvx_scratch_size(&d, &ts, &nscr) != TSCVX_SETUP_OK) {
-            return PDG_SETUP_SOCP_ERROR;
-        }
-        if (socp_at + nscr > a.cap) {
-            *need = (socp_at + nscr > a.high ? socp_at + nscr : a.high) + ALIGN;
-            return short_memory;
-        }
-        sz = tscvx_workspace_size(&d, &ts, a.base + socp_at, a.cap - socp_at, &nsocp);
-        if (sz == TSCVX_SETUP_OK) {
-            break;
-        }
-        if (sz != TSCVX_SETUP_NOT_BANDED || i == 1) {
-            return PDG_SETUP_SOCP_ERROR;
-        }
-    }
-    total = socp_at + (nsocp > nscr ? nsocp : nscr);
-    *need = (total > a.high ? total : a.high) + ALIGN;
-    if (mode == BUILD_SIZE) {
-        return PDG_SETUP_OK;
-    }
-    if (socp_at + nsocp > a.cap) {
-        return PDG_SETUP_ARENA_TOO_SMALL;
-    }
-    if (tscvx_setup(&ws->socp, a.base + socp_at, a.cap - socp_at, &d, &ts) != TSCVX_SETUP_OK) {
-        return PDG_SETUP_SOCP_ERROR;
-    }
-    {
-        tscvx_info info;
-        size_t hw;
-        tscvx_get_info(ws->socp, &info);
-        hw = socp_at + (info.arena_high_water > nscr ? info.arena_high_water : nscr);
-        ws->arena_high = skip + (hw > a.high ? hw : a.high);
+    status = socp_workspace(ws, &a, st, mode, skip, need);
+    if (status != PDG_SETUP_OK || mode == BUILD_SIZE) {
+        return status;
     }
     ws->arena_bytes = bytes;
     ws->layout_sum = pdg_layout_sum(ws);
@@ -959,7 +986,6 @@ static pdg_status diagnose(pdg_workspace *ws, double vc, double defect, double v
     return PDG_INFEASIBLE;
 }
 
-/* Mask for iteration k into ws->mask; returns 1 when there is one (0: full problem). */
 /* 1: ws->mask holds iteration k's mask; 0: the full problem; -1: the callback answered
  * neither (its answer in *answer), which stops the solve. */
 static int mask_for(pdg_workspace *ws, const pdg_options *o, int k, int *answer)
@@ -1125,6 +1151,191 @@ static void failed_row(pdg_log_row *r, double J)
     r->accepted = 0;
 }
 
+/* What Algorithm 1 carries from one subproblem to the next. */
+typedef struct {
+    int k;             /* successions (accepted steps); a rejection retries the same k */
+    double eta;        /* trust radius of the next subproblem */
+    double J;          /* penalty J at the iterate z */
+    double defect;     /* its largest nonlinear defect */
+    double viol;       /* its largest path-constraint value */
+    double vc;         /* virtual control + buffers of the last candidate */
+    int have_masks;    /* T-SCvx: the caller gives masks */
+    int prev_has_mask; /* the last accepted subproblem was masked (tau_r compares with it) */
+    int have_solution; /* a subproblem solution to warm-start the next IPM from */
+    int stalled;       /* rejected at the smallest radius: the same subproblem forever */
+} scvx_state;
+
+/* Step 1 (T-SCvx): the caller's mask for iteration k + 1 plus what the full-constraint guard
+ * put back, into ws->keep (T_min always kept). Returns 1 with a mask, 0 for the full
+ * problem, -1 (message written) when the callback answered neither. */
+static int iteration_mask(pdg_workspace *ws, const pdg_options *opt, const scvx_state *s,
+                          double *tau_r, char *msg)
+{
+    int answer = 0, i;
+    const int has_mask = s->have_masks ? mask_for(ws, opt, s->k + 1, &answer) : 0;
+    if (has_mask < 0) {
+        snprintf(msg, PDG_MESSAGE_LEN,
+                 "masks: the mask callback answered %d for iteration %d (1: it wrote a "
+                 "mask, 0: the full problem); the solve stops at its last accepted step",
+                 answer, s->k + 1);
+        return -1;
+    }
+    if (has_mask) {
+        memcpy(ws->pred, ws->mask, (size_t)NC * ws->N);
+        if (s->prev_has_mask) {
+            *tau_r = changed_fraction(ws);
+        }
+        for (i = 0; i < NC * ws->N; ++i) {
+            ws->mask[i] |= ws->forced[i];
+            ws->keep[i] = (i % NC == 6) ? 1 : ws->mask[i]; /* T_min always kept */
+        }
+    }
+    return has_mask;
+}
+
+/* Step 2: the convex subproblem about z with radius eta, solved by the SOCP runtime into
+ * ws->znew and its duals. Starts the log row (the time is the conic solve's alone, as in the
+ * Python reference's log). Returns the SOCP status (TSCVX_INVALID_INPUT if assembly failed). */
+static int solve_subproblem(pdg_workspace *ws, const pdg_options *opt,
+                            const unsigned char *keep, scvx_state *s, pdg_log_row *r,
+                            pdg_result *res)
+{
+    tscvx_info info;
+    double t_solve = 0.0;
+    int sst = TSCVX_INVALID_INPUT;
+    if (assemble(ws, ws->z, ws->disc, keep, s->eta) == 0) {
+        const double t0 = opt->clock_s ? opt->clock_s() : 0.0;
+        /* from the last subproblem's solution, accepted or not: the subproblems of a
+         * solve differ by one linearization or one radius (tscvx_warm_start) */
+        if (s->have_solution && ws->st.socp_warm_start) {
+            tscvx_warm_start(ws->socp, ws->znew, ws->ydual, ws->zdual, ws->slack);
+        }
+        sst = (int)tscvx_solve(ws->socp);
+        t_solve = opt->clock_s ? opt->clock_s() - t0 : 0.0;
+    }
+    tscvx_get_info(ws->socp, &info);
+    memset(r, 0, sizeof *r);
+    r->subproblem_time_s = t_solve;
+    r->k = s->k + 1;
+    r->eta = s->eta;
+    r->solver_status = sst;
+    /* a warm start that failed and was run again cold counts both runs */
+    r->solver_iterations =
+        sst == TSCVX_INVALID_INPUT ? 0 : info.iterations + info.restart_iterations;
+    res->socp_iterations += r->solver_iterations;
+    if (sst == TSCVX_SOLVED || sst == TSCVX_SOLVED_INACCURATE) {
+        tscvx_get_solution(ws->socp, ws->znew, ws->ydual, ws->zdual, ws->slack);
+        s->have_solution = 1;
+    }
+    return sst;
+}
+
+/* Step 4: rho = actual / predicted change, acceptance and the next radius, Eq. (15), into the
+ * log row; the full-constraint guard of T-SCvx may overrule. Returns the next radius. */
+static double judge(pdg_workspace *ws, const scvx_state *s, const candidate *cd, int has_mask,
+                    double tau_r, pdg_log_row *r)
+{
+    const pdg_settings *st = &ws->st;
+    const double dJ = s->J - cd->J, dL = s->J - cd->L;
+    const double rho = dL != 0.0 ? dJ / dL : (double)NAN;
+    /* dL <= 0 only when the subproblem gives the reference back (to the solver's tolerance);
+     * Algorithm 1 stops there (dJ = 0), here the step is accepted with rho = 1 and the
+     * convergence test decides (as the Python reference) */
+    int accepted = dJ == 0.0 || dL <= 0.0 || rho >= st->rho0;
+    double eta_new = trust_update(st, s->eta, dL > 0 ? rho : 1.0, accepted, cd->tr_step,
+                                  s->have_masks && st->tau_r_update, tau_r);
+    /* Full-constraint guard: a candidate that violates a constraint the mask dropped is
+     * rejected and the constraint put back for the rest of the solve; the retry starts from
+     * the same reference (which meets every convex constraint, so the subproblem stays
+     * feasible) with the same radius. */
+    const int restored = has_mask ? put_back_dropped(ws) : 0;
+    if (restored > 0) {
+        accepted = 0;
+        eta_new = s->eta;
+    }
+    r->J = cd->J;
+    r->dJ = dJ;
+    r->dL = dL;
+    r->rho = rho;
+    r->vc_norm1 = cd->vc;
+    r->n_tight = cd->n_tight;
+    r->accepted = accepted;
+    r->restored = restored;
+    return eta_new;
+}
+
+/* The candidate becomes the iterate: succession k + 1. */
+static void succeed(pdg_workspace *ws, scvx_state *s, const candidate *cd, int has_mask)
+{
+    s->prev_has_mask = has_mask;
+    if (has_mask) {
+        memcpy(ws->prev_mask, ws->pred, (size_t)NC * ws->N);
+    }
+    accept(ws, s->k);
+    ws->n_masks_out = ++s->k;
+    s->J = cd->J;
+    s->defect = cd->defect;
+    s->viol = cd->viol;
+}
+
+/* One subproblem of Algorithm 1 (Algorithm 2 with masks). Returns 1 to go on; 0 to stop,
+ * with the status in *status (PDG_MAX_ITERATIONS when stalled, for diagnose). */
+static int scvx_iteration(pdg_workspace *ws, const pdg_options *opt, scvx_state *s,
+                          pdg_result *res, pdg_status *status)
+{
+    const pdg_settings *st = &ws->st;
+    pdg_log_row *r = &ws->log[ws->n_log++];
+    double tau_r = 0.0, eta_new;
+    candidate cd;
+    int sst;
+    const int has_mask = iteration_mask(ws, opt, s, &tau_r, res->message);
+    if (has_mask < 0) {
+        ws->n_log--;
+        *status = PDG_INVALID_INPUT;
+        return 0;
+    }
+    sst = solve_subproblem(ws, opt, has_mask ? ws->keep : NULL, s, r, res);
+    if (sst != TSCVX_SOLVED && sst != TSCVX_SOLVED_INACCURATE) {
+        failed_row(r, s->J);
+        *status = PDG_SOLVER_ERROR;
+        snprintf(res->message, PDG_MESSAGE_LEN,
+                 "subproblem at iteration %d: conic solver returned %s", s->k + 1,
+                 socp_status_name(sst));
+        return 0;
+    }
+    /* step 3: the candidate on the full nonlinear problem */
+    if (evaluate(ws, has_mask ? ws->keep : NULL, &cd) != 0) {
+        failed_row(r, s->J);
+        *status = PDG_SOLVER_ERROR;
+        snprintf(res->message, PDG_MESSAGE_LEN,
+                 "iteration %d: model evaluation failed at the subproblem solution", s->k + 1);
+        return 0;
+    }
+    s->vc = cd.vc;
+    eta_new = judge(ws, s, &cd, has_mask, tau_r, r);
+    if (r->accepted) {
+        succeed(ws, s, &cd, has_mask);
+    }
+    /* step 5: convergence on the FULL constraint set; T-SCvx never returns what it rejects */
+    if (r->accepted && cd.step <= st->step_tol && s->vc <= st->vc_tol &&
+        s->defect <= st->defect_tol && s->viol <= st->defect_tol) {
+        *status = PDG_SOLVED;
+        snprintf(res->message, PDG_MESSAGE_LEN, "converged");
+        return 0;
+    }
+    if (!r->accepted && !r->restored) {
+        if (s->eta <= st->eta_lb) {
+            s->stalled = 1; /* same reference, same radius: it would be rejected forever */
+            return 0;
+        }
+        if (eta_new < cd.tr_step) {
+            pull_back(ws, RETRY_START * eta_new / cd.tr_step); /* the retry's warm start */
+        }
+    }
+    s->eta = eta_new;
+    return 1;
+}
+
 pdg_status pdg_solve(pdg_workspace *ws, const pdg_scenario *scenario, const pdg_options *opt,
                      pdg_result *res)
 {
@@ -1148,170 +1359,42 @@ int pdg_result_begin(pdg_workspace *ws, pdg_result *res)
     return 0;
 }
 
+/* Paper Algorithm 1 (Algorithm 2 when the options carry masks): subproblems until
+ * convergence on the full constraint set, a stall, a failure or the settings' limits. */
 pdg_status pdg_solve_from(pdg_workspace *ws, const pdg_scenario *scenario,
                           const pdg_options *opt, pdg_result *res, double eta_init)
 {
     static const pdg_options no_options = {NULL, NULL, 0.0, NULL, 0, NULL, NULL, NULL};
-    const pdg_settings *st;
-    int k = 0, it, have_masks, prev_has_mask = 0, stalled = 0;
-    int have_solution = 0; /* a subproblem solution to warm-start the next IPM from */
-    double J = NAN, defect = NAN, viol = NAN, eta, vc = INFINITY;
     pdg_status status;
+    scvx_state s = {0, 0.0, NAN, NAN, NAN, INFINITY, 0, 0, 0, 0};
+    int it;
 
     if (pdg_result_begin(ws, res) != 0) {
         return PDG_INVALID_INPUT;
     }
     opt = opt ? opt : &no_options;
-    st = &ws->st;
-    status = start(ws, scenario, opt, res, &J, &defect, &viol);
+    status = start(ws, scenario, opt, res, &s.J, &s.defect, &s.viol);
     if (status != PDG_SOLVED) {
         res->status = status;
         return status;
     }
     status = PDG_MAX_ITERATIONS;
-    have_masks = opt->masks != NULL || opt->mask_fn != NULL;
-    eta = eta_init > 0.0 ? eta_init : st->eta_init;
-
-    /* k counts successions (accepted steps); a rejection retries the same k (Algorithm 1) */
-    for (it = 0; it < st->max_subproblems && k < st->iter_max; ++it) {
-        pdg_log_row *r = &ws->log[ws->n_log++];
-        int answer = 0;
-        const int has_mask = have_masks ? mask_for(ws, opt, k + 1, &answer) : 0;
-        const unsigned char *keep = NULL;
-        candidate cd;
-        tscvx_info info;
-        double dJ, dL, rho, tau_r = 0.0, eta_new, t_solve = 0.0;
-        int sst, i, accepted, converged, newly_forced, restored;
-
-        if (has_mask < 0) {
-            ws->n_log--;
-            status = PDG_INVALID_INPUT;
-            snprintf(res->message, PDG_MESSAGE_LEN,
-                     "masks: the mask callback answered %d for iteration %d (1: it wrote a "
-                     "mask, 0: the full problem); the solve stops at its last accepted step",
-                     answer, k + 1);
+    s.have_masks = opt->masks != NULL || opt->mask_fn != NULL;
+    s.eta = eta_init > 0.0 ? eta_init : ws->st.eta_init;
+    for (it = 0; it < ws->st.max_subproblems && s.k < ws->st.iter_max; ++it) {
+        if (!scvx_iteration(ws, opt, &s, res, &status)) {
             break;
         }
-
-        /* 1. mask (T-SCvx): the caller's, plus what the full-constraint guard put back */
-        if (has_mask) {
-            memcpy(ws->pred, ws->mask, (size_t)NC * ws->N);
-            if (prev_has_mask) {
-                tau_r = changed_fraction(ws);
-            }
-            for (i = 0; i < NC * ws->N; ++i) {
-                ws->mask[i] |= ws->forced[i];
-                ws->keep[i] = (i % NC == 6) ? 1 : ws->mask[i]; /* T_min always kept */
-            }
-            keep = ws->keep;
-        }
-        /* 2. convex subproblem about z with radius eta, solved by the SOCP runtime (the log's
-         * time is the conic solve's alone, as in the Python reference's log) */
-        sst = TSCVX_INVALID_INPUT;
-        if (assemble(ws, ws->z, ws->disc, keep, eta) == 0) {
-            const double t0 = opt->clock_s ? opt->clock_s() : 0.0;
-            /* from the last subproblem's solution, accepted or not: the subproblems of a
-             * solve differ by one linearization or one radius (tscvx_warm_start) */
-            if (have_solution && st->socp_warm_start) {
-                tscvx_warm_start(ws->socp, ws->znew, ws->ydual, ws->zdual, ws->slack);
-            }
-            sst = (int)tscvx_solve(ws->socp);
-            t_solve = opt->clock_s ? opt->clock_s() - t0 : 0.0;
-        }
-        tscvx_get_info(ws->socp, &info);
-        memset(r, 0, sizeof *r);
-        r->subproblem_time_s = t_solve;
-        r->k = k + 1;
-        r->eta = eta;
-        r->solver_status = sst;
-        /* a warm start that failed and was run again cold counts both runs */
-        r->solver_iterations =
-            sst == TSCVX_INVALID_INPUT ? 0 : info.iterations + info.restart_iterations;
-        res->socp_iterations += r->solver_iterations;
-        if (sst != TSCVX_SOLVED && sst != TSCVX_SOLVED_INACCURATE) {
-            failed_row(r, J);
-            status = PDG_SOLVER_ERROR;
-            snprintf(res->message, PDG_MESSAGE_LEN,
-                     "subproblem at iteration %d: conic solver returned %s", k + 1,
-                     socp_status_name(sst));
-            break;
-        }
-        tscvx_get_solution(ws->socp, ws->znew, ws->ydual, ws->zdual, ws->slack);
-        have_solution = 1;
-        /* 3. the candidate on the full nonlinear problem */
-        if (evaluate(ws, keep, &cd) != 0) {
-            failed_row(r, J);
-            status = PDG_SOLVER_ERROR;
-            snprintf(res->message, PDG_MESSAGE_LEN,
-                     "iteration %d: model evaluation failed at the subproblem solution", k + 1);
-            break;
-        }
-        /* 4. rho = actual / predicted change; acceptance and trust radius, Eq. (15) */
-        dJ = J - cd.J;
-        dL = J - cd.L;
-        vc = cd.vc;
-        rho = dL != 0.0 ? dJ / dL : NAN;
-        /* dL <= 0 only when the subproblem gives the reference back (to the solver's
-         * tolerance); Algorithm 1 stops there (dJ = 0), here the step is accepted with rho = 1
-         * and the convergence test decides (as the Python reference) */
-        accepted = dJ == 0.0 || dL <= 0.0 || rho >= st->rho0;
-        eta_new = trust_update(st, eta, dL > 0 ? rho : 1.0, accepted, cd.tr_step,
-                               have_masks && st->tau_r_update, tau_r);
-        /* Full-constraint guard of T-SCvx: a candidate that violates a constraint the mask
-         * dropped is rejected and the constraint put back for the rest of the solve; the retry
-         * starts from the same reference (which meets every convex constraint, so the
-         * subproblem stays feasible) with the same radius. */
-        restored = has_mask ? put_back_dropped(ws) : 0;
-        newly_forced = restored > 0;
-        if (newly_forced) {
-            accepted = 0;
-            eta_new = eta;
-        }
-        r->J = cd.J;
-        r->dJ = dJ;
-        r->dL = dL;
-        r->rho = rho;
-        r->vc_norm1 = cd.vc;
-        r->n_tight = cd.n_tight;
-        r->accepted = accepted;
-        r->restored = restored;
-        if (accepted) {
-            prev_has_mask = has_mask;
-            if (has_mask) {
-                memcpy(ws->prev_mask, ws->pred, (size_t)NC * ws->N);
-            }
-            accept(ws, k);
-            ws->n_masks_out = ++k;
-            J = cd.J;
-            defect = cd.defect;
-            viol = cd.viol;
-        }
-        /* 5. convergence on the FULL constraint set; T-SCvx never returns what it rejects */
-        converged = accepted && cd.step <= st->step_tol && vc <= st->vc_tol &&
-                    defect <= st->defect_tol && viol <= st->defect_tol;
-        if (converged) {
-            status = PDG_SOLVED;
-            snprintf(res->message, PDG_MESSAGE_LEN, "converged");
-            break;
-        }
-        if (!accepted && eta <= st->eta_lb && !newly_forced) {
-            stalled = 1; /* same reference, same radius: it would be rejected forever */
-            break;
-        }
-        if (!accepted && !newly_forced && eta_new < cd.tr_step) {
-            pull_back(ws, RETRY_START * eta_new / cd.tr_step); /* the retry's warm start */
-        }
-        eta = eta_new;
     }
     if (status == PDG_MAX_ITERATIONS) {
-        status = diagnose(ws, vc, defect, viol, k, stalled, res->message);
+        status = diagnose(ws, s.vc, s.defect, s.viol, s.k, s.stalled, res->message);
     }
     to_physical(ws, ws->z, res->x, res->u, &res->t_f);
     res->status = status;
-    res->iterations = k;
+    res->iterations = s.k;
     res->subproblems_solved = ws->n_log;
-    res->max_defect = defect;
-    res->max_violation = viol;
+    res->max_defect = s.defect;
+    res->max_violation = s.viol;
     return status;
 }
 

@@ -129,39 +129,47 @@ static void rhs(const pdg_emitter *e, const pdg_values *v, int row, double val)
 #define XI(k, i) (L->ix + NX * (k) + (i))
 #define UI(k, i) (L->iu + NU * (k) + (i))
 
-void pdg_emit(pdg_emitter *e, const pdg_layout *L, int roll_free, const pdg_values *v)
-{
-    const int N = L->N, nI = N - 1, ne = N_TR_SCALAR * (N - 1);
-    const int ns = N_TR_SCALAR * N + NU * N + 1;
-    const int vals = e->mode == 2;
-    const pdg_scaling *sc = vals ? v->sc : 0;
-    const pdg_params *p = vals ? &v->scn->params : 0;
-    double inv[NX], xf[NX];
-    double tg = 0.0, cg = 0.0, eta = 0.0;
-    int row = 0, k, i, j, c;
+/* What every block of rows reads; the numbers only in values mode (vals), zeros otherwise. */
+typedef struct {
+    pdg_emitter *e;
+    const pdg_layout *L;
+    const pdg_values *v;
+    const pdg_scaling *sc;
+    const pdg_params *p;
+    int vals;
+    double inv[NX]; /* 1 / Sx */
+    double tg;      /* tan of the glideslope angle */
+    double cg;      /* cos of the gimbal limit */
+    double eta;     /* trust radius */
+} emit_ctx;
 
-    if (vals) {
-        for (i = 0; i < NX; ++i) {
-            inv[i] = 1.0 / sc->Sx[i];
-        }
-        pdg_x_final_target(v->scn, xf);
-        tg = pdg_tan_glideslope(p);
-        cg = pdg_cos_gimbal(p);
-        eta = v->eta;
-        for (i = 0; i < L->n; ++i) {
-            v->c[i] = i >= L->ivc ? v->lam : 0.0;
-        }
-        v->c[XI(N - 1, IM)] = -1.0;
-        /* proximal term (w/2)|u_hat - u_ref|^2: its linear part -w u_ref */
-        for (i = L->iu; i < L->isig; ++i) {
-            v->c[i] -= v->prox_u * v->zref[i];
-        }
+/* c = lam on the virtual control and buffers, -1 on the final mass, and the linear part
+ * -w u_ref of the proximal term (w/2)|u_hat - u_ref|^2 */
+static void objective(const pdg_layout *L, const pdg_values *v)
+{
+    int i;
+    for (i = 0; i < L->n; ++i) {
+        v->c[i] = i >= L->ivc ? v->lam : 0.0;
     }
-    /* ---- dynamics: x_{k+1} - A_hat x_k - Bm_hat u_k - Bp_hat u_{k+1} - S_hat sigma - nu
-     *      = Sx^-1 (A c_x + z - c_x) */
-    for (k = 0; k < nI; ++k) {
-        const double *D = vals ? v->disc + (size_t)k * N_DISC : 0;
-        const int base = row + NX * k;
+    v->c[XI(L->N - 1, IM)] = -1.0;
+    for (i = L->iu; i < L->isig; ++i) {
+        v->c[i] -= v->prox_u * v->zref[i];
+    }
+}
+
+/* dynamics: x_{k+1} - A_hat x_k - Bm_hat u_k - Bp_hat u_{k+1} - S_hat sigma - nu
+ *           = Sx^-1 (A c_x + z - c_x); returns the rows written */
+static int emit_dynamics(const emit_ctx *c)
+{
+    const pdg_layout *L = c->L;
+    const pdg_scaling *sc = c->sc;
+    const double *inv = c->inv;
+    pdg_emitter *e = c->e;
+    const int vals = c->vals;
+    int k, i, j;
+    for (k = 0; k < L->N - 1; ++k) {
+        const double *D = vals ? c->v->disc + (size_t)k * N_DISC : 0;
+        const int base = NX * k;
         for (i = 0; i < NX; ++i) {
             put(e, base + i, XI(k + 1, i), 1.0);
         }
@@ -192,90 +200,110 @@ void pdg_emit(pdg_emitter *e, const pdg_layout *L, int roll_free, const pdg_valu
         if (vals) {
             for (i = 0; i < NX; ++i) {
                 const double Acx = D[D_A + NX * i + IM] * sc->cx[IM];
-                rhs(e, v, base + i, inv[i] * (Acx + D[D_Z + i] - sc->cx[i]));
+                rhs(e, c->v, base + i, inv[i] * (Acx + D[D_Z + i] - sc->cx[i]));
             }
         }
     }
-    row += NX * nI;
-    /* ---- boundary conditions */
-    {
-        double x0[NX];
-        if (vals) {
-            pdg_initial_state(v->scn, x0);
-        }
-        for (i = 0; i < NX; ++i) {
-            put(e, row + i, XI(0, i), 1.0);
-            if (vals) {
-                rhs(e, v, row + i, (x0[i] - sc->cx[i]) / sc->Sx[i]);
-            }
+    return NX * (L->N - 1);
+}
+
+/* boundary conditions from `row`: the initial state, the final r, v, omega and q2, q3 (or
+ * all of q); returns the next row */
+static int emit_boundary(const emit_ctx *c, int row, int roll_free)
+{
+    static const int fin_free[11] = {0, 1, 2, 3, 4, 5, 10, 11, 12, 8, 9};
+    static const int fin_pin[13] = {0, 1, 2, 3, 4, 5, 10, 11, 12, 6, 7, 8, 9};
+    const int *fin = roll_free ? fin_free : fin_pin;
+    const int nf = roll_free ? 11 : 13;
+    const pdg_layout *L = c->L;
+    const pdg_scaling *sc = c->sc;
+    double x0[NX], xf[NX];
+    int i;
+    if (c->vals) {
+        pdg_initial_state(c->v->scn, x0);
+        pdg_x_final_target(c->v->scn, xf);
+    }
+    for (i = 0; i < NX; ++i) {
+        put(c->e, row + i, XI(0, i), 1.0);
+        if (c->vals) {
+            rhs(c->e, c->v, row + i, (x0[i] - sc->cx[i]) / sc->Sx[i]);
         }
     }
     row += NX;
-    {
-        static const int fin_free[11] = {0, 1, 2, 3, 4, 5, 10, 11, 12, 8, 9};
-        static const int fin_pin[13] = {0, 1, 2, 3, 4, 5, 10, 11, 12, 6, 7, 8, 9};
-        const int *fin = roll_free ? fin_free : fin_pin;
-        const int nf = roll_free ? 11 : 13;
-        for (i = 0; i < nf; ++i) {
-            put(e, row + i, XI(N - 1, fin[i]), 1.0);
-            if (vals) {
-                rhs(e, v, row + i, (xf[fin[i]] - sc->cx[fin[i]]) / sc->Sx[fin[i]]);
+    for (i = 0; i < nf; ++i) {
+        put(c->e, row + i, XI(L->N - 1, fin[i]), 1.0);
+        if (c->vals) {
+            rhs(c->e, c->v, row + i, (xf[fin[i]] - sc->cx[fin[i]]) / sc->Sx[fin[i]]);
+        }
+    }
+    return row + nf;
+}
+
+/* |nu_i| epigraph (scalar blocks): s = t - nu >= 0 and s = t + nu >= 0; returns the next row */
+static int emit_nu_epigraph(const emit_ctx *c, int row)
+{
+    const pdg_layout *L = c->L;
+    const int ne = N_TR_SCALAR * (L->N - 1);
+    int k, j, side;
+    for (side = 0; side < 2; ++side) {
+        for (k = 0; k < L->N - 1; ++k) {
+            for (j = 0; j < N_TR_SCALAR; ++j) {
+                const int r = row + side * ne + N_TR_SCALAR * k + j;
+                put(c->e, r, L->ivc + N_NU_BLOCKS * k + j, -1.0);
+                put(c->e, r, L->inu + NX * k + pdg_tr_scalar_states[j], side ? -1.0 : 1.0);
+                rhs(c->e, c->v, r, 0.0);
             }
         }
-        row += nf;
     }
-    /* ---- |nu_i| epigraph (scalar blocks): s = t - nu >= 0 and s = t + nu >= 0 */
-    for (k = 0; k < nI; ++k) {
-        for (j = 0; j < N_TR_SCALAR; ++j) {
-            const int r = row + N_TR_SCALAR * k + j;
-            put(e, r, L->ivc + N_NU_BLOCKS * k + j, -1.0);
-            put(e, r, L->inu + NX * k + pdg_tr_scalar_states[j], 1.0);
-            rhs(e, v, r, 0.0);
-        }
-    }
-    for (k = 0; k < nI; ++k) {
-        for (j = 0; j < N_TR_SCALAR; ++j) {
-            const int r = row + ne + N_TR_SCALAR * k + j;
-            put(e, r, L->ivc + N_NU_BLOCKS * k + j, -1.0);
-            put(e, r, L->inu + NX * k + pdg_tr_scalar_states[j], -1.0);
-            rhs(e, v, r, 0.0);
-        }
-    }
-    row += 2 * ne;
-    /* ---- s' >= 0 */
+    return row + 2 * ne;
+}
+
+/* s' >= 0, sigma_hat >= SIGMA_MIN / Ss, and the trust region's scalar rows
+ * eta -+ (z - z_ref) >= 0 over (x scalars, u, sigma); returns the next row */
+static int emit_bounds(const emit_ctx *c, int row)
+{
+    const pdg_layout *L = c->L;
+    const int N = L->N, ns = N_TR_SCALAR * N + NU * N + 1;
+    int k, i;
     for (k = 0; k < N; ++k) {
-        put(e, row + k, L->ibuf + k, -1.0);
-        rhs(e, v, row + k, 0.0);
+        put(c->e, row + k, L->ibuf + k, -1.0);
+        rhs(c->e, c->v, row + k, 0.0);
     }
     row += N;
-    /* ---- sigma_hat >= SIGMA_MIN / Ss */
-    put(e, row, L->isig, -1.0);
-    rhs(e, v, row, vals ? -SIGMA_MIN / sc->Ss : 0.0);
+    put(c->e, row, L->isig, -1.0);
+    rhs(c->e, c->v, row, c->vals ? -SIGMA_MIN / c->sc->Ss : 0.0);
     row += 1;
-    /* ---- trust region, scalars: eta -+ (z - z_ref) >= 0 over (x scalars, u, sigma) */
     for (i = 0; i < ns; ++i) {
         const int col = i < N_TR_SCALAR * N
                             ? XI(i / N_TR_SCALAR, pdg_tr_scalar_states[i % N_TR_SCALAR])
                             : L->iu + (i - N_TR_SCALAR * N);
-        put(e, row + i, col, 1.0);
-        put(e, row + ns + i, col, -1.0);
-        if (vals) {
-            rhs(e, v, row + i, eta + v->zref[col]);
-            rhs(e, v, row + ns + i, eta - v->zref[col]);
+        put(c->e, row + i, col, 1.0);
+        put(c->e, row + ns + i, col, -1.0);
+        if (c->vals) {
+            rhs(c->e, c->v, row + i, c->eta + c->v->zref[col]);
+            rhs(c->e, c->v, row + ns + i, c->eta - c->v->zref[col]);
         }
     }
-    row += 2 * ns;
-    /* ---- mass: m_hat >= 0 (a masked-out node gets 0 >= -1) */
+    return row + 2 * ns;
+}
+
+/* mass m_hat >= 0 (a masked-out node gets 0 >= -1) and T_min linearized,
+ * -(T_ref/|T_ref|) . u_hat - s' + s = -T_min / Su; returns the next row */
+static int emit_mass_tmin(const emit_ctx *c, int row)
+{
+    const pdg_layout *L = c->L;
+    const pdg_values *v = c->v;
+    const int N = L->N;
+    int k, j;
     for (k = 0; k < N; ++k) {
-        const int keep = !vals || !v->keep || v->keep[NC * k];
-        put(e, row + k, XI(k, IM), keep ? -1.0 : 0.0);
-        rhs(e, v, row + k, keep ? 0.0 : 1.0);
+        const int keep = !c->vals || !v->keep || v->keep[NC * k];
+        put(c->e, row + k, XI(k, IM), keep ? -1.0 : 0.0);
+        rhs(c->e, v, row + k, keep ? 0.0 : 1.0);
     }
     row += N;
-    /* ---- T_min linearized: -(T_ref/|T_ref|) . u_hat - s' + s = -T_min / Su */
     for (k = 0; k < N; ++k) {
         double dir[NU] = {0.0, 0.0, 0.0};
-        if (vals) {
+        if (c->vals) {
             const double *ur = v->zref + L->iu + NU * k;
             double un = sqrt(ur[0] * ur[0] + ur[1] * ur[1] + ur[2] * ur[2]);
             un = un > 1e-12 ? un : 1e-12;
@@ -284,50 +312,64 @@ void pdg_emit(pdg_emitter *e, const pdg_layout *L, int roll_free, const pdg_valu
             }
         }
         for (j = 0; j < NU; ++j) {
-            put(e, row + k, UI(k, j), -dir[j]);
+            put(c->e, row + k, UI(k, j), -dir[j]);
         }
-        put(e, row + k, L->ibuf + k, -1.0);
-        rhs(e, v, row + k, vals ? -p->T_min / sc->Su : 0.0);
+        put(c->e, row + k, L->ibuf + k, -1.0);
+        rhs(c->e, v, row + k, c->vals ? -c->p->T_min / c->sc->Su : 0.0);
     }
-    row += N;
-    /* ---- path-constraint cones, node-major, c = 1..5 (masked out: zero rows, head 1) */
-    for (k = 0; k < N; ++k) {
-        for (c = 1; c <= 5; ++c) {
-            const int keep = !vals || !v->keep || v->keep[NC * k + c];
-            const double on = keep ? 1.0 : 0.0;
-            double head = 0.0;
-            if (c == 1) { /* [r1; tan(gs) r2; tan(gs) r3] */
-                put(e, row, XI(k, 0), -on);
-                put(e, row + 1, XI(k, 1), -tg * on);
-                put(e, row + 2, XI(k, 2), -tg * on);
-            } else if (c == 2) { /* [q_max; q2; q3] */
-                put(e, row + 1, XI(k, 8), -on);
-                put(e, row + 2, XI(k, 9), -on);
-                head = vals ? pdg_tilt_q_max(p) / sc->Sx[8] : 0.0;
-            } else if (c == 3) { /* [omega_max / S_w; omega_hat] */
-                for (j = 0; j < 3; ++j) {
-                    put(e, row + 1 + j, XI(k, 10 + j), -on);
-                }
-                head = vals ? pdg_omega_max(p) / sc->Sx[10] : 0.0;
-            } else if (c == 4) { /* [T_max / Su; u_hat] */
-                for (j = 0; j < 3; ++j) {
-                    put(e, row + 1 + j, UI(k, j), -on);
-                }
-                head = vals ? p->T_max / sc->Su : 0.0;
-            } else { /* [u1; cos(delta) u_hat] */
-                put(e, row, UI(k, 0), -on);
-                put(e, row + 1, UI(k, 0), -cg * on);
-                put(e, row + 2, UI(k, 1), -cg * on);
-                put(e, row + 3, UI(k, 2), -cg * on);
-            }
-            for (j = 0; j < cone_dims[c]; ++j) {
-                rhs(e, v, row + j, j == 0 ? (keep ? head : 1.0) : 0.0);
-            }
-            row += cone_dims[c];
+    return row + N;
+}
+
+/* Path constraint `con` (1..5) of node k as one cone at `row` (masked out: zero rows, head 1);
+ * returns the next row */
+static int emit_path_cone(const emit_ctx *c, int k, int con, int row)
+{
+    const pdg_layout *L = c->L;
+    const pdg_values *v = c->v;
+    pdg_emitter *e = c->e;
+    const int keep = !c->vals || !v->keep || v->keep[NC * k + con];
+    const double on = keep ? 1.0 : 0.0;
+    double head = 0.0;
+    int j;
+    if (con == 1) { /* [r1; tan(gs) r2; tan(gs) r3] */
+        put(e, row, XI(k, 0), -on);
+        put(e, row + 1, XI(k, 1), -c->tg * on);
+        put(e, row + 2, XI(k, 2), -c->tg * on);
+    } else if (con == 2) { /* [q_max; q2; q3] */
+        put(e, row + 1, XI(k, 8), -on);
+        put(e, row + 2, XI(k, 9), -on);
+        head = c->vals ? pdg_tilt_q_max(c->p) / c->sc->Sx[8] : 0.0;
+    } else if (con == 3) { /* [omega_max / S_w; omega_hat] */
+        for (j = 0; j < 3; ++j) {
+            put(e, row + 1 + j, XI(k, 10 + j), -on);
         }
+        head = c->vals ? pdg_omega_max(c->p) / c->sc->Sx[10] : 0.0;
+    } else if (con == 4) { /* [T_max / Su; u_hat] */
+        for (j = 0; j < 3; ++j) {
+            put(e, row + 1 + j, UI(k, j), -on);
+        }
+        head = c->vals ? c->p->T_max / c->sc->Su : 0.0;
+    } else { /* [u1; cos(delta) u_hat] */
+        put(e, row, UI(k, 0), -on);
+        put(e, row + 1, UI(k, 0), -c->cg * on);
+        put(e, row + 2, UI(k, 1), -c->cg * on);
+        put(e, row + 3, UI(k, 2), -c->cg * on);
     }
-    /* ---- virtual-control pairs: [t_p; nu_a; nu_b] in Q3 */
-    for (k = 0; k < nI; ++k) {
+    for (j = 0; j < cone_dims[con]; ++j) {
+        rhs(e, v, row + j, j == 0 ? (keep ? head : 1.0) : 0.0);
+    }
+    return row + cone_dims[con];
+}
+
+/* The rotation-invariant pairs in Q3: virtual control [t_p; nu_a; nu_b] per interval, then
+ * trust region [eta; z_a - ref_a; z_b - ref_b] per node; returns the next row */
+static int emit_pairs(const emit_ctx *c, int row)
+{
+    const pdg_layout *L = c->L;
+    const pdg_values *v = c->v;
+    pdg_emitter *e = c->e;
+    int k, j;
+    for (k = 0; k < L->N - 1; ++k) {
         for (j = 0; j < N_TR_PAIRS; ++j) {
             put(e, row, L->ivc + N_NU_BLOCKS * k + N_TR_SCALAR + j, -1.0);
             put(e, row + 1, L->inu + NX * k + pdg_tr_pairs[j][0], -1.0);
@@ -338,18 +380,51 @@ void pdg_emit(pdg_emitter *e, const pdg_layout *L, int roll_free, const pdg_valu
             row += 3;
         }
     }
-    /* ---- trust region, rotation-invariant pairs: [eta; z_a - ref_a; z_b - ref_b] in Q3 */
-    for (k = 0; k < N; ++k) {
+    for (k = 0; k < L->N; ++k) {
         for (j = 0; j < N_TR_PAIRS; ++j) {
             const int ca = XI(k, pdg_tr_pairs[j][0]), cb = XI(k, pdg_tr_pairs[j][1]);
             put(e, row + 1, ca, -1.0);
             put(e, row + 2, cb, -1.0);
-            if (vals) {
-                rhs(e, v, row, eta);
+            if (c->vals) {
+                rhs(e, v, row, c->eta);
                 rhs(e, v, row + 1, -v->zref[ca]);
                 rhs(e, v, row + 2, -v->zref[cb]);
             }
             row += 3;
         }
     }
+    return row;
+}
+
+void pdg_emit(pdg_emitter *e, const pdg_layout *L, int roll_free, const pdg_values *v)
+{
+    emit_ctx c;
+    int row, k, con, i;
+    c.e = e;
+    c.L = L;
+    c.v = v;
+    c.vals = e->mode == 2;
+    c.sc = c.vals ? v->sc : 0;
+    c.p = c.vals ? &v->scn->params : 0;
+    c.tg = c.cg = c.eta = 0.0;
+    if (c.vals) {
+        for (i = 0; i < NX; ++i) {
+            c.inv[i] = 1.0 / c.sc->Sx[i];
+        }
+        c.tg = pdg_tan_glideslope(c.p);
+        c.cg = pdg_cos_gimbal(c.p);
+        c.eta = v->eta;
+        objective(L, v);
+    }
+    row = emit_dynamics(&c);
+    row = emit_boundary(&c, row, roll_free);
+    row = emit_nu_epigraph(&c, row);
+    row = emit_bounds(&c, row);
+    row = emit_mass_tmin(&c, row);
+    for (k = 0; k < L->N; ++k) { /* path-constraint cones, node-major */
+        for (con = 1; con <= 5; ++con) {
+            row = emit_path_cone(&c, k, con, row);
+        }
+    }
+    emit_pairs(&c, row);
 }
