@@ -89,6 +89,52 @@ class SCvxResult:
         return float(self.x[-1, IM])
 
 
+# T-SCvx masks: a 7N mask per iteration k (the last repeats), or a function k -> mask
+_Masks = Callable[[int], np.ndarray | None] | Sequence[np.ndarray] | None
+
+
+@dataclass
+class _Candidate:
+    """A subproblem's solution z_new, evaluated on the FULL constraint set."""
+
+    z: np.ndarray
+    disc: dict[str, np.ndarray]  # its discretization (the next subproblem's, if accepted)
+    J: float  # penalty J(z_new), Eq. (12)
+    defect: float  # largest nonlinear defect (physical units)
+    viol: float  # largest path-constraint value
+    L: float  # predicted cost, Eq. (13)
+    vc: float  # virtual control + buffers, max(sum, 0)
+    step: float  # |z_new - z|_inf over the trajectory variables
+    tr_step: float  # |z_new - z| in the trust region's norm
+    h: np.ndarray  # path-constraint values (N, 7)
+    tight: np.ndarray  # tight labels (7N)
+
+
+@dataclass
+class _LoopState:
+    """What Algorithm 1 carries from one subproblem to the next."""
+
+    z: np.ndarray  # the iterate (scaled)
+    disc: dict[str, np.ndarray]  # its discretization
+    J: float  # its penalty
+    defect: float  # its largest defect
+    viol: float  # its largest path-constraint value
+    eta: float  # trust radius of the next subproblem
+    forced: np.ndarray  # constraints put back by the full-constraint guard (7N)
+    k: int = 0  # successions (accepted steps); a rejection retries the same k
+    vc: float = float("inf")  # virtual control + buffers of the last candidate
+    # tau_r (Algorithm 2, step 4) compares the predicted masks of successions k+1 and k:
+    # prev_pred is the prediction of the last accepted succession (a retry keeps it).
+    prev_pred: np.ndarray | None = None
+    last_sol: ConicSolution | None = None  # where the next IPM starts
+    stalled: bool = False  # rejected at the smallest radius
+    status: str = "max_iterations"
+    reason: str = "iteration limit reached"
+    history: list[IterationRecord] = field(default_factory=list)
+    mask_log: list[np.ndarray] = field(default_factory=list)  # tight labels per succession
+    subproblems: list[ConicProblem] = field(default_factory=list)
+
+
 class SCvxSolver:
     """SCvx / T-SCvx for one scenario. ``solve`` runs the whole loop."""
 
@@ -157,7 +203,7 @@ class SCvxSolver:
     def solve(
         self,
         guess: tuple[np.ndarray, np.ndarray, float] | None = None,
-        masks: Callable[[int], np.ndarray | None] | Sequence[np.ndarray] | None = None,
+        masks: _Masks = None,
     ) -> SCvxResult:
         """Runs SCvx; with ``masks`` (per-iteration 7N masks, or a function k -> mask), T-SCvx.
 
@@ -167,7 +213,21 @@ class SCvxSolver:
         rejects).
         """
         t_start = time.perf_counter()
-        st, p = self.st, self.p
+        s = self._start(guess)
+        if s is None:
+            # No trajectory to return (the C library leaves x, u as given and t_f NaN).
+            return self.no_trajectory("model evaluation failed at the initial guess", t_start)
+        self.trace: list[np.ndarray] = []
+        if self.log:
+            self.log(_HEADER)
+        for _ in range(self.st.max_subproblems):
+            if s.k >= self.st.iter_max or not self._iteration(s, masks):
+                break
+        return self._result(s, t_start)
+
+    def _start(self, guess: tuple[np.ndarray, np.ndarray, float] | None) -> _LoopState | None:
+        """The iterate at the guess (the initial guess when none is given), with the scaling
+        it sets; None when the model cannot be evaluated there."""
         if guess is not None:  # used as given; the C library refuses the same (pdg_solve)
             x, u, t_f = np.asarray(guess[0], float), np.asarray(guess[1], float), float(guess[2])
             if not (is_finite_guess(x, u, t_f) and t_f > 0.0):
@@ -175,153 +235,192 @@ class SCvxSolver:
         else:
             x, u, t_f = initial_guess(self.scn)
         self.sc = Scaling.for_scenario(self.scn, t_f)
-        self.scales = constraint_scales(p, self.sc.Sx, self.sc.Su)
+        self.scales = constraint_scales(self.p, self.sc.Sx, self.sc.Su)
         self.lay = self.template(None).lay
         z = scaled(x, u, t_f, self.lay, self.sc)
         try:
             disc = self._discretize(z)
         except ModelEvaluationError:
-            # No trajectory to return (the C library leaves x, u as given and t_f NaN).
-            return self.no_trajectory("model evaluation failed at the initial guess", t_start)
+            return None
         J, defect, viol = self.penalty(z, disc)
-        eta = st.eta_init
-        history: list[IterationRecord] = []
-        mask_log: list[np.ndarray] = []
-        subproblems: list[ConicProblem] = []
-        status, reason = "max_iterations", "iteration limit reached"
-        # tau_r (Algorithm 2, step 4) compares the predicted masks of successions k+1 and k:
-        # prev_pred is the prediction of the last accepted succession (a retry keeps it).
-        prev_pred: np.ndarray | None = None
-        forced = np.zeros(NC * p.N, dtype=bool)  # constraints put back by the full check
-        vc = float("inf")
-        self.trace: list[np.ndarray] = []
-        if self.log:
-            self.log(_HEADER)
-        stalled = False
-        last_sol: ConicSolution | None = None
-        k = 0  # successions (accepted steps); rejected steps retry the same k (Algorithm 1)
-        for _ in range(st.max_subproblems):
-            if k >= st.iter_max:
-                break
-            pred = _mask_for(masks, k + 1)
-            mask = None if pred is None else np.asarray(pred, dtype=bool) | forced
-            tpl = self.template(mask)
-            prob = tpl.assemble(disc, z, eta, st.lam, self.scn, self.sc, st.prox_u)
-            if self.record:
-                subproblems.append(prob)
-            if id(tpl) not in self._sessions:
-                self._sessions[id(tpl)] = conic.session(self.backend, st.socp_tol, st.socp_max_iter)
-            sol = self._sessions[id(tpl)].solve(prob, last_sol if st.socp_warm_start else None)
-            if sol.ok:
-                last_sol = sol  # the next subproblem's IPM starts from it (as the C loop)
-            failure = None  # no candidate: the C library's reasons (pdg_scvx.c)
-            if not sol.ok:
-                failure = f"subproblem at iteration {k + 1}: conic solver returned {sol.status}"
-            else:
-                try:
-                    disc_new = self._discretize(sol.x)
-                except ModelEvaluationError:
-                    failure = (
-                        f"iteration {k + 1}: model evaluation failed at the subproblem solution"
-                    )
-            if failure is not None:
-                status, reason = "solver_error", failure
-                history.append(_failed_record(k + 1, J, eta, sol))
-                if self.log:
-                    self.log(f"{k + 1:3d}  {reason}")
-                break
-            z_new = sol.x.copy()
-            J_new, defect_new, viol_new = self.penalty(z_new, disc_new)
-            L = self.linear_cost(prob, sol.x)
-            dJ, dL = J - J_new, J - L
-            vc = float(max(sol.x[self.lay.ivc :].sum(), 0.0))
-            xs, us, _ = physical(z_new, self.lay, self.sc)
-            h = path_constraint_values(xs, us, p)
-            tmask = tight_mask(h, self.scales, self._duals(tpl, sol.z), st.tight_tol)
-            rho = dJ / dL if dL != 0.0 else float("nan")
-            step = float(np.abs(z_new[: self.lay.n_traj] - z[: self.lay.n_traj]).max())
-            tr_step = tpl.trust_norm(z_new - z)
-            # dL <= 0 only when the subproblem gives the reference back (to the solver's
-            # tolerance: the reference is feasible and the proximal term is >= 0). Algorithm 1
-            # stops there (dJ = 0); here the step is accepted with rho = 1 and the convergence
-            # test below ends the solve, or not if the reference is still infeasible.
-            accepted = dJ == 0.0 or dL <= 0.0 or rho >= st.rho0
-            use_tau = masks is not None and st.tau_r_update
-            tau_r = _changed_fraction(prev_pred, pred) if use_tau else None
-            eta_new = _trust_update(eta, rho if dL > 0 else 1.0, accepted, tr_step, st, tau_r)
-            newly_forced, restored = False, 0
-            if mask is not None:
-                # Full-constraint guard: a candidate that violates a constraint the mask
-                # dropped is rejected, and the constraint is put back for the rest of the solve.
-                # The retry starts from the same reference (which meets every convex
-                # constraint, so the subproblem stays feasible) with the same radius.
-                # T_min is never dropped (tpl.mask keeps it): its buffer is penalized instead.
-                dropped = (h.reshape(-1) > st.defect_tol) & ~tpl.mask.reshape(-1)
-                if dropped.any():
-                    forced |= dropped
-                    newly_forced, accepted, eta_new = True, False, eta
-                    restored = int(dropped.sum())
-            history.append(
-                IterationRecord(
-                    k + 1,
-                    J_new,
-                    dJ,
-                    dL,
-                    rho,
-                    eta,
-                    vc,
-                    int(tmask.sum()),
-                    sol.solve_time_s,
-                    accepted,
-                    sol.status,
-                    sol.iterations,
-                    restored,
-                )
-            )
+        return _LoopState(
+            z, disc, J, defect, viol, self.st.eta_init, np.zeros(NC * self.p.N, dtype=bool)
+        )
+
+    def _iteration(self, s: _LoopState, masks: _Masks) -> bool:
+        """One subproblem of Algorithm 1 (Algorithm 2 with masks); False when the solve stops
+        (converged, failed or stalled)."""
+        st = self.st
+        # 1. mask (T-SCvx): the prediction, plus what the full-constraint guard put back
+        pred = _mask_for(masks, s.k + 1)
+        mask = None if pred is None else np.asarray(pred, dtype=bool) | s.forced
+        tpl = self.template(mask)
+        # 2. the convex subproblem about z with radius eta; 3. its solution on the full problem
+        prob, sol = self._solve_subproblem(s, tpl)
+        cand = self._candidate(s, tpl, prob, sol)
+        if isinstance(cand, str):
+            s.status, s.reason = "solver_error", cand
+            s.history.append(_failed_record(s.k + 1, s.J, s.eta, sol))
             if self.log:
-                self.log(_format(history[-1]))
-            if accepted:
-                k += 1
-                prev_pred = pred
-                mask_log.append(tmask)
-                z, disc, J, defect, viol = z_new, disc_new, J_new, defect_new, viol_new
-                self.trace.append(z.copy())
-            converged = accepted and (
-                step <= st.step_tol
-                and vc <= st.vc_tol
-                and defect <= st.defect_tol
-                and viol <= st.defect_tol
-            )
-            if converged:
-                status, reason = "solved", "converged"
-                break
-            if not accepted and eta <= st.eta_lb and not newly_forced:
-                # Same reference, same radius: the same step would be rejected forever.
-                stalled = True
-                break
-            if not accepted and not newly_forced and last_sol is not None and eta_new < tr_step:
-                last_sol = _pulled_back(last_sol, z, RETRY_START * eta_new / tr_step, self.lay)
-            eta = eta_new
+                self.log(f"{s.k + 1:3d}  {cand}")
+            return False
+        # 4. acceptance and the next radius
+        record, eta_new = self._judge(s, tpl, cand, sol, mask, pred, masks is not None)
+        s.history.append(record)
+        if self.log:
+            self.log(_format(record))
+        if record.accepted:
+            self._succeed(s, cand, pred)
+        # 5. convergence on the FULL constraint set; T-SCvx never returns what it rejects
+        if record.accepted and self._converged(s, cand):
+            s.status, s.reason = "solved", "converged"
+            return False
+        if not record.accepted and not record.restored:
+            if s.eta <= st.eta_lb:
+                s.stalled = True  # same reference, same radius: rejected forever
+                return False
+            if s.last_sol is not None and eta_new < cand.tr_step:  # the retry's warm start
+                f = RETRY_START * eta_new / cand.tr_step
+                s.last_sol = _pulled_back(s.last_sol, s.z, f, self.lay)
+        s.eta = eta_new
+        return True
+
+    def _solve_subproblem(
+        self, s: _LoopState, tpl: SubproblemTemplate
+    ) -> tuple[ConicProblem, ConicSolution]:
+        """The subproblem about s.z with radius s.eta, solved from the last solution."""
+        st = self.st
+        prob = tpl.assemble(s.disc, s.z, s.eta, st.lam, self.scn, self.sc, st.prox_u)
+        if self.record:
+            s.subproblems.append(prob)
+        if id(tpl) not in self._sessions:
+            self._sessions[id(tpl)] = conic.session(self.backend, st.socp_tol, st.socp_max_iter)
+        sol = self._sessions[id(tpl)].solve(prob, s.last_sol if st.socp_warm_start else None)
+        if sol.ok:
+            s.last_sol = sol  # the next subproblem's IPM starts from it (as the C loop)
+        return prob, sol
+
+    def _candidate(
+        self, s: _LoopState, tpl: SubproblemTemplate, prob: ConicProblem, sol: ConicSolution
+    ) -> _Candidate | str:
+        """The subproblem's solution evaluated on the full nonlinear problem, or why there is
+        none (the C library's reasons, pdg_scvx.c)."""
+        if not sol.ok:
+            return f"subproblem at iteration {s.k + 1}: conic solver returned {sol.status}"
+        try:
+            disc = self._discretize(sol.x)
+        except ModelEvaluationError:
+            return f"iteration {s.k + 1}: model evaluation failed at the subproblem solution"
+        z = sol.x.copy()
+        J, defect, viol = self.penalty(z, disc)
+        xs, us, _ = physical(z, self.lay, self.sc)
+        h = path_constraint_values(xs, us, self.p)
+        n = self.lay.n_traj
+        return _Candidate(
+            z=z,
+            disc=disc,
+            J=J,
+            defect=defect,
+            viol=viol,
+            L=self.linear_cost(prob, sol.x),
+            vc=float(max(sol.x[self.lay.ivc :].sum(), 0.0)),
+            step=float(np.abs(z[:n] - s.z[:n]).max()),
+            tr_step=tpl.trust_norm(z - s.z),
+            h=h,
+            tight=tight_mask(h, self.scales, self._duals(tpl, sol.z), self.st.tight_tol),
+        )
+
+    def _judge(
+        self,
+        s: _LoopState,
+        tpl: SubproblemTemplate,
+        c: _Candidate,
+        sol: ConicSolution,
+        mask: np.ndarray | None,
+        pred: np.ndarray | None,
+        has_masks: bool,
+    ) -> tuple[IterationRecord, float]:
+        """rho = actual / predicted change, acceptance and the next radius (Eq. (15)); the
+        full-constraint guard of T-SCvx may overrule. Returns the log record and the radius."""
+        st = self.st
+        s.vc = c.vc
+        dJ, dL = s.J - c.J, s.J - c.L
+        rho = dJ / dL if dL != 0.0 else float("nan")
+        # dL <= 0 only when the subproblem gives the reference back (to the solver's
+        # tolerance: the reference is feasible and the proximal term is >= 0). Algorithm 1
+        # stops there (dJ = 0); here the step is accepted with rho = 1 and the convergence
+        # test ends the solve, or not if the reference is still infeasible.
+        accepted = dJ == 0.0 or dL <= 0.0 or rho >= st.rho0
+        tau_r = _changed_fraction(s.prev_pred, pred) if has_masks and st.tau_r_update else None
+        eta_new = _trust_update(s.eta, rho if dL > 0 else 1.0, accepted, c.tr_step, st, tau_r)
+        restored = 0
+        if mask is not None:
+            # Full-constraint guard: a candidate that violates a constraint the mask dropped
+            # is rejected, and the constraint is put back for the rest of the solve. The retry
+            # starts from the same reference (which meets every convex constraint, so the
+            # subproblem stays feasible) with the same radius. T_min is never dropped
+            # (tpl.mask keeps it): its buffer is penalized instead.
+            dropped = (c.h.reshape(-1) > st.defect_tol) & ~tpl.mask.reshape(-1)
+            if dropped.any():
+                s.forced |= dropped
+                accepted, eta_new, restored = False, s.eta, int(dropped.sum())
+        record = IterationRecord(
+            s.k + 1,
+            c.J,
+            dJ,
+            dL,
+            rho,
+            s.eta,
+            c.vc,
+            int(c.tight.sum()),
+            sol.solve_time_s,
+            accepted,
+            sol.status,
+            sol.iterations,
+            restored,
+        )
+        return record, eta_new
+
+    def _succeed(self, s: _LoopState, c: _Candidate, pred: np.ndarray | None) -> None:
+        """The candidate becomes the iterate: succession k + 1."""
+        s.k += 1
+        s.prev_pred = pred
+        s.mask_log.append(c.tight)
+        s.z, s.disc, s.J, s.defect, s.viol = c.z, c.disc, c.J, c.defect, c.viol
+        self.trace.append(s.z.copy())
+
+    def _converged(self, s: _LoopState, c: _Candidate) -> bool:
+        st = self.st
+        return (
+            c.step <= st.step_tol
+            and s.vc <= st.vc_tol
+            and s.defect <= st.defect_tol
+            and s.viol <= st.defect_tol
+        )
+
+    def _result(self, s: _LoopState, t_start: float) -> SCvxResult:
+        status, reason = s.status, s.reason
         if status == "max_iterations":
-            status, reason = self._diagnose(z, vc, defect, viol, k)
-            if stalled:
-                reason = f"step rejected at the smallest trust radius {st.eta_lb:g}; " + reason
-        x, u, t_f = physical(z, self.lay, self.sc)
+            status, reason = self._diagnose(s.z, s.vc, s.defect, s.viol, s.k)
+            if s.stalled:
+                reason = f"step rejected at the smallest trust radius {self.st.eta_lb:g}; " + reason
+        x, u, t_f = physical(s.z, self.lay, self.sc)
+        N = self.p.N
         return SCvxResult(
             status=status,
             reason=reason,
             x=x,
             u=u,
             t_f=t_f,
-            iterations=k,
-            subproblems_solved=len(history),
+            iterations=s.k,
+            subproblems_solved=len(s.history),
             solve_time_s=time.perf_counter() - t_start,
-            history=history,
-            masks=np.array(mask_log, dtype=np.uint8).reshape(len(mask_log), NC * p.N),
-            max_defect=defect,
-            max_violation=viol,
-            subproblems=subproblems,
-            settings=st,
+            history=s.history,
+            masks=np.array(s.mask_log, dtype=np.uint8).reshape(len(s.mask_log), NC * N),
+            max_defect=s.defect,
+            max_violation=s.viol,
+            subproblems=s.subproblems,
+            settings=self.st,
         )
 
     def no_trajectory(self, reason: str, t_start: float) -> SCvxResult:
@@ -394,9 +493,7 @@ def _failed_record(k: int, J: float, eta: float, sol: conic.ConicSolution) -> It
     )
 
 
-def _mask_for(
-    masks: Callable[[int], np.ndarray | None] | Sequence[np.ndarray] | None, k: int
-) -> np.ndarray | None:
+def _mask_for(masks: _Masks, k: int) -> np.ndarray | None:
     if masks is None:
         return None
     if callable(masks):

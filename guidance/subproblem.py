@@ -24,7 +24,7 @@ import scipy.sparse as sp
 
 from guidance.conic import ConeKind, ConicProblem
 from guidance.model import transition_pattern
-from guidance.params import IM, IR, IV, IW, NC, NU, NX, Scenario
+from guidance.params import IM, IR, IV, IW, NC, NU, NX, Params, Scenario
 
 # Cone dimension of each path constraint (mask order); 1 = a linear row.
 CONE_DIMS = (1, 3, 3, 4, 4, 4, 1)
@@ -174,19 +174,37 @@ class SubproblemTemplate:
 
     # -- pattern --------------------------------------------------------------------------
     def _build(self) -> None:
-        N, L = self.N, self.lay
+        """The sparsity pattern, block by block in the row order of the module docstring,
+        and its COO -> CSC permutation, computed once: csc.data = values[self.perm]."""
         R = _Rows()
-        nI = N - 1
-        k = np.arange(nI)
-        # Dynamics (zero cone), 14 rows per interval; entries in this order per interval:
-        # x_{k+1} (14), A_hat (its structural nonzeros, row-major), Bm_hat (14x3),
-        # Bp_hat (14x3), Sigma_hat (14), nu (14).
+        self._dynamics_rows(R)
+        self._boundary_rows(R)
+        self._nonneg_rows(R)
+        self._path_cone_rows(R)
+        self._pair_rows(R)
+        rows = np.concatenate(R.rows)
+        cols = np.concatenate(R.cols)
+        self.m, self.n = R.m, self.lay.n
+        self.cones = R.cones
+        self.nnz = rows.size
+        order = np.lexsort((rows, cols))
+        self.perm = order
+        self.indices = rows[order].astype(np.int64)
+        self.indptr = np.searchsorted(cols[order], np.arange(self.n + 1)).astype(np.int64)
+        if np.any((np.diff(rows[order]) == 0) & (np.diff(cols[order]) == 0)):
+            raise AssertionError("duplicate entries in the subproblem pattern")
+
+    def _dynamics_rows(self, R: _Rows) -> None:
+        """Dynamics (zero cone), 14 rows per interval; entries in this order per interval:
+        x_{k+1} (14), A_hat (its structural nonzeros, row-major), Bm_hat (14x3),
+        Bp_hat (14x3), Sigma_hat (14), nu (14)."""
+        L = self.lay
         eye_r = np.arange(NX)
         rr, cc = np.nonzero(self.a_pattern)  # row-major over (row, col)
         ru = np.repeat(eye_r, NU)
         cu = np.tile(np.arange(NU), NX)
         rows_d, cols_d = [], []
-        for kk in k:
+        for kk in range(self.N - 1):
             base = NX * kk
             rows_d += [base + eye_r, base + rr, base + ru, base + ru, base + eye_r, base + eye_r]
             cols_d += [
@@ -197,15 +215,25 @@ class SubproblemTemplate:
                 np.full(NX, L.isig),
                 L.inu + NX * kk + eye_r,
             ]
-        self.r_dyn = R.add("zero", np.concatenate(rows_d), np.concatenate(cols_d), NX * nI)
-        # Boundary conditions (zero cone): full initial state, final r, v, omega, q.
+        self.r_dyn = R.add(
+            "zero", np.concatenate(rows_d), np.concatenate(cols_d), NX * (self.N - 1)
+        )
+
+    def _boundary_rows(self, R: _Rows) -> None:
+        """Boundary conditions (zero cone): full initial state, final r, v, omega, q."""
+        L, eye_r = self.lay, np.arange(NX)
         self.r_x0 = R.add("zero", eye_r, L.x_index(0, eye_r), NX)
         fin = list(range(0, 6)) + list(range(10, 13))
         fin += [8, 9] if self.final_roll_free else [6, 7, 8, 9]
         self.final_idx = np.array(fin)
-        self.r_xf = R.add("zero", np.arange(len(fin)), L.x_index(N - 1, self.final_idx), len(fin))
-        # Nonnegative rows: t_i - nu_i >= 0 and t_i + nu_i >= 0 (scalar blocks), s' >= 0,
-        # sigma bound, trust region, mass, T_min.
+        last = L.x_index(self.N - 1, self.final_idx)
+        self.r_xf = R.add("zero", np.arange(len(fin)), last, len(fin))
+
+    def _nonneg_rows(self, R: _Rows) -> None:
+        """Nonnegative rows: t_i - nu_i >= 0 and t_i + nu_i >= 0 (scalar blocks), s' >= 0,
+        sigma bound, trust region, mass, T_min."""
+        N, L = self.N, self.lay
+        k = np.arange(N - 1)
         ns_nu = len(TR_SCALAR_STATES)
         t_idx = (L.ivc + N_NU_BLOCKS * k[:, None] + np.arange(ns_nu)[None, :]).ravel()
         nu_idx = (L.inu + NX * k[:, None] + np.array(TR_SCALAR_STATES)[None, :]).ravel()
@@ -248,40 +276,34 @@ class SubproblemTemplate:
             ),
             N,
         )
-        # Second-order cones, node-major, in constraint order 1..5 at each node.
+
+    def _path_cone_rows(self, R: _Rows) -> None:
+        """The masked-in path-constraint cones, node-major, in constraint order 1..5."""
         self.soc_rows: dict[tuple[int, int], int] = {}
-        for node in range(N):
+        for node in range(self.N):
             for c in range(1, 6):
                 if not self.mask[node, c]:
                     continue
                 rows, cols = self._soc_entries(node, c)
                 self.soc_rows[(node, c)] = R.add("soc", rows, cols, CONE_DIMS[c])
-        # Virtual control pairs: [t_p; nu_a; nu_b] in Q3.
+
+    def _pair_rows(self, R: _Rows) -> None:
+        """The rotation-invariant pairs in Q3: virtual control [t_p; nu_a; nu_b] per
+        interval, then trust region |(z_a, z_b) - ref|_2 <= eta per node."""
+        L = self.lay
         self.nu_pairs = []
-        for kk in k:
+        for kk in range(self.N - 1):
             for j, pair in enumerate(TR_PAIRS):
                 t_col = L.ivc + N_NU_BLOCKS * kk + len(TR_SCALAR_STATES) + j
                 cols = np.array([t_col, L.inu + NX * kk + pair[0], L.inu + NX * kk + pair[1]])
                 self.nu_pairs.append(R.add("soc", np.arange(3), cols, 3))
-        # Trust region, rotation-invariant pairs: |(z_a, z_b) - ref|_2 <= eta (SOC of dim 3).
+        nodes = np.arange(self.N)
         self.tr_pairs = np.stack(
             [L.x_index(nodes[:, None], np.array(pair)[None, :]) for pair in TR_PAIRS], axis=1
         ).reshape(-1, 2)
         self.r_trp = R.m
         for pair in self.tr_pairs:
             R.add("soc", np.array([1, 2]), pair, 3)
-        rows = np.concatenate(R.rows)
-        cols = np.concatenate(R.cols)
-        self.m, self.n = R.m, L.n
-        self.cones = R.cones
-        self.nnz = rows.size
-        # COO -> CSC permutation, computed once: csc.data = values[self.perm].
-        order = np.lexsort((rows, cols))
-        self.perm = order
-        self.indices = rows[order].astype(np.int64)
-        self.indptr = np.searchsorted(cols[order], np.arange(self.n + 1)).astype(np.int64)
-        if np.any((np.diff(rows[order]) == 0) & (np.diff(cols[order]) == 0)):
-            raise AssertionError("duplicate entries in the subproblem pattern")
 
     def trust_norm(self, dz: np.ndarray) -> float:
         """|dz| in the trust region's norm: the largest |component| of the scalar part and
@@ -314,56 +336,74 @@ class SubproblemTemplate:
         prox_u: float = 0.0,
     ) -> ConicProblem:
         """Writes the numbers of the subproblem linearized about the scaled iterate z_ref;
-        prox_u > 0 adds (prox_u / 2) |u_hat - u_hat_ref|^2 (SCvxSettings.prox_u)."""
-        p = scenario.params
-        N, L, sc = self.N, self.lay, scaling
-        Sx, cx, Su, Ss = sc.Sx, sc.cx, sc.Su, sc.Ss
-        vals: list[np.ndarray] = []
+        prox_u > 0 adds (prox_u / 2) |u_hat - u_hat_ref|^2 (SCvxSettings.prox_u). The blocks
+        in the order of _build."""
         b = np.zeros(self.m)
-        # Dynamics: x_hat_{k+1} - A_hat x_hat_k - Bm_hat u_hat_k - Bp_hat u_hat_{k+1}
-        #           - Sigma_hat sigma_hat - nu = Sx^-1 (A c_x + z - c_x)
+        vals = [
+            self._dynamics_values(disc, scaling, b),
+            *self._boundary_values(scenario, scaling, b),
+            *self._nonneg_values(z_ref, eta, scenario.params, scaling, b),
+            *self._cone_values(z_ref, eta, scenario.params, scaling, b),
+        ]
+        data = np.concatenate(vals)[self.perm]
+        Amat = sp.csc_matrix((data, self.indices, self.indptr), shape=(self.m, self.n))
+        P, q = self._objective(z_ref, lam, prox_u)
+        return ConicProblem(P=P, q=q, A=Amat, b=b, cones=list(self.cones))
+
+    def _dynamics_values(
+        self, disc: dict[str, np.ndarray], sc: Scaling, b: np.ndarray
+    ) -> np.ndarray:
+        """x_hat_{k+1} - A_hat x_hat_k - Bm_hat u_hat_k - Bp_hat u_hat_{k+1}
+        - Sigma_hat sigma_hat - nu = Sx^-1 (A c_x + z - c_x)"""
+        Sx, cx, Su, Ss = sc.Sx, sc.cx, sc.Su, sc.Ss
         A, Bm, Bp, S, zk = disc["A"], disc["Bm"], disc["Bp"], disc["Sigma"], disc["z"]
         inv = 1.0 / Sx
         Ah = -(inv[None, :, None] * A * Sx[None, None, :])
         Bmh = -(inv[None, :, None] * Bm * Su)
         Bph = -(inv[None, :, None] * Bp * Su)
         Sh = -(inv[None, :] * S * Ss)
-        nI = N - 1
+        nI = self.N - 1
         ones = np.ones((nI, NX))
         Ah = Ah[:, self.a_pattern]  # its structural nonzeros, row-major
         dyn = np.concatenate(
             [ones, Ah, Bmh.reshape(nI, -1), Bph.reshape(nI, -1), Sh, -ones], axis=1
         )
-        vals.append(dyn.ravel())
         b[self.r_dyn : self.r_dyn + NX * nI] = (inv * (A @ cx + zk - cx)).ravel()
-        # Boundary conditions.
-        x0h = sc.scale_x(scenario.x0)
+        return dyn.ravel()
+
+    def _boundary_values(self, scenario: Scenario, sc: Scaling, b: np.ndarray) -> list[np.ndarray]:
         xf = scenario.x_final_target()
-        vals.append(np.ones(NX))
-        b[self.r_x0 : self.r_x0 + NX] = x0h
-        vals.append(np.ones(len(self.final_idx)))
-        b[self.r_xf : self.r_xf + len(self.final_idx)] = ((xf - cx) / Sx)[self.final_idx]
-        # Epigraph of |nu_i|: s = t - nu >= 0 and s = t + nu >= 0; then s' >= 0.
-        ne = self.n_nu_scalar
-        vals.append(np.concatenate([-np.ones(ne), np.ones(ne), -np.ones(ne), -np.ones(ne)]))
-        vals.append(-np.ones(N))
-        # sigma_hat >= SIGMA_MIN / Ss.
-        vals.append(-np.ones(1))
-        b[self.r_sig] = -SIGMA_MIN / Ss
-        # Trust region, scalars: eta - (z - z_ref) >= 0 and eta + (z - z_ref) >= 0.
-        ns = self.tr_scalar.size
-        zr = z_ref[self.tr_scalar]
-        vals.append(np.concatenate([np.ones(ns), -np.ones(ns)]))
-        b[self.r_tr : self.r_tr + ns] = eta + zr
-        b[self.r_tr + ns : self.r_tr + 2 * ns] = eta - zr
-        # Mass: m_hat >= 0  (m >= m_dry with c_m = m_dry).
-        vals.append(-np.ones(len(self.nodes_mass)))
+        b[self.r_x0 : self.r_x0 + NX] = sc.scale_x(scenario.x0)
+        b[self.r_xf : self.r_xf + len(self.final_idx)] = ((xf - sc.cx) / sc.Sx)[self.final_idx]
+        return [np.ones(NX), np.ones(len(self.final_idx))]
+
+    def _nonneg_values(
+        self, z_ref: np.ndarray, eta: float, p: Params, sc: Scaling, b: np.ndarray
+    ) -> list[np.ndarray]:
+        N, L, ne, ns = self.N, self.lay, self.n_nu_scalar, self.tr_scalar.size
         # T_min: -(T_ref/|T_ref|) . u_hat - s' + s = -T_min / S_u  (s >= 0).
         u_ref = z_ref[L.iu : L.isig].reshape(N, NU)
         dirs = u_ref / np.maximum(np.linalg.norm(u_ref, axis=1, keepdims=True), 1e-12)
-        vals.append(np.concatenate([-dirs.ravel(), -np.ones(N)]))
-        b[self.r_tmin : self.r_tmin + N] = -p.T_min / Su
-        # Second-order cones: s = b - A z.
+        b[self.r_sig] = -SIGMA_MIN / sc.Ss  # sigma_hat >= SIGMA_MIN / Ss
+        zr = z_ref[self.tr_scalar]  # trust region: eta -+ (z - z_ref) >= 0
+        b[self.r_tr : self.r_tr + ns] = eta + zr
+        b[self.r_tr + ns : self.r_tr + 2 * ns] = eta - zr
+        b[self.r_tmin : self.r_tmin + N] = -p.T_min / sc.Su
+        return [
+            # epigraph of |nu_i|: s = t - nu >= 0 and s = t + nu >= 0; then s' >= 0
+            np.concatenate([-np.ones(ne), np.ones(ne), -np.ones(ne), -np.ones(ne)]),
+            -np.ones(N),
+            -np.ones(1),
+            np.concatenate([np.ones(ns), -np.ones(ns)]),
+            -np.ones(len(self.nodes_mass)),  # m_hat >= 0 (m >= m_dry with c_m = m_dry)
+            np.concatenate([-dirs.ravel(), -np.ones(N)]),
+        ]
+
+    def _cone_values(
+        self, z_ref: np.ndarray, eta: float, p: Params, sc: Scaling, b: np.ndarray
+    ) -> list[np.ndarray]:
+        """The path-constraint cones (s = b - A z), then the virtual-control pairs
+        s = [t; nu_a; nu_b] and the trust-region pairs s = [eta; z_a - ref_a; z_b - ref_b]."""
         tg, cg = p.tan_glideslope, p.cos_gimbal
         soc_vals = {
             1: np.array([-1.0, -tg, -tg]),
@@ -372,31 +412,36 @@ class SubproblemTemplate:
             4: np.array([-1.0, -1.0, -1.0]),
             5: np.array([-1.0, -cg, -cg, -cg]),
         }
-        head = {2: p.tilt_q_max / Sx[8], 3: p.omega_max / Sx[10], 4: p.T_max / Su}
+        head = {2: p.tilt_q_max / sc.Sx[8], 3: p.omega_max / sc.Sx[10], 4: p.T_max / sc.Su}
+        vals = []
         for (_node, c), row in self.soc_rows.items():
             vals.append(soc_vals[c])
             if c in head:
                 b[row] = head[c]
-        # Virtual control pairs: s = [t; nu_a; nu_b] in Q3.
         vals.append(np.tile(-np.ones(3), len(self.nu_pairs)))
-        # Trust region, pairs: s = [eta; z_a - ref_a; z_b - ref_b] in Q3.
         npair = len(self.tr_pairs)
         vals.append(-np.ones(2 * npair))
         tb = np.zeros((npair, 3))
         tb[:, 0] = eta
         tb[:, 1:] = -z_ref[self.tr_pairs]
         b[self.r_trp : self.r_trp + 3 * npair] = tb.ravel()
-        data = np.concatenate(vals)[self.perm]
-        Amat = sp.csc_matrix((data, self.indices, self.indptr), shape=(self.m, self.n))
+        return vals
+
+    def _objective(
+        self, z_ref: np.ndarray, lam: float, prox_u: float
+    ) -> tuple[sp.csc_matrix | None, np.ndarray]:
+        """-m_hat(t_f) + lambda (sum t + sum s'), plus (prox_u / 2) |u_hat - u_ref|^2 as its
+        P part and linear part (the constant dropped)."""
+        L = self.lay
         q = np.zeros(self.n)
-        q[L.x_index(N - 1, IM)] = -1.0  # minimize -m_hat(t_f)
-        q[L.ivc :] = lam  # lambda (sum t + sum s')
+        q[L.x_index(self.N - 1, IM)] = -1.0
+        q[L.ivc :] = lam
         P = None
-        if prox_u > 0.0:  # (prox_u / 2) |u_hat - u_ref|^2 = P part + linear part, + const
+        if prox_u > 0.0:
             thrust = np.arange(L.iu, L.isig)
             P = sp.csc_matrix((np.full(thrust.size, prox_u), (thrust, thrust)), (self.n,) * 2)
             q[thrust] -= prox_u * z_ref[thrust]
-        return ConicProblem(P=P, q=q, A=Amat, b=b, cones=list(self.cones))
+        return P, q
 
 
 def pack(xh: np.ndarray, uh: np.ndarray, sh: float, lay: Layout) -> np.ndarray:
