@@ -7,8 +7,8 @@
  *                                                 second file the constraint network's masks
  *
  * Solves the default landing scenario of DESIGN.md and prints the iteration log, the
- * summary and the trajectory (one line per node). The weight files are build/models/{solution,constraint}.tnn
- * (`make lib`). Links only the static libraries and their Debian dependencies:
+ * summary and the trajectory (one line per node), following the lifecycle at the top of
+ * tscvx_guidance.h. The weight files are build/models/{solution,constraint}.tnn (`make lib`). Links only the static libraries and their Debian dependencies:
  *
  *   cc -std=c99 -Ic_runtime/include pdg_example.c build/libtscvx_gnc.a build/libtscvx.a \
  *      -lamd -lldl -lsuitesparseconfig -lm
@@ -38,36 +38,37 @@ static double now_s(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-int main(int argc, char **argv)
+/* The memory this program claims before the solve: the guidance arena, and per network its
+ * weight blob (read in place) and its arena. */
+typedef struct {
+    void *arena;
+    size_t bytes;
+    unsigned char *blobs[2];
+    size_t blob_len[2];
+    void *net_arenas[2];
+    size_t net_bytes[2];
+    tscvx_nn *nets[2]; /* solution, constraint */
+} memory;
+
+static void release(memory *m)
 {
-    pdg_tscvx_options topt = {0};
-    pdg_tscvx_report rep;
-    unsigned char *blobs[2] = {NULL, NULL};
-    void *net_arenas[2] = {NULL, NULL};
-    size_t blob_len[2] = {0, 0}, net_bytes[2] = {0, 0};
-    tscvx_nn *nets[2] = {NULL, NULL};
-    const int tscvx = argc > 1;
-    pdg_settings st;
-    pdg_scenario scn;
-    pdg_options opt = {0};
-    pdg_result res;
-    pdg_workspace *ws = NULL;
-    pdg_setup_status s;
-    void *scratch = NULL, *arena;
-    size_t need = 0;
-    double x[PDG_N_MAX * PDG_NSTATE], u[PDG_N_MAX * PDG_NCTRL];
-    int N, i, k, tries;
-
-    if (argc > 3 || (argc > 1 && argv[1][0] == '-') || (argc > 2 && argv[2][0] == '-')) {
-        fprintf(stderr, "usage: %s [SOLUTION.tnn [CONSTRAINT.tnn]]\n", argv[0]);
-        return 2;
+    int i;
+    free(m->arena);
+    for (i = 0; i < 2; ++i) {
+        free(m->net_arenas[i]);
+        free(m->blobs[i]);
     }
-    pdg_default_settings(&st);
-    pdg_default_scenario(&scn);
-    N = scn.params.N;
+}
 
-    /* 2. size the arena (the scratch may be reused as the arena) */
-    s = PDG_SETUP_SCRATCH_TOO_SMALL;
+/* Lifecycle steps 2 and 3: size the arena (the scratch may be reused as the arena; at most
+ * two retries), then set up in it. 0 = ok, else a message on stderr. */
+static int set_up(const pdg_scenario *scn, const pdg_settings *st, memory *m,
+                  pdg_workspace **ws)
+{
+    pdg_setup_status s = PDG_SETUP_SCRATCH_TOO_SMALL;
+    void *scratch = NULL;
+    size_t need = 0;
+    int tries;
     for (tries = 0; tries < 4 && s == PDG_SETUP_SCRATCH_TOO_SMALL; ++tries) {
         free(scratch);
         scratch = need ? malloc(need) : NULL;
@@ -75,62 +76,31 @@ int main(int argc, char **argv)
             fprintf(stderr, "out of memory\n");
             return 1;
         }
-        s = pdg_workspace_size(&scn.params, &st, scratch, need, &need);
+        s = pdg_workspace_size(&scn->params, st, scratch, need, &need);
     }
     free(scratch);
     if (s != PDG_SETUP_OK) {
         fprintf(stderr, "pdg_workspace_size: %s\n", pdg_setup_status_message(s));
         return 1;
     }
-    /* 3. set up in one arena */
-    arena = malloc(need);
-    if (!arena) {
+    m->arena = malloc(need);
+    m->bytes = need;
+    if (!m->arena) {
         fprintf(stderr, "out of memory\n");
         return 1;
     }
-    s = pdg_setup(&ws, arena, need, &scn.params, &st);
+    s = pdg_setup(ws, m->arena, need, &scn->params, st);
     if (s != PDG_SETUP_OK) {
         fprintf(stderr, "pdg_setup: %s\n", pdg_setup_status_message(s));
-        free(arena);
         return 1;
     }
-    /* 3b. T-SCvx: the networks, each in its own arena */
-    for (i = 1; i < argc && i <= 2; ++i) {
-        if (load_net(argv[i], &blobs[i - 1], &blob_len[i - 1], &net_arenas[i - 1],
-                     &net_bytes[i - 1], &nets[i - 1])) {
-            return 1;
-        }
-        printf("network %s: %zu bytes of weights, arena %zu bytes\n", argv[i], blob_len[i - 1],
-               net_bytes[i - 1]);
-    }
-    /* 4. solve */
-    res.x = x;
-    res.u = u;
-    opt.clock_s = now_s;
-    topt.solution = nets[0];
-    topt.constraint = nets[1];
-    topt.clock_s = now_s;
-    {
-        const double t0 = now_s();
-        const pdg_status st_solve = tscvx ? pdg_solve_tscvx(ws, &scn, &topt, &res, &rep)
-                                          : pdg_solve(ws, &scn, &opt, &res);
-        if (st_solve == PDG_INVALID_INPUT) { /* nothing was solved: no log, no trajectory */
-            fprintf(stderr, "refused: %s\n", res.message);
-            free(arena);
-            for (i = 0; i < 2; ++i) {
-                free(net_arenas[i]);
-                free(blobs[i]);
-            }
-            return 2;
-        }
-        printf("%s time %.1f ms\n", tscvx ? "T-SCvx (networks included)" : "SCvx",
-               1e3 * (now_s() - t0));
-    }
-    if (tscvx) {
-        printf("T-SCvx: warm start %s, initial radius %g, %d network masks, %d refused\n",
-               rep.warm_started ? "yes" : "no", rep.eta_init, rep.masks_predicted,
-               rep.mask_failures);
-    }
+    return 0;
+}
+
+/* Lifecycle step 5: the iteration log of the last solve. */
+static void print_log(const pdg_workspace *ws)
+{
+    int i;
     printf("  k        J         dJ         dL        rho    radius   |vc|_1  tight  sub[ms]  "
            "step\n");
     for (i = 0; i < pdg_log_length(ws); ++i) {
@@ -144,28 +114,103 @@ int main(int argc, char **argv)
         }
         printf("\n");
     }
+}
+
+/* The summary of the answer. */
+static void print_summary(const pdg_scenario *scn, const pdg_result *res)
+{
+    const int N = scn->params.N;
+    const double m_f = res->x[PDG_NSTATE * (N - 1) + 13];
     printf("status %s (%s)\niterations %d, subproblems %d, t_f %.6f, m_f %.6f, fuel %.6f\n",
-           pdg_status_name(res.status), res.message, res.iterations, res.subproblems_solved,
-           res.t_f, x[PDG_NSTATE * (N - 1) + 13], scn.m0 - x[PDG_NSTATE * (N - 1) + 13]);
-    printf("largest defect %.2e, largest path-constraint value %.2e\n", res.max_defect,
-           res.max_violation);
-    printf("arena %zu bytes, high-water %zu bytes\n", need, pdg_arena_high_water(ws));
+           pdg_status_name(res->status), res->message, res->iterations, res->subproblems_solved,
+           res->t_f, m_f, scn->m0 - m_f);
+    printf("largest defect %.2e, largest path-constraint value %.2e\n", res->max_defect,
+           res->max_violation);
+}
+
+/* One line per node: t, the state x and the thrust T_B with its norm. */
+static void print_trajectory(const pdg_scenario *scn, const pdg_result *res)
+{
+    const int N = scn->params.N;
+    int i, k;
     printf("\n node      t      r1       r2       r3       v1       v2       v3       q0       "
            "q1       q2       q3       w1       w2       w3       m        T1       T2       "
            "T3      |T|\n");
     for (k = 0; k < N; ++k) {
-        const double *xk = x + PDG_NSTATE * k, *uk = u + PDG_NCTRL * k;
-        printf("%4d %7.4f", k, res.t_f * k / (N - 1));
+        const double *xk = res->x + PDG_NSTATE * k, *uk = res->u + PDG_NCTRL * k;
+        printf("%4d %7.4f", k, res->t_f * k / (N - 1));
         for (i = 0; i < PDG_NSTATE; ++i) {
             printf(" %8.4f", xk[i]);
         }
         printf(" %8.4f %8.4f %8.4f %8.4f\n", uk[0], uk[1], uk[2],
                sqrt(uk[0] * uk[0] + uk[1] * uk[1] + uk[2] * uk[2]));
     }
-    free(arena);
-    for (i = 0; i < 2; ++i) {
-        free(net_arenas[i]);
-        free(blobs[i]);
+}
+
+int main(int argc, char **argv)
+{
+    memory mem = {0};
+    pdg_settings st;
+    pdg_scenario scn;
+    pdg_workspace *ws = NULL;
+    pdg_options opt = {0};
+    pdg_tscvx_options topt = {0};
+    pdg_tscvx_report rep;
+    pdg_result res;
+    pdg_status status;
+    double x[PDG_N_MAX * PDG_NSTATE], u[PDG_N_MAX * PDG_NCTRL], t0;
+    const int tscvx = argc > 1;
+    int i;
+
+    if (argc > 3 || (argc > 1 && argv[1][0] == '-') || (argc > 2 && argv[2][0] == '-')) {
+        fprintf(stderr, "usage: %s [SOLUTION.tnn [CONSTRAINT.tnn]]\n", argv[0]);
+        return 2;
     }
-    return res.status == PDG_SOLVED ? 0 : 3;
+    /* 1. Table 1's settings and the default scenario; 2.-3. the arena */
+    pdg_default_settings(&st);
+    pdg_default_scenario(&scn);
+    if (set_up(&scn, &st, &mem, &ws) != 0) {
+        release(&mem);
+        return 1;
+    }
+    /* T-SCvx: the networks, each in its own arena */
+    for (i = 1; i < argc && i <= 2; ++i) {
+        if (load_net(argv[i], &mem.blobs[i - 1], &mem.blob_len[i - 1], &mem.net_arenas[i - 1],
+                     &mem.net_bytes[i - 1], &mem.nets[i - 1])) {
+            release(&mem);
+            return 1;
+        }
+        printf("network %s: %zu bytes of weights, arena %zu bytes\n", argv[i],
+               mem.blob_len[i - 1], mem.net_bytes[i - 1]);
+    }
+    /* 4. solve */
+    res.x = x;
+    res.u = u;
+    opt.clock_s = now_s;
+    topt.solution = mem.nets[0];
+    topt.constraint = mem.nets[1];
+    topt.clock_s = now_s;
+    t0 = now_s();
+    status = tscvx ? pdg_solve_tscvx(ws, &scn, &topt, &res, &rep)
+                   : pdg_solve(ws, &scn, &opt, &res);
+    if (status == PDG_INVALID_INPUT) { /* nothing was solved: no log, no trajectory */
+        fprintf(stderr, "refused: %s\n", res.message);
+        release(&mem);
+        return 2;
+    }
+    printf("%s time %.1f ms\n", tscvx ? "T-SCvx (networks included)" : "SCvx",
+           1e3 * (now_s() - t0));
+    if (tscvx) {
+        printf("T-SCvx: warm start %s, initial radius %g, %d network masks, %d refused\n",
+               rep.warm_started ? "yes" : "no", rep.eta_init, rep.masks_predicted,
+               rep.mask_failures);
+    }
+    /* 5. the record of the solve, and its answer */
+    print_log(ws);
+    print_summary(&scn, &res);
+    printf("arena %zu bytes, high-water %zu bytes\n", mem.bytes, pdg_arena_high_water(ws));
+    print_trajectory(&scn, &res);
+    /* 6. cleanup: the arenas are the caller's */
+    release(&mem);
+    return status == PDG_SOLVED ? 0 : 3;
 }
