@@ -180,8 +180,6 @@ def measure(
     """Scores of every rule at every eps, over the landings with at least 3 solved
     neighbours. With ``run_dir`` each landing's neighbour masks are kept there as they are
     solved, and a rerun of the same run solves only what is missing."""
-    from tqdm import tqdm
-
     std = theta_spread() if std is None else std
     ranges = SamplingRanges()
     landings = [theta_of(base_scenario(seed, i, ranges)[0]) for i in range(n_landings)]
@@ -190,16 +188,46 @@ def measure(
         config = dict(seed=seed, neighbours=n_neighbours, backend=backend,
                       settings=dataclasses.asdict(SCvxSettings()), std=std.tolist())  # fmt: skip
         _check_run(cache, config)
-    found: dict[tuple[float, int], list[np.ndarray]] = {}
-    jobs = []
+    found, missing = _cached_masks(cache, eps_values, n_landings)
+    jobs = [(eps, i, landings[i], std, n_neighbours, backend, seed) for eps, i in missing]
+    _solve_missing(jobs, found, len(eps_values) * n_landings, workers, cache, progress)
+    scores = []
     for eps in eps_values:
-        for i, theta in enumerate(landings):
+        groups = [found[eps, i] for i in range(n_landings) if len(found[eps, i]) >= 3]
+        scores += [_score(eps, rule, votes, groups) for rule, votes in RULES]
+    return scores
+
+
+def _cached_masks(
+    cache: Path | None, eps_values: Sequence[float], n_landings: int
+) -> tuple[dict[tuple[float, int], list[np.ndarray]], list[tuple[float, int]]]:
+    """The neighbour masks the run directory holds already, by (eps, landing), and the
+    (eps, landing) pairs it does not hold, in the order of the run."""
+    found: dict[tuple[float, int], list[np.ndarray]] = {}
+    missing: list[tuple[float, int]] = []
+    for eps in eps_values:
+        for i in range(n_landings):
             path = _cache_file(cache, eps, i) if cache is not None else None
             if path is not None and path.exists():
-                with np.load(path) as f:
+                with np.load(path) as f:  # arr_0, arr_1, ... in the order of the neighbours
                     found[eps, i] = [f[k] for k in sorted(f.files, key=lambda k: int(k[4:]))]
             else:
-                jobs.append((eps, i, theta, std, n_neighbours, backend, seed))
+                missing.append((eps, i))
+    return found, missing
+
+
+def _solve_missing(
+    jobs: list[tuple],
+    found: dict[tuple[float, int], list[np.ndarray]],
+    n_total: int,
+    workers: int,
+    cache: Path | None,
+    progress: bool,
+) -> None:
+    """Solves the neighbourhoods of ``jobs`` into ``found`` and the run directory, one file
+    each as it finishes: a dead worker (WorkerDiedError) loses only the unfinished ones."""
+    from tqdm import tqdm
+
     with tqdm(total=len(jobs), disable=not progress, unit="landing",
               desc=f"neighbourhoods ({len(found)} done before)") as bar:  # fmt: skip
         results = imap_pool(neighbour_masks, jobs, workers)
@@ -211,19 +239,18 @@ def measure(
                         np.savez(f, *masks)
                 bar.update()
         except BrokenProcessPool as exc:
-            raise worker_died(len(found), len(eps_values) * n_landings, cache) from exc
+            raise worker_died(len(found), n_total, cache) from exc
         finally:
             results.close()  # stops the pool now, also when this loop fails
-    scores = []
-    for eps in eps_values:
-        groups = [found[eps, i] for i in range(n_landings) if len(found[eps, i]) >= 3]
-        for rule, votes in RULES:
-            counts = np.zeros(5, np.int64)
-            for masks in groups:
-                counts += loo_counts(masks, votes)
-            tp, fp, fn, rows, missing = (int(v) for v in counts)
-            scores.append(Score(eps, rule, tp, fp, fn, rows, missing))
-    return scores
+
+
+def _score(eps: float, rule: str, min_votes: int, groups: list[list[np.ndarray]]) -> Score:
+    """One rule's leave-one-out counts summed over the neighbourhoods ``groups``."""
+    counts = np.zeros(5, np.int64)
+    for masks in groups:
+        counts += loo_counts(masks, min_votes)
+    tp, fp, fn, rows, missing = (int(v) for v in counts)
+    return Score(eps, rule, tp, fp, fn, rows, missing)
 
 
 def format_table(

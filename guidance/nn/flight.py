@@ -145,32 +145,69 @@ def load_onnx(path: str | Path, load_external_data: bool = True) -> Any:
 
 
 def read_onnx(path: str | Path) -> FlightWeights:
-    from onnx import helper, numpy_helper
-
+    """The weights of a T-SCvx ONNX export in the blob's order, checked against the probes
+    recorded in its metadata; OnnxLayoutError when the file is not such an export."""
     model = load_onnx(path)
-    graph = model.graph
-    props = {p.key: p.value for p in model.metadata_props}
-    if "tscvx" not in props:
-        raise OnnxLayoutError(f"{path}: no 'tscvx' metadata: not a T-SCvx model export")
-    meta = json.loads(props["tscvx"])
+    meta = _tscvx_metadata(path, model)
     arch = meta["arch"]
-    ops = {n.op_type for n in graph.node} - ALLOWED_OPS
-    if ops:
-        raise OnnxLayoutError(f"{path}: operators outside the architecture: {sorted(ops)}")
-    inits = {t.name: numpy_helper.to_array(t) for t in graph.initializer}
+    _check_operators(path, model.graph)
+    inits = _Initializers(path, model.graph)
     d_in, d_out, d, ff = arch["d_in"], arch["d_out"], arch["d_model"], arch["d_ff"]
     H, n_layers, tokens = arch["n_heads"], arch["n_layers"], arch["tokens"]
     if (d_in, d_out) != (meta["d_in"], meta["d_out"]) or meta["kind"] not in KINDS:
         raise OnnxLayoutError(f"{path}: metadata sizes or kind inconsistent")
-    L = d_in if tokens == "scalar" else 1
+    ln_eps = _layer_norm_eps(path, model.graph, n_layers)
+    arrays = _weight_arrays(inits, arch)
+    fw = FlightWeights(
+        kind=meta["kind"], tokens=tokens, d_in=d_in, d_out=d_out, d_model=d, n_heads=H,
+        n_layers=n_layers, d_ff=ff, N=int(meta["N"]), ln_eps=ln_eps,
+        threshold=float(meta.get("threshold", 0.5)), arrays=arrays,
+        probe_in=np.asarray(meta["probe_input"], np.float32).reshape(-1, d_in),
+        probe_out=np.asarray(meta["probe_output"], np.float32).reshape(-1, d_out),
+        trained=_trained(path, meta),
+    )  # fmt: skip
+    _check_probes(path, fw)
+    return fw
 
-    def init(name: str, shape: tuple[int, ...]) -> np.ndarray:
-        if name not in inits:
-            raise OnnxLayoutError(f"{path}: initializer {name!r} missing")
-        a = np.asarray(inits[name], np.float32)
+
+def _tscvx_metadata(path: str | Path, model: Any) -> dict[str, Any]:
+    props = {p.key: p.value for p in model.metadata_props}
+    if "tscvx" not in props:
+        raise OnnxLayoutError(f"{path}: no 'tscvx' metadata: not a T-SCvx model export")
+    return json.loads(props["tscvx"])
+
+
+def _check_operators(path: str | Path, graph: Any) -> None:
+    ops = {n.op_type for n in graph.node} - ALLOWED_OPS
+    if ops:
+        raise OnnxLayoutError(f"{path}: operators outside the architecture: {sorted(ops)}")
+
+
+class _Initializers:
+    """A graph's initializers, taken by name with the shape the architecture expects."""
+
+    def __init__(self, path: str | Path, graph: Any) -> None:
+        from onnx import numpy_helper
+
+        self.path, self.graph = path, graph
+        self.arrays = {t.name: numpy_helper.to_array(t) for t in graph.initializer}
+
+    def get(self, name: str, shape: tuple[int, ...]) -> np.ndarray:
+        if name not in self.arrays:
+            raise OnnxLayoutError(f"{self.path}: initializer {name!r} missing")
+        a = np.asarray(self.arrays[name], np.float32)
         if a.size != int(np.prod(shape)):
-            raise OnnxLayoutError(f"{path}: {name!r} has shape {a.shape}, expected {shape}")
+            raise OnnxLayoutError(f"{self.path}: {name!r} has shape {a.shape}, expected {shape}")
         return a.reshape(shape)
+
+    def linear(self, bias: str, n_out: int, n_in: int) -> np.ndarray:
+        """Weight [n_out][n_in] of the linear layer whose bias initializer is ``bias``."""
+        return _linear(self.graph, self.arrays, bias, n_out, n_in)
+
+
+def _layer_norm_eps(path: str | Path, graph: Any, n_layers: int) -> float:
+    """The epsilon all LayerNorms share (the C inference has one; 1e-5 without layers)."""
+    from onnx import helper
 
     eps = {
         float(helper.get_attribute_value(a))
@@ -181,55 +218,59 @@ def read_onnx(path: str | Path) -> FlightWeights:
     }
     if len(eps) > 1 or (n_layers and len(eps) != 1):
         raise OnnxLayoutError(f"{path}: LayerNorm epsilons {sorted(eps)}")
-    ln_eps = eps.pop() if eps else 1e-5
+    return eps.pop() if eps else 1e-5
 
+
+def _weight_arrays(w: _Initializers, arch: dict[str, Any]) -> list[tuple[str, np.ndarray]]:
+    """The named arrays of the blob, in its order (c_runtime/nn/nn_internal.h)."""
+    d_in, d_out, d, ff = arch["d_in"], arch["d_out"], arch["d_model"], arch["d_ff"]
+    L = d_in if arch["tokens"] == "scalar" else 1
     arrays: list[tuple[str, np.ndarray]] = [
-        ("in_mean", init("in_mean", (d_in,))),
-        ("in_scale", init("in_scale", (d_in,))),
-        ("out_mean", init("out_mean", (d_out,))),
-        ("out_std", init("out_std", (d_out,))),
+        ("in_mean", w.get("in_mean", (d_in,))),
+        ("in_scale", w.get("in_scale", (d_in,))),
+        ("out_mean", w.get("out_mean", (d_out,))),
+        ("out_std", w.get("out_std", (d_out,))),
     ]
-    if tokens == "single":
+    if arch["tokens"] == "single":
         arrays += [
-            ("enc_w", _linear(graph, inits, "net.encoder.bias", d, d_in)),
-            ("enc_b", init("net.encoder.bias", (d,))),
+            ("enc_w", w.linear("net.encoder.bias", d, d_in)),
+            ("enc_b", w.get("net.encoder.bias", (d,))),
         ]
     else:
-        arrays += [("enc_w", init("net.enc_w", (L, d))), ("enc_b", init("net.enc_b", (L, d)))]
-    arrays.append(("pos", init("net.pos", (L, d))))
-    for i in range(n_layers):
-        p = f"net.layers.{i}."
-        arrays += [
-            (p + "W_qkv", _linear(graph, inits, p + "qkv.bias", 3 * d, d)),
-            (p + "b_qkv", init(p + "qkv.bias", (3 * d,))),
-            (p + "W_o", _linear(graph, inits, p + "proj.bias", d, d)),
-            (p + "b_o", init(p + "proj.bias", (d,))),
-            (p + "ln1_g", init(p + "norm1.weight", (d,))),
-            (p + "ln1_b", init(p + "norm1.bias", (d,))),
-            (p + "W_1", _linear(graph, inits, p + "ff1.bias", ff, d)),
-            (p + "b_1", init(p + "ff1.bias", (ff,))),
-            (p + "W_2", _linear(graph, inits, p + "ff2.bias", d, ff)),
-            (p + "b_2", init(p + "ff2.bias", (d,))),
-            (p + "ln2_g", init(p + "norm2.weight", (d,))),
-            (p + "ln2_b", init(p + "norm2.bias", (d,))),
-        ]
+        arrays += [("enc_w", w.get("net.enc_w", (L, d))), ("enc_b", w.get("net.enc_b", (L, d)))]
+    arrays.append(("pos", w.get("net.pos", (L, d))))
+    for i in range(arch["n_layers"]):
+        arrays += _layer_arrays(w, f"net.layers.{i}.", d, ff)
     arrays += [
-        ("W_d", _linear(graph, inits, "net.decoder.bias", d_out, L * d)),
-        ("b_d", init("net.decoder.bias", (d_out,))),
+        ("W_d", w.linear("net.decoder.bias", d_out, L * d)),
+        ("b_d", w.get("net.decoder.bias", (d_out,))),
     ]
-    fw = FlightWeights(
-        kind=meta["kind"], tokens=tokens, d_in=d_in, d_out=d_out, d_model=d, n_heads=H,
-        n_layers=n_layers, d_ff=ff, N=int(meta["N"]), ln_eps=ln_eps,
-        threshold=float(meta.get("threshold", 0.5)), arrays=arrays,
-        probe_in=np.asarray(meta["probe_input"], np.float32).reshape(-1, d_in),
-        probe_out=np.asarray(meta["probe_output"], np.float32).reshape(-1, d_out),
-        trained=_trained(path, meta),
-    )  # fmt: skip
+    return arrays
+
+
+def _layer_arrays(w: _Initializers, p: str, d: int, ff: int) -> list[tuple[str, np.ndarray]]:
+    """The arrays of the encoder layer whose names start with ``p``."""
+    return [
+        (p + "W_qkv", w.linear(p + "qkv.bias", 3 * d, d)),
+        (p + "b_qkv", w.get(p + "qkv.bias", (3 * d,))),
+        (p + "W_o", w.linear(p + "proj.bias", d, d)),
+        (p + "b_o", w.get(p + "proj.bias", (d,))),
+        (p + "ln1_g", w.get(p + "norm1.weight", (d,))),
+        (p + "ln1_b", w.get(p + "norm1.bias", (d,))),
+        (p + "W_1", w.linear(p + "ff1.bias", ff, d)),
+        (p + "b_1", w.get(p + "ff1.bias", (ff,))),
+        (p + "W_2", w.linear(p + "ff2.bias", d, ff)),
+        (p + "b_2", w.get(p + "ff2.bias", (d,))),
+        (p + "ln2_g", w.get(p + "norm2.weight", (d,))),
+        (p + "ln2_b", w.get(p + "norm2.bias", (d,))),
+    ]
+
+
+def _check_probes(path: str | Path, fw: FlightWeights) -> None:
     got = forward(fw, fw.probe_in.astype(np.float64))
     want = fw.probe_out.astype(np.float64)
     if np.any(np.abs(got - want) > PROBE_RTOL * np.maximum(np.abs(want), 1.0)):
         raise OnnxLayoutError(f"{path}: the extracted weights do not reproduce the probes")
-    return fw
 
 
 def _trained(path: str | Path, meta: dict[str, Any]) -> np.ndarray:

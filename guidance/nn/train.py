@@ -363,117 +363,329 @@ def train(
         raise InputError(f"epochs per fold must be at least 1, got {cfg.epochs}")
     if cfg.threads:
         torch.set_num_threads(cfg.threads)
-    torch.manual_seed(cfg.split_seed)
-    t_start = time.perf_counter()
+    torch.manual_seed(cfg.split_seed)  # the initial weights, then dropout
+    rng = np.random.default_rng(cfg.split_seed + 1)  # calibration landings, folds, batch order
+    data = _prepare_data(ds, kind, cfg, rng)
+    trainer = _Trainer.new(kind, arch, cfg, data, rng, ds.N)
+    log(trainer.describe())
+    identity = run_identity(kind, arch, cfg, dataset)
+    saved = trainer.run_state(Path(state_path), identity) if state_path else None
+    run = _resume(saved, kind, trainer.n_epochs, log)
+    t_start = time.perf_counter() - run.seconds  # the wall-clock cap spans the resumes
+    _train_epochs(trainer, run, saved, t_start, log, progress)
+    if run.stopped_early:
+        log(f"[{kind}] stopped at the wall-clock cap of {cfg.max_seconds:.0f} s")
+    trainer.net.eval()
+    threshold = 0.5
+    if kind == "constraint":
+        threshold = trainer.threshold(last_fold=run.history[-1]["fold"] - 1)
+    metrics = trainer.evaluate(threshold)
+    metrics.update(_run_record(trainer, run, identity, time.perf_counter() - t_start))
+    norm = (getattr(data, name) for name in NORMALIZATION)
+    return TrainResult(kind, trainer.arch, trainer.net, *norm, threshold, metrics)
+
+
+def _run_record(
+    trainer: _Trainer, run: _Progress, identity: dict[str, Any], seconds: float
+) -> dict[str, Any]:
+    """What the metrics record of the run beside the test-split numbers."""
+    split = trainer.data.split
+    return dict(
+        history=run.history,
+        train_seconds=seconds,
+        stopped_early=run.stopped_early,
+        n_params=n_params(trainer.net),
+        macs=trainer.arch.macs(),
+        train_config=dataclasses.asdict(trainer.cfg),
+        identity=identity,
+        n_trainval_bases=len(split.trainval_b),
+        n_calibration_bases=len(split.calib_b),
+        n_test_bases=len(split.test_b),
+        test_bases=[int(b) for b in split.test_b],
+    )
+
+
+@dataclass(frozen=True)
+class _Split:
+    """Where the base landings, and so their rows, go: the test split, the calibration
+    landings (constraint network only) and the K folds of the rest of train+validation."""
+
+    trainval_b: np.ndarray  # base ids
+    test_b: np.ndarray
+    calib_b: np.ndarray
+    tv: np.ndarray  # row masks: train+validation (calibration included), test, calibration
+    te: np.ndarray
+    cal: np.ndarray
+    fit: np.ndarray  # rows of the folds: train+validation without the calibration rows
+    fold: np.ndarray  # each row's fold (-1: not in a fold)
+
+    def train_rows(self, f: int) -> np.ndarray:
+        return np.flatnonzero(self.fit & (self.fold != f))
+
+    def val_rows(self, f: int) -> np.ndarray:
+        return np.flatnonzero(self.fit & (self.fold == f))
+
+
+@dataclass(frozen=True)
+class _Data:
+    """One network's rows, standardized with the train+validation statistics."""
+
+    Xs: np.ndarray  # float32 inputs and targets
+    Ys: np.ndarray
+    bid: np.ndarray  # each row's base landing
+    theta: np.ndarray  # each row's theta, for the OOD tests
+    iteration: np.ndarray | None  # the constraint rows' SCvx iteration k
+    split: _Split
+    in_mean: np.ndarray  # the NORMALIZATION statistics
+    in_std: np.ndarray
+    out_mean: np.ndarray
+    out_std: np.ndarray
+
+
+def _prepare_data(ds: Dataset, kind: str, cfg: TrainConfig, rng: np.random.Generator) -> _Data:
     solved = ds.solved()
     if len(solved.theta) == 0:
         raise InputError("the dataset has no solved samples to train on")
     X, Y, bid, theta = xy(solved, kind)
-    trainval_b, test_b = split_bases(solved.base_id, cfg.test_fraction, cfg.split_seed)
-    tv = np.isin(bid, trainval_b)
-    te = np.isin(bid, test_b)
-    in_mean, in_std = standardization(X[tv])
+    split = _split_rows(kind, cfg, solved.base_id, bid, rng)
+    in_mean, in_std = standardization(X[split.tv])
     if kind == "solution":
-        out_mean, out_std = standardization(Y[tv])
-    else:
+        out_mean, out_std = standardization(Y[split.tv])
+    else:  # 0/1 labels, as they are
         out_mean, out_std = np.zeros(Y.shape[1]), np.ones(Y.shape[1])
-    Xs = ((X - in_mean) / in_std).astype(np.float32)
-    Ys = ((Y - out_mean) / out_std).astype(np.float32)
-    a = ArchConfig(d_in=X.shape[1], d_out=Y.shape[1], **(arch or {}))
-    net = Transformer(a)
-    loss_fn = _loss(kind, Y.shape[1], ds.N)
-    opt = torch.optim.AdamW(net.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay)
-    rng = np.random.default_rng(cfg.split_seed + 1)
-    calib_b = np.zeros(0, trainval_b.dtype)
-    if kind == "constraint" and cfg.calibration_fraction > 0 and len(trainval_b) > cfg.folds:
-        n_cal = max(1, round(cfg.calibration_fraction * len(trainval_b)))
-        calib_b = np.sort(rng.permutation(trainval_b)[:n_cal])
+    return _Data(
+        Xs=((X - in_mean) / in_std).astype(np.float32),
+        Ys=((Y - out_mean) / out_std).astype(np.float32),
+        bid=bid,
+        theta=theta,
+        iteration=X[:, -1] if kind == "constraint" else None,
+        split=split,
+        in_mean=in_mean,
+        in_std=in_std,
+        out_mean=out_mean,
+        out_std=out_std,
+    )
+
+
+def _split_rows(
+    kind: str, cfg: TrainConfig, sample_b: np.ndarray, bid: np.ndarray, rng: np.random.Generator
+) -> _Split:
+    """The split of the rows of base ids ``bid``; ``sample_b``: the solved samples' base ids."""
+    trainval_b, test_b = split_bases(sample_b, cfg.test_fraction, cfg.split_seed)
+    calib_b = _calibration_bases(kind, cfg, trainval_b, rng)
     fit_b = np.setdiff1d(trainval_b, calib_b)
     if len(fit_b) < cfg.folds:
         raise InputError(
             f"need at least K = {cfg.folds} base landings for the folds (each fold validates "
             f"on its own landings), have {len(fit_b)}: the dataset has "
-            f"{len(np.unique(solved.base_id))} solved base landings, {len(test_b)} go to the "
+            f"{len(np.unique(sample_b))} solved base landings, {len(test_b)} go to the "
             f"test split and {len(calib_b)} to calibration; make a larger dataset"
         )
-    cal = np.isin(bid, calib_b)
     fold_of_base = dict(zip(fit_b.tolist(), rng.permutation(len(fit_b)) % cfg.folds, strict=True))
-    fold = np.array([fold_of_base.get(int(b), -1) for b in bid])
-    fit = tv & ~cal
-    steps = [math.ceil(int(np.sum(fit & (fold != f))) / cfg.batch_size) for f in range(cfg.folds)]
-    total = sum(steps) * cfg.epochs
-    warmup = max(1, min(cfg.warmup_steps, total // 10))
-    sched = torch.optim.lr_scheduler.LambdaLR(opt, _lr_lambda(warmup, total))
-    log(
-        f"[{kind}] {a.label()}: {n_params(net):,} parameters, {a.macs():,} MACs/inference; "
-        f"{int(tv.sum())} train+val rows ({len(trainval_b)} base landings, "
-        f"{len(calib_b)} of them for calibration), "
-        f"{int(te.sum())} test rows ({len(test_b)} base landings); {total} steps, "
-        f"warm-up {warmup}"
+    tv = np.isin(bid, trainval_b)
+    cal = np.isin(bid, calib_b)
+    return _Split(
+        trainval_b,
+        test_b,
+        calib_b,
+        tv=tv,
+        te=np.isin(bid, test_b),
+        cal=cal,
+        fit=tv & ~cal,
+        fold=np.array([fold_of_base.get(int(b), -1) for b in bid]),
     )
-    identity = run_identity(kind, arch, cfg, dataset)
-    saved = _RunState(Path(state_path), identity, net, opt, sched, rng) if state_path else None
-    n_epochs = cfg.folds * cfg.epochs
-    run = {"epochs_done": 0, "history": [], "seconds": 0.0, "stopped_early": False}
-    if saved and saved.path.exists():
-        run = saved.load()
-        log(f"[{kind}] resumed from {saved.path}: {run['epochs_done']} of {n_epochs} epochs done")
-    t_start = time.perf_counter() - run["seconds"]  # the wall-clock cap spans the resumes
-    history: list[dict[str, Any]] = run["history"]
-    stopped_early = run["stopped_early"]
-    done_steps = sum(steps[e // cfg.epochs] for e in range(run["epochs_done"]))
-    bar = _bar(total, done_steps, f"{kind} {a.label()}", progress)
-    e = run["epochs_done"]
+
+
+def _calibration_bases(
+    kind: str, cfg: TrainConfig, trainval_b: np.ndarray, rng: np.random.Generator
+) -> np.ndarray:
+    """The train+validation base landings kept out of the folds to choose the constraint
+    network's threshold on (none for the solution network, or when the folds need them)."""
+    calib_b = np.zeros(0, trainval_b.dtype)
+    if kind == "constraint" and cfg.calibration_fraction > 0 and len(trainval_b) > cfg.folds:
+        n_cal = max(1, round(cfg.calibration_fraction * len(trainval_b)))
+        calib_b = np.sort(rng.permutation(trainval_b)[:n_cal])
+    return calib_b
+
+
+@dataclass(frozen=True)
+class _Steps:
+    """Optimizer steps: in one epoch of each fold, in all, and of the learning-rate warm-up."""
+
+    per_epoch: list[int]  # of fold 1, 2, ...
+    epochs: int  # per fold
+    total: int
+    warmup: int
+
+    @classmethod
+    def of(cls, split: _Split, cfg: TrainConfig) -> _Steps:
+        per_epoch = [math.ceil(len(split.train_rows(f)) / cfg.batch_size) for f in range(cfg.folds)]
+        total = sum(per_epoch) * cfg.epochs
+        return cls(per_epoch, cfg.epochs, total, max(1, min(cfg.warmup_steps, total // 10)))
+
+    def done_after(self, epochs_done: int) -> int:
+        return sum(self.per_epoch[e // self.epochs] for e in range(epochs_done))
+
+
+@dataclass
+class _Progress:
+    """How far a run is; saved in its checkpoint after every epoch."""
+
+    epochs_done: int = 0
+    history: list[dict[str, Any]] = dataclasses.field(default_factory=list)  # one per epoch
+    seconds: float = 0.0  # of training, over all resumes (as of the last checkpoint)
+    stopped_early: bool = False  # at the wall-clock cap
+
+
+@dataclass
+class _Trainer:
+    """One network in training: its data, the objects the epochs advance, and the steps."""
+
+    kind: str
+    cfg: TrainConfig
+    data: _Data
+    arch: ArchConfig
+    net: Transformer
+    opt: torch.optim.Optimizer
+    sched: torch.optim.lr_scheduler.LRScheduler
+    loss_fn: Callable[[torch.Tensor, torch.Tensor], torch.Tensor]
+    rng: np.random.Generator  # the batch order
+    steps: _Steps
+
+    @classmethod
+    def new(
+        cls,
+        kind: str,
+        arch: dict[str, Any] | None,
+        cfg: TrainConfig,
+        data: _Data,
+        rng: np.random.Generator,
+        N: int,
+    ) -> _Trainer:
+        a = ArchConfig(d_in=data.Xs.shape[1], d_out=data.Ys.shape[1], **(arch or {}))
+        net = Transformer(a)
+        loss_fn = _loss(kind, data.Ys.shape[1], N)
+        opt = torch.optim.AdamW(net.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay)
+        steps = _Steps.of(data.split, cfg)
+        sched = torch.optim.lr_scheduler.LambdaLR(opt, _lr_lambda(steps.warmup, steps.total))
+        return cls(kind, cfg, data, a, net, opt, sched, loss_fn, rng, steps)
+
+    @property
+    def n_epochs(self) -> int:
+        return self.cfg.folds * self.cfg.epochs
+
+    def describe(self) -> str:
+        split, a = self.data.split, self.arch
+        return (
+            f"[{self.kind}] {a.label()}: {n_params(self.net):,} parameters, "
+            f"{a.macs():,} MACs/inference; "
+            f"{int(split.tv.sum())} train+val rows ({len(split.trainval_b)} base landings, "
+            f"{len(split.calib_b)} of them for calibration), "
+            f"{int(split.te.sum())} test rows ({len(split.test_b)} base landings); "
+            f"{self.steps.total} steps, warm-up {self.steps.warmup}"
+        )
+
+    def run_state(self, path: Path, identity: dict[str, Any]) -> _RunState:
+        return _RunState(path, identity, self.net, self.opt, self.sched, self.rng)
+
+    def epoch(self, e: int, deadline: float, bar: Any) -> dict[str, Any]:
+        """Trains the run's epoch ``e`` (0-based, fold by fold); its history entry."""
+        f, ep = divmod(e, self.cfg.epochs)
+        bar.set_description(
+            f"{self.kind} fold {f + 1}/{self.cfg.folds} epoch {ep + 1}/{self.cfg.epochs}"
+        )
+        d = self.data
+        tr = self.rng.permutation(d.split.train_rows(f))
+        va = d.split.val_rows(f)
+        train_loss = self._train_pass(tr, deadline, bar)
+        val_pred = torch.from_numpy(_predict(self.net, d.Xs[va]))
+        val_loss = float(self.loss_fn(val_pred, torch.from_numpy(d.Ys[va])))
+        return {"fold": f + 1, "epoch": ep + 1, "train": train_loss, "val": val_loss}
+
+    def _train_pass(self, perm: np.ndarray, deadline: float, bar: Any) -> float:
+        """One pass over the rows ``perm`` (in that order), or fewer past ``deadline``; the
+        mean batch loss."""
+        self.net.train()
+        d, batch_size = self.data, self.cfg.batch_size
+        running, nb = 0.0, 0
+        for i in range(0, len(perm), batch_size):
+            b = perm[i : i + batch_size]
+            loss = self.loss_fn(self.net(torch.from_numpy(d.Xs[b])), torch.from_numpy(d.Ys[b]))
+            self.opt.zero_grad()
+            loss.backward()
+            self.opt.step()
+            self.sched.step()
+            running += loss.item()
+            nb += 1
+            bar.update(1)
+            if time.perf_counter() > deadline:
+                break
+        return running / max(nb, 1)
+
+    def threshold(self, last_fold: int) -> float:
+        """The constraint network's decision threshold, chosen on the calibration landings
+        (on the last fold's validation rows when there are none)."""
+        split = self.data.split
+        rows = np.flatnonzero(split.cal) if split.cal.any() else split.val_rows(last_fold)
+        p_cal = 1 / (1 + np.exp(-_predict(self.net, self.data.Xs[rows])))
+        return prob_threshold(
+            self.data.Ys[rows], p_cal, self.cfg.target_recall, self.data.bid[rows],
+            self.cfg.recall_confidence,
+        )  # fmt: skip
+
+    def evaluate(self, threshold: float) -> dict[str, Any]:
+        d = self.data
+        return evaluate(
+            self.net, self.kind, d.Xs, d.Ys, d.split.tv, d.split.te, d.theta, threshold,
+            d.iteration,
+        )  # fmt: skip
+
+
+def _resume(
+    saved: _RunState | None, kind: str, n_epochs: int, log: Callable[[str], object]
+) -> _Progress:
+    """The progress of the run's checkpoint, restored into the run's objects; a fresh start
+    without one."""
+    if not (saved and saved.path.exists()):
+        return _Progress()
+    state = saved.load()
+    log(f"[{kind}] resumed from {saved.path}: {state['epochs_done']} of {n_epochs} epochs done")
+    return _Progress(
+        state["epochs_done"], state["history"], state["seconds"], state["stopped_early"]
+    )
+
+
+def _train_epochs(
+    trainer: _Trainer,
+    run: _Progress,
+    saved: _RunState | None,
+    t_start: float,
+    log: Callable[[str], object],
+    show_progress: bool,
+) -> None:
+    """Trains the epochs of ``run`` not done yet, or until the wall-clock cap, checkpointing after
+    each; Ctrl-C raises TrainingInterrupted (the epochs before it are in the checkpoint)."""
+    kind, n_epochs = trainer.kind, trainer.n_epochs
+    deadline = t_start + trainer.cfg.max_seconds
+    initial = trainer.steps.done_after(run.epochs_done)
+    bar = _bar(trainer.steps.total, initial, f"{kind} {trainer.arch.label()}", show_progress)
     try:
-        while e < n_epochs and not stopped_early:
-            f, ep = divmod(e, cfg.epochs)
-            bar.set_description(f"{kind} fold {f + 1}/{cfg.folds} epoch {ep + 1}/{cfg.epochs}")
-            tr = rng.permutation(np.flatnonzero(fit & (fold != f)))
-            va = np.flatnonzero(fit & (fold == f))
-            deadline = t_start + cfg.max_seconds
-            train_loss = _epoch(net, opt, sched, loss_fn, Xs, Ys, tr, cfg.batch_size, deadline, bar)
-            val_loss = float(
-                loss_fn(torch.from_numpy(_predict(net, Xs[va])), torch.from_numpy(Ys[va]))
-            )
-            history.append({"fold": f + 1, "epoch": ep + 1, "train": train_loss, "val": val_loss})
-            stopped_early = time.perf_counter() > deadline
-            e += 1
+        while run.epochs_done < n_epochs and not run.stopped_early:
+            entry = trainer.epoch(run.epochs_done, deadline, bar)
+            run.history.append(entry)
+            run.stopped_early = time.perf_counter() > deadline
+            run.epochs_done += 1
             if saved:
-                seconds = time.perf_counter() - t_start
-                saved.save({"epochs_done": e, "history": history, "seconds": seconds,
-                            "stopped_early": stopped_early})  # fmt: skip
-            log(f"[{kind}] fold {f + 1} epoch {ep + 1}: train {train_loss:.4f} val {val_loss:.4f}")
+                run.seconds = time.perf_counter() - t_start
+                saved.save(run)
+            log(
+                f"[{kind}] fold {entry['fold']} epoch {entry['epoch']}: "
+                f"train {entry['train']:.4f} val {entry['val']:.4f}"
+            )
     except KeyboardInterrupt:
-        raise TrainingInterrupted(e, n_epochs) from None
+        raise TrainingInterrupted(run.epochs_done, n_epochs) from None
     finally:
         bar.close()
-    if stopped_early:
-        log(f"[{kind}] stopped at the wall-clock cap of {cfg.max_seconds:.0f} s")
-    net.eval()
-    threshold = 0.5
-    if kind == "constraint":
-        last_fold = history[-1]["fold"] - 1
-        rows = np.flatnonzero(cal) if cal.any() else np.flatnonzero(fit & (fold == last_fold))
-        p_cal = 1 / (1 + np.exp(-_predict(net, Xs[rows])))
-        threshold = prob_threshold(
-            Ys[rows], p_cal, cfg.target_recall, bid[rows], cfg.recall_confidence
-        )
-    k = X[:, -1] if kind == "constraint" else None  # the constraint rows' SCvx iteration
-    metrics = evaluate(net, kind, Xs, Ys, tv, te, theta, threshold, k)
-    metrics.update(
-        history=history,
-        train_seconds=time.perf_counter() - t_start,
-        stopped_early=stopped_early,
-        n_params=n_params(net),
-        macs=a.macs(),
-        train_config=dataclasses.asdict(cfg),
-        identity=identity,
-        n_trainval_bases=len(trainval_b),
-        n_calibration_bases=len(calib_b),
-        n_test_bases=len(test_b),
-        test_bases=[int(b) for b in test_b],
-    )
-    return TrainResult(kind, a, net, in_mean, in_std, out_mean, out_std, threshold, metrics)
 
 
 def _loss(kind: str, d_out: int, N: int) -> Callable[[torch.Tensor, torch.Tensor], torch.Tensor]:
@@ -487,37 +699,6 @@ def _loss(kind: str, d_out: int, N: int) -> Callable[[torch.Tensor, torch.Tensor
         return torch.mean(w * (pred - target) ** 2)
 
     return loss_fn
-
-
-def _epoch(
-    net: nn.Module,
-    opt: torch.optim.Optimizer,
-    sched: torch.optim.lr_scheduler.LRScheduler,
-    loss_fn: Callable[[torch.Tensor, torch.Tensor], torch.Tensor],
-    Xs: np.ndarray,
-    Ys: np.ndarray,
-    perm: np.ndarray,
-    batch_size: int,
-    deadline: float,
-    bar: Any,
-) -> float:
-    """One pass over the rows ``perm`` (in that order), or fewer past ``deadline``; the mean
-    batch loss."""
-    net.train()
-    running, nb = 0.0, 0
-    for i in range(0, len(perm), batch_size):
-        b = perm[i : i + batch_size]
-        loss = loss_fn(net(torch.from_numpy(Xs[b])), torch.from_numpy(Ys[b]))
-        opt.zero_grad()
-        loss.backward()
-        opt.step()
-        sched.step()
-        running += loss.item()
-        nb += 1
-        bar.update(1)
-        if time.perf_counter() > deadline:
-            break
-    return running / max(nb, 1)
 
 
 def _bar(total: int, initial: int, desc: str, enabled: bool) -> Any:
@@ -539,8 +720,7 @@ class _RunState:
     sched: torch.optim.lr_scheduler.LRScheduler
     rng: np.random.Generator
 
-    def save(self, progress: dict[str, Any]) -> None:
-        """``progress``: epochs_done, history, seconds, stopped_early."""
+    def save(self, progress: _Progress) -> None:
         state = {
             "identity": self.identity,
             "net": self.net.state_dict(),
@@ -548,7 +728,7 @@ class _RunState:
             "sched": self.sched.state_dict(),
             "numpy_rng": plain(self.rng.bit_generator.state),
             "torch_rng": torch.get_rng_state(),
-            **plain(progress),
+            **plain(dataclasses.asdict(progress)),
         }
         save_atomic(state, self.path)
 
