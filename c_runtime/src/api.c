@@ -319,14 +319,14 @@ enum { MODE_COUNT, MODE_ANALYSE, MODE_SETUP };
 
 #define ALLOC(ptr, count, type) ((ptr) = (type *)tscvx_arena_alloc(a, (size_t)(count), sizeof(type)))
 
-/* Claim the problem data: cones, P, A, G, c, b, h and the equilibration. */
+/* Claim the problem data: cones, P, A, G, c, b, h and the equilibration. The cone arrays
+ * are read-only in the workspace; *q and *off are where set-up writes them. */
 static void alloc_data(tscvx_workspace *ws, tscvx_arena *a, tscvx_int nnzP, tscvx_int nnzA,
-                       tscvx_int nnzG) {
+                       tscvx_int nnzG, tscvx_int **q, tscvx_int **off) {
     const tscvx_int n = ws->n, p = ws->p, m = ws->m, nsoc = ws->K.nsoc;
-    tscvx_int *q, *off;
-    ALLOC(q, nsoc, tscvx_int);
-    ALLOC(off, nsoc, tscvx_int);
-    ws->K.q = q, ws->K.off = off;
+    ALLOC(*q, nsoc, tscvx_int);
+    ALLOC(*off, nsoc, tscvx_int);
+    ws->K.q = *q, ws->K.off = *off;
     tscvx_csc *M[3] = {&ws->P, &ws->A, &ws->G};
     const tscvx_int nnz[3] = {nnzP, nnzA, nnzG};
     for (int k = 0; k < 3; k++) {
@@ -430,6 +430,49 @@ static int setup_sparse(tscvx_workspace *ws, tscvx_arena *a) {
     return 0;
 }
 
+/* A cleared workspace with the settings and the sizes of the problem and its KKT system */
+static void init_sizes(tscvx_workspace *ws, const tscvx_data *d, const tscvx_settings *st,
+                       tscvx_int dim, tscvx_int nnzK, tscvx_int nexp, tscvx_int ncone) {
+    memset(ws, 0, sizeof *ws);
+    ws->st = *st;
+    ws->n = d->n, ws->p = d->p, ws->m = d->m;
+    ws->K.l = d->l, ws->K.nsoc = d->nsoc, ws->K.m = d->m, ws->K.degree = d->l + d->nsoc;
+    ws->kkt.backend = st->kkt_backend == TSCVX_KKT_LDL ? &tscvx_backend_ldl
+                                                       : &tscvx_backend_static;
+    ws->kkt.dim = dim, ws->kkt.nnz = nnzK;
+    ws->kkt.nexp = nexp, ws->kkt.ncone = ncone;
+    ws->log_cap = st->max_iter + 1;
+}
+
+/* The problem data and cone sizes into the arena (q, off: alloc_data's cone arrays) */
+static void copy_problem(tscvx_workspace *ws, const tscvx_data *d, tscvx_int *q,
+                         tscvx_int *off) {
+    for (tscvx_int k = 0, o = d->l; k < d->nsoc; k++) q[k] = d->q[k], off[k] = o, o += d->q[k];
+    copy_csc(&ws->P, d->Pp, d->Pi, d->Px, d->n, d->n);
+    copy_csc(&ws->A, d->Ap, d->Ai, d->Ax, d->p, d->n);
+    copy_csc(&ws->G, d->Gp, d->Gi, d->Gx, d->m, d->n);
+    copy_floats(ws->c, d->c, d->n);
+    if (d->p > 0) copy_floats(ws->b, d->b, d->p);
+    if (d->m > 0) copy_floats(ws->h, d->h, d->m);
+}
+
+/* What set-up reports in info: the method and the size of what it factors */
+static void report_setup(tscvx_workspace *ws, int banded) {
+    ws->info.status = TSCVX_UNSOLVED;
+    ws->info.kkt_backend = ws->method->id == TSCVX_KKT_BANDED ? TSCVX_KKT_BANDED
+                           : ws->kkt.backend == &tscvx_backend_ldl ? TSCVX_KKT_LDL
+                                                                   : TSCVX_KKT_STATIC;
+    if (banded) { /* the factored matrices: Y (p x p profile) and the groups' blocks */
+        ws->info.kkt_dim = ws->p;
+        ws->info.kkt_nnz = (tscvx_int)ws->bd.nY;
+        ws->info.factor_nnz = (tscvx_int)(ws->bd.nY + ws->bd.nH);
+    } else {
+        ws->info.kkt_dim = ws->kkt.dim, ws->info.kkt_nnz = ws->kkt.nnz;
+        ws->info.factor_nnz = ws->kkt.lnz;
+    }
+    ws->info.arena_used = ws->arena_used, ws->info.arena_high_water = ws->arena_high;
+}
+
 /* The one set-up path. MODE_COUNT only counts bytes (scratch size); MODE_ANALYSE runs up to
  * the symbolic analysis and reports the arena size; MODE_SETUP builds the workspace. */
 static tscvx_setup_status build(const tscvx_data *d, const tscvx_settings *st, tscvx_arena *a,
@@ -450,30 +493,14 @@ static tscvx_setup_status build(const tscvx_data *d, const tscvx_settings *st, t
     tscvx_workspace *ws = (tscvx_workspace *)tscvx_arena_alloc(a, 1, sizeof(tscvx_workspace));
     if (mode == MODE_COUNT) ws = &local;
     if (ws == NULL) return short_memory;
-    memset(ws, 0, sizeof *ws);
-    ws->st = *st;
-    ws->n = d->n, ws->p = d->p, ws->m = d->m;
-    ws->K.l = d->l, ws->K.nsoc = d->nsoc, ws->K.m = d->m, ws->K.degree = d->l + d->nsoc;
-    ws->kkt.backend = st->kkt_backend == TSCVX_KKT_LDL ? &tscvx_backend_ldl
-                                                       : &tscvx_backend_static;
-    ws->kkt.dim = (tscvx_int)dim, ws->kkt.nnz = (tscvx_int)nnzK;
-    ws->kkt.nexp = nexp, ws->kkt.ncone = ncone;
-    ws->log_cap = st->max_iter + 1;
+    init_sizes(ws, d, st, (tscvx_int)dim, (tscvx_int)nnzK, nexp, ncone);
     const tscvx_int nnzP = nnz_of(d->Pp, d->n), nnzA = nnz_of(d->Ap, d->n);
     const tscvx_int nnzG = nnz_of(d->Gp, d->n);
-    alloc_data(ws, a, nnzP, nnzA, nnzG);
+    tscvx_int *q, *off;
+    alloc_data(ws, a, nnzP, nnzA, nnzG, &q, &off);
     ws->P.nnz = nnzP, ws->A.nnz = nnzA, ws->G.nnz = nnzG;
     if (a->overflow && mode != MODE_COUNT) return short_memory;
-    if (mode != MODE_COUNT) { /* copy the data and cones into the arena */
-        tscvx_int *q = (tscvx_int *)ws->K.q, *off = (tscvx_int *)ws->K.off;
-        for (tscvx_int k = 0, o = d->l; k < d->nsoc; k++) q[k] = d->q[k], off[k] = o, o += d->q[k];
-        copy_csc(&ws->P, d->Pp, d->Pi, d->Px, d->n, d->n);
-        copy_csc(&ws->A, d->Ap, d->Ai, d->Ax, d->p, d->n);
-        copy_csc(&ws->G, d->Gp, d->Gi, d->Gx, d->m, d->n);
-        copy_floats(ws->c, d->c, d->n);
-        if (d->p > 0) copy_floats(ws->b, d->b, d->p);
-        if (d->m > 0) copy_floats(ws->h, d->h, d->m);
-    }
+    if (mode != MODE_COUNT) copy_problem(ws, d, q, off);
 
     /* the KKT method: banded when asked for (or, by default, when the problem has the
      * structure), else the sparse LDL' of the whole KKT matrix */
@@ -508,20 +535,7 @@ static tscvx_setup_status build(const tscvx_data *d, const tscvx_settings *st, t
     tscvx_equilibrate(ws);
     if (ws->P.nnz > 0 && ws->method->check_p(ws) != 0) return TSCVX_SETUP_P_NOT_PSD;
     ws->arena_used = a->top, ws->arena_high = a->high;
-    ws->info.status = TSCVX_UNSOLVED;
-    ws->info.kkt_backend = ws->method->id == TSCVX_KKT_BANDED ? TSCVX_KKT_BANDED
-                                                              : ws->kkt.backend == &tscvx_backend_ldl
-                                                                    ? TSCVX_KKT_LDL
-                                                                    : TSCVX_KKT_STATIC;
-    if (banded) { /* the factored matrices: Y (p x p profile) and the groups' blocks */
-        ws->info.kkt_dim = ws->p;
-        ws->info.kkt_nnz = (tscvx_int)ws->bd.nY;
-        ws->info.factor_nnz = (tscvx_int)(ws->bd.nY + ws->bd.nH);
-    } else {
-        ws->info.kkt_dim = ws->kkt.dim, ws->info.kkt_nnz = ws->kkt.nnz;
-        ws->info.factor_nnz = ws->kkt.lnz;
-    }
-    ws->info.arena_used = ws->arena_used, ws->info.arena_high_water = ws->arena_high;
+    report_setup(ws, banded);
     ws->ready = 1;
     ws->magic = TSCVX_WS_MAGIC;
     *out = ws;
