@@ -29,14 +29,14 @@ import subprocess
 import tempfile
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 import scipy.sparse as sp
 
 from guidance import callgrind
-from guidance.conic import ConicProblem, ConicSolution, clarabel_solver
+from guidance.conic import ConeKind, ConicProblem, ConicSolution, clarabel_solver
 from guidance.params import SCvxSettings
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -44,6 +44,18 @@ KKT_SPARSE = 2  # tscvx_settings.kkt_backend: the sparse static-pattern LDL' (cs
 
 
 # ---- (b) 3-DoF lossless convexification (Acikmese & Blackmore 2013) -----------------------
+
+# The lander and its landing (m, s, kg).
+_G = np.array([-3.7114, 0.0, 0.0])
+_M_WET = 1905.0
+_ALPHA = 1.0 / (225.0 * 9.807)  # 1 / (I_sp g0), I_sp = 225 s
+_T_MAX = 6.0 * 3100.0 * math.cos(math.radians(27.0))
+_RHO1, _RHO2 = 0.3 * _T_MAX, 0.8 * _T_MAX  # thrust bounds
+_R0 = np.array([1500.0, 0.0, 2000.0])
+_V0 = np.array([-75.0, 0.0, 100.0])
+_TAN_GS = math.tan(math.radians(4.0))  # glideslope 86 deg from vertical
+_COS_PT = math.cos(math.radians(60.0))  # thrust pointing within 60 deg of vertical
+_NV = 11  # variables per node: r 0:3, v 3:6, z 6, u 7:10, sigma 10
 
 
 def lcvx_3dof(N: int = 50, t_f: float = 75.0) -> ConicProblem:
@@ -55,113 +67,133 @@ def lcvx_3dof(N: int = 50, t_f: float = 75.0) -> ConicProblem:
     |(r2, r3)| tan(gs) <= r1, thrust pointing u1 >= cos(theta) sigma; maximize final mass.
     Units: m, s, kg (Mars lander numbers of the LCvx literature).
     """
-    g = np.array([-3.7114, 0.0, 0.0])
-    m_wet, isp = 1905.0, 225.0
-    alpha = 1.0 / (isp * 9.807)
-    T_max = 6.0 * 3100.0 * math.cos(math.radians(27.0))
-    rho1, rho2 = 0.3 * T_max, 0.8 * T_max
-    r0 = np.array([1500.0, 0.0, 2000.0])
-    v0 = np.array([-75.0, 0.0, 100.0])
-    tan_gs = math.tan(math.radians(4.0))  # glideslope 86 deg from vertical
-    cos_pt = math.cos(math.radians(60.0))
     dt = t_f / N
-    nv = 11  # r 0:3, v 3:6, z 6, u 7:10, sigma 10
-    nx = nv * (N + 1)
+    eq, nonneg, soc = _Rows(), _Rows(), _Rows()
+    _boundary_conditions(eq, N)
+    _dynamics(eq, N, dt)
+    for k in range(N + 1):
+        _node_bounds(nonneg, k, dt)
+        _node_cones(soc, k)
+    nx = _NV * (N + 1)
+    A, b, cones = _stacked(eq, nonneg, soc, nx)
+    q = np.zeros(nx)
+    q[_ix(N, 6)] = -1.0  # maximize the final log-mass
+    return ConicProblem(P=None, q=q, A=A, b=b, cones=cones)
 
-    def ix(k: int, j: int) -> int:
-        return nv * k + j
 
-    eq_rows: list[list[tuple[int, float]]] = []
-    eq_rhs: list[float] = []
-    # boundary conditions
+_Row = list[tuple[int, float]]  # (column, coefficient) of one constraint row
+
+
+def _ix(k: int, j: int) -> int:
+    """Column of node k's variable j."""
+    return _NV * k + j
+
+
+@dataclass
+class _Rows:
+    """Rows of one cone type (A x + s = b, s in the cone) and their right-hand sides."""
+
+    rows: list[_Row] = field(default_factory=list)
+    rhs: list[float] = field(default_factory=list)
+    soc_dims: list[int] = field(default_factory=list)
+
+    def add(self, row: _Row, rhs: float) -> None:
+        self.rows.append(row)
+        self.rhs.append(rhs)
+
+    def add_soc(self, rows: list[_Row]) -> None:
+        """One second-order cone on these rows (right-hand side 0)."""
+        for row in rows:
+            self.add(row, 0.0)
+        self.soc_dims.append(len(rows))
+
+
+def _boundary_conditions(eq: _Rows, N: int) -> None:
+    """From r0, v0 and the wet mass to rest at the origin."""
     for j in range(3):
-        eq_rows.append([(ix(0, j), 1.0)])
-        eq_rhs.append(r0[j])
-        eq_rows.append([(ix(0, 3 + j), 1.0)])
-        eq_rhs.append(v0[j])
-        eq_rows.append([(ix(N, j), 1.0)])
-        eq_rhs.append(0.0)
-        eq_rows.append([(ix(N, 3 + j), 1.0)])
-        eq_rhs.append(0.0)
-    eq_rows.append([(ix(0, 6), 1.0)])
-    eq_rhs.append(math.log(m_wet))
-    # dynamics
+        eq.add([(_ix(0, j), 1.0)], _R0[j])
+        eq.add([(_ix(0, 3 + j), 1.0)], _V0[j])
+        eq.add([(_ix(N, j), 1.0)], 0.0)
+        eq.add([(_ix(N, 3 + j), 1.0)], 0.0)
+    eq.add([(_ix(0, 6), 1.0)], math.log(_M_WET))
+
+
+def _dynamics(eq: _Rows, N: int, dt: float) -> None:
+    """Trapezoidal (FOH) updates of r, v and z over each interval."""
     for k in range(N):
         for j in range(3):
-            eq_rows.append(
+            eq.add(
                 [
-                    (ix(k + 1, j), 1.0),
-                    (ix(k, j), -1.0),
-                    (ix(k, 3 + j), -dt / 2),
-                    (ix(k + 1, 3 + j), -dt / 2),
-                    (ix(k + 1, 7 + j), dt**2 / 12),
-                    (ix(k, 7 + j), -(dt**2) / 12),
-                ]
+                    (_ix(k + 1, j), 1.0),
+                    (_ix(k, j), -1.0),
+                    (_ix(k, 3 + j), -dt / 2),
+                    (_ix(k + 1, 3 + j), -dt / 2),
+                    (_ix(k + 1, 7 + j), dt**2 / 12),
+                    (_ix(k, 7 + j), -(dt**2) / 12),
+                ],
+                0.0,
             )
-            eq_rhs.append(0.0)
-            eq_rows.append(
+            eq.add(
                 [
-                    (ix(k + 1, 3 + j), 1.0),
-                    (ix(k, 3 + j), -1.0),
-                    (ix(k, 7 + j), -dt / 2),
-                    (ix(k + 1, 7 + j), -dt / 2),
-                ]
+                    (_ix(k + 1, 3 + j), 1.0),
+                    (_ix(k, 3 + j), -1.0),
+                    (_ix(k, 7 + j), -dt / 2),
+                    (_ix(k + 1, 7 + j), -dt / 2),
+                ],
+                _G[j] * dt,
             )
-            eq_rhs.append(g[j] * dt)
-        eq_rows.append(
+        eq.add(
             [
-                (ix(k + 1, 6), 1.0),
-                (ix(k, 6), -1.0),
-                (ix(k, 10), alpha * dt / 2),
-                (ix(k + 1, 10), alpha * dt / 2),
-            ]
+                (_ix(k + 1, 6), 1.0),
+                (_ix(k, 6), -1.0),
+                (_ix(k, 10), _ALPHA * dt / 2),
+                (_ix(k + 1, 10), _ALPHA * dt / 2),
+            ],
+            0.0,
         )
-        eq_rhs.append(0.0)
-    nonneg_rows: list[list[tuple[int, float]]] = []
-    nonneg_rhs: list[float] = []
-    soc_rows: list[list[tuple[int, float]]] = []
-    soc_rhs: list[float] = []
-    soc_dims: list[int] = []
-    for k in range(N + 1):
-        t = k * dt
-        z0 = math.log(m_wet - alpha * rho2 * t)
-        z1 = math.log(m_wet - alpha * rho1 * t)
-        mu1, mu2 = rho1 * math.exp(-z0), rho2 * math.exp(-z0)
-        # sigma >= mu1 (1 - (z - z0))  <=>  -sigma - mu1 z + s = -mu1 (1 + z0)
-        nonneg_rows.append([(ix(k, 10), -1.0), (ix(k, 6), -mu1)])
-        nonneg_rhs.append(-mu1 * (1.0 + z0))
-        # sigma <= mu2 (1 - (z - z0))  <=>  sigma + mu2 z + s = mu2 (1 + z0)
-        nonneg_rows.append([(ix(k, 10), 1.0), (ix(k, 6), mu2)])
-        nonneg_rhs.append(mu2 * (1.0 + z0))
-        # z0 <= z <= z1
-        nonneg_rows.append([(ix(k, 6), -1.0)])
-        nonneg_rhs.append(-z0)
-        nonneg_rows.append([(ix(k, 6), 1.0)])
-        nonneg_rhs.append(z1)
-        # pointing: u1 >= cos * sigma
-        nonneg_rows.append([(ix(k, 7), -1.0), (ix(k, 10), cos_pt)])
-        nonneg_rhs.append(0.0)
-        # |u| <= sigma
-        soc_rows += [[(ix(k, 10), -1.0)]] + [[(ix(k, 7 + j), -1.0)] for j in range(3)]
-        soc_rhs += [0.0] * 4
-        soc_dims.append(4)
-        # glideslope: (r1, tan r2, tan r3) in Q3
-        soc_rows += [[(ix(k, 0), -1.0)], [(ix(k, 1), -tan_gs)], [(ix(k, 2), -tan_gs)]]
-        soc_rhs += [0.0] * 3
-        soc_dims.append(3)
-    all_rows = eq_rows + nonneg_rows + soc_rows
-    b = np.array(eq_rhs + nonneg_rhs + soc_rhs)
-    cones = [("zero", len(eq_rows)), ("nonneg", len(nonneg_rows))] + [("soc", d) for d in soc_dims]
+
+
+def _node_bounds(nonneg: _Rows, k: int, dt: float) -> None:
+    """Node k's thrust bounds (linearized about z0, the log of the least mass at its time:
+    rho2 from the start), mass bounds and thrust pointing."""
+    t = k * dt
+    z0 = math.log(_M_WET - _ALPHA * _RHO2 * t)
+    z1 = math.log(_M_WET - _ALPHA * _RHO1 * t)
+    mu1, mu2 = _RHO1 * math.exp(-z0), _RHO2 * math.exp(-z0)
+    # sigma >= mu1 (1 - (z - z0))  <=>  -sigma - mu1 z + s = -mu1 (1 + z0)
+    nonneg.add([(_ix(k, 10), -1.0), (_ix(k, 6), -mu1)], -mu1 * (1.0 + z0))
+    # sigma <= mu2 (1 - (z - z0))  <=>  sigma + mu2 z + s = mu2 (1 + z0)
+    nonneg.add([(_ix(k, 10), 1.0), (_ix(k, 6), mu2)], mu2 * (1.0 + z0))
+    # z0 <= z <= z1
+    nonneg.add([(_ix(k, 6), -1.0)], -z0)
+    nonneg.add([(_ix(k, 6), 1.0)], z1)
+    # pointing: u1 >= cos * sigma
+    nonneg.add([(_ix(k, 7), -1.0), (_ix(k, 10), _COS_PT)], 0.0)
+
+
+def _node_cones(soc: _Rows, k: int) -> None:
+    # |u| <= sigma
+    soc.add_soc([[(_ix(k, 10), -1.0)]] + [[(_ix(k, 7 + j), -1.0)] for j in range(3)])
+    # glideslope: (r1, tan r2, tan r3) in Q3
+    soc.add_soc([[(_ix(k, 0), -1.0)], [(_ix(k, 1), -_TAN_GS)], [(_ix(k, 2), -_TAN_GS)]])
+
+
+def _stacked(
+    eq: _Rows, nonneg: _Rows, soc: _Rows, n: int
+) -> tuple[sp.csc_matrix, np.ndarray, list[tuple[ConeKind, int]]]:
+    """A, b and the cones of a problem of n variables: the zero, then the nonneg, then the
+    SOC rows."""
+    rows = eq.rows + nonneg.rows + soc.rows
     ri, ci, vals = [], [], []
-    for r, row in enumerate(all_rows):
+    for r, row in enumerate(rows):
         for c, v in row:
             ri.append(r)
             ci.append(c)
             vals.append(v)
-    A = sp.csc_matrix((vals, (ri, ci)), shape=(len(all_rows), nx))
-    q = np.zeros(nx)
-    q[ix(N, 6)] = -1.0  # maximize the final log-mass
-    return ConicProblem(P=None, q=q, A=A, b=b, cones=cones)
+    A = sp.csc_matrix((vals, (ri, ci)), shape=(len(rows), n))
+    b = np.array(eq.rhs + nonneg.rhs + soc.rhs)
+    cones: list[tuple[ConeKind, int]] = [("zero", len(eq.rows)), ("nonneg", len(nonneg.rows))]
+    return A, b, cones + [("soc", d) for d in soc.soc_dims]
 
 
 # ---- solvers: each returns (solve seconds, iterations, status) -----------------------------

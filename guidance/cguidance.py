@@ -317,44 +317,12 @@ def solve_c(
     ws = workspace(scenario, settings, **socp)
     cs = c_scenario(scenario)
     opt = _Options()
-    keep: list[object] = []
+    keep: list[object] = []  # what opt points at, alive until the call returns
     if guess is not None:
-        gx = np.ascontiguousarray(guess[0], dtype=float).reshape(N, NX)
-        gu = np.ascontiguousarray(guess[1], dtype=float).reshape(N, NU)
-        keep += [gx, gu]
-        opt.guess_x, opt.guess_u, opt.guess_t_f = _dptr(gx), _dptr(gu), float(guess[2])
+        keep += _point_at_guess(opt, guess, N)
     callback_errors: list[str] = []
     if masks is not None:
-        if callable(masks):
-
-            def _cb(ctx, k, out, n, fn=masks):
-                # an exception would be lost inside ctypes (it answers 0, the full problem):
-                # kept, and -1 answered, which stops the solve
-                try:
-                    m = fn(int(k))
-                    if m is None:
-                        return 0
-                    m = np.ascontiguousarray(np.asarray(m, dtype=bool).reshape(-1), np.uint8)
-                    if m.size != n:
-                        raise InputError(f"masks: iteration {int(k)}'s mask has {m.size} "
-                                         f"entries, not 7N = {n}")  # fmt: skip
-                    ct.memmove(out, m.ctypes.data, n)
-                    return 1
-                except Exception as exc:  # reported after the C call
-                    callback_errors.append(str(exc) or type(exc).__name__)
-                    return -1
-
-            cb = MASK_FN(_cb)
-            keep.append(cb)
-            opt.mask_fn = cb
-        else:
-            table = np.ascontiguousarray(np.asarray(masks, dtype=bool), dtype=np.uint8)
-            if table.size != len(masks) * NC * N:
-                raise InputError(f"masks: {table.shape} entries, not rows of 7N = {NC * N}")
-            table = table.reshape(len(masks), NC * N)
-            keep.append(table)
-            opt.masks = table.ctypes.data_as(_ucp)
-            opt.n_masks = len(masks)
+        keep.append(_point_at_masks(opt, masks, N, callback_errors))
     opt.clock_s = _CLOCK
     x, u, res = _result_buffers(N)
     t_start = time.perf_counter()  # the guidance call only (set-up is a one-time init)
@@ -363,6 +331,61 @@ def solve_c(
     if callback_errors:
         raise InputError(callback_errors[0])
     return _collect(ws, status, res, x, u, solve_time, _ran_with(settings, socp))
+
+
+def _point_at_guess(
+    opt: _Options, guess: tuple[np.ndarray, np.ndarray, float], N: int
+) -> list[np.ndarray]:
+    """Points opt at the guess; returns the arrays it points at."""
+    gx = np.ascontiguousarray(guess[0], dtype=float).reshape(N, NX)
+    gu = np.ascontiguousarray(guess[1], dtype=float).reshape(N, NU)
+    opt.guess_x, opt.guess_u, opt.guess_t_f = _dptr(gx), _dptr(gu), float(guess[2])
+    return [gx, gu]
+
+
+def _point_at_masks(
+    opt: _Options,
+    masks: Callable[[int], np.ndarray | None] | Sequence[np.ndarray],
+    N: int,
+    errors: list[str],
+) -> object:
+    """Points opt at the masks, a callback (its exceptions collected in ``errors``) or a table
+    of rows of 7N; returns what it points at."""
+    if callable(masks):
+        cb = _mask_callback(masks, errors)
+        opt.mask_fn = cb
+        return cb
+    table = np.ascontiguousarray(np.asarray(masks, dtype=bool), dtype=np.uint8)
+    if table.size != len(masks) * NC * N:
+        raise InputError(f"masks: {table.shape} entries, not rows of 7N = {NC * N}")
+    table = table.reshape(len(masks), NC * N)
+    opt.masks = table.ctypes.data_as(_ucp)
+    opt.n_masks = len(masks)
+    return table
+
+
+def _mask_callback(fn: Callable[[int], np.ndarray | None], errors: list[str]) -> object:
+    """fn as the C library's mask callback: None answers 0 (the full problem), a mask 1."""
+
+    def _cb(ctx, k, out, n):
+        # an exception would be lost inside ctypes (it answers 0, the full problem):
+        # kept, and -1 answered, which stops the solve
+        try:
+            m = fn(int(k))
+            if m is None:
+                return 0
+            m = np.ascontiguousarray(np.asarray(m, dtype=bool).reshape(-1), np.uint8)
+            if m.size != n:
+                raise InputError(
+                    f"masks: iteration {int(k)}'s mask has {m.size} entries, not 7N = {n}"
+                )
+            ct.memmove(out, m.ctypes.data, n)
+            return 1
+        except Exception as exc:  # reported after the C call
+            errors.append(str(exc) or type(exc).__name__)
+            return -1
+
+    return MASK_FN(_cb)
 
 
 def _ran_with(settings: SCvxSettings | None, socp: dict[str, float | int]) -> SCvxSettings:

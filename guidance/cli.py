@@ -9,15 +9,19 @@ import os
 import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from guidance import file_check
-from guidance.api import CONSTRAINT_MODEL, MODELS_DIR, SOLUTION_MODEL, solve
+from guidance.api import BACKENDS, CONSTRAINT_MODEL, METHODS, MODELS_DIR, SOLUTION_MODEL, solve
 from guidance.errors import InputError, check_output_path
-from guidance.params import IM, Scenario, SCvxSettings
+from guidance.params import IM, Params, Scenario, SCvxSettings
 from guidance.scenario import load_scenario, scenario_to_dict
 from guidance.tscvx import REDUCED_ETA_INIT
+
+if TYPE_CHECKING:
+    from guidance.scvx import SCvxResult
 
 EXIT_BAD_INPUT = 2
 # No trajectory to write (the solve stopped before its first subproblem). Any status with a
@@ -99,40 +103,17 @@ def _check_plot_format(path: str) -> None:
 
 
 def cmd_solve(args: argparse.Namespace) -> int:
-    from guidance.trajectory_io import read_trajectory, write_trajectory
-    from guidance.verify import checked_trajectory
-
     scenario = _load(args.scenario, args.pin_final_attitude)
-    if args.trust_update is not None and args.method != "tscvx":
-        raise InputError("--trust-update: applies to --method tscvx only (SCvx has no masks)")
-    if args.guess and args.method != "scvx":
-        raise InputError("--guess: applies to --method scvx only (T-SCvx starts from its network)")
-    guess = None
-    if args.guess:  # checked here to name the file; solve projects it
-        data = read_trajectory(args.guess)
-        try:
-            guess = checked_trajectory(data["x"], data["u"], data["t_f"], scenario.params)
-        except InputError as exc:
-            raise InputError(f"--guess {args.guess}: {exc}") from None
-    if args.plot:
-        _check_plot_format(args.plot)
-    for flag, path in (("--out", args.out), ("--plot", args.plot)):
-        if path:
-            check_output_path(flag, Path(path))
+    _check_method_options(args)
+    guess = _read_guess(args.guess, scenario.params)
+    _check_output_files(args.out, args.plot)
     settings = SCvxSettings(
         iter_max=args.iter_max,
         tau_r_update=args.trust_update != "alg1",
         prox_u=args.prox_u,
         socp_warm_start=not args.cold_ipm,
     )
-    print(f"scenario: {json.dumps(scenario_to_dict(scenario))}")
-    objective = "paper's linear" if settings.prox_u == 0 else f"proximal weight {settings.prox_u:g}"
-    print(
-        f"method: {args.method}, backend: {args.backend}, N = {scenario.params.N}, "
-        f"subproblem objective: {objective}"
-    )
-    if args.guess:
-        print(f"initial guess: {args.guess} (projected onto the boundary and path constraints)")
+    _print_problem(args, scenario, settings)
     result = solve(
         scenario,
         args.method,
@@ -143,15 +124,66 @@ def cmd_solve(args: argparse.Namespace) -> int:
         args.eta_init,
         guess,
     )
-    p = scenario.params
     print()
     print(f"status        {result.status} ({result.reason})")
     print(f"iterations    {result.iterations} (subproblems solved: {result.subproblems_solved})")
     if not np.isfinite(result.t_f):  # stopped before its first subproblem
         print("no trajectory: nothing written")
         return EXIT_NO_TRAJECTORY
+    _print_landing(result, scenario)
+    if args.out:
+        _write_trajectory(args, result, scenario)
+    if args.plot:
+        _write_figure(args, result, scenario.params)
+    return 0
+
+
+def _check_method_options(args: argparse.Namespace) -> None:
+    """Refuse the options the chosen method has no use for."""
+    if args.trust_update is not None and args.method != "tscvx":
+        raise InputError("--trust-update: applies to --method tscvx only (SCvx has no masks)")
+    if args.guess and args.method != "scvx":
+        raise InputError("--guess: applies to --method scvx only (T-SCvx starts from its network)")
+
+
+def _read_guess(path: str | None, p: Params) -> tuple[np.ndarray, np.ndarray, float] | None:
+    """--guess: the file's (x, u, t_f), checked here to name the file (solve projects it)."""
+    if not path:
+        return None
+    from guidance.trajectory_io import read_trajectory
+    from guidance.verify import checked_trajectory
+
+    data = read_trajectory(path)
+    try:
+        return checked_trajectory(data["x"], data["u"], data["t_f"], p)
+    except InputError as exc:
+        raise InputError(f"--guess {path}: {exc}") from None
+
+
+def _check_output_files(out: str | None, plot: str | None) -> None:
+    """Refuse an output the solve could not write, before solving."""
+    if plot:
+        _check_plot_format(plot)
+    for flag, path in (("--out", out), ("--plot", plot)):
+        if path:
+            check_output_path(flag, Path(path))
+
+
+def _print_problem(args: argparse.Namespace, scenario: Scenario, settings: SCvxSettings) -> None:
+    print(f"scenario: {json.dumps(scenario_to_dict(scenario))}")
+    objective = "paper's linear" if settings.prox_u == 0 else f"proximal weight {settings.prox_u:g}"
+    print(
+        f"method: {args.method}, backend: {args.backend}, N = {scenario.params.N}, "
+        f"subproblem objective: {objective}"
+    )
+    if args.guess:
+        print(f"initial guess: {args.guess} (projected onto the boundary and path constraints)")
+
+
+def _print_landing(result: SCvxResult, scenario: Scenario) -> None:
+    """The figures of a solve that has a trajectory: time, mass, accuracy, run time."""
     fuel = scenario.initial.m0 - result.x[-1, IM]
-    propellant = scenario.initial.m0 - p.m_dry
+    propellant = scenario.initial.m0 - scenario.params.m_dry
     sub_times = [h.subproblem_time_s for h in result.history]
     print(f"t_f           {result.t_f:.6f} U_T")
     print(f"final mass    {result.m_f:.6f} U_M")
@@ -161,24 +193,41 @@ def cmd_solve(args: argparse.Namespace) -> int:
         f"total time    {result.solve_time_s:.3f} s "
         f"(conic solves {sum(sub_times):.3f} s, median {1e3 * np.median(sub_times):.1f} ms)"
     )
-    if args.out:
-        inputs = None  # the files the solve started from, in the file's provenance
-        if args.method == "tscvx":  # the files the networks were read from
-            inputs = _network_files(Path(args.models), args.backend)
-        if args.guess:
-            inputs = {"initial_guess": Path(args.guess)}
-        write_trajectory(args.out, result, p, scenario, args.method, args.backend, inputs)
-        print(f"wrote {args.out}")
-    if args.plot:
-        from guidance.plots import landing_figure
 
-        title = (
-            f"{args.method} / {args.backend}: {result.status}, t_f = {result.t_f:.3f}, "
-            f"m_f = {result.m_f:.4f}"
-        )
-        landing_figure(result.x, result.u, result.t_f, p, args.plot, title)
-        print(f"wrote {args.plot}")
-    return 0
+
+def _write_trajectory(args: argparse.Namespace, result: SCvxResult, scenario: Scenario) -> None:
+    from guidance.trajectory_io import write_trajectory
+
+    write_trajectory(
+        args.out,
+        result,
+        scenario.params,
+        scenario,
+        args.method,
+        args.backend,
+        _solve_inputs(args),
+    )
+    print(f"wrote {args.out}")
+
+
+def _solve_inputs(args: argparse.Namespace) -> dict[str, Path] | None:
+    """The files the solve started from, for the trajectory file's provenance."""
+    if args.guess:  # SCvx only (_check_method_options)
+        return {"initial_guess": Path(args.guess)}
+    if args.method == "tscvx":  # the files the networks were read from
+        return _network_files(Path(args.models), args.backend)
+    return None
+
+
+def _write_figure(args: argparse.Namespace, result: SCvxResult, p: Params) -> None:
+    from guidance.plots import landing_figure
+
+    title = (
+        f"{args.method} / {args.backend}: {result.status}, t_f = {result.t_f:.3f}, "
+        f"m_f = {result.m_f:.4f}"
+    )
+    landing_figure(result.x, result.u, result.t_f, p, args.plot, title)
+    print(f"wrote {args.plot}")
 
 
 def _network_files(models: Path, backend: str) -> dict[str, Path]:
@@ -259,18 +308,33 @@ def build_parser() -> argparse.ArgumentParser:
         description="T-SCvx 6-DoF powered-descent guidance: ground tools.",
     )
     sub = parser.add_subparsers(dest="command", required=True)
+    _add_solve(sub)
+    _add_scenario(sub)
+    _add_bench(sub)
+    _add_agreement(sub)
+    _add_verify(sub)
+    g = sub.add_parser("budget", help="RAD750 time and memory budget of one C guidance call")
+    g.set_defaults(func=cmd_budget)
 
+    # Learning tools (dataset, train, export, baselines) register their own subcommands.
+    from guidance import cli_learning
+
+    cli_learning.add_commands(sub)
+    return parser
+
+
+def _add_solve(sub: argparse._SubParsersAction) -> None:
     s = sub.add_parser("solve", help="solve one landing and write the trajectory")
     s.add_argument("scenario", nargs="?", help="scenario JSON (default: the default landing)")
     s.add_argument(
         "--method",
-        choices=["scvx", "tscvx"],
+        choices=METHODS,
         default="scvx",
         help="tscvx: warm start and tight-constraint masks from the shipped networks",
     )
     s.add_argument(
         "--backend",
-        choices=["clarabel", "c-socp", "c"],
+        choices=BACKENDS,
         default="clarabel",
         help="clarabel: Python SCvx + Clarabel; c-socp: Python SCvx + the C SOCP runtime; "
         "c: the whole solve in the C library",
@@ -324,6 +388,8 @@ def build_parser() -> argparse.ArgumentParser:
     )
     s.set_defaults(func=cmd_solve)
 
+
+def _add_scenario(sub: argparse._SubParsersAction) -> None:
     c = sub.add_parser("scenario", help="print a scenario (default: the default) as JSON")
     c.add_argument(
         "scenario",
@@ -338,12 +404,12 @@ def build_parser() -> argparse.ArgumentParser:
     )
     c.set_defaults(func=cmd_scenario)
 
+
+def _add_bench(sub: argparse._SubParsersAction) -> None:
     b = sub.add_parser("bench", help="time the reference SCvx (and the conic solvers)")
-    b.add_argument(
-        "--backend", nargs="+", default=["clarabel"], choices=["clarabel", "c-socp", "c"]
-    )
+    b.add_argument("--backend", nargs="+", default=["clarabel"], choices=BACKENDS)
     b.add_argument("--repeats", type=at_least(1), default=1)
-    b.add_argument("--method", choices=["scvx", "tscvx"], default="scvx")
+    b.add_argument("--method", choices=METHODS, default="scvx")
     b.add_argument("--skip-socp", action="store_true", help="skip the conic solver benchmark")
     b.add_argument(
         "--callgrind",
@@ -356,9 +422,11 @@ def build_parser() -> argparse.ArgumentParser:
         default=0,
         help="also compare SCvx and T-SCvx on this many fresh sampled landings",
     )
-    b.add_argument("--tscvx-backend", default="c", choices=["clarabel", "c-socp", "c"])
+    b.add_argument("--tscvx-backend", default="c", choices=BACKENDS)
     b.set_defaults(func=cmd_bench)
 
+
+def _add_agreement(sub: argparse._SubParsersAction) -> None:
     a = sub.add_parser(
         "agreement",
         help="final mass of SCvx across conic solvers and tolerances (reference, C library)",
@@ -376,6 +444,8 @@ def build_parser() -> argparse.ArgumentParser:
     add_prox_u(a, "on which the solvers part")
     a.set_defaults(func=cmd_agreement)
 
+
+def _add_verify(sub: argparse._SubParsersAction) -> None:
     v = sub.add_parser(
         "verify",
         help="fly trajectory files open loop (scipy) and check landing and path constraints",
@@ -401,15 +471,6 @@ def build_parser() -> argparse.ArgumentParser:
         help=f"node states against the propagation (default {tol.node_deviation:g})",
     )
     v.set_defaults(func=cmd_verify)
-
-    g = sub.add_parser("budget", help="RAD750 time and memory budget of one C guidance call")
-    g.set_defaults(func=cmd_budget)
-
-    # Learning tools (dataset, train, export, baselines) register their own subcommands.
-    from guidance import cli_learning
-
-    cli_learning.add_commands(sub)
-    return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:

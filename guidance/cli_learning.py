@@ -54,10 +54,23 @@ DEFAULT_DATASET = "data/dataset.npz"
 DEFAULT_RUN_DIR = "data/runs/default"
 DEFAULT_TRAIN_DIR = "data/train"
 DEFAULT_MODELS_DIR = "models"
+# Choices of --backend of the commands that solve sampled landings (dataset, mask-ceiling);
+# without it, dataset.default_backend().
+_SAMPLE_BACKENDS = ["c", "clarabel", "c-socp"]
 
 
 def add_commands(sub: argparse._SubParsersAction) -> None:
     """Registers the learning subcommands on the main parser."""
+    _add_dataset(sub)
+    _add_train(sub)
+    _add_export(sub)
+    _add_baselines(sub)
+    _add_mask_ceiling(sub)
+
+
+# The helpers import guidance.cli when called, not at this module's import: guidance.cli
+# imports the solvers, and guidance.nn.card imports this module.
+def _add_dataset(sub: argparse._SubParsersAction) -> None:
     from guidance.cli import add_prox_u, at_least
     from guidance.dataset import SamplingRanges
 
@@ -74,13 +87,17 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
     d.add_argument("--workers", type=at_least(0), default=0, help="worker processes (0: all cores)")
     d.add_argument(
         "--backend",
-        choices=["c", "clarabel", "c-socp"],
+        choices=_SAMPLE_BACKENDS,
         help="SCvx that solves the samples (default: the C library when built, else clarabel)",
     )
     add_prox_u(d, "with which the networks shipped until 23 Nov were trained")
     d.add_argument("--pack-only", action="store_true", help="pack the samples solved so far")
     d.add_argument("--no-progress", action="store_true")
     d.set_defaults(func=cmd_dataset, ranges=SamplingRanges())
+
+
+def _add_train(sub: argparse._SubParsersAction) -> None:
+    from guidance.cli import at_least
 
     t = sub.add_parser("train", help="train the constraint and solution transformers (resumable)")
     t.add_argument("--dataset", default=DEFAULT_DATASET)
@@ -122,6 +139,8 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
     t.add_argument("--no-progress", action="store_true")
     t.set_defaults(func=cmd_train)
 
+
+def _add_export(sub: argparse._SubParsersAction) -> None:
     e = sub.add_parser("export", help="export the best flight-size networks to ONNX")
     e.add_argument("--train-dir", default=DEFAULT_TRAIN_DIR)
     e.add_argument(
@@ -134,6 +153,8 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
     e.add_argument("--models-dir", default=DEFAULT_MODELS_DIR)
     e.set_defaults(func=cmd_export)
 
+
+def _add_baselines(sub: argparse._SubParsersAction) -> None:
     b = sub.add_parser("baselines", help="lookup-table baselines against the networks")
     b.add_argument("--dataset", default=DEFAULT_DATASET)
     b.add_argument("--models-dir", default=DEFAULT_MODELS_DIR)
@@ -143,6 +164,10 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
     b.add_argument("--seed", type=int, default=0, help="the split seed used in training")
     b.add_argument("--json", help="write the results here (default: MODELS_DIR/baselines.json)")
     b.set_defaults(func=cmd_baselines)
+
+
+def _add_mask_ceiling(sub: argparse._SubParsersAction) -> None:
+    from guidance.cli import at_least
 
     c = sub.add_parser(
         "mask-ceiling",
@@ -158,7 +183,7 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
     c.add_argument(
         "--eps", type=_radii, default="0.005,0.02,0.1", help="neighbourhood radii, in std units"
     )
-    c.add_argument("--backend", choices=["c", "clarabel", "c-socp"], help="default: as dataset")
+    c.add_argument("--backend", choices=_SAMPLE_BACKENDS, help="default: as dataset")
     c.add_argument(
         "--train-landings",
         type=at_least(1),

@@ -41,7 +41,7 @@ from typing import TypeVar
 import numpy as np
 import scipy.sparse as sp
 
-from guidance.conic import ConicProblem, ConicSolution, Status
+from guidance.conic import ConeKind, ConicProblem, ConicSolution, Status
 
 _LIB_ENV = "TSCVX_LIB"
 _LIB_DEFAULT = Path(__file__).resolve().parents[1] / "build" / "libtscvx.so"
@@ -273,9 +273,37 @@ def _split(prob: ConicProblem) -> _Split:
         raise InvalidProblemError(
             f"A must be a sparse {m} x {n} matrix (len(b) x len(q)), got shape {A.shape}"
         )
-    eq, nonneg, soc_rows, soc = [], [], [], []
+    eq, nonneg, soc_rows, soc = _cone_rows(prob.cones, m)
+    eq_rows = np.array(eq, dtype=np.int64)
+    g_rows = np.array(nonneg + soc_rows, dtype=np.int64)
+    T = _pattern_of(A)
+    P_src = None
+    if prob.P is not None:
+        if not sp.issparse(prob.P) or prob.P.shape != (n, n):
+            raise InvalidProblemError(f"P must be a sparse {n} x {n} matrix")
+        P_src = _pattern_of(prob.P).data.astype(np.int64) - 1
+    return _Split(
+        eq_rows=eq_rows,
+        g_rows=g_rows,
+        l=len(nonneg),
+        soc=np.array(soc, dtype=np.int32),
+        A_src=_sources_of_rows(T, eq_rows),
+        G_src=_sources_of_rows(T, g_rows),
+        P_src=P_src,
+    )
+
+
+def _cone_rows(
+    cones: list[tuple[ConeKind, int]], m: int
+) -> tuple[list[int], list[int], list[int], list[int]]:
+    """The rows of the zero, nonneg and SOC cones and the SOC dimensions; the cones must cover
+    the m rows exactly."""
+    eq: list[int] = []
+    nonneg: list[int] = []
+    soc_rows: list[int] = []
+    soc: list[int] = []
     row = 0
-    for kind, dim in prob.cones:
+    for kind, dim in cones:
         dim = int(dim)
         if dim < 1:
             raise InvalidProblemError(f"cone ({kind}, {dim}): dimension must be >= 1")
@@ -296,27 +324,15 @@ def _split(prob: ConicProblem) -> _Split:
         row += dim
     if row != m:
         raise InvalidProblemError(f"cones cover {row} rows but A and b have {m}")
-    eq_rows = np.array(eq, dtype=np.int64)
-    g_rows = np.array(nonneg + soc_rows, dtype=np.int64)
-    T = _pattern_of(A)
-    Teq = sp.csc_matrix(T[eq_rows, :]) if len(eq_rows) else sp.csc_matrix((0, n))
-    Tg = sp.csc_matrix(T[g_rows, :]) if len(g_rows) else sp.csc_matrix((0, n))
-    Teq.sort_indices()
-    Tg.sort_indices()
-    P_src = None
-    if prob.P is not None:
-        if not sp.issparse(prob.P) or prob.P.shape != (n, n):
-            raise InvalidProblemError(f"P must be a sparse {n} x {n} matrix")
-        P_src = _pattern_of(prob.P).data.astype(np.int64) - 1
-    return _Split(
-        eq_rows=eq_rows,
-        g_rows=g_rows,
-        l=len(nonneg),
-        soc=np.array(soc, dtype=np.int32),
-        A_src=Teq.data.astype(np.int64) - 1,
-        G_src=Tg.data.astype(np.int64) - 1,
-        P_src=P_src,
-    )
+    return eq, nonneg, soc_rows, soc
+
+
+def _sources_of_rows(T: sp.csc_matrix, rows: np.ndarray) -> np.ndarray:
+    """For each entry of these rows of A (canonical CSC), its index in the original A.data;
+    ``T`` is A's _pattern_of."""
+    sub = sp.csc_matrix(T[rows, :]) if len(rows) else sp.csc_matrix((0, T.shape[1]))
+    sub.sort_indices()
+    return sub.data.astype(np.int64) - 1
 
 
 def c_point(

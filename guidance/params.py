@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -180,15 +181,7 @@ class SCvxSettings:
         """The ranges the flight library checks too, in its order (pdg_check_settings in
         pdg_scvx.c): with two bad settings both name the same one."""
         for f in dataclasses.fields(self):
-            value = getattr(self, f.name)
-            if f.type == "bool" and not isinstance(value, bool):
-                raise InputError(f"{f.name} must be True or False, got {value!r}")
-            if f.type == "float" and (
-                isinstance(value, bool) or not isinstance(value, int | float)
-            ):
-                raise InputError(f"{f.name} must be a number, got {value!r}")
-            if isinstance(value, float) and not math.isfinite(value):
-                raise InputError(f"{f.name} must be finite, got {value}")
+            _check_type(f.name, f.type, getattr(self, f.name))
         if self.discretization not in DISCRETIZATIONS:
             raise InputError(
                 f"discretization must be one of {', '.join(DISCRETIZATIONS)}, "
@@ -198,38 +191,43 @@ class SCvxSettings:
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or not lo <= value <= hi:
                 raise InputError(f"{name} must be an integer within {lo}..{hi}, got {value!r}")
-        if not self.eta_lb > 0.0:
-            raise InputError(f"eta_lb must be > 0, got {self.eta_lb!r}")
-        if not self.eta_ub >= self.eta_lb:
-            raise InputError(f"eta_ub must be >= eta_lb = {self.eta_lb:g}, got {self.eta_ub!r}")
-        if not (self.eta_lb <= self.eta_init <= self.eta_ub):
-            raise InputError(
-                f"eta_init must lie within [eta_lb, eta_ub] = [{self.eta_lb:g}, "
-                f"{self.eta_ub:g}], got {self.eta_init!r}"
-            )
-        if not self.lam > 0.0:
-            raise InputError(f"lam must be > 0, got {self.lam!r}")
-        if not self.rho0 <= self.rho1:
-            raise InputError(
-                f"rho1 must satisfy rho0 <= rho1 (rho0 = {self.rho0:g}), got {self.rho1!r}"
-            )
-        if not self.rho1 <= self.rho2:
-            raise InputError(
-                f"rho2 must satisfy rho1 <= rho2 (rho1 = {self.rho1:g}), got {self.rho2!r}"
-            )
+        for name, holds, requirement in self._ranges():
+            if not holds:
+                must = requirement.format_map(vars(self))
+                raise InputError(f"{name} must {must}, got {getattr(self, name)!r}")
+
+    def _ranges(self) -> Iterator[tuple[str, bool, str]]:
+        """(field, whether its range holds, what it must do) of each real setting in the order
+        they are checked: a generator, each comparison made once the earlier ones held. What
+        it must do is a template over the fields, filled in only for the message."""
+        yield "eta_lb", self.eta_lb > 0.0, "be > 0"
+        yield "eta_ub", self.eta_ub >= self.eta_lb, "be >= eta_lb = {eta_lb:g}"
+        yield (
+            "eta_init",
+            self.eta_lb <= self.eta_init <= self.eta_ub,
+            "lie within [eta_lb, eta_ub] = [{eta_lb:g}, {eta_ub:g}]",
+        )
+        yield "lam", self.lam > 0.0, "be > 0"
+        yield "rho1", self.rho0 <= self.rho1, "satisfy rho0 <= rho1 (rho0 = {rho0:g})"
+        yield "rho2", self.rho1 <= self.rho2, "satisfy rho1 <= rho2 (rho1 = {rho1:g})"
         for name in ("alpha", "beta"):
-            if not getattr(self, name) >= 1.0:
-                raise InputError(
-                    f"{name} must be >= 1 (a trust-region factor), got {getattr(self, name)!r}"
-                )
+            yield name, getattr(self, name) >= 1.0, "be >= 1 (a trust-region factor)"
         for name in ("step_tol", "vc_tol", "defect_tol", "tight_tol", "prox_u"):
-            if not getattr(self, name) >= 0.0:
-                raise InputError(f"{name} must be >= 0, got {getattr(self, name)!r}")
-        if not 0.0 < self.socp_tol < 1.0:
-            raise InputError(f"socp_tol must lie within (0, 1), got {self.socp_tol!r}")
+            yield name, getattr(self, name) >= 0.0, "be >= 0"
+        yield "socp_tol", 0.0 < self.socp_tol < 1.0, "lie within (0, 1)"
 
     def replace(self, **changes: object) -> SCvxSettings:
         return dataclasses.replace(self, **changes)
+
+
+def _check_type(name: str, kind: str, value: object) -> None:
+    """A setting of the type its field declares (``kind``: the annotation), finite if real."""
+    if kind == "bool" and not isinstance(value, bool):
+        raise InputError(f"{name} must be True or False, got {value!r}")
+    if kind == "float" and (isinstance(value, bool) or not isinstance(value, int | float)):
+        raise InputError(f"{name} must be a number, got {value!r}")
+    if isinstance(value, float) and not math.isfinite(value):
+        raise InputError(f"{name} must be finite, got {value}")
 
 
 DEFAULT_PARAMS = Params()

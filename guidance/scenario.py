@@ -289,37 +289,40 @@ def _validate_magnitudes(part: InitialState | Params) -> None:
 
 def _validate_params(p: Params) -> None:
     _validate_magnitudes(p)
-    positive = ("alpha_mdot", "aero_coeff", "m_dry", "T_min", "T_max", "omega_max_deg")
-    for name in positive:
-        if getattr(p, name) <= 0.0:
-            raise ScenarioError(name, f"must be positive, got {getattr(p, name)!r}")
-    if p.beta_mdot < 0.0:
-        raise ScenarioError("beta_mdot", f"must be non-negative, got {p.beta_mdot!r}")
-    if any(j <= 0.0 for j in p.J_B):
-        raise ScenarioError("J_B", f"inertia diagonal must be positive, got {p.J_B}")
-    if p.T_min >= p.T_max:
-        raise ScenarioError("T_min", f"T_min = {p.T_min:g} must be below T_max = {p.T_max:g}")
-    if not p.r_T_B[0] < 0.0:  # the gimbal's lever arm; the guess divides by it
-        raise ScenarioError(
-            "r_T_B",
-            f"r_T_B[0] = {p.r_T_B[0]!r}: the engine sits below the centre of mass on the body "
-            "axis (r_T_B[0] < 0, DESIGN.md: -0.01)",
-        )
-    if not 0.0 < p.gimbal_max_deg < 90.0:
-        raise ScenarioError("gimbal_max_deg", "must lie in (0, 90) degrees")
-    if not 0.0 < p.tilt_max_deg <= 180.0:
-        raise ScenarioError("tilt_max_deg", "must lie in (0, 180] degrees")
-    if not 0.0 <= p.glideslope_deg < 90.0:
-        raise ScenarioError("glideslope_deg", "must lie in [0, 90) degrees")
-    if abs(_norm(p.q_f) - 1.0) > UNIT_QUATERNION_TOL:
-        raise ScenarioError("q_f", "must be a unit quaternion")
-    if p.g_I[0] >= 0.0 or p.g_I[1] != 0.0 or p.g_I[2] != 0.0:
-        raise ScenarioError("g_I", "gravity must point along -e1 (e1 is up)")
-    if not 3 <= p.N <= 400:
-        raise ScenarioError("N", f"must lie in [3, 400], got {p.N}")
-    if p.r_f[0] < 0.0:
-        raise ScenarioError("r_f", "landing point must not be below the surface")
+    for field, broken, message in _param_rules(p):
+        if broken:
+            value = getattr(p, field)
+            raise ScenarioError(field, message.format_map({**vars(p), "value": value}))
     _validate_terminal(p)
+
+
+def _param_rules(p: Params) -> Iterator[tuple[str, bool, str]]:
+    """(field, whether the rule is broken, message) of each rule on the parameters, in the C
+    library's order (check_params in pdg_scenario.c): a generator, each rule judged only after
+    the earlier ones passed. The message is a template over the fields and ``value``, the
+    named field's."""
+    for name in ("alpha_mdot", "aero_coeff", "m_dry", "T_min", "T_max", "omega_max_deg"):
+        yield name, getattr(p, name) <= 0.0, "must be positive, got {value!r}"
+    yield "beta_mdot", p.beta_mdot < 0.0, "must be non-negative, got {value!r}"
+    yield "J_B", any(j <= 0.0 for j in p.J_B), "inertia diagonal must be positive, got {J_B}"
+    yield "T_min", p.T_min >= p.T_max, "T_min = {T_min:g} must be below T_max = {T_max:g}"
+    yield (  # the gimbal's lever arm; the guess divides by it
+        "r_T_B",
+        not p.r_T_B[0] < 0.0,
+        "r_T_B[0] = {r_T_B[0]!r}: the engine sits below the centre of mass on the body axis "
+        "(r_T_B[0] < 0, DESIGN.md: -0.01)",
+    )
+    yield "gimbal_max_deg", not 0.0 < p.gimbal_max_deg < 90.0, "must lie in (0, 90) degrees"
+    yield "tilt_max_deg", not 0.0 < p.tilt_max_deg <= 180.0, "must lie in (0, 180] degrees"
+    yield "glideslope_deg", not 0.0 <= p.glideslope_deg < 90.0, "must lie in [0, 90) degrees"
+    yield "q_f", abs(_norm(p.q_f) - 1.0) > UNIT_QUATERNION_TOL, "must be a unit quaternion"
+    yield (
+        "g_I",
+        p.g_I[0] >= 0.0 or p.g_I[1] != 0.0 or p.g_I[2] != 0.0,
+        "gravity must point along -e1 (e1 is up)",
+    )
+    yield "N", not 3 <= p.N <= 400, "must lie in [3, 400], got {N}"
+    yield "r_f", p.r_f[0] < 0.0, "landing point must not be below the surface"
 
 
 def _validate_terminal(p: Params) -> None:

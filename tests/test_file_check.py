@@ -8,6 +8,7 @@ purpose.
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -210,6 +211,37 @@ def _params_json(written: Path) -> dict:
         return json.loads(str(f["params"]))
 
 
+def _array(written: Path, name: str) -> np.ndarray:
+    with np.load(written) as f:
+        return f[name]
+
+
+def _with_params(src: Path, dst: Path, params: dict) -> Path:
+    return _edited(src, dst, params=json.dumps(params))
+
+
+# How each file the test below cannot check is made at dst from the reference file src.
+_UNCHECKABLE: dict[str, Callable[[Path, Path], object]] = {
+    "text": lambda src, dst: dst.write_text("not a trajectory"),
+    "missing": lambda src, dst: None,  # never written
+    "short_x": lambda src, dst: _edited(src, dst, x=_array(src, "x")[:10]),
+    "nan": lambda src, dst: _edited(src, dst, x=np.full_like(_array(src, "x"), np.nan)),
+    "t_max": lambda src, dst: _with_params(src, dst, {**_params_json(src), "T_max": 4.0}),
+    "n": lambda src, dst: _with_params(src, dst, {**_params_json(src), "N": 2}),
+    "t_f_pair": lambda src, dst: _edited(src, dst, t_f=np.asarray([1.0, 2.0])),
+    "t_f_text": lambda src, dst: _edited(src, dst, t_f=np.asarray("abc")),
+    "t_f_huge": lambda src, dst: _edited(src, dst, t_f=np.asarray(1e300)),
+    "t_f_tiny": lambda src, dst: _edited(src, dst, t_f=np.asarray(1e-300)),
+    "x_text": lambda src, dst: _edited(src, dst, x=_array(src, "x").astype(str)),
+    "x_complex": lambda src, dst: _edited(src, dst, x=_array(src, "x") + 1j),
+    "u_huge": lambda src, dst: _edited(src, dst, u=_array(src, "u") * 1e300),
+    "no_params": lambda src, dst: _with_params(src, dst, {}),
+    "no_t_min": lambda src, dst: _with_params(
+        src, dst, {k: v for k, v in _params_json(src).items() if k != "T_min"}
+    ),
+}
+
+
 @pytest.mark.parametrize(
     ("case", "message"),
     [
@@ -234,32 +266,8 @@ def _params_json(written: Path) -> dict:
 def test_files_that_cannot_be_checked_exit_2(
     written: Path, tmp_path: Path, capsys, case: str, message: str
 ) -> None:
-    with np.load(written) as f:
-        x = f["x"]
     path = tmp_path / f"{case}.npz"
-    if case == "text":
-        path.write_text("not a trajectory")
-    elif case == "short_x":
-        _edited(written, path, x=x[:10])
-    elif case == "nan":
-        _edited(written, path, x=np.full_like(x, np.nan))
-    elif case == "t_max":
-        _edited(written, path, params=json.dumps({**_params_json(written), "T_max": 4.0}))
-    elif case == "n":
-        _edited(written, path, params=json.dumps({**_params_json(written), "N": 2}))
-    elif case.startswith("t_f_"):
-        t_f = {"pair": [1.0, 2.0], "text": "abc", "huge": 1e300, "tiny": 1e-300}[case[4:]]
-        _edited(written, path, t_f=np.asarray(t_f))
-    elif case == "x_text":
-        _edited(written, path, x=x.astype(str))
-    elif case == "x_complex":
-        _edited(written, path, x=x + 1j)
-    elif case == "u_huge":
-        with np.load(written) as f:
-            _edited(written, path, u=f["u"] * 1e300)
-    elif case in ("no_params", "no_t_min"):
-        params = {k: v for k, v in _params_json(written).items() if k != "T_min"}
-        _edited(written, path, params=json.dumps({} if case == "no_params" else params))
+    _UNCHECKABLE[case](written, path)
     assert main(["verify", str(written), str(path)]) == 2
     captured = capsys.readouterr()
     assert message in captured.err
