@@ -257,10 +257,14 @@ def _csc_int(M: sp.csc_matrix) -> sp.csc_matrix:
 
 
 def _pattern_of(M: sp.spmatrix) -> sp.csc_matrix:
-    """Copy of M's stored pattern whose values are 1 + the index into M.data (canonical CSC)."""
+    """Copy of M's stored pattern whose values are 1 + the index into M.data (canonical CSC).
+    M itself is left as it is: its index arrays are copied before the sort (sp.csc_matrix
+    of a CSC matrix shares them, and sorting them in place would reorder the caller's rows
+    under its values)."""
     M = sp.csc_matrix(M)
-    T = sp.csc_matrix((np.arange(1, M.nnz + 1, dtype=float), M.indices, M.indptr), M.shape)
-    T.sum_duplicates()  # sorts; duplicates (if any) would merge: refused below
+    index = np.arange(1, M.nnz + 1, dtype=float)
+    T = sp.csc_matrix((index, M.indices.copy(), M.indptr.copy()), M.shape)
+    T.sum_duplicates()  # sorts; duplicates (if any) merge: refused below
     if T.nnz != M.nnz:
         raise InvalidProblemError("duplicate entries in a sparse matrix")
     return T

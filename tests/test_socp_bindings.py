@@ -330,3 +330,64 @@ def test_initial_mu_by_hand() -> None:
     sol = csocp.solve(prob, log=True, ruiz_iters=0)
     assert sol.status == "solved"
     assert sol.info["log"][0]["mu"] == pytest.approx(7.0 / 6.0, rel=1e-9)
+
+
+def _scrambled(M: sp.csc_matrix, rng: np.random.Generator) -> sp.csc_matrix:
+    """M with the entries of every column stored in a random order (a valid CSC matrix whose
+    row indices are not sorted)."""
+    M = sp.csc_matrix(M)
+    order = np.concatenate(
+        [lo + rng.permutation(hi - lo) for lo, hi in zip(M.indptr[:-1], M.indptr[1:], strict=True)]
+    )
+    S = sp.csc_matrix((M.data[order], M.indices[order], M.indptr.copy()), M.shape)
+    assert not S.has_sorted_indices
+    return S
+
+
+@pytest.mark.parametrize("seed", [3, 4, 6, 7])
+def test_unsorted_rows_are_solved_as_stored_and_left_as_given(seed: int) -> None:
+    """A and P whose columns store their rows out of order are the same matrices: the runtime
+    gives the answer of the sorted copies to the bit (Clarabel's optimum), and the caller's
+    matrices keep their arrays (the pattern map once sorted them in place, moving the rows
+    under the values); update() takes values in the caller's stored order."""
+    rng = np.random.default_rng(seed)
+    ref_prob = random_feasible(seed, n=20, with_P=True)
+    A, P = _scrambled(ref_prob.A, rng), _scrambled(sp.triu(ref_prob.P, format="csc"), rng)
+    kept = [a.copy() for a in (A.indices, A.data, P.indices, P.data)]
+    prob = ConicProblem(P=P, q=ref_prob.q, A=A, b=ref_prob.b, cones=ref_prob.cones)
+    solver = csocp.Solver(prob)
+    sol, sorted_sol, ref = solver.solve(), csocp.solve(ref_prob), solve_clarabel(ref_prob)
+    assert sol.status == sorted_sol.status == ref.status == "solved"
+    assert np.array_equal(sol.x, sorted_sol.x)
+    assert abs(sol.obj - ref.obj) <= 1e-6 * max(1.0, abs(ref.obj))
+    for a, b in zip((A.indices, A.data, P.indices, P.data), kept, strict=True):
+        assert np.array_equal(a, b)
+    # new values in each one's stored order: the same problem again, the same bits
+    sorted_solver = csocp.Solver(ref_prob)
+    assert solver.update(A_values=np.sqrt(2.0) * A.data) == 0
+    assert sorted_solver.update(A_values=np.sqrt(2.0) * sp.csc_matrix(ref_prob.A).data) == 0
+    assert np.array_equal(solver.solve().x, sorted_solver.solve().x)
+
+
+@pytest.mark.parametrize("which", ["A", "P"])
+def test_duplicate_entries_are_refused_and_left_as_given(which: str) -> None:
+    """Two stored entries at one (row, column) are refused by name, before any solve (they
+    crashed with an IndexError, and the caller's matrix lost one of them)."""
+    prob = small_soc()
+    if which == "A":  # small_soc's A with its entry (0, 0) = 1 stored as 0.5 + 0.5
+        M = sp.csc_matrix(
+            (np.array([0.5, 0.5, -1, -1, -1, -1, -1.0]), np.array([0, 0, 1, 3, 0, 1, 4]),
+             np.array([0, 4, 7])), shape=(5, 2)
+        )  # fmt: skip
+        assert np.array_equal(M.toarray(), prob.A.toarray())
+        prob = ConicProblem(P=None, q=prob.q, A=M, b=prob.b, cones=prob.cones)
+    else:  # P = I with its entry (0, 0) stored as 0.5 + 0.5
+        M = sp.csc_matrix(
+            (np.array([0.5, 0.5, 1.0]), np.array([0, 0, 1]), np.array([0, 2, 3])), shape=(2, 2)
+        )
+        prob = ConicProblem(P=M, q=prob.q, A=prob.A, b=prob.b, cones=prob.cones)
+    kept = (M.indices.copy(), M.data.copy(), M.indptr.copy())
+    with pytest.raises(csocp.InvalidProblemError, match="duplicate entries"):
+        csocp.Solver(prob)
+    after = (M.indices, M.data, M.indptr)
+    assert all(np.array_equal(a, b) for a, b in zip(after, kept, strict=True))
