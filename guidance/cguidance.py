@@ -408,9 +408,8 @@ def _collect(
     N = ws.N
     message = res.message.decode()
     if status == 4:  # PDG_INVALID_INPUT
-        field = message.split("'")[1] if message.startswith("scenario field '") else "<input>"
         if message.startswith("scenario field '"):
-            raise ScenarioError(field, message.split("': ", 1)[1])
+            raise ScenarioError(message.split("'")[1], message.split("': ", 1)[1])
         raise InputError(message)
     history = []
     row = _LogRow()
