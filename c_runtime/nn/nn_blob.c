@@ -211,17 +211,10 @@ static tscvx_nn_status check_dimensions(const nn_header *hd, char *why)
     return TSCVX_NN_OK;
 }
 
-tscvx_nn_status nn_parse(const void *blob, size_t len, nn_header *hd, char *why)
+/* Magic, header length and format: what must hold before any other field is read. Leaves hd
+ * zeroed but for version and header_bytes. */
+static tscvx_nn_status check_format(const unsigned char *p, size_t len, nn_header *hd, char *why)
 {
-    const unsigned char *p = (const unsigned char *)blob;
-    const unsigned char *w;
-    size_t n_weights, n_probe_vals, n_values, i;
-    uint32_t crc;
-    tscvx_nn_status st;
-
-    if (!blob || !hd) {
-        return refuse(why, TSCVX_NN_NULL_ARGUMENT, "blob is NULL");
-    }
     if (len < 8 || memcmp(p, NN_MAGIC, 8) != 0) {
         return refuse(why, TSCVX_NN_BAD_MAGIC, "the first 8 bytes are not \"TSCVXNN\\0\"");
     }
@@ -238,6 +231,12 @@ tscvx_nn_status nn_parse(const void *blob, size_t len, nn_header *hd, char *why)
                       hd->version, hd->header_bytes, TSCVX_NN_FORMAT_VERSION,
                       TSCVX_NN_HEADER_BYTES);
     }
+    return TSCVX_NN_OK;
+}
+
+/* The fields after version and header size (offsets: nn_internal.h), not yet checked. */
+static void read_fields(const unsigned char *p, nn_header *hd)
+{
     hd->kind = rd_u32(p + 16);
     hd->tokens = rd_u32(p + 20);
     hd->d_in = rd_u32(p + 24);
@@ -254,8 +253,15 @@ tscvx_nn_status nn_parse(const void *blob, size_t len, nn_header *hd, char *why)
     hd->threshold = rd_f64(p + 72);
     hd->n_values = rd_u64(p + 80);
     hd->n_weights = rd_u64(p + 88);
+}
 
-    /* length first (a truncated blob says so, whatever its other fields), then the CRC */
+/* Length first (a truncated blob says so, whatever its other fields), then the CRC, then the
+ * reserved bytes (a corrupt blob is reported as corrupt, not as a later format). */
+static tscvx_nn_status check_integrity(const unsigned char *p, size_t len, const nn_header *hd,
+                                       char *why)
+{
+    uint32_t crc;
+    size_t i;
     if (hd->n_values > ((uint64_t)(size_t)-1 - TSCVX_NN_HEADER_BYTES) / 8u
         || (uint64_t)len != TSCVX_NN_HEADER_BYTES + 8u * hd->n_values) {
         return refuse(why, TSCVX_NN_TRUNCATED, "%zu bytes; n_values = %llu asks for %u + 8 x %llu",
@@ -275,13 +281,14 @@ tscvx_nn_status nn_parse(const void *blob, size_t len, nn_header *hd, char *why)
                           (unsigned)p[i]);
         }
     }
+    return TSCVX_NN_OK;
+}
 
-    st = check_dimensions(hd, why);
-    if (st != TSCVX_NN_OK) {
-        return st;
-    }
-    n_weights = nn_count_weights(hd);
-    n_probe_vals = (size_t)hd->n_probes * ((size_t)hd->d_in + hd->d_out);
+/* The value counts against the (checked) dimensions, then epsilon and threshold. */
+static tscvx_nn_status check_counts(const nn_header *hd, char *why)
+{
+    const size_t n_weights = nn_count_weights(hd);
+    const size_t n_probe_vals = (size_t)hd->n_probes * ((size_t)hd->d_in + hd->d_out);
     if (n_weights == 0 || hd->n_weights != (uint64_t)n_weights) {
         return refuse(why, TSCVX_NN_BAD_DIMENSIONS, "n_weights = %llu, the dimensions give %zu",
                       (unsigned long long)hd->n_weights, n_weights);
@@ -298,10 +305,14 @@ tscvx_nn_status nn_parse(const void *blob, size_t len, nn_header *hd, char *why)
         return refuse(why, TSCVX_NN_BAD_WEIGHTS, "threshold = %g is outside (0, 1)",
                       hd->threshold);
     }
+    return TSCVX_NN_OK;
+}
 
-    /* values: all finite; in_scale and out_std positive */
-    n_values = (size_t)hd->n_values;
-    w = p + TSCVX_NN_HEADER_BYTES;
+/* The values after the header (w): all finite; in_scale and out_std positive. */
+static tscvx_nn_status check_values(const unsigned char *w, const nn_header *hd, char *why)
+{
+    const size_t n_values = (size_t)hd->n_values;
+    size_t i;
     for (i = 0; i < n_values; ++i) {
         if (!f64_bits_finite(rd_u64(w + 8 * i))) {
             return refuse(why, TSCVX_NN_BAD_WEIGHTS, "value %zu of %zu is NaN or infinite", i,
@@ -320,6 +331,40 @@ tscvx_nn_status nn_parse(const void *blob, size_t len, nn_header *hd, char *why)
             return refuse(why, TSCVX_NN_BAD_WEIGHTS, "out_std[%zu] = %g is not positive", i,
                           rd_f64(w + 8 * k));
         }
+    }
+    return TSCVX_NN_OK;
+}
+
+/* The checks in the order the refusals are reported: format, integrity, dimensions, counts,
+ * values (the first failing one names its field). */
+tscvx_nn_status nn_parse(const void *blob, size_t len, nn_header *hd, char *why)
+{
+    const unsigned char *p = (const unsigned char *)blob;
+    tscvx_nn_status st;
+
+    if (!blob || !hd) {
+        return refuse(why, TSCVX_NN_NULL_ARGUMENT, "blob is NULL");
+    }
+    st = check_format(p, len, hd, why);
+    if (st != TSCVX_NN_OK) {
+        return st;
+    }
+    read_fields(p, hd);
+    st = check_integrity(p, len, hd, why);
+    if (st != TSCVX_NN_OK) {
+        return st;
+    }
+    st = check_dimensions(hd, why);
+    if (st != TSCVX_NN_OK) {
+        return st;
+    }
+    st = check_counts(hd, why);
+    if (st != TSCVX_NN_OK) {
+        return st;
+    }
+    st = check_values(p + TSCVX_NN_HEADER_BYTES, hd, why);
+    if (st != TSCVX_NN_OK) {
+        return st;
     }
     return refuse(why, TSCVX_NN_OK, "ok");
 }
@@ -391,133 +436,177 @@ static void *take(unsigned char **cur, size_t n)
     return p;
 }
 
+/* Everything init refuses after its NULL checks, in tscvx_nn_arena_size's order, then the
+ * arena's size and the blob's alignment. *copy: weights go into the arena; *need: the arena
+ * bytes, alignment slack included. */
+static tscvx_nn_status check_init(size_t arena_bytes, const void *blob, size_t len,
+                                  unsigned flags, nn_header *hd, int *copy, size_t *need)
+{
+    tscvx_nn_status st;
+    if (flags & ~TSCVX_NN_COPY_WEIGHTS) {
+        return TSCVX_NN_BAD_FLAGS;
+    }
+    st = nn_parse(blob, len, hd, NULL);
+    if (st != TSCVX_NN_OK) {
+        return st;
+    }
+    *copy = must_copy(flags);
+    *need = layout_bytes(hd, *copy);
+    if (*need == 0) {
+        return TSCVX_NN_BAD_DIMENSIONS;
+    }
+    *need += ALIGN; /* as tscvx_nn_arena_size */
+    if (arena_bytes < *need) {
+        return TSCVX_NN_ARENA_TOO_SMALL;
+    }
+    if (!*copy && ((uintptr_t)blob % sizeof(double)) != 0) {
+        return TSCVX_NN_BAD_ALIGNMENT;
+    }
+    return TSCVX_NN_OK;
+}
+
+/* The net's struct at the arena's first aligned byte, zeroed (its padding too: nn_layout_sum
+ * hashes it), with the header and its dimensions. */
+static tscvx_nn *place_net(unsigned char **cur, const nn_header *hd, size_t need)
+{
+    tscvx_nn *net;
+    *cur += (ALIGN - (uintptr_t)*cur % ALIGN) % ALIGN;
+    net = (tscvx_nn *)take(cur, sizeof *net);
+    memset(net, 0, sizeof *net);
+    net->hdr = *hd;
+    net->d_in = (int)hd->d_in;
+    net->d_out = (int)hd->d_out;
+    net->d = (int)hd->d_model;
+    net->heads = (int)hd->n_heads;
+    net->n_layers = (int)hd->n_layers;
+    net->ff = (int)hd->d_ff;
+    net->L = (int)hd->seq_len;
+    net->arena_bytes = need;
+    return net;
+}
+
+/* The layer table and the activations after the struct (their sizes: layout_bytes). */
+static void place_buffers(tscvx_nn *net, unsigned char **cur)
+{
+    const nn_header *hd = &net->hdr;
+    const size_t d = hd->d_model, L = hd->seq_len, ff = hd->d_ff;
+    net->layers = (nn_layer *)take(cur, sizeof(nn_layer) * (hd->n_layers ? hd->n_layers : 1));
+    net->z = (double *)take(cur, sizeof(double) * hd->d_in);
+    net->h = (double *)take(cur, sizeof(double) * L * d);
+    net->qkv = (double *)take(cur, sizeof(double) * L * 3 * d);
+    net->o = (double *)take(cur, sizeof(double) * L * d);
+    net->t = (double *)take(cur, sizeof(double) * d);
+    net->f = (double *)take(cur, sizeof(double) * ff);
+    net->sc = (double *)take(cur, sizeof(double) * L);
+    net->xb = (double *)take(cur, sizeof(double) * hd->d_in);
+    net->yb = (double *)take(cur, sizeof(double) * hd->d_out);
+}
+
+/* The values as doubles: in place in the (aligned, checked) blob, or copied into the arena
+ * after the activations in the host's byte order. */
+static const double *place_values(tscvx_nn *net, unsigned char **cur, const void *blob, int copy)
+{
+    const unsigned char *src = (const unsigned char *)blob + TSCVX_NN_HEADER_BYTES;
+    const size_t n_values = (size_t)net->hdr.n_values;
+    double *dst;
+    size_t i;
+    net->weights_in_arena = copy;
+    if (!copy) {
+        return (const double *)(const void *)src;
+    }
+    dst = (double *)take(cur, sizeof(double) * n_values);
+    for (i = 0; i < n_values; ++i) {
+        dst[i] = rd_f64(src + 8 * i);
+    }
+    return dst;
+}
+
+/* One encoder layer's weights from w on, in the blob's order; returns what follows them. */
+static const double *carve_layer(nn_layer *ly, const double *w, size_t d, size_t ff)
+{
+    ly->W_qkv = w;
+    w += 3 * d * d;
+    ly->b_qkv = w;
+    w += 3 * d;
+    ly->W_o = w;
+    w += d * d;
+    ly->b_o = w;
+    w += d;
+    ly->ln1_g = w;
+    w += d;
+    ly->ln1_b = w;
+    w += d;
+    ly->W_1 = w;
+    w += ff * d;
+    ly->b_1 = w;
+    w += ff;
+    ly->W_2 = w;
+    w += d * ff;
+    ly->b_2 = w;
+    w += d;
+    ly->ln2_g = w;
+    w += d;
+    ly->ln2_b = w;
+    w += d;
+    return w;
+}
+
+/* Points the net at its weights, probes and parameters, in the blob's order (nn_internal.h). */
+static void carve_values(tscvx_nn *net, const double *w)
+{
+    const nn_header *hd = &net->hdr;
+    const size_t d = hd->d_model, L = hd->seq_len;
+    uint32_t l;
+    net->in_mean = w;
+    w += hd->d_in;
+    net->in_scale = w;
+    w += hd->d_in;
+    net->out_mean = w;
+    w += hd->d_out;
+    net->out_std = w;
+    w += hd->d_out;
+    net->enc_w = w;
+    w += hd->tokens == TSCVX_NN_TOKENS_SINGLE ? d * hd->d_in : L * d;
+    net->enc_b = w;
+    w += hd->tokens == TSCVX_NN_TOKENS_SINGLE ? d : L * d;
+    net->pos = w;
+    w += L * d;
+    for (l = 0; l < hd->n_layers; ++l) {
+        w = carve_layer(&net->layers[l], w, d, hd->d_ff);
+    }
+    net->W_d = w;
+    w += hd->d_out * L * d;
+    net->b_d = w;
+    w += hd->d_out;
+    net->probe_in = w;
+    w += (size_t)hd->n_probes * hd->d_in;
+    net->probe_out = w;
+    w += (size_t)hd->n_probes * hd->d_out;
+    net->params = w;
+}
+
 tscvx_nn_status tscvx_nn_init(tscvx_nn **out, void *arena, size_t arena_bytes, const void *blob,
                               size_t len, unsigned flags)
 {
     nn_header hd;
     tscvx_nn_status st;
     tscvx_nn *net;
-    unsigned char *cur;
-    const double *w;
-    size_t need, d, L, ff, i;
+    unsigned char *cur = (unsigned char *)arena;
+    size_t need;
     int copy;
-    uint32_t l;
 
     if (!out || !arena || !blob) {
         return TSCVX_NN_NULL_ARGUMENT;
     }
     *out = NULL;
-    if (flags & ~TSCVX_NN_COPY_WEIGHTS) {
-        return TSCVX_NN_BAD_FLAGS;
-    }
-    st = nn_parse(blob, len, &hd, NULL);
+    st = check_init(arena_bytes, blob, len, flags, &hd, &copy, &need);
     if (st != TSCVX_NN_OK) {
         return st;
     }
-    copy = must_copy(flags);
-    need = layout_bytes(&hd, copy);
-    if (need == 0) {
-        return TSCVX_NN_BAD_DIMENSIONS;
-    }
-    need += ALIGN; /* as tscvx_nn_arena_size */
-    if (arena_bytes < need) {
-        return TSCVX_NN_ARENA_TOO_SMALL;
-    }
-    if (!copy && ((uintptr_t)blob % sizeof(double)) != 0) {
-        return TSCVX_NN_BAD_ALIGNMENT;
-    }
-
-    cur = (unsigned char *)arena;
-    cur += (ALIGN - (uintptr_t)cur % ALIGN) % ALIGN;
-    net = (tscvx_nn *)take(&cur, sizeof *net);
-    memset(net, 0, sizeof *net);
-    net->hdr = hd;
-    net->d_in = (int)hd.d_in;
-    net->d_out = (int)hd.d_out;
-    net->d = (int)hd.d_model;
-    net->heads = (int)hd.n_heads;
-    net->n_layers = (int)hd.n_layers;
-    net->ff = (int)hd.d_ff;
-    net->L = (int)hd.seq_len;
-    net->arena_bytes = need;
-    d = hd.d_model;
-    L = hd.seq_len;
-    ff = hd.d_ff;
-    net->layers = (nn_layer *)take(&cur, sizeof(nn_layer) * (hd.n_layers ? hd.n_layers : 1));
-    net->z = (double *)take(&cur, sizeof(double) * hd.d_in);
-    net->h = (double *)take(&cur, sizeof(double) * L * d);
-    net->qkv = (double *)take(&cur, sizeof(double) * L * 3 * d);
-    net->o = (double *)take(&cur, sizeof(double) * L * d);
-    net->t = (double *)take(&cur, sizeof(double) * d);
-    net->f = (double *)take(&cur, sizeof(double) * ff);
-    net->sc = (double *)take(&cur, sizeof(double) * L);
-    net->xb = (double *)take(&cur, sizeof(double) * hd.d_in);
-    net->yb = (double *)take(&cur, sizeof(double) * hd.d_out);
-
-    if (copy) { /* the values in the host's byte order */
-        const unsigned char *src = (const unsigned char *)blob + TSCVX_NN_HEADER_BYTES;
-        double *dst = (double *)take(&cur, sizeof(double) * (size_t)hd.n_values);
-        for (i = 0; i < (size_t)hd.n_values; ++i) {
-            dst[i] = rd_f64(src + 8 * i);
-        }
-        w = dst;
-    } else {
-        w = (const double *)(const void *)((const unsigned char *)blob + TSCVX_NN_HEADER_BYTES);
-    }
-    net->weights_in_arena = copy;
-
-    /* carve the weights in the blob's order (nn_internal.h) */
-    net->in_mean = w;
-    w += hd.d_in;
-    net->in_scale = w;
-    w += hd.d_in;
-    net->out_mean = w;
-    w += hd.d_out;
-    net->out_std = w;
-    w += hd.d_out;
-    net->enc_w = w;
-    w += hd.tokens == TSCVX_NN_TOKENS_SINGLE ? d * hd.d_in : L * d;
-    net->enc_b = w;
-    w += hd.tokens == TSCVX_NN_TOKENS_SINGLE ? d : L * d;
-    net->pos = w;
-    w += L * d;
-    for (l = 0; l < hd.n_layers; ++l) {
-        nn_layer *ly = &net->layers[l];
-        ly->W_qkv = w;
-        w += 3 * d * d;
-        ly->b_qkv = w;
-        w += 3 * d;
-        ly->W_o = w;
-        w += d * d;
-        ly->b_o = w;
-        w += d;
-        ly->ln1_g = w;
-        w += d;
-        ly->ln1_b = w;
-        w += d;
-        ly->W_1 = w;
-        w += ff * d;
-        ly->b_1 = w;
-        w += ff;
-        ly->W_2 = w;
-        w += d * ff;
-        ly->b_2 = w;
-        w += d;
-        ly->ln2_g = w;
-        w += d;
-        ly->ln2_b = w;
-        w += d;
-    }
-    net->W_d = w;
-    w += hd.d_out * L * d;
-    net->b_d = w;
-    w += hd.d_out;
-    net->probe_in = w;
-    w += (size_t)hd.n_probes * hd.d_in;
-    net->probe_out = w;
-    w += (size_t)hd.n_probes * hd.d_out;
-    net->params = w;
-    net->cookie = NN_COOKIE;
+    net = place_net(&cur, &hd, need);
+    place_buffers(net, &cur);
+    carve_values(net, place_values(net, &cur, blob, copy));
+    net->cookie = NN_COOKIE; /* cookie and checksum last: nn_live only for a complete net */
     net->layout_sum = nn_layout_sum(net);
     *out = net;
     return TSCVX_NN_OK;
