@@ -41,8 +41,14 @@ setup: apt $(STAMP)
 # vectorizer would pack loops into SSE2 pairs and undercount), and loops kept as loops (no
 # libc memset/memcpy substituted, whose x86 `rep stos` counts a byte per instruction). -O3
 # rather than -O2: 3 % fewer instructions per guidance call for the same results to the last
-# bit (IEEE arithmetic either way) and 28 KB more code.
-FLIGHT_CFLAGS := -std=c99 -Wall -Wextra -Werror -O3 -fno-tree-vectorize \
+# bit (IEEE arithmetic either way) and 28 KB more code. Beyond -Wall -Wextra, the warnings a
+# flight-code review asks for: shadowed names, float silently promoted to double, const cast
+# away, functions without prototypes, casts that may misalign, arithmetic on void pointers,
+# variable-length arrays, undefined macros in #if, format strings that are not literals.
+FLIGHT_WARNINGS := -Wall -Wextra -Werror -Wshadow -Wdouble-promotion -Wcast-qual \
+                   -Wstrict-prototypes -Wmissing-prototypes -Wcast-align -Wpointer-arith \
+                   -Wvla -Wundef -Wformat=2
+FLIGHT_CFLAGS := -std=c99 $(FLIGHT_WARNINGS) -O3 -fno-tree-vectorize \
                  -fno-tree-loop-distribute-patterns
 include c_runtime/runtime.mk
 include c_runtime/nn.mk

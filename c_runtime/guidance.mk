@@ -23,10 +23,11 @@ $(GEN_DIR)/tscvx_model.c $(GEN_DIR)/tscvx_model.h &: codegen/generate.py guidanc
 	$(PY) codegen/generate.py $(GEN_DIR)
 	@touch $(GEN_DIR)/tscvx_model.c $(GEN_DIR)/tscvx_model.h  # the generator keeps identical files untouched
 
-# CasADi's generated entry points share one signature and ignore some arguments.
+# CasADi's generated entry points share one signature and ignore some arguments, and the
+# generated file defines them (and its helpers) without including its header.
 $(GNC_OBJDIR)/tscvx_model.o: $(GEN_DIR)/tscvx_model.c
 	@mkdir -p $(GNC_OBJDIR)
-	$(CC) $(GNC_CFLAGS) -Wno-unused-parameter -c $< -o $@
+	$(CC) $(GNC_CFLAGS) -Wno-unused-parameter -Wno-missing-prototypes -c $< -o $@
 
 $(GNC_OBJDIR)/%.o: c_runtime/guidance/%.c $(GNC_HDRS) $(GEN_DIR)/tscvx_model.h
 	@mkdir -p $(GNC_OBJDIR)

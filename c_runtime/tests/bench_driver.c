@@ -15,12 +15,18 @@
 
 #include "tscvx_socp.h"
 
+/* Every buffer read, to free at the end (the problem's arrays are const in tscvx_data). */
+static void *owned[32];
+static size_t n_owned;
+
 static void *rd(FILE *f, size_t count, size_t size) {
     void *p = malloc(count * size + 8);
-    if (p == NULL || fread(p, size, count, f) != count) {
+    if (p == NULL || fread(p, size, count, f) != count ||
+        n_owned == sizeof owned / sizeof owned[0]) {
         fprintf(stderr, "bench_driver: short file\n");
         exit(2);
     }
+    owned[n_owned++] = p;
     return p;
 }
 
@@ -90,8 +96,6 @@ int main(int argc, char **argv) {
            (int)s, tscvx_solve_status_message(s), (int)info.iterations, (int)info.factorizations, info.pcost, 1e3 * best,
            narena, (int)info.kkt_dim, (int)info.kkt_nnz, (int)info.factor_nnz, (int)info.warm_started);
     free(arena);
-    const void *bufs[] = {d.q, d.Pp, d.Pi, d.Px, d.c,  d.Ap, d.Ai, d.Ax, d.b,
-                          d.Gp, d.Gi, d.Gx, d.h, wx, wy, wz, ws_};
-    for (size_t i = 0; i < sizeof bufs / sizeof bufs[0]; i++) free((void *)bufs[i]);
+    for (size_t i = 0; i < n_owned; i++) free(owned[i]);
     return 0;
 }

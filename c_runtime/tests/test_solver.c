@@ -91,9 +91,8 @@ typedef struct {
 static void check_scaled(const scaled_case *k, const char *name) {
     tscvx_float c[4], b[2], h[9], x1[4], x[4];
     tscvx_info info;
-    tscvx_data d = {k->n, k->p, k->m, NULL, NULL, NULL, c, (tscvx_int *)k->Ap, (tscvx_int *)k->Ai,
-                    (tscvx_float *)k->Ax, b, (tscvx_int *)k->Gp, (tscvx_int *)k->Gi,
-                    (tscvx_float *)k->Gx, h, k->l, k->nsoc, (tscvx_int *)k->q};
+    tscvx_data d = {k->n, k->p, k->m, NULL, NULL, NULL, c,     k->Ap,   k->Ai,
+                    k->Ax, b,    k->Gp, k->Gi, k->Gx, h,    k->l, k->nsoc, k->q};
     const double scales[] = {1e8, 1e10};
     memcpy(c, k->c, sizeof c), memcpy(b, k->b, sizeof b), memcpy(h, k->h, sizeof h);
     CHECK(solve(&d, x1, &info) == TSCVX_SOLVED, "%s: unscaled status %d", name, (int)info.status);
