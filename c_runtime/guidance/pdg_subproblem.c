@@ -222,6 +222,10 @@ static int emit_boundary(const emit_ctx *c, int row, int roll_free)
     if (c->vals) {
         pdg_initial_state(c->v->scn, x0);
         pdg_x_final_target(c->v->scn, xf);
+    } else { /* not read; set so that no path reads an unset value */
+        for (i = 0; i < NX; ++i) {
+            x0[i] = xf[i] = 0.0;
+        }
     }
     for (i = 0; i < NX; ++i) {
         put(c->e, row + i, XI(0, i), 1.0);
