@@ -206,12 +206,48 @@ static int network_mask(void *ctx, int k, unsigned char *mask, int n)
     return 1;
 }
 
+/* Every input of pdg_solve_tscvx, checked before any inference; the warm start's radius into
+ * *warm_eta. 0, or -1 with the message in res. */
+static int check_tscvx_call(const pdg_workspace *ws, const pdg_scenario *s,
+                            const pdg_tscvx_options *o, pdg_result *res, double *warm_eta)
+{
+    if (!o) {
+        snprintf(res->message, PDG_MESSAGE_LEN, "nets: the T-SCvx options must be given");
+        return -1;
+    }
+    if (!res->x || !res->u) {
+        snprintf(res->message, PDG_MESSAGE_LEN, "result arrays x and u must be given");
+        return -1;
+    }
+    if (pdg_check_workspace_scenario(ws, s, res->message) ||
+        (o->solution && check_net(o->solution, TSCVX_NN_KIND_SOLUTION, &s->params, res->message)) ||
+        (o->constraint &&
+         check_net(o->constraint, TSCVX_NN_KIND_CONSTRAINT, &s->params, res->message))) {
+        return -1;
+    }
+    /* 0 stands for Table 1's radius, which the settings' bounds must admit when it is used */
+    *warm_eta = o->eta_init == 0.0 ? PDG_TSCVX_ETA_INIT : o->eta_init;
+    if ((o->eta_init != 0.0 || o->solution) &&
+        !(*warm_eta >= ws->st.eta_lb && *warm_eta <= ws->st.eta_ub)) {
+        snprintf(res->message, PDG_MESSAGE_LEN,
+                 "eta_init: must be 0 (Table 1's %g) or within [eta_lb, eta_ub] = [%g, %g], got "
+                 "%.17g%s",
+                 PDG_TSCVX_ETA_INIT, ws->st.eta_lb, ws->st.eta_ub, o->eta_init,
+                 o->eta_init == 0.0 ? " (Table 1's radius is outside the settings' bounds)" : "");
+        return -1;
+    }
+    return 0;
+}
+
+/* Paper Algorithm 2 on board: the solution network's warm start (with the reduced radius),
+ * the constraint network's mask at every iteration, and the SCvx loop with its
+ * full-constraint guard. */
 pdg_status pdg_solve_tscvx(pdg_workspace *ws, const pdg_scenario *s,
                            const pdg_tscvx_options *o, pdg_result *res, pdg_tscvx_report *rep)
 {
     pdg_options opt;
     mask_ctx mc;
-    double eta, warm_eta;
+    double eta, warm_eta = 0.0;
     pdg_status status;
     int N;
 
@@ -221,33 +257,10 @@ pdg_status pdg_solve_tscvx(pdg_workspace *ws, const pdg_scenario *s,
     if (pdg_result_begin(ws, res) != 0) {
         return PDG_INVALID_INPUT;
     }
-    if (!o) {
-        snprintf(res->message, PDG_MESSAGE_LEN, "nets: the T-SCvx options must be given");
-        return PDG_INVALID_INPUT;
-    }
-    if (!res->x || !res->u) {
-        snprintf(res->message, PDG_MESSAGE_LEN, "result arrays x and u must be given");
+    if (check_tscvx_call(ws, s, o, res, &warm_eta) != 0) {
         return PDG_INVALID_INPUT;
     }
     N = ws->N;
-    /* every input checked before any inference */
-    if (pdg_check_workspace_scenario(ws, s, res->message) ||
-        (o->solution && check_net(o->solution, TSCVX_NN_KIND_SOLUTION, &s->params, res->message)) ||
-        (o->constraint &&
-         check_net(o->constraint, TSCVX_NN_KIND_CONSTRAINT, &s->params, res->message))) {
-        return PDG_INVALID_INPUT;
-    }
-    /* 0 stands for Table 1's radius, which the settings' bounds must admit when it is used */
-    warm_eta = o->eta_init == 0.0 ? PDG_TSCVX_ETA_INIT : o->eta_init;
-    if ((o->eta_init != 0.0 || o->solution) &&
-        !(warm_eta >= ws->st.eta_lb && warm_eta <= ws->st.eta_ub)) {
-        snprintf(res->message, PDG_MESSAGE_LEN,
-                 "eta_init: must be 0 (Table 1's %g) or within [eta_lb, eta_ub] = [%g, %g], got "
-                 "%.17g%s",
-                 PDG_TSCVX_ETA_INIT, ws->st.eta_lb, ws->st.eta_ub, o->eta_init,
-                 o->eta_init == 0.0 ? " (Table 1's radius is outside the settings' bounds)" : "");
-        return PDG_INVALID_INPUT;
-    }
     memset(&opt, 0, sizeof opt);
     opt.clock_s = o->clock_s;
     memset(&mc, 0, sizeof mc);
