@@ -146,21 +146,36 @@ def solve_clarabel(
     return _clarabel_solution(sol, time.perf_counter() - t0)
 
 
-class ClarabelSession:
-    """Clarabel for a sequence of problems of one sparsity pattern (what SCvx solves).
+def same_pattern(a: ConicProblem, b: ConicProblem) -> bool:
+    """Whether b has a's cones and the sparsity pattern of its A and P (numbers aside)."""
+    if a.cones != b.cones or a.A.shape != b.A.shape or (a.P is None) != (b.P is None):
+        return False
+    pairs = [(a.A, b.A)] if a.P is None else [(a.A, b.A), (a.P, b.P)]
+    for M1, M2 in pairs:
+        C1, C2 = sp.csc_matrix(M1), sp.csc_matrix(M2)
+        if not (np.array_equal(C1.indptr, C2.indptr) and np.array_equal(C1.indices, C2.indices)):
+            return False
+    return True
 
-    The first solve sets Clarabel up (ordering, symbolic factorization); later solves only
-    write the new numbers of P, q, A and b into it.
+
+class ClarabelSession:
+    """Clarabel for a sequence of problems (what SCvx solves).
+
+    The first solve sets Clarabel up (ordering, symbolic factorization); later solves of the
+    same sparsity pattern only write the new numbers of P, q, A and b into it, and a problem
+    of another pattern gets a new set-up (before 26 Nov its numbers were written into the old
+    pattern: the wrong problem, solved without a word).
     """
 
     def __init__(self, tol: float = 1e-9, max_iter: int = 200) -> None:
         self.tol, self.max_iter = tol, max_iter
         self._solver: object | None = None
+        self._prob: ConicProblem | None = None
 
     def solve(self, prob: ConicProblem, warm: ConicSolution | None = None) -> ConicSolution:
         """``warm`` is ignored: Clarabel has no warm start (the reference starts cold)."""
         del warm
-        if self._solver is None:
+        if self._solver is None or self._prob is None or not same_pattern(self._prob, prob):
             settings = _clarabel_settings(self.tol, self.max_iter, False)
             self._solver = clarabel_solver(prob, settings)
         else:
@@ -168,6 +183,7 @@ class ClarabelSession:
             if prob.P is not None:
                 new["P"] = sp.csc_matrix(prob.P).data
             self._solver.update(**new)  # type: ignore[attr-defined]
+        self._prob = prob
         t0 = time.perf_counter()
         sol = self._solver.solve()  # type: ignore[attr-defined]
         return _clarabel_solution(sol, time.perf_counter() - t0)

@@ -41,7 +41,7 @@ from typing import TypeVar
 import numpy as np
 import scipy.sparse as sp
 
-from guidance.conic import ConeKind, ConicProblem, ConicSolution, Status
+from guidance.conic import ConeKind, ConicProblem, ConicSolution, Status, same_pattern
 
 _LIB_ENV = "TSCVX_LIB"
 _LIB_DEFAULT = Path(__file__).resolve().parents[1] / "build" / "libtscvx.so"
@@ -584,17 +584,6 @@ class Solver:
         )
 
 
-def _same_pattern(a: ConicProblem, b: ConicProblem) -> bool:
-    if a.cones != b.cones or a.A.shape != b.A.shape or (a.P is None) != (b.P is None):
-        return False
-    A1, A2 = sp.csc_matrix(a.A), sp.csc_matrix(b.A)
-    same = np.array_equal(A1.indptr, A2.indptr) and np.array_equal(A1.indices, A2.indices)
-    if same and a.P is not None:
-        P1, P2 = sp.csc_matrix(a.P), sp.csc_matrix(b.P)
-        same = np.array_equal(P1.indptr, P2.indptr) and np.array_equal(P1.indices, P2.indices)
-    return bool(same)
-
-
 class Session:
     """A sequence of problems (what SCvx solves): one workspace per sparsity pattern, later
     problems of the same pattern only update the numbers (no new symbolic work)."""
@@ -609,7 +598,7 @@ class Session:
     def solve(self, prob: ConicProblem, warm: ConicSolution | None = None) -> ConicSolution:
         """Solve ``prob``; ``warm``, a solution of a problem of the same size, is where the
         interior-point method starts (Solver.warm_start)."""
-        if self.solver is None or not _same_pattern(self.solver.prob, prob):
+        if self.solver is None or not same_pattern(self.solver.prob, prob):
             try:
                 self.solver = Solver(prob, **self.settings)
             except InvalidProblemError as err:

@@ -11,6 +11,7 @@ from socp_problems import random_feasible
 
 from guidance import csocp
 from guidance.conic import ConicProblem, solve_clarabel
+from guidance.conic import session as conic_session
 
 
 def small_soc() -> ConicProblem:
@@ -165,6 +166,23 @@ def test_session_reuses_the_workspace() -> None:
         assert sol.status == "solved"
         assert abs(sol.obj - ref.obj) <= 1e-6 * max(1, abs(ref.obj))
     assert session.setups == 1
+
+
+@pytest.mark.parametrize("backend", ["clarabel", "c"])
+def test_a_session_given_another_pattern_solves_that_problem(backend: str) -> None:
+    """A session fed a problem whose A has another pattern (same size, same number of
+    entries) solves that problem, as a fresh solve does; the Clarabel session used to write
+    the new numbers into the old pattern and return the answer of another problem."""
+    q, b = np.array([1.0, 2.0]), np.array([-1.0, -3.0])  # min x1 + 2 x2, rows >= (1, 3)
+    diag = sp.csc_matrix(np.array([[-1.0, 0.0], [0.0, -1.0]]))  # x1 >= 1, x2 >= 3
+    anti = sp.csc_matrix(np.array([[0.0, -1.0], [-1.0, 0.0]]))  # x2 >= 1, x1 >= 3
+    session = conic_session(backend)
+    for A, x in ((diag, [1.0, 3.0]), (anti, [3.0, 1.0]), (diag, [1.0, 3.0])):
+        prob = ConicProblem(P=None, q=q, A=A, b=b, cones=[("nonneg", 2)])
+        sol = session.solve(prob)
+        assert sol.status == "solved"
+        assert np.allclose(sol.x, x, atol=1e-7)
+        assert np.allclose(sol.x, solve_clarabel(prob).x, atol=1e-7)
 
 
 def test_threads_sharing_a_solver_or_a_session_take_turns() -> None:

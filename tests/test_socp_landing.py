@@ -9,7 +9,7 @@ from test_socp_random import OBJ_RTOL, RES_TOL, cone_violation, residuals
 
 from guidance import csocp
 from guidance.bench_socp import lcvx_3dof
-from guidance.conic import solve_clarabel
+from guidance.conic import same_pattern, solve_clarabel
 
 scvx = pytest.importorskip("guidance.scvx")
 catalog = pytest.importorskip("guidance.catalog")
@@ -35,7 +35,7 @@ def test_landing_subproblems_match_clarabel(subproblems) -> None:
         for start, solver in solvers.items():
             # one workspace per scenario: later subproblems reuse it through update() whenever
             # the sparsity is unchanged (what the flight SCvx loop does)
-            if solver is None or not _same_pattern(solver.prob, prob):
+            if solver is None or not same_pattern(solver.prob, prob):
                 solver = solvers[start] = csocp.Solver(prob)
             else:
                 assert solver.update(q=prob.q, A_values=prob.A.data, b=prob.b) == 0
@@ -61,16 +61,6 @@ def _check(name, k, prob, sol, ref, solver) -> None:
         assert abs(sol.obj - ref.obj) <= OBJ_RTOL * max(1.0, abs(ref.obj)), (name, k)
         assert cone_violation(prob.cones, sol.s) <= 1e-9 * (1 + abs(sol.s).max())
     assert solver.arena_bytes <= 4 * 2**20
-
-
-def _same_pattern(a, b) -> bool:
-    return (
-        a.cones == b.cones
-        and a.A.shape == b.A.shape
-        and (a.A.indptr == b.A.indptr).all()
-        and (a.A.indices == b.A.indices).all()
-        and (a.P is None) == (b.P is None)
-    )
 
 
 def test_landing_kkt_methods_agree() -> None:
