@@ -36,10 +36,11 @@ import numpy as np
 
 from guidance.csocp import SOLVE_STATUS
 from guidance.errors import InputError
+from guidance.guess import checked_guess
 from guidance.model import param_vector, pattern_index
 from guidance.params import NC, NU, NX, Params, Scenario, SCvxSettings
 from guidance.scenario import ScenarioError
-from guidance.scvx import IterationRecord, SCvxResult
+from guidance.scvx import IterationRecord, SCvxResult, mask_bits, mask_table
 from guidance.tscvx import REDUCED_ETA_INIT
 
 LIB_PATH = Path(__file__).resolve().parent.parent / "build" / "libtscvx_gnc.so"
@@ -174,8 +175,8 @@ def c_params(p: Params) -> _Params:
     cp = _Params()
     for f in dataclasses.fields(Params):
         v = getattr(p, f.name)
-        if isinstance(v, tuple):
-            _fill(getattr(cp, f.name), v, f.name)
+        if isinstance(v, tuple | list | np.ndarray):  # a vector (a Params may hold arrays)
+            _fill(getattr(cp, f.name), np.asarray(v, dtype=float).reshape(-1), f.name)
         elif f.name in ("final_roll_free", "N"):
             setattr(cp, f.name, int(v))
         else:
@@ -202,6 +203,8 @@ def c_settings(settings: SCvxSettings | None = None, **socp: float | int) -> _Se
                 v = getattr(settings, f.name)
                 setattr(st, f.name, int(v) if f.name in _INT_SETTINGS else float(v))
     for k, v in socp.items():
+        if k not in SETTING_FIELDS:  # setattr would make a Python attribute, silently unused
+            raise TypeError(f"unknown setting {k!r} (the settings are {', '.join(SETTING_FIELDS)})")
         setattr(st, k, v)
     return st
 
@@ -314,13 +317,14 @@ def solve_c(
     N = scenario.params.N
     if not 3 <= N <= 400:
         raise ScenarioError("N", f"must lie in [3, 400], got {N}")
+    ran_with = _ran_with(settings, socp)  # a bad setting refused before the solve
     ws = workspace(scenario, settings, **socp)
     cs = c_scenario(scenario)
     opt = _Options()
     keep: list[object] = []  # what opt points at, alive until the call returns
     if guess is not None:
         keep += _point_at_guess(opt, guess, N)
-    callback_errors: list[str] = []
+    callback_errors: list[BaseException] = []
     if masks is not None:
         keep.append(_point_at_masks(opt, masks, N, callback_errors))
     opt.clock_s = _CLOCK
@@ -328,18 +332,18 @@ def solve_c(
     t_start = time.perf_counter()  # the guidance call only (set-up is a one-time init)
     status = lib.pdg_solve(ws.ws, ct.byref(cs), ct.byref(opt), ct.byref(res))
     solve_time = time.perf_counter() - t_start
-    if callback_errors:
-        raise InputError(callback_errors[0])
-    return _collect(ws, status, res, x, u, solve_time, _ran_with(settings, socp))
+    if callback_errors:  # the callback's own exception; one of ours as itself
+        raise _callback_error(callback_errors[0])
+    return _collect(ws, status, res, x, u, solve_time, ran_with)
 
 
 def _point_at_guess(
     opt: _Options, guess: tuple[np.ndarray, np.ndarray, float], N: int
 ) -> list[np.ndarray]:
     """Points opt at the guess; returns the arrays it points at."""
-    gx = np.ascontiguousarray(guess[0], dtype=float).reshape(N, NX)
-    gu = np.ascontiguousarray(guess[1], dtype=float).reshape(N, NU)
-    opt.guess_x, opt.guess_u, opt.guess_t_f = _dptr(gx), _dptr(gu), float(guess[2])
+    x, u, t_f = checked_guess(guess, N)  # the Python loop's check
+    gx, gu = np.ascontiguousarray(x), np.ascontiguousarray(u)
+    opt.guess_x, opt.guess_u, opt.guess_t_f = _dptr(gx), _dptr(gu), t_f
     return [gx, gu]
 
 
@@ -352,37 +356,42 @@ def _point_at_masks(
     """Points opt at the masks, a callback (its exceptions collected in ``errors``) or a table
     of rows of 7N; returns what it points at."""
     if callable(masks):
-        cb = _mask_callback(masks, errors)
+        cb = _mask_callback(masks, N, errors)
         opt.mask_fn = cb
         return cb
-    table = np.ascontiguousarray(np.asarray(masks, dtype=bool), dtype=np.uint8)
-    if table.size != len(masks) * NC * N:
-        raise InputError(f"masks: {table.shape} entries, not rows of 7N = {NC * N}")
-    table = table.reshape(len(masks), NC * N)
+    table = np.ascontiguousarray(np.stack(mask_table(masks, N)), dtype=np.uint8)
     opt.masks = table.ctypes.data_as(_ucp)
-    opt.n_masks = len(masks)
+    opt.n_masks = len(table)
     return table
 
 
-def _mask_callback(fn: Callable[[int], np.ndarray | None], errors: list[str]) -> object:
+def _callback_error(exc: BaseException) -> BaseException:
+    """What solve_c raises for an exception inside the mask callback: an InputError, Ctrl-C
+    or an exit as it is; any other exception as an InputError with its message (the C loop
+    stopped on it)."""
+    if isinstance(exc, InputError) or not isinstance(exc, Exception):
+        return exc
+    return InputError(str(exc) or type(exc).__name__)
+
+
+def _mask_callback(
+    fn: Callable[[int], np.ndarray | None], N: int, errors: list[BaseException]
+) -> object:
     """fn as the C library's mask callback: None answers 0 (the full problem), a mask 1."""
 
     def _cb(ctx, k, out, n):
-        # an exception would be lost inside ctypes (it answers 0, the full problem):
-        # kept, and -1 answered, which stops the solve
+        # An exception cannot cross the C call: ctypes would print and drop it, and hand C an
+        # undefined answer. Any one (Ctrl-C too) is kept and -1 answered, which stops the
+        # solve; solve_c raises it after the call.
         try:
             m = fn(int(k))
             if m is None:
                 return 0
-            m = np.ascontiguousarray(np.asarray(m, dtype=bool).reshape(-1), np.uint8)
-            if m.size != n:
-                raise InputError(
-                    f"masks: iteration {int(k)}'s mask has {m.size} entries, not 7N = {n}"
-                )
-            ct.memmove(out, m.ctypes.data, n)
+            bits = np.ascontiguousarray(mask_bits(m, N, int(k)), np.uint8)
+            ct.memmove(out, bits.ctypes.data, n)
             return 1
-        except Exception as exc:  # reported after the C call
-            errors.append(str(exc) or type(exc).__name__)
+        except BaseException as exc:
+            errors.append(exc)
             return -1
 
     return MASK_FN(_cb)
@@ -563,6 +572,7 @@ def solve_tscvx_c(
     N = scenario.params.N
     if not 3 <= N <= 400:
         raise ScenarioError("N", f"must lie in [3, 400], got {N}")
+    ran_with = _ran_with(settings, socp)  # a bad setting refused before the solve
     sol, con = nets if nets is not None else _nets(models_dir, masks, scenario.params)
     ws = workspace(scenario, settings, **socp)
     cs = c_scenario(scenario)
@@ -580,7 +590,6 @@ def solve_tscvx_c(
         solve_time = time.perf_counter() - t_start
     if status == 4 and res.message.startswith(b"nets: "):
         raise FlightNetsError(res.message.decode())
-    ran_with = _ran_with(settings, socp)
     if status != 4:  # on PDG_INVALID_INPUT no radius was taken; _collect raises the message
         ran_with = ran_with.replace(eta_init=float(rep.eta_init))
     out = _collect(ws, status, res, x, u, solve_time, ran_with)

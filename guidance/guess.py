@@ -15,7 +15,7 @@ import numpy as np
 
 from guidance.errors import InputError
 from guidance.model import dcm_bi_numpy
-from guidance.params import IM, IQ, IR, IV, IW, NX, Scenario
+from guidance.params import IM, IQ, IR, IV, IW, NU, NX, Scenario
 from guidance.verify import checked_trajectory
 
 BLEND_FRACTION = 0.25
@@ -207,6 +207,30 @@ def initial_guess(scenario: Scenario) -> tuple[np.ndarray, np.ndarray, float]:
     u[:, 1] = torque[:, 2] / r_T[0]
     u[:, 2] = -torque[:, 1] / r_T[0]
     return project_guess(scenario, x, u, t_f)
+
+
+def checked_guess(guess: object, N: int) -> tuple[np.ndarray, np.ndarray, float]:
+    """A guess (x, u, t_f) as the SCvx loops take it, used as given: x N x 14, u N x 3 and t_f
+    one positive number, all finite (the C library's words for the last); InputError
+    otherwise. Both loops (this package's and the C library's through guidance.cguidance)
+    check a given guess through it."""
+    if not isinstance(guess, tuple | list) or len(guess) != 3:
+        raise InputError("guess: give (x, u, t_f)")
+    arrays = []
+    for name, value, cols in (("x", guess[0], NX), ("u", guess[1], NU)):
+        a = np.asarray(value)
+        if a.dtype.kind not in "iuf" or a.shape != (N, cols):
+            raise InputError(
+                f"guess: {name} is {a.shape} {a.dtype} values, not {N} x {cols} numbers"
+            )
+        arrays.append(a.astype(float))
+    tf = np.asarray(guess[2])
+    if tf.dtype.kind not in "iuf" or tf.size != 1:
+        raise InputError(f"guess: t_f must be one number, got {guess[2]!r}")
+    x, u, t_f = arrays[0], arrays[1], float(tf.reshape(-1)[0])
+    if not (is_finite_guess(x, u, t_f) and t_f > 0.0):
+        raise InputError("guess: x, u and t_f must be finite and t_f positive")
+    return x, u, t_f
 
 
 def is_finite_guess(x: np.ndarray, u: np.ndarray, t_f: float) -> bool:

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import sys
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 
@@ -180,8 +181,8 @@ class SCvxSettings:
     def __post_init__(self) -> None:
         """The ranges the flight library checks too, in its order (pdg_check_settings in
         pdg_scvx.c): with two bad settings both name the same one."""
-        for f in dataclasses.fields(self):
-            _check_type(f.name, f.type, getattr(self, f.name))
+        for f in dataclasses.fields(self):  # numpy scalars stored as the Python numbers
+            object.__setattr__(self, f.name, _checked_type(f.name, f.type, getattr(self, f.name)))
         if self.discretization not in DISCRETIZATIONS:
             raise InputError(
                 f"discretization must be one of {', '.join(DISCRETIZATIONS)}, "
@@ -220,14 +221,22 @@ class SCvxSettings:
         return dataclasses.replace(self, **changes)
 
 
-def _check_type(name: str, kind: str, value: object) -> None:
-    """A setting of the type its field declares (``kind``: the annotation), finite if real."""
-    if kind == "bool" and not isinstance(value, bool):
-        raise InputError(f"{name} must be True or False, got {value!r}")
-    if kind == "float" and (isinstance(value, bool) or not isinstance(value, int | float)):
-        raise InputError(f"{name} must be a number, got {value!r}")
-    if isinstance(value, float) and not math.isfinite(value):
-        raise InputError(f"{name} must be finite, got {value}")
+def _checked_type(name: str, kind: str, value: object) -> object:
+    """A setting of the type its field declares (``kind``: the annotation; numpy scalars
+    taken as the Python numbers they stand for), finite if real; as that Python type."""
+    if isinstance(value, np.generic):
+        value = value.item()
+    if kind == "bool":
+        if not isinstance(value, bool):
+            raise InputError(f"{name} must be True or False, got {value!r}")
+    elif kind == "float":
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            raise InputError(f"{name} must be a number, got {value!r}")
+        if isinstance(value, int) and abs(value) > sys.float_info.max:
+            raise InputError(f"{name} must be finite, got an integer of {len(str(value))} digits")
+        if not math.isfinite(value):
+            raise InputError(f"{name} must be finite, got {value}")
+    return value
 
 
 DEFAULT_PARAMS = Params()

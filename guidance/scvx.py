@@ -22,7 +22,7 @@ from guidance import conic
 from guidance.conic import ConicProblem, ConicSolution
 from guidance.constraints import constraint_scales, path_constraint_values, tight_mask
 from guidance.errors import InputError, ModelEvaluationError
-from guidance.guess import initial_guess, is_finite_guess
+from guidance.guess import checked_guess, initial_guess
 from guidance.model import discretize, vehicle_pattern
 from guidance.params import IM, NC, NU, NX, Scenario, SCvxSettings
 from guidance.subproblem import (
@@ -213,6 +213,8 @@ class SCvxSolver:
         rejects).
         """
         t_start = time.perf_counter()
+        if masks is not None and not callable(masks):
+            masks = mask_table(masks, self.p.N)
         s = self._start(guess)
         if s is None:
             # No trajectory to return (the C library leaves x, u as given and t_f NaN).
@@ -228,10 +230,8 @@ class SCvxSolver:
     def _start(self, guess: tuple[np.ndarray, np.ndarray, float] | None) -> _LoopState | None:
         """The iterate at the guess (the initial guess when none is given), with the scaling
         it sets; None when the model cannot be evaluated there."""
-        if guess is not None:  # used as given; the C library refuses the same (pdg_solve)
-            x, u, t_f = np.asarray(guess[0], float), np.asarray(guess[1], float), float(guess[2])
-            if not (is_finite_guess(x, u, t_f) and t_f > 0.0):
-                raise InputError("guess: x, u and t_f must be finite and t_f positive")
+        if guess is not None:  # used as given (not projected), as pdg_solve does
+            x, u, t_f = checked_guess(guess, self.p.N)
         else:
             x, u, t_f = initial_guess(self.scn)
         self.sc = Scaling.for_scenario(self.scn, t_f)
@@ -252,8 +252,8 @@ class SCvxSolver:
         (converged, failed or stalled)."""
         st = self.st
         # 1. mask (T-SCvx): the prediction, plus what the full-constraint guard put back
-        pred = _mask_for(masks, s.k + 1)
-        mask = None if pred is None else np.asarray(pred, dtype=bool) | s.forced
+        pred = _mask_for(masks, s.k + 1, self.p.N)
+        mask = None if pred is None else pred | s.forced
         tpl = self.template(mask)
         # 2. the convex subproblem about z with radius eta; 3. its solution on the full problem
         prob, sol = self._solve_subproblem(s, tpl)
@@ -493,11 +493,40 @@ def _failed_record(k: int, J: float, eta: float, sol: conic.ConicSolution) -> It
     )
 
 
-def _mask_for(masks: _Masks, k: int) -> np.ndarray | None:
+def mask_bits(mask: object, N: int, k: int) -> np.ndarray:
+    """Iteration k's mask as 7N booleans (nonzero = keep): a vector of 7N entries or an N x 7
+    array (node-major either way); InputError otherwise. Both loops (this one and the C
+    library's through guidance.cguidance) read masks through it."""
+    a = np.asarray(mask)
+    if a.shape not in ((NC * N,), (N, NC)) or a.dtype.kind not in "biuf":
+        raise InputError(
+            f"masks: iteration {k}'s mask is {a.shape} {a.dtype} values, not 7N = {NC * N} "
+            f"numbers (or N x 7 = {N} x {NC})"
+        )
+    return a.reshape(-1) != 0
+
+
+def mask_table(masks: Sequence[object], N: int) -> list[np.ndarray]:
+    """A table of masks (row k - 1 for iteration k, the last one repeating) checked row by
+    row. One lone mask is refused: read as a table it would be 7N masks of one entry each."""
+    lone = isinstance(masks, np.ndarray) and (masks.ndim == 1 or masks.shape == (N, NC))
+    if lone:
+        raise InputError(
+            f"masks: one mask of shape {masks.shape}; give a table of masks, one per "
+            "iteration ([mask] for the same mask at every iteration), or a function k -> mask"
+        )
+    if len(masks) == 0:
+        raise InputError("masks: an empty table; give at least one mask, or None")
+    return [mask_bits(m, N, k) for k, m in enumerate(masks, start=1)]
+
+
+def _mask_for(masks: _Masks, k: int, N: int) -> np.ndarray | None:
+    """Iteration k's mask (checked), None for the full problem."""
     if masks is None:
         return None
     if callable(masks):
-        return masks(k)
+        m = masks(k)
+        return None if m is None else mask_bits(m, N, k)
     return masks[min(k, len(masks)) - 1]
 
 

@@ -19,6 +19,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from guidance.errors import InputError
 from guidance.guess import is_finite_guess, project_guess
 from guidance.params import Scenario, SCvxSettings
 from guidance.scvx import SCvxResult, SCvxSolver
@@ -26,7 +27,7 @@ from guidance.scvx import SCvxResult, SCvxSolver
 REDUCED_ETA_INIT = 0.01  # Table 1: eta_reduced,init
 
 SolutionPredictor = Callable[[Scenario], tuple[np.ndarray, np.ndarray, float]]
-MaskPredictor = Callable[[Scenario, int], np.ndarray]
+MaskPredictor = Callable[[Scenario, int], np.ndarray | None]  # None: the full problem
 
 
 def solve_tscvx(
@@ -61,10 +62,13 @@ def solve_tscvx(
     masks = None
     if predict_mask is not None:
 
-        def masks(k: int) -> np.ndarray:
-            bits = np.asarray(predict_mask(scenario, k))
+        def masks(k: int) -> np.ndarray | None:
+            bits = predict_mask(scenario, k)
+            if bits is None:  # the full problem, as in the C loop
+                return None
+            bits = np.asarray(bits)
             if bits.dtype != bool and not np.isin(bits, (0, 1)).all():
-                raise ValueError("predict_mask must give 0/1 bits (threshold probabilities first)")
+                raise InputError("predict_mask must give 0/1 bits (threshold probabilities first)")
             return bits.astype(bool)
 
     solver = SCvxSolver(scenario, st, backend=backend, log=log)

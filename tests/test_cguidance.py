@@ -992,9 +992,90 @@ def test_a_mask_callback_that_fails_or_answers_the_wrong_size_stops_the_solve() 
     def broken(k: int) -> np.ndarray:
         raise RuntimeError("network down")
 
-    with pytest.raises(InputError, match=r"iteration 1's mask has 349 entries, not 7N = 350"):
+    with pytest.raises(InputError, match=r"iteration 1's mask is \(349,\) bool values, not 7N"):
         cguidance.solve_c(SCENARIOS["default"], masks=short)
     with pytest.raises(InputError, match="network down"):
         cguidance.solve_c(SCENARIOS["default"], masks=broken)
-    with pytest.raises(InputError, match="not rows of 7N = 350"):
+    with pytest.raises(InputError, match=r"iteration 1's mask is \(349,\) bool values"):
         cguidance.solve_c(SCENARIOS["default"], masks=np.ones((2, NC * N - 1), bool))
+
+
+# ---- inputs of the two loops (adversarial review, 26 Nov) --------------------------------
+
+
+def _loop(which: str) -> Callable[..., SCvxResult]:
+    """One landing solved by the C loop or the Python loop (on the C SOCP), two iterations."""
+    st = SCvxSettings(iter_max=2)
+    if which == "C":
+        return functools.partial(cguidance.solve_c, SCENARIOS["default"], st)
+    return SCvxSolver(SCENARIOS["default"], st, backend="c").solve
+
+
+@pytest.mark.parametrize("which", ["C", "Python"])
+def test_masks_of_the_wrong_shape_are_refused_by_both_loops(which: str) -> None:
+    """A lone 7N mask ([mask] meant) ran in the Python loop with bit k - 1 as the whole mask of
+    iteration k (0 of 350 constraints kept at k = 1); short, ragged and empty tables ended in
+    numpy's IndexError or broadcasting errors there, and a transposed 7 x N mask was read as
+    another mask. Both loops now refuse each by name, and take an N x 7 mask as its 7N vector."""
+    N = Params().N
+    m = np.ones(NC * N, bool)
+    m[0] = False
+    run = _loop(which)
+    for masks, words in (
+        (m, "one mask of shape"),
+        ([], "empty table"),
+        ([m[:-1]], r"iteration 1's mask is \(349,\)"),
+        ([m, m[:10]], r"iteration 2's mask is \(10,\)"),
+        ([m.reshape(N, NC).T], r"iteration 1's mask is \(7, 50\)"),
+        (lambda k: m[:-1], r"iteration 1's mask is \(349,\)"),
+    ):
+        with pytest.raises(InputError, match=words):
+            run(masks=masks)
+    flat, grid = run(masks=[m]), run(masks=[m.reshape(N, NC)])
+    assert (flat.iterations, flat.m_f) == (grid.iterations, grid.m_f)
+
+
+@pytest.mark.parametrize("which", ["C", "Python"])
+def test_a_guess_of_the_wrong_shape_is_refused_by_both_loops(which: str) -> None:
+    """A transposed u (3 x N) was read by the C loop as N x 3 numbers of another thrust and
+    solved: a different plan without a word; a transposed or flattened x ended in a numpy
+    error or a misleading solver_error. Both loops now check a guess as guidance.solve does
+    (t_f any one number), and a well-formed one in another memory order is the same guess."""
+    x, u, t_f = initial_guess(SCENARIOS["default"])
+    run = _loop(which)
+    for guess, words in (
+        ((x, u.T, t_f), r"u is \(3, 50\)"),
+        ((x.T, u, t_f), r"x is \(14, 50\)"),
+        ((x.ravel(), u, t_f), r"x is \(700,\)"),
+        ((x, u), "give \\(x, u, t_f\\)"),
+        ((x, u, "3.0"), "t_f must be one number"),
+    ):
+        with pytest.raises(InputError, match=words):
+            run(guess=guess)
+    plain = run(guess=(x, u, t_f))
+    other = run(guess=(np.asfortranarray(x), np.asfortranarray(u), np.array([t_f])))
+    assert np.array_equal(plain.x, other.x)
+
+
+def test_ctrl_c_in_a_mask_callback_stops_the_c_solve_as_ctrl_c() -> None:
+    """Ctrl-C inside the callback used to be printed and dropped by ctypes, which handed the C
+    loop an undefined answer (the solve then stopped on a random number, or went on); now the
+    callback answers -1 and solve_c raises the KeyboardInterrupt after the call."""
+
+    def interrupted(k: int) -> np.ndarray:
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        _loop("C")(masks=interrupted)
+
+
+def test_solve_c_refuses_an_unknown_setting_and_takes_params_holding_arrays() -> None:
+    """A misspelled keyword (itr_max) was set as a plain attribute of the ctypes structure and
+    ignored; a Params whose vectors are numpy arrays or lists made c_params raise TypeError."""
+    with pytest.raises(TypeError, match="unknown setting 'itr_max'"):
+        cguidance.solve_c(SCENARIOS["default"], itr_max=2)
+    st = SCvxSettings(iter_max=2)
+    plain = cguidance.solve_c(Scenario(), st)
+    for r_f in (np.zeros(3), [0.0, 0.0, 0.0]):
+        other = cguidance.solve_c(Scenario(params=Params(r_f=r_f)), st)  # type: ignore[arg-type]
+        assert np.array_equal(plain.x, other.x)

@@ -15,6 +15,7 @@ import pytest
 from guidance import conic
 from guidance.catalog import SCENARIOS
 from guidance.constraints import TIGHT_DUAL_TOL, constraint_scales, tight_mask
+from guidance.errors import InputError
 from guidance.guess import initial_guess
 from guidance.model import discretize
 from guidance.params import IM, NC, NX, Params, Scenario, SCvxSettings
@@ -213,3 +214,18 @@ def test_masked_mass_constraint_has_no_rows() -> None:
     A = tpl.assemble(disc, z, 1.0, 500.0, scn, sc).A.tocsr()
     row = A[tpl.r_mass].toarray().ravel()
     assert np.flatnonzero(row).tolist() == [tpl.lay.x_index(3, IM)]
+
+
+def test_settings_take_numpy_scalars_and_refuse_numbers_beyond_a_float() -> None:
+    """numpy scalars were refused ("iter_max must be an integer within 1..100, got
+    np.int64(5)") while scenarios take them; an integer beyond a float (lam = 10**400) passed
+    and crashed each backend differently (OverflowError, scipy's dtype object). Now the
+    scalars are taken as the Python numbers they stand for, and such integers are refused."""
+    st = SCvxSettings(iter_max=np.int64(5), eta_init=np.float32(0.5), socp_warm_start=np.bool_(1))
+    assert st == SCvxSettings(iter_max=5, eta_init=0.5, socp_warm_start=True)
+    assert (type(st.iter_max), type(st.eta_init), type(st.socp_warm_start)) == (int, float, bool)
+    for name in ("lam", "prox_u", "eta_ub"):
+        with pytest.raises(InputError, match=f"{name} must be finite, got an integer of 401"):
+            SCvxSettings(**{name: 10**400})
+    with pytest.raises(InputError, match="lam must be a number"):
+        SCvxSettings(lam=np.bool_(True))

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from guidance.catalog import SCENARIOS
+from guidance.errors import InputError
 from guidance.params import NC, SCvxSettings
 from guidance.scvx import SCvxResult, SCvxSolver, format_log, solve_scvx
 from guidance.tscvx import solve_tscvx
@@ -246,7 +247,7 @@ def test_a_prediction_off_the_boundary_conditions_is_projected(reference: SCvxRe
 def test_mask_probabilities_are_refused() -> None:
     scenario = SCENARIOS["north"]
     probs = np.full(NC * scenario.params.N, 0.7)
-    with pytest.raises(ValueError, match="0/1 bits"):
+    with pytest.raises(InputError, match="0/1 bits"):
         solve_tscvx(scenario, None, lambda s, k: probs)
 
 
