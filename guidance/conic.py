@@ -42,11 +42,11 @@ class ConicProblem:
 
     @property
     def n(self) -> int:
-        return int(self.q.shape[0])
+        return int(np.shape(self.q)[0])
 
     @property
     def m(self) -> int:
-        return int(self.b.shape[0])
+        return int(np.shape(self.b)[0])
 
 
 @dataclass
@@ -146,16 +146,60 @@ def solve_clarabel(
     return _clarabel_solution(sol, time.perf_counter() - t0)
 
 
-def same_pattern(a: ConicProblem, b: ConicProblem) -> bool:
-    """Whether b has a's cones and the sparsity pattern of its A and P (numbers aside)."""
-    if a.cones != b.cones or a.A.shape != b.A.shape or (a.P is None) != (b.P is None):
-        return False
-    pairs = [(a.A, b.A)] if a.P is None else [(a.A, b.A), (a.P, b.P)]
-    for M1, M2 in pairs:
-        C1, C2 = sp.csc_matrix(M1), sp.csc_matrix(M2)
-        if not (np.array_equal(C1.indptr, C2.indptr) and np.array_equal(C1.indices, C2.indices)):
+def canonical_csc(M: object) -> sp.csc_matrix:
+    """A canonical CSC copy of ``M`` (rows sorted in each column, duplicates summed): the
+    order in which Clarabel takes the values of A and P. ``M`` itself is left as it is."""
+    C = sp.csc_matrix(M, copy=True)
+    C.sum_duplicates()
+    return C
+
+
+def csc_key(M: object) -> tuple[tuple[int, int], np.ndarray, np.ndarray]:
+    """Copies of the shape, indptr and indices of a canonical CSC pattern (anything with those
+    attributes)."""
+    shape = tuple(int(d) for d in M.shape)  # type: ignore[attr-defined]
+    return shape, np.array(M.indptr), np.array(M.indices)  # type: ignore[attr-defined,return-value]
+
+
+@dataclass(frozen=True, eq=False)
+class Pattern:
+    """A private snapshot of what a session compares the next problem with: the sizes, the
+    cones (a tuple copy) and the canonical CSC pattern of A and P (copies), so that a caller
+    who changes or reuses its problem object afterwards changes nothing here."""
+
+    n: int
+    m: int
+    cones: tuple[tuple[object, ...], ...]
+    A: tuple[tuple[int, int], np.ndarray, np.ndarray]
+    P: tuple[tuple[int, int], np.ndarray, np.ndarray] | None
+
+    @classmethod
+    def with_keys(cls, prob: ConicProblem, A: tuple, P: tuple | None) -> Pattern:
+        """``prob``'s snapshot with the csc_key of its A and P (given: the caller has them)."""
+        cones = tuple(tuple(cone) for cone in prob.cones)
+        return cls(n=prob.n, m=prob.m, cones=cones, A=A, P=P)
+
+    @classmethod
+    def of(cls, prob: ConicProblem) -> Pattern:
+        P = None if prob.P is None else csc_key(canonical_csc(prob.P))
+        return cls.with_keys(prob, csc_key(canonical_csc(prob.A)), P)
+
+    def matches(self, other: Pattern | None) -> bool:
+        if other is None or (self.n, self.m, self.cones) != (other.n, other.m, other.cones):
             return False
-    return True
+        if (self.P is None) != (other.P is None):
+            return False
+        pairs = [(self.A, other.A)] if self.P is None else [(self.A, other.A), (self.P, other.P)]
+        return all(
+            k1[0] == k2[0] and np.array_equal(k1[1], k2[1]) and np.array_equal(k1[2], k2[2])
+            for k1, k2 in pairs
+        )
+
+
+def same_pattern(a: ConicProblem, b: ConicProblem) -> bool:
+    """Whether b has a's sizes (len(q), len(b)), cones and the sparsity pattern of its A and P
+    (numbers and storage order aside)."""
+    return Pattern.of(a).matches(Pattern.of(b))
 
 
 class ClarabelSession:
@@ -164,26 +208,32 @@ class ClarabelSession:
     The first solve sets Clarabel up (ordering, symbolic factorization); later solves of the
     same sparsity pattern only write the new numbers of P, q, A and b into it, and a problem
     of another pattern gets a new set-up (before 26 Nov its numbers were written into the old
-    pattern: the wrong problem, solved without a word).
+    pattern: the wrong problem, solved without a word). The pattern is compared with a private
+    snapshot (:class:`Pattern`), and the numbers are written in canonical CSC order whatever
+    the format or storage order of the caller's matrices.
     """
 
     def __init__(self, tol: float = 1e-9, max_iter: int = 200) -> None:
         self.tol, self.max_iter = tol, max_iter
         self._solver: object | None = None
-        self._prob: ConicProblem | None = None
+        self._pattern: Pattern | None = None
 
     def solve(self, prob: ConicProblem, warm: ConicSolution | None = None) -> ConicSolution:
         """``warm`` is ignored: Clarabel has no warm start (the reference starts cold)."""
         del warm
-        if self._solver is None or self._prob is None or not same_pattern(self._prob, prob):
+        A = canonical_csc(prob.A)
+        P = None if prob.P is None else canonical_csc(prob.P)
+        pattern = Pattern.with_keys(prob, csc_key(A), None if P is None else csc_key(P))
+        if self._solver is None or not pattern.matches(self._pattern):
+            self._solver, self._pattern = None, None
             settings = _clarabel_settings(self.tol, self.max_iter, False)
-            self._solver = clarabel_solver(prob, settings)
+            canonical = ConicProblem(P=P, q=prob.q, A=A, b=prob.b, cones=list(pattern.cones))
+            self._solver, self._pattern = clarabel_solver(canonical, settings), pattern
         else:
-            new = {"q": prob.q, "A": prob.A.data, "b": prob.b}
-            if prob.P is not None:
-                new["P"] = sp.csc_matrix(prob.P).data
+            new = {"q": prob.q, "A": A.data, "b": prob.b}
+            if P is not None:
+                new["P"] = P.data
             self._solver.update(**new)  # type: ignore[attr-defined]
-        self._prob = prob
         t0 = time.perf_counter()
         sol = self._solver.solve()  # type: ignore[attr-defined]
         return _clarabel_solution(sol, time.perf_counter() - t0)

@@ -13,6 +13,10 @@ equality constraints ``A_eq x = b_eq``, the nonnegative rows (first) and the sec
     S.update(q=q2, A_values=A2.data, b=b2); S.solve()    # ... new numbers, same sparsity
     session = Session(); session.solve(prob_k)           # SCvx: re-setup only on new patterns
 
+``A_values`` and ``P_values`` are in the caller's value order: ``A.data`` itself for CSC, CSR
+and COO (whatever the storage order), ``scipy.sparse.csc_matrix(A).data`` for other formats.
+A Solver keeps its own copies of the sizes, pattern and numbers it was set up with.
+
 A Solver (and a Session) holds one C workspace. Its calls take turns: threads sharing one
 are served one call at a time (unguarded, two solves at once corrupted the workspace and
 crashed), while solvers in different threads run in parallel (the C call releases the GIL).
@@ -30,6 +34,7 @@ from __future__ import annotations
 
 import ctypes as ct
 import functools
+import operator
 import os
 import threading
 import time
@@ -41,7 +46,7 @@ from typing import TypeVar
 import numpy as np
 import scipy.sparse as sp
 
-from guidance.conic import ConeKind, ConicProblem, ConicSolution, Status, same_pattern
+from guidance.conic import ConeKind, ConicProblem, ConicSolution, Pattern, Status, csc_key
 
 _LIB_ENV = "TSCVX_LIB"
 _LIB_DEFAULT = Path(__file__).resolve().parents[1] / "build" / "libtscvx.so"
@@ -233,7 +238,99 @@ def _dptr(a: np.ndarray | None):
 
 
 class InvalidProblemError(ValueError):
-    """The problem data do not describe a valid conic program (message says why)."""
+    """The problem data (or a setting) do not describe a valid conic program (message says
+    why)."""
+
+
+# ---- the caller's value order and the canonical pattern ------------------------------------
+#
+# The values of a sparse matrix are numbered in "the caller's value order": ``M.data`` itself
+# for CSC, CSR and COO (entry k of M.data is value k, whatever the storage order), and
+# ``scipy.sparse.csc_matrix(M).data`` for any other format (BSR, DIA, LIL, DOK). Set-up takes
+# the initial values in that order, and update() takes new ones in it. Inside, every matrix is
+# canonical CSC (rows sorted in each column); two stored entries at one position are refused.
+
+
+@dataclass(frozen=True)
+class _Numbered:
+    """A sparse matrix's stored entries in canonical CSC, each with the index of its value in
+    the caller's value order."""
+
+    shape: tuple[int, int]
+    indptr: np.ndarray  # canonical CSC (int32)
+    indices: np.ndarray  # canonical CSC (int32)
+    order: np.ndarray  # for each canonical entry, its index in the caller's values
+
+    @property
+    def nnz(self) -> int:
+        return len(self.order)
+
+
+def _positions(M: sp.spmatrix) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Row, column and value of each stored entry of M, in the caller's value order."""
+    if M.format == "coo":
+        return np.asarray(M.row), np.asarray(M.col), np.asarray(M.data)
+    if M.format in ("csc", "csr"):
+        major = np.repeat(np.arange(len(M.indptr) - 1), np.diff(M.indptr))
+        if M.format == "csc":
+            return np.asarray(M.indices), major, np.asarray(M.data)
+        return major, np.asarray(M.indices), np.asarray(M.data)
+    return _positions(sp.csc_matrix(M))
+
+
+def _caller_values(M: sp.spmatrix) -> np.ndarray:
+    """M's values in the caller's value order (a float copy)."""
+    return np.array(_positions(M)[2], dtype=float)
+
+
+def _numbered(M: object, name: str) -> _Numbered:
+    """M's entries numbered in the caller's value order and placed in canonical CSC; M itself
+    is left as it is (nothing is sorted in place)."""
+    if not sp.issparse(M):
+        raise InvalidProblemError(f"{name} must be a scipy sparse matrix, got {type(M).__name__}")
+    rows, cols, _ = _positions(M)
+    rows, cols = rows.astype(np.int64), cols.astype(np.int64)
+    order = np.lexsort((rows, cols))
+    r, c = rows[order], cols[order]
+    twice = np.flatnonzero((np.diff(r) == 0) & (np.diff(c) == 0))
+    if len(twice):
+        at = f"({r[twice[0]]}, {c[twice[0]]})"
+        raise InvalidProblemError(
+            f"duplicate entries in a sparse matrix ({name} stores {at} twice)"
+        )
+    indptr = np.searchsorted(c, np.arange(M.shape[1] + 1))
+    return _Numbered(tuple(M.shape), indptr.astype(np.int32), r.astype(np.int32), order)
+
+
+@dataclass(frozen=True)
+class _Block:
+    """Some rows of A (or all of P) as the C runtime takes them: the canonical CSC pattern and,
+    for each entry, the index of its value in the caller's value order."""
+
+    shape: tuple[int, int]
+    indptr: np.ndarray
+    indices: np.ndarray
+    src: np.ndarray
+
+    @staticmethod
+    def rows_of(num: _Numbered, rows: np.ndarray) -> _Block:
+        index = np.arange(1, num.nnz + 1, dtype=np.int64)  # 1 + canonical index (never 0)
+        T = sp.csc_matrix((index, num.indices, num.indptr), num.shape)
+        sub = sp.csc_matrix(T[rows, :]) if len(rows) else sp.csc_matrix((0, num.shape[1]))
+        sub.sort_indices()
+        src = num.order[sub.data.astype(np.int64) - 1]
+        return _Block(sub.shape, sub.indptr.astype(np.int32), sub.indices.astype(np.int32), src)
+
+    @staticmethod
+    def whole(num: _Numbered) -> _Block:
+        return _Block(num.shape, num.indptr, num.indices, num.order)
+
+    def matrix(self, values: np.ndarray) -> sp.csc_matrix:
+        """The block with these values (the caller's value order), int32 indices."""
+        M = sp.csc_matrix((values[self.src], self.indices.copy(), self.indptr.copy()), self.shape)
+        M.indptr = M.indptr.astype(np.int32)
+        M.indices = M.indices.astype(np.int32)
+        return M
 
 
 @dataclass
@@ -244,30 +341,10 @@ class _Split:
     g_rows: np.ndarray  # original rows of G: nonneg rows first, then the SOC rows
     l: int
     soc: np.ndarray  # SOC dimensions
-    A_src: np.ndarray  # for each A_eq entry, its index in the original A.data
-    G_src: np.ndarray  # for each G entry, its index in the original A.data
-    P_src: np.ndarray | None  # for each canonical P entry, its index in the original P.data
-
-
-def _csc_int(M: sp.csc_matrix) -> sp.csc_matrix:
-    M = sp.csc_matrix(M, copy=True)
-    M.indptr = M.indptr.astype(np.int32)
-    M.indices = M.indices.astype(np.int32)
-    return M
-
-
-def _pattern_of(M: sp.spmatrix) -> sp.csc_matrix:
-    """Copy of M's stored pattern whose values are 1 + the index into M.data (canonical CSC).
-    M itself is left as it is: its index arrays are copied before the sort (sp.csc_matrix
-    of a CSC matrix shares them, and sorting them in place would reorder the caller's rows
-    under its values)."""
-    M = sp.csc_matrix(M)
-    index = np.arange(1, M.nnz + 1, dtype=float)
-    T = sp.csc_matrix((index, M.indices.copy(), M.indptr.copy()), M.shape)
-    T.sum_duplicates()  # sorts; duplicates (if any) merge: refused below
-    if T.nnz != M.nnz:
-        raise InvalidProblemError("duplicate entries in a sparse matrix")
-    return T
+    A: _Numbered  # A's entries
+    Aeq: _Block  # the zero-cone rows of A
+    G: _Block  # the other rows
+    P: _Numbered | None
 
 
 def _split(prob: ConicProblem) -> _Split:
@@ -275,26 +352,41 @@ def _split(prob: ConicProblem) -> _Split:
     A = prob.A
     if not sp.issparse(A) or A.shape != (m, n):
         raise InvalidProblemError(
-            f"A must be a sparse {m} x {n} matrix (len(b) x len(q)), got shape {A.shape}"
+            f"A must be a sparse {m} x {n} matrix (len(b) x len(q)), got shape {np.shape(A)}"
         )
     eq, nonneg, soc_rows, soc = _cone_rows(prob.cones, m)
     eq_rows = np.array(eq, dtype=np.int64)
     g_rows = np.array(nonneg + soc_rows, dtype=np.int64)
-    T = _pattern_of(A)
-    P_src = None
+    A_num = _numbered(A, "A")
+    P_num = None
     if prob.P is not None:
         if not sp.issparse(prob.P) or prob.P.shape != (n, n):
             raise InvalidProblemError(f"P must be a sparse {n} x {n} matrix")
-        P_src = _pattern_of(prob.P).data.astype(np.int64) - 1
+        P_num = _numbered(prob.P, "P")
     return _Split(
         eq_rows=eq_rows,
         g_rows=g_rows,
         l=len(nonneg),
         soc=np.array(soc, dtype=np.int32),
-        A_src=_sources_of_rows(T, eq_rows),
-        G_src=_sources_of_rows(T, g_rows),
-        P_src=P_src,
+        A=A_num,
+        Aeq=_Block.rows_of(A_num, eq_rows),
+        G=_Block.rows_of(A_num, g_rows),
+        P=P_num,
     )
+
+
+def _cone_dim(kind: object, dim: object) -> int:
+    """A cone's dimension: a whole number >= 1."""
+    try:
+        d = int(dim)  # type: ignore[call-overload]
+        whole = d == dim
+    except (TypeError, ValueError):
+        whole = False
+    if not whole:
+        raise InvalidProblemError(f"cone ({kind}, {dim!r}): dimension must be a whole number")
+    if d < 1:
+        raise InvalidProblemError(f"cone ({kind}, {d}): dimension must be >= 1")
+    return d
 
 
 def _cone_rows(
@@ -308,9 +400,7 @@ def _cone_rows(
     soc: list[int] = []
     row = 0
     for kind, dim in cones:
-        dim = int(dim)
-        if dim < 1:
-            raise InvalidProblemError(f"cone ({kind}, {dim}): dimension must be >= 1")
+        dim = _cone_dim(kind, dim)
         if row + dim > m:
             raise InvalidProblemError(
                 f"cones cover more rows ({row + dim}) than A and b have ({m})"
@@ -329,14 +419,6 @@ def _cone_rows(
     if row != m:
         raise InvalidProblemError(f"cones cover {row} rows but A and b have {m}")
     return eq, nonneg, soc_rows, soc
-
-
-def _sources_of_rows(T: sp.csc_matrix, rows: np.ndarray) -> np.ndarray:
-    """For each entry of these rows of A (canonical CSC), its index in the original A.data;
-    ``T`` is A's _pattern_of."""
-    sub = sp.csc_matrix(T[rows, :]) if len(rows) else sp.csc_matrix((0, T.shape[1]))
-    sub.sort_indices()
-    return sub.data.astype(np.int64) - 1
 
 
 def c_point(
@@ -364,93 +446,106 @@ def _one_at_a_time(method: Callable[..., _R]) -> Callable[..., _R]:
     return serialized
 
 
+_C_INT_MIN, _C_INT_MAX = -(2**31), 2**31 - 1
+
+
+def _settings_struct(lib: ct.CDLL, settings: dict[str, float | int]) -> _Settings:
+    """The C settings: the defaults with these changes. An unknown name raises TypeError (as
+    does a fraction for an integer setting); an integer outside the C int range (which ctypes
+    would truncate without a word) raises InvalidProblemError."""
+    st = _Settings()
+    lib.tscvx_default_settings(ct.byref(st))
+    fields = dict(_SETTING_FIELDS)
+    for key, val in settings.items():
+        if key not in fields:
+            raise TypeError(f"unknown setting {key!r}")
+        if fields[key] is c_int and not _C_INT_MIN <= operator.index(val) <= _C_INT_MAX:
+            raise InvalidProblemError(f"setting {key} = {val} is outside the C int range")
+        setattr(st, key, val)
+    return st
+
+
+def _checked_vector(name: str, value: object, length: int) -> np.ndarray:
+    """``value`` as a new float vector of exactly ``length`` entries, or InvalidProblemError
+    naming the argument."""
+    try:
+        v = np.array(value, dtype=float)
+    except (TypeError, ValueError) as err:
+        raise InvalidProblemError(f"{name} must be a vector of {length} numbers ({err})") from err
+    if v.shape != (length,):
+        raise InvalidProblemError(
+            f"{name} must be a vector of length {length}, got an array of shape {v.shape}"
+        )
+    return v
+
+
+def _flat(v: object) -> np.ndarray:
+    """A problem's q or b as the set-up reads it."""
+    return np.asarray(v, dtype=float).reshape(-1)
+
+
 class Solver:
-    """A set-up workspace: one arena, fixed sparsity, repeated solves."""
+    """A set-up workspace: one arena, fixed sparsity, repeated solves.
+
+    It keeps its own copies of everything it was set up with (sizes, pattern, numbers): the
+    caller may change or reuse its problem object afterwards."""
 
     def __init__(self, prob: ConicProblem, **settings: float | int):
         self._lock = threading.RLock()
         self.lib = load_library()
-        self.prob = prob
-        n, m = prob.n, prob.m
-        q = np.asarray(prob.q, dtype=float).reshape(-1)
-        b = np.asarray(prob.b, dtype=float).reshape(-1)
+        self._settings = _settings_struct(self.lib, settings)
+        self.prob = prob  # the caller's object, kept for the caller: never read after set-up
+        self.n, self.m = n, m = prob.n, prob.m
+        q, b = _flat(prob.q), _flat(prob.b)
         if q.shape[0] != n or b.shape[0] != m:
             raise InvalidProblemError("q and b must be vectors of length n and m")
         self.split = sp_ = _split(prob)
-        A = sp.csc_matrix(prob.A)
-        # canonical CSC structure (sorted rows) with values taken through the source maps
-        self._Aeq = _csc_int(self._take(A, sp_.A_src, sp_.eq_rows))
-        self._G = _csc_int(self._take(A, sp_.G_src, sp_.g_rows))
-        if prob.P is not None:
-            Pc = _csc_int(_pattern_of(prob.P))
-            Pc.data = np.asarray(sp.csc_matrix(prob.P).data, dtype=float)[sp_.P_src]
-            self._P = Pc
-        else:
-            self._P = None
+        # canonical CSC structure (sorted rows), values taken in the caller's value order
+        a = _caller_values(prob.A)
+        self._Aeq, self._G = sp_.Aeq.matrix(a), sp_.G.matrix(a)
+        self._P = None if sp_.P is None else _Block.whole(sp_.P).matrix(_caller_values(prob.P))
         self._c = q.copy()
         self._beq = np.ascontiguousarray(b[sp_.eq_rows], dtype=float)
         self._h = np.ascontiguousarray(b[sp_.g_rows], dtype=float)
         self._soc = np.ascontiguousarray(sp_.soc, dtype=np.int32)
         self._data = self._make_data()
+        self._set_up()
 
-        self._settings = _Settings()
-        self.lib.tscvx_default_settings(ct.byref(self._settings))
-        for key, val in settings.items():
-            if key not in dict(_SETTING_FIELDS):
-                raise TypeError(f"unknown setting {key!r}")
-            setattr(self._settings, key, val)
-
+    def _set_up(self) -> None:
+        """The C set-up: arena size, arena, workspace; on failure, not ready with a message."""
         self.ws = ct.c_void_p()
-        self.setup_status = 0
         self.message = "ok"
+        self.arena = np.zeros(0, dtype=np.uint8)
+        data, settings = ct.byref(self._data), ct.byref(self._settings)
         need = ct.c_size_t(0)
-        st = self.lib.tscvx_scratch_size(
-            ct.byref(self._data), ct.byref(self._settings), ct.byref(need)
-        )
+        st = self.lib.tscvx_scratch_size(data, settings, ct.byref(need))
         if st == 0:
             scratch = np.zeros(need.value, dtype=np.uint8)
+            scratch_p = scratch.ctypes.data_as(ct.c_void_p)
             st = self.lib.tscvx_workspace_size(
-                ct.byref(self._data),
-                ct.byref(self._settings),
-                scratch.ctypes.data_as(ct.c_void_p),
-                need.value,
-                ct.byref(need),
+                data, settings, scratch_p, need.value, ct.byref(need)
             )
             del scratch
         if st == 0:
             self.arena = np.zeros(need.value, dtype=np.uint8)
-            st = self.lib.tscvx_setup(
-                ct.byref(self.ws),
-                self.arena.ctypes.data_as(ct.c_void_p),
-                need.value,
-                ct.byref(self._data),
-                ct.byref(self._settings),
-            )
-        else:
-            self.arena = np.zeros(0, dtype=np.uint8)
+            arena_p = self.arena.ctypes.data_as(ct.c_void_p)
+            st = self.lib.tscvx_setup(ct.byref(self.ws), arena_p, need.value, data, settings)
         self.setup_status = int(st)
         if st != 0:
-            self.message = self.lib.tscvx_setup_status_message(st).decode()
-            detail = ct.create_string_buffer(MESSAGE_LEN)  # the array and entry at fault
-            if self.lib.tscvx_check_data(ct.byref(self._data), detail) == st and detail.value:
-                self.message += f" ({detail.value.decode()}; in the C runtime's terms: c is q, "
-                self.message += "A and b the zero-cone rows, G and h the other rows)"
+            self.message = self._setup_message(st)
             self.ws = ct.c_void_p()
 
-    @staticmethod
-    def _take(A: sp.csc_matrix, src: np.ndarray, rows: np.ndarray) -> sp.csc_matrix:
-        T = _pattern_of(A)
-        Ts = sp.csc_matrix(T[rows, :]) if len(rows) else sp.csc_matrix((0, A.shape[1]))
-        Ts.sort_indices()
-        return sp.csc_matrix(
-            (np.asarray(A.data, dtype=float)[src], Ts.indices.copy(), Ts.indptr.copy()),
-            Ts.shape,
-        )
+    def _setup_message(self, st: int) -> str:
+        message = self.lib.tscvx_setup_status_message(st).decode()
+        detail = ct.create_string_buffer(MESSAGE_LEN)  # the array and entry at fault
+        if self.lib.tscvx_check_data(ct.byref(self._data), detail) == st and detail.value:
+            message += f" ({detail.value.decode()}; in the C runtime's terms: c is q, "
+            message += "A and b the zero-cone rows, G and h the other rows)"
+        return message
 
     def _make_data(self) -> _Data:
         d = _Data()
-        n = self.prob.n
-        d.n, d.p, d.m = n, self._Aeq.shape[0], self._G.shape[0]
+        d.n, d.p, d.m = self.n, self._Aeq.shape[0], self._G.shape[0]
         if self._P is not None:
             d.Pp, d.Pi, d.Px = _iptr(self._P.indptr), _iptr(self._P.indices), _dptr(self._P.data)
         d.c = _dptr(self._c)
@@ -471,6 +566,23 @@ class Solver:
     def arena_bytes(self) -> int:
         return int(self.arena.nbytes)
 
+    def _checked_update(
+        self, q: object, A_values: object, b: object, P_values: object
+    ) -> dict[str, np.ndarray]:
+        """The given arrays, each checked against the set-up's sizes (InvalidProblemError
+        naming the first one that does not fit)."""
+        sizes = {"q": self.n, "A_values": self.split.A.nnz, "b": self.m}
+        if self.split.P is not None:
+            sizes["P_values"] = self.split.P.nnz
+        elif P_values is not None:
+            raise InvalidProblemError("P_values given, but the problem was set up without P")
+        given = {"q": q, "A_values": A_values, "b": b, "P_values": P_values}
+        return {
+            name: _checked_vector(name, value, sizes[name])
+            for name, value in given.items()
+            if value is not None
+        }
+
     @_one_at_a_time
     def update(
         self,
@@ -479,33 +591,39 @@ class Solver:
         b: np.ndarray | None = None,
         P_values: np.ndarray | None = None,
     ) -> int:
-        """New numbers, same sparsity: A_values/P_values in the order of the original
-        ``prob.A.data`` / ``prob.P.data``. Returns the C setup status (0 = ok)."""
+        """New numbers, same sparsity: q and b of lengths n and m, A_values / P_values in the
+        caller's value order of the set-up's A / P (``A.data`` for CSC, CSR and COO, else
+        ``csc_matrix(A).data``). An array that does not fit raises InvalidProblemError before
+        anything changes. Returns the C setup status (0 = ok)."""
+        new = self._checked_update(q, A_values, b, P_values)
         if not self.ready:
             return self.setup_status
-        Px = c = Ax = beq = Gx = h = None
-        if q is not None:
-            self._c[:] = np.asarray(q, dtype=float).reshape(-1)
-            c = self._c
-        if A_values is not None:
-            av = np.asarray(A_values, dtype=float).reshape(-1)
-            self._Aeq.data[:] = av[self.split.A_src]
-            self._G.data[:] = av[self.split.G_src]
-            Ax, Gx = self._Aeq.data, self._G.data
-        if b is not None:
-            bv = np.asarray(b, dtype=float).reshape(-1)
-            self._beq[:] = bv[self.split.eq_rows]
-            self._h[:] = bv[self.split.g_rows]
-            beq, h = self._beq, self._h
-        if P_values is not None and self._P is not None:
-            self._P.data[:] = np.asarray(P_values, dtype=float).reshape(-1)[self.split.P_src]
-            Px = self._P.data
-        st = self.lib.tscvx_update_data(
-            self.ws, _dptr(Px), _dptr(c), _dptr(Ax), _dptr(beq), _dptr(Gx), _dptr(h)
+        if "q" in new:
+            self._c[:] = new["q"]
+        if "A_values" in new:
+            self._Aeq.data[:] = new["A_values"][self.split.Aeq.src]
+            self._G.data[:] = new["A_values"][self.split.G.src]
+        if "b" in new:
+            self._beq[:] = new["b"][self.split.eq_rows]
+            self._h[:] = new["b"][self.split.g_rows]
+        if "P_values" in new and self._P is not None:
+            self._P.data[:] = new["P_values"][self.split.P.order]  # type: ignore[union-attr]
+        st = self._send(new)
+        self.message = "ok" if st == 0 else self.lib.tscvx_setup_status_message(st).decode()
+        return st
+
+    def _send(self, new: dict[str, np.ndarray]) -> int:
+        """tscvx_update_data with the arrays that changed (NULL: unchanged)."""
+        A, P = "A_values" in new, "P_values" in new
+        arrays = (
+            self._P.data if P and self._P is not None else None,
+            self._c if "q" in new else None,
+            self._Aeq.data if A else None,
+            self._beq if "b" in new else None,
+            self._G.data if A else None,
+            self._h if "b" in new else None,
         )
-        if st != 0:
-            self.message = self.lib.tscvx_setup_status_message(st).decode()
-        return int(st)
+        return int(self.lib.tscvx_update_data(self.ws, *(_dptr(a) for a in arrays)))
 
     @_one_at_a_time
     def warm_start(self, sol: ConicSolution) -> int:
@@ -514,7 +632,7 @@ class Solver:
         a solution of another size is refused (-1) and the next solve starts cold."""
         if not self.ready:
             return self.setup_status
-        n, m = self.prob.n, self.prob.m
+        n, m = self.n, self.m
         if sol.x.shape != (n,) or sol.z.shape != (m,) or sol.s.shape != (m,):
             self.lib.tscvx_warm_start(self.ws, None, None, None, None)  # refused: drops any point
             return -1
@@ -544,7 +662,7 @@ class Solver:
 
     @_one_at_a_time
     def solve(self, log: bool = False) -> ConicSolution:
-        n, m = self.prob.n, self.prob.m
+        n, m = self.n, self.m
         if not self.ready:
             return _invalid(n, m, self.message)
         t0 = time.perf_counter()
@@ -586,38 +704,77 @@ class Solver:
 
 class Session:
     """A sequence of problems (what SCvx solves): one workspace per sparsity pattern, later
-    problems of the same pattern only update the numbers (no new symbolic work)."""
+    problems of the same pattern only update the numbers (no new symbolic work).
+
+    The pattern is compared with a private snapshot of the set-up problem's (sizes, cones,
+    canonical CSC pattern of A and P), so the caller may change or reuse its problem objects
+    between solves; the new values are passed in the set-up's value order whatever the new
+    matrices' format or storage order. A problem whose set-up is refused (e.g. NaN data or an
+    indefinite P) gets its invalid_input answer and is not kept: the next problem is set up
+    afresh."""
 
     def __init__(self, **settings: float | int) -> None:
         self._lock = threading.RLock()
         self.settings = settings
         self.solver: Solver | None = None
+        self._pattern: Pattern | None = None
         self.setups = 0
 
     @_one_at_a_time
     def solve(self, prob: ConicProblem, warm: ConicSolution | None = None) -> ConicSolution:
         """Solve ``prob``; ``warm``, a solution of a problem of the same size, is where the
         interior-point method starts (Solver.warm_start)."""
-        if self.solver is None or not same_pattern(self.solver.prob, prob):
-            try:
-                self.solver = Solver(prob, **self.settings)
-            except InvalidProblemError as err:
-                self.solver = None
-                return _invalid(prob.n, prob.m, str(err))
-            self.setups += 1
-        else:
-            st = self.solver.update(
-                q=prob.q,
-                A_values=sp.csc_matrix(prob.A).data,
-                b=prob.b,
-                P_values=None if prob.P is None else sp.csc_matrix(prob.P).data,
-            )
-            self.solver.prob = prob
-            if st != 0:
-                return _invalid(prob.n, prob.m, self.solver.message)
+        try:
+            refused = self._load(prob)
+        except InvalidProblemError as err:
+            return _invalid(prob.n, prob.m, str(err))
+        if refused is not None:
+            return refused
+        assert self.solver is not None
         if warm is not None and warm.ok:
             self.solver.warm_start(warm)
         return self.solver.solve()
+
+    def _load(self, prob: ConicProblem) -> ConicSolution | None:
+        """Put ``prob`` into a workspace: the current one if ``prob`` has its pattern, else a
+        new set-up. Returns None, or the answer to a refused problem."""
+        A = _numbered(prob.A, "A")
+        P = None if prob.P is None else _numbered(prob.P, "P")
+        pattern = Pattern.with_keys(prob, csc_key(A), None if P is None else csc_key(P))
+        if self.solver is not None and pattern.matches(self._pattern):
+            return self._update(self.solver, prob, A, P)
+        self.solver, self._pattern = None, None
+        solver = Solver(prob, **self.settings)
+        if not solver.ready:
+            return solver.solve()  # invalid_input with the set-up's message
+        self.solver, self._pattern = solver, pattern
+        self.setups += 1
+        return None
+
+    @staticmethod
+    def _update(
+        solver: Solver, prob: ConicProblem, A: _Numbered, P: _Numbered | None
+    ) -> ConicSolution | None:
+        """``prob``'s numbers into ``solver`` (set up for a problem of the same pattern)."""
+        split = solver.split
+        P_values = None
+        if P is not None and split.P is not None:
+            P_values = _reordered(_caller_values(prob.P), P, split.P)
+        st = solver.update(
+            q=_flat(prob.q),
+            A_values=_reordered(_caller_values(prob.A), A, split.A),
+            b=_flat(prob.b),
+            P_values=P_values,
+        )
+        return None if st == 0 else _invalid(prob.n, prob.m, solver.message)
+
+
+def _reordered(values: np.ndarray, now: _Numbered, setup: _Numbered) -> np.ndarray:
+    """Values in the caller's order of one matrix (numbered ``now``) put in the caller's order
+    of another of the same canonical pattern (numbered ``setup``)."""
+    out = np.empty(setup.nnz)
+    out[setup.order] = values[now.order]
+    return out
 
 
 def _invalid(n: int, m: int, message: str) -> ConicSolution:

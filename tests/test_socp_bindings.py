@@ -2,7 +2,11 @@
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
 import threading
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -10,8 +14,10 @@ import scipy.sparse as sp
 from socp_problems import random_feasible
 
 from guidance import csocp
-from guidance.conic import ConicProblem, solve_clarabel
+from guidance.conic import ConicProblem, same_pattern, solve_clarabel
 from guidance.conic import session as conic_session
+
+TESTS = Path(__file__).resolve().parent
 
 
 def small_soc() -> ConicProblem:
@@ -409,3 +415,347 @@ def test_duplicate_entries_are_refused_and_left_as_given(which: str) -> None:
         csocp.Solver(prob)
     after = (M.indices, M.data, M.indptr)
     assert all(np.array_equal(a, b) for a, b in zip(after, kept, strict=True))
+
+
+# ---- the Solver and the sessions own what they were set up with (26 Nov) --------------------
+
+
+def _copy(prob: ConicProblem) -> ConicProblem:
+    P = None if prob.P is None else prob.P.copy()
+    return ConicProblem(
+        P=P, q=prob.q.copy(), A=prob.A.copy(), b=prob.b.copy(), cones=list(prob.cones)
+    )
+
+
+def _sorted_csc(M: sp.spmatrix) -> sp.csc_matrix:
+    C = sp.csc_matrix(M, copy=True)
+    C.sort_indices()
+    return C
+
+
+def _reference(P, q, A, b, cones) -> ConicProblem:
+    """The problem with canonical CSC copies of its matrices (what Clarabel is given)."""
+    P = None if P is None else _sorted_csc(P)
+    return ConicProblem(P=P, q=np.asarray(q), A=_sorted_csc(A), b=np.asarray(b), cones=list(cones))
+
+
+def test_a_solver_keeps_its_sizes_and_numbers_when_the_caller_changes_its_problem() -> None:
+    """The caller reuses its problem object after the set-up (longer q and b, new A values,
+    other cones): the Solver answers the problem it was set up with, as a fresh solve of a
+    copy does (it read n and m from the caller's object at each solve)."""
+    base = random_feasible(3, n=10, with_P=True)
+    prob = _copy(base)
+    solver = csocp.Solver(prob)
+    prob.q, prob.b = np.r_[prob.q, 1.0, 2.0], np.r_[prob.b, 3.0]
+    prob.A.data *= 3.0
+    prob.cones.reverse()
+    sol, fresh = solver.solve(), csocp.solve(base)
+    assert sol.status == fresh.status == "solved"
+    assert sol.x.shape == (base.n,) and sol.z.shape == sol.s.shape == (base.m,)
+    np.testing.assert_array_equal(sol.x, fresh.x)
+    assert solver.warm_start(fresh) == 0  # a solution of the set-up's sizes is taken
+
+
+def test_a_caller_shortening_its_q_after_set_up_is_not_written_past() -> None:
+    """q shortened to one entry after the set-up: the solve wrote n doubles into an array of
+    one (a segmentation fault at exit); it must return the set-up's n entries."""
+    code = (
+        "from guidance import csocp\n"
+        "from socp_problems import random_feasible\n"
+        "prob = random_feasible(3, n=40, with_P=True)\n"
+        "solver = csocp.Solver(prob)\n"
+        "prob.q = prob.q[:1]\n"
+        "sol = solver.solve()\n"
+        "print(sol.status, sol.x.shape[0])\n"
+    )
+    env = dict(
+        os.environ, PYTHONPATH=os.pathsep.join([str(TESTS), os.environ.get("PYTHONPATH", "")])
+    )
+    run = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=300
+    )
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert run.stdout.split() == ["solved", "40"]
+
+
+def _non_psd(prob: ConicProblem) -> ConicProblem:
+    bad = _copy(prob)
+    bad.P.data = -bad.P.data  # negative diagonal
+    return bad
+
+
+def _nan_q(prob: ConicProblem) -> ConicProblem:
+    bad = _copy(prob)
+    bad.q[-1] = np.nan
+    return bad
+
+
+@pytest.mark.parametrize("spoil", [_nan_q, _non_psd])
+def test_a_session_solves_the_next_problem_after_a_refused_one(spoil) -> None:
+    """A problem whose set-up the runtime refuses (NaN in q, an indefinite P) is answered
+    invalid_input; the next valid problem of the same pattern is solved, as a fresh solve and
+    Clarabel do (the session kept the refused set-up and refused every later problem)."""
+    good = random_feasible(3, n=10, with_P=True)
+    bad = spoil(good)
+    fresh, ref = csocp.solve(good), solve_clarabel(good)
+    session = csocp.Session()
+    for prob in (bad, good, bad, good):
+        sol = session.solve(prob)
+        if prob is bad:
+            assert sol.status == "invalid_input" == csocp.solve(bad).status
+            continue
+        assert sol.status == fresh.status == "solved" and ref.ok
+        np.testing.assert_allclose(sol.x, fresh.x, rtol=0, atol=1e-7)
+        assert abs(sol.obj - ref.obj) <= 1e-6 * max(1.0, abs(ref.obj))
+
+
+def _shuffled_coo(M: sp.spmatrix, rng: np.random.Generator) -> sp.coo_matrix:
+    C = sp.coo_matrix(M)
+    k = rng.permutation(C.nnz)
+    return sp.coo_matrix((C.data[k], (C.row[k], C.col[k])), shape=C.shape)
+
+
+def _assert_same_optimum(sol, ref) -> None:
+    """Both solved (to full or reduced accuracy), the same optimal value and point (x to the
+    1e-4 that gap-based stopping leaves on these strongly convex problems)."""
+    assert sol.ok and ref.ok, (sol.status, ref.status)
+    assert abs(sol.obj - ref.obj) <= 1e-6 * max(1.0, abs(ref.obj))
+    np.testing.assert_allclose(sol.x, ref.x, rtol=0, atol=1e-4)
+
+
+def _strongly_convex(seed: int) -> ConicProblem:
+    """random_feasible(seed, n=10) with P + I: one well-determined optimal x."""
+    prob = random_feasible(seed, n=10, with_P=True)
+    prob.P = sp.csc_matrix(sp.triu(prob.P + sp.eye(prob.n), format="csc"))
+    return prob
+
+
+def _reversed_rows(M: sp.spmatrix) -> sp.csc_matrix:
+    """M as CSC with the rows of every column stored in descending order (unsorted)."""
+    C = sp.csc_matrix(M)
+    order = np.concatenate(
+        [np.arange(lo, hi)[::-1] for lo, hi in zip(C.indptr[:-1], C.indptr[1:], strict=True)]
+    )
+    R = sp.csc_matrix((C.data[order], C.indices[order], C.indptr.copy()), C.shape)
+    assert not R.has_sorted_indices
+    return R
+
+
+def _in_format(M: sp.spmatrix, fmt: str, rng: np.random.Generator) -> sp.spmatrix:
+    if fmt == "csr":
+        return sp.csr_matrix(M)
+    if fmt == "coo":
+        return _shuffled_coo(M, rng)
+    if fmt == "csc-unsorted":
+        return _reversed_rows(M)
+    return sp.lil_matrix(M)
+
+
+def _entry_positions(M: sp.spmatrix) -> tuple[np.ndarray, np.ndarray]:
+    """Row and column of each value in the caller's value order (see _rescaled)."""
+    if M.format == "coo":
+        return M.row, M.col
+    C = M if M.format in ("csc", "csr") else sp.csc_matrix(M)
+    major = np.repeat(np.arange(C.shape[C.format == "csr"]), np.diff(C.indptr))
+    return (C.indices, major) if C.format == "csc" else (major, C.indices)
+
+
+def _rescaled(M: sp.spmatrix, w: np.ndarray) -> tuple[sp.spmatrix, np.ndarray]:
+    """M with its values times w (in the caller's value order), and those values: M.data for
+    CSC, CSR and COO, csc_matrix(M).data for other formats."""
+    if M.format in ("csc", "csr", "coo"):
+        M2 = M.copy()
+        M2.data = M.data * w
+        return M2, M2.data
+    C = sp.csc_matrix(M)
+    M2 = sp.csc_matrix((C.data * w, C.indices, C.indptr), C.shape)
+    return M2, M2.data
+
+
+def _new_values(A: sp.spmatrix, P: sp.spmatrix):
+    """A and P with new values (each entry its own factor; P as D P D, still semidefinite),
+    and those values in the caller's order."""
+    A2, A_values = _rescaled(A, np.linspace(0.7, 1.3, A.nnz))
+    d = np.linspace(0.5, 2.0, P.shape[0])
+    rows, cols = _entry_positions(P)
+    P2, P_values = _rescaled(P, d[rows] * d[cols])
+    return A2, A_values, P2, P_values
+
+
+@pytest.mark.parametrize("fmt", ["csr", "coo", "csc-unsorted", "lil"])
+def test_update_takes_values_in_the_callers_order_for_every_format(fmt: str) -> None:
+    """update(A_values=, P_values=) takes the values in the caller's order (A.data for CSC,
+    CSR and COO, csc_matrix(A).data otherwise): the answer is Clarabel's on the new matrices
+    (it read CSR and COO values as if in CSC order: another problem, or P 'not PSD')."""
+    rng = np.random.default_rng(5)
+    base = _strongly_convex(3)
+    A1, P1 = _in_format(base.A, fmt, rng), _in_format(base.P, fmt, rng)
+    solver = csocp.Solver(ConicProblem(P=P1, q=base.q, A=A1, b=base.b, cones=base.cones))
+    _assert_same_optimum(solver.solve(), solve_clarabel(base))
+    A2, A_values, P2, P_values = _new_values(A1, P1)
+    assert solver.update(A_values=A_values, P_values=P_values) == 0, solver.message
+    sol = solver.solve()
+    _assert_same_optimum(sol, solve_clarabel(_reference(P2, base.q, A2, base.b, base.cones)))
+
+
+def test_coo_duplicates_are_refused() -> None:
+    """A COO matrix with two stored entries at one position is refused, as CSC and CSR ones
+    are (README); it was summed."""
+    base = random_feasible(3, n=10, with_P=True)
+    C = sp.coo_matrix(base.A)
+    halves = np.r_[C.data[:-1], C.data[-1] / 2, C.data[-1] / 2]
+    A = sp.coo_matrix((halves, (np.r_[C.row, C.row[-1]], np.r_[C.col, C.col[-1]])), C.shape)
+    prob = ConicProblem(P=base.P, q=base.q, A=A, b=base.b, cones=base.cones)
+    with pytest.raises(csocp.InvalidProblemError, match="duplicate entries"):
+        csocp.Solver(prob)
+    assert csocp.solve(prob).status == "invalid_input"
+
+
+@pytest.mark.parametrize("fmt", ["csr", "coo", "csc-unsorted"])
+@pytest.mark.parametrize("backend", ["clarabel", "c"])
+def test_sessions_take_new_values_in_any_format_and_storage_order(backend: str, fmt: str) -> None:
+    """A session's second problem (same pattern, new values) stored as CSR, shuffled COO or
+    CSC with unsorted rows (P too) is solved as Clarabel solves it afresh (the Clarabel
+    session passed the values in the caller's storage order, not Clarabel's sorted CSC)."""
+    rng = np.random.default_rng(2)
+    base = _strongly_convex(3)
+    A1, P1 = _in_format(base.A, fmt, rng), _in_format(base.P, "csc-unsorted", rng)
+    A2, _, P2, _ = _new_values(A1, P1)
+    session = conic_session(backend)
+    for P, A in ((P1, A1), (P2, A2)):
+        sol = session.solve(ConicProblem(P=P, q=base.q, A=A, b=base.b, cones=base.cones))
+        _assert_same_optimum(sol, solve_clarabel(_reference(P, base.q, A, base.b, base.cones)))
+
+
+def _sort_rows_in_place(prob: ConicProblem) -> None:
+    prob.A.sort_indices()
+
+
+def _cones_edited_in_place(prob: ConicProblem) -> None:
+    prob.cones[0] = prob.cones[1] = ("nonneg", 1)
+    prob.cones[4] = ("nonneg", 2)
+
+
+def _A_reassigned(prob: ConicProblem) -> None:
+    C = sp.coo_matrix(prob.A)
+    prob.A = sp.csc_matrix((C.data, ((C.row + 1) % prob.m, C.col)), shape=C.shape)
+
+
+@pytest.mark.parametrize("mutate", [_sort_rows_in_place, _cones_edited_in_place, _A_reassigned])
+@pytest.mark.parametrize("backend", ["clarabel", "c"])
+def test_sessions_compare_with_a_snapshot_not_the_callers_object(backend: str, mutate) -> None:
+    """The caller changes its own problem object between two solves (sorts A's rows in place,
+    edits its cones list, assigns another A): the session answers the changed problem, as
+    Clarabel does afresh (it compared the new problem with the same object: always equal)."""
+    base = random_feasible(3, n=10, with_P=True)
+    assert base.cones[:2] == [("zero", 1), ("zero", 1)] and base.cones[4] == ("zero", 2)
+    prob = _copy(base)
+    prob.A = _reversed_rows(prob.A)
+    session = conic_session(backend)
+    assert session.solve(prob).status == "solved"
+    mutate(prob)
+    sol = session.solve(prob)
+    ref = solve_clarabel(_reference(prob.P, prob.q, prob.A, prob.b, prob.cones))
+    assert sol.ok == ref.ok
+    if ref.ok:
+        assert abs(sol.obj - ref.obj) <= 1e-6 * max(1.0, abs(ref.obj))
+    else:
+        assert sol.status == ref.status
+
+
+def test_same_pattern_requires_equal_sizes() -> None:
+    prob = random_feasible(3, n=10, with_P=True)
+    longer_q = ConicProblem(P=prob.P, q=np.r_[prob.q, 0.0], A=prob.A, b=prob.b, cones=prob.cones)
+    longer_b = ConicProblem(P=prob.P, q=prob.q, A=prob.A, b=np.r_[prob.b, 0.0], cones=prob.cones)
+    assert same_pattern(prob, _copy(prob))
+    assert not same_pattern(prob, longer_q) and not same_pattern(longer_q, prob)
+    assert not same_pattern(prob, longer_b)
+
+
+_PROB = random_feasible(3, n=10, with_P=True)
+_BAD_UPDATES = {
+    "q short": {"q": _PROB.q[:-1]},
+    "q long": {"q": np.r_[_PROB.q, 0.0]},
+    "q scalar": {"q": 1.0},
+    "q column": {"q": _PROB.q[:, None]},
+    "b short": {"b": _PROB.b[:-1]},
+    "b long": {"b": np.r_[_PROB.b, 1.0]},
+    "A_values short": {"A_values": _PROB.A.data[:-1]},
+    "A_values twice": {"A_values": np.tile(_PROB.A.data, 2)},
+    "A_values dense": {"A_values": _PROB.A.toarray()},
+    "A_values sparse": {"A_values": _PROB.A},
+    "P_values short": {"P_values": _PROB.P.data[:-1]},
+}
+
+
+@pytest.mark.parametrize("case", list(_BAD_UPDATES))
+def test_update_refuses_arrays_that_do_not_fit_and_changes_nothing(case: str) -> None:
+    """An array of the wrong shape raises InvalidProblemError naming the argument, before
+    anything is changed: the next solve is the set-up's again (it raised IndexError or
+    ValueError after overwriting q, or took the array: a scalar q broadcast, a longer b cut)."""
+    bad = _BAD_UPDATES[case]
+    name = next(iter(bad))
+    other = {"A_values": 2.0 * _PROB.A.data} if name == "q" else {"q": 2.0 * _PROB.q}
+    solver = csocp.Solver(_PROB)
+    before = solver.solve()
+    with pytest.raises(csocp.InvalidProblemError, match=name):
+        solver.update(**other, **bad)
+    after = solver.solve()
+    assert after.status == before.status == "solved"
+    np.testing.assert_array_equal(after.x, before.x)
+
+
+def test_update_refuses_P_values_without_P() -> None:
+    prob = random_feasible(3, n=10, with_P=False)
+    solver = csocp.Solver(prob)
+    with pytest.raises(csocp.InvalidProblemError, match="P_values"):
+        solver.update(P_values=np.ones(7))
+
+
+@pytest.mark.parametrize("value", [2**32 + 3, -(2**31) - 1])
+def test_integer_setting_outside_c_int_is_refused(value: int) -> None:
+    """ctypes truncated max_iter = 2**32 + 3 to 3 without a word."""
+    prob = random_feasible(3, n=10, with_P=True)
+    with pytest.raises(csocp.InvalidProblemError, match="max_iter"):
+        csocp.Solver(prob, max_iter=value)
+    sol = csocp.solve(prob, max_iter=value)
+    assert sol.status == "invalid_input" and "max_iter" in sol.info["message"]
+
+
+def test_fractional_cone_dimension_is_refused() -> None:
+    """('soc', 3.9) was read as ('soc', 3) and the problem solved."""
+    A = sp.csc_matrix(np.vstack([-np.eye(3), -np.eye(3)]))
+    prob = ConicProblem(
+        P=sp.csc_matrix(np.diag([1.0, 2.0, 3.0])),
+        q=np.array([1.0, -1.0, 2.0]),
+        A=A,
+        b=np.r_[1.0, 0, 0, 0, 0, 0],
+        cones=[("soc", 3.9), ("nonneg", 3)],
+    )
+    sol = csocp.solve(prob)
+    assert sol.status == "invalid_input" and "whole number" in sol.info["message"]
+    ref = solve_clarabel(ConicProblem(prob.P, prob.q, A, prob.b, [("soc", 3), ("nonneg", 3)]))
+    prob.cones[0] = ("soc", 3.0)  # a whole number, as a float: accepted
+    sol = csocp.solve(prob)
+    assert sol.status == ref.status == "solved"
+    assert abs(sol.obj - ref.obj) <= 1e-6 * max(1.0, abs(ref.obj))
+
+
+def test_message_is_ok_again_after_a_successful_update() -> None:
+    prob = random_feasible(3, n=10, with_P=True)
+    solver = csocp.Solver(prob)
+    assert solver.message == "ok"
+    assert solver.update(q=np.full(prob.n, np.nan)) != 0
+    assert "NaN" in solver.message
+    assert solver.update(q=prob.q) == 0
+    assert solver.message == "ok"
+    assert solver.solve().status == "solved"
+
+
+def test_q_and_b_may_be_lists() -> None:
+    prob = random_feasible(3, n=10, with_P=True)
+    listed = ConicProblem(P=prob.P, q=list(prob.q), A=prob.A, b=list(prob.b), cones=prob.cones)
+    assert (listed.n, listed.m) == (prob.n, prob.m)
+    sol, ref = csocp.solve(listed), solve_clarabel(prob)
+    assert sol.status == ref.status == "solved"
+    assert abs(sol.obj - ref.obj) <= 1e-6 * max(1.0, abs(ref.obj))
