@@ -25,6 +25,7 @@ from guidance.errors import InputError, ModelEvaluationError
 from guidance.guess import checked_guess, initial_guess
 from guidance.model import discretize, vehicle_pattern
 from guidance.params import IM, NC, NU, NX, Scenario, SCvxSettings
+from guidance.scenario import checked
 from guidance.subproblem import (
     TR_PAIRS,
     TR_SCALAR_STATES,
@@ -146,7 +147,7 @@ class SCvxSolver:
         log: Callable[[str], None] | None = None,
         record_subproblems: bool = False,
     ) -> None:
-        self.scn = scenario
+        self.scn = checked(scenario)  # as pdg_solve checks it: ScenarioError names the field
         self.p = scenario.params
         self.st = settings or SCvxSettings()
         self.backend = backend

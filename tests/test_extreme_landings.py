@@ -18,7 +18,7 @@ from guidance import cguidance
 from guidance.errors import InputError
 from guidance.guess import initial_guess
 from guidance.params import InitialState, Params, Scenario
-from guidance.scenario import MAGNITUDE_MAX, validate
+from guidance.scenario import MAGNITUDE_MAX, ScenarioError, validate
 from guidance.scvx import SCvxSolver
 from guidance.verify import audit
 
@@ -82,15 +82,18 @@ def test_tscvx_at_the_envelope_edge_ends_with_the_same_status(name: str) -> None
     assert reference.status == c.status != "solved", (reference.reason, c.reason)
 
 
-def test_a_scenario_that_skipped_validation_ends_with_a_status() -> None:
-    """r0 = 1e9 (refused by validation) overflows the cubic guess; the reference's own loop
-    then says so instead of raising numpy's LinAlgError from inside the guess."""
+def test_the_reference_loop_refuses_what_the_c_loop_refuses() -> None:
+    """r0 = 1e9 overflows the cubic guess. The reference's own loop took any scenario until
+    26 Nov (it ended this one with a solver_error status, after numpy warnings) while the C
+    loop refused it by name; both now check the scenario as a scenario file is checked."""
     scenario = Scenario(InitialState(r0=(1e9, 0.0, 0.0)))
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        result = SCvxSolver(scenario).solve()
-    assert result.status == "solver_error"
-    assert result.reason == "model evaluation failed at the initial guess"
+        with pytest.raises(ScenarioError, match="r0") as ref:
+            SCvxSolver(scenario)
+        with pytest.raises(ScenarioError, match="r0") as c:
+            cguidance.solve_c(scenario)
+    assert str(ref.value) == str(c.value)
 
 
 @pytest.mark.parametrize("broken", ["x", "t_f"])
