@@ -29,7 +29,7 @@ def solve(
     method: str = "scvx",
     backend: str = "clarabel",
     settings: SCvxSettings | None = None,
-    models_dir: Path | str = MODELS_DIR,
+    models_dir: Path | str | None = MODELS_DIR,
     log: Callable[[str], None] | None = None,
     eta_init: float | None = None,
     guess: tuple[object, object, object] | None = None,
@@ -41,7 +41,8 @@ def solve(
     c         the whole solve in the flight C library (for tscvx the networks too:
               guidance.cguidance.solve_tscvx_c, not onnxruntime)
 
-    ``method="tscvx"`` starts from the shipped networks' warm start and masks (``models_dir``).
+    ``method="tscvx"`` starts from the shipped networks' warm start and masks (``models_dir``,
+    None: the shipped ones).
     ``eta_init`` overrides the initial trust radius; without it SCvx starts from
     settings.eta_init and T-SCvx (from the networks' warm start) from Table 1's reduced radius.
     ``guess`` (x, u, t_f), a trajectory of the scenario's N such as an earlier solve's, starts
@@ -50,12 +51,12 @@ def solve(
     ``log`` receives one line per subproblem. An infeasible landing is a result (its
     ``status`` and ``reason`` say so); bad input raises InputError.
     """
-    _check_request(method, backend, guess)
+    _check_request(method, backend, guess, settings)
     # checked as a scenario file is: a Scenario built in Python skips no rule
     scenario = checked(Scenario() if scenario is None else scenario)
     start = None if guess is None else given_guess(scenario, *guess)
     settings = _run_settings(settings, method, backend, eta_init)
-    models_dir = Path(models_dir)
+    models_dir = Path(MODELS_DIR if models_dir is None else models_dir)
     if backend == "c":
         return _solve_in_c(scenario, method, settings, models_dir, start, log)
     conic = "c" if backend == "c-socp" else backend  # the Python loop's name for its solver
@@ -64,7 +65,11 @@ def solve(
     return SCvxSolver(scenario, settings, backend=conic, log=log).solve(guess=start)
 
 
-def _check_request(method: str, backend: str, guess: object) -> None:
+def _check_request(method: str, backend: str, guess: object, settings: object) -> None:
+    if settings is not None and not isinstance(settings, SCvxSettings):
+        raise InputError(
+            f"settings: expected a guidance.SCvxSettings, got {type(settings).__name__}"
+        )
     if method not in METHODS:
         raise InputError(f"method {method!r}: use one of {', '.join(METHODS)}")
     if backend not in BACKENDS:

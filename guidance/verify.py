@@ -209,7 +209,7 @@ def checked_trajectory(
     out = []
     for name, value, cols in (("x", x, NX), ("u", u, NU)):
         a = np.asarray(value)
-        if a.dtype.kind not in "biuf":
+        if a.dtype.kind not in "iuf":
             raise InputError(f"{name}: expected real numbers, got {a.dtype} values")
         a = a.astype(float)
         if a.shape != (p.N, cols):
@@ -220,7 +220,7 @@ def checked_trajectory(
             raise InputError(f"{name}: values beyond {VALUE_LIMIT:g}, outside any landing")
         out.append(a)
     tf = np.asarray(t_f)
-    if tf.dtype.kind not in "biuf" or tf.size != 1:
+    if tf.dtype.kind not in "iuf" or tf.size != 1:
         raise InputError(f"t_f: expected one real number, got {t_f!r}")
     t = float(tf.reshape(-1)[0])
     if not T_F_RANGE[0] <= t <= T_F_RANGE[1]:

@@ -96,3 +96,15 @@ def test_numpy_numbers_in_a_scenario_are_numbers() -> None:
 def test_a_setting_of_the_wrong_type_is_refused(change: dict, message: str) -> None:
     with pytest.raises(guidance.InputError, match=message):
         guidance.SCvxSettings(**change)
+
+
+def test_settings_of_another_type_and_a_boolean_t_f_are_refused_by_name() -> None:
+    """A settings dict reached the backends and failed there with AttributeError (a different
+    one per backend); a guess whose t_f is True was taken as t_f = 1; models_dir=None raised
+    TypeError where it means the shipped networks."""
+    with pytest.raises(guidance.InputError, match=r"settings: expected a guidance\.SCvxSettings"):
+        guidance.solve(settings={"iter_max": 2}, backend="c")  # type: ignore[arg-type]
+    first = guidance.solve(backend="c", settings=guidance.SCvxSettings(iter_max=2))
+    with pytest.raises(guidance.InputError, match="t_f: expected one real number, got True"):
+        guidance.solve(backend="c", guess=(first.x, first.u, True))
+    assert guidance.solve(method="tscvx", backend="c", models_dir=None).status == "solved"
