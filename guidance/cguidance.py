@@ -497,6 +497,8 @@ def flight_net(models_dir: Path | str, kind: str):
             return FlightNet(tnn_bytes(path) if path.suffix == ".onnx" else path.read_bytes())
         except FlightNetError as exc:
             raise FlightNetsError(f"model {path}: refused by the C library: {exc}") from exc
+        except InputError as exc:  # an ONNX file that is not a T-SCvx export (its reader's)
+            raise FlightNetsError(f"model {path}: {exc}") from exc
 
     return _thread_cached("nets", key, load)
 
@@ -524,7 +526,12 @@ def check_trained_params(models_dir: Path | str, kind: str, params: Params) -> N
         props = {p.key: p.value for p in load_onnx(path, load_external_data=False).metadata_props}
         if META_KEY not in props:  # an empty file parses as an empty model
             raise FlightNetsError(f"model {path}: not a T-SCvx model export (no metadata)")
-        _TRAINED[key] = json.loads(props[META_KEY]).get("params", {})
+        try:
+            _TRAINED[key] = dict(json.loads(props[META_KEY])).get("params", {})
+        except (json.JSONDecodeError, TypeError, ValueError) as exc:
+            raise FlightNetsError(
+                f"model {path}: its '{META_KEY}' metadata is unreadable ({exc})"
+            ) from None
     diff = _params_diff(_TRAINED[key], params)
     if diff:
         raise FlightNetsError(

@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 from guidance import cgnc
+from guidance.errors import InputError
 from guidance.nn import flight
 from guidance.nn.flight import FlightNet, FlightNetError
 
@@ -229,13 +230,14 @@ def test_bad_inputs_are_refused(blobs: dict[str, bytes]) -> None:
     x = np.zeros(16)
     x[6] = 1.0
     assert np.all(np.isfinite(net.run(x)))
-    with pytest.raises(FlightNetError, match="bad_size"):
+    # the wrapper refuses these before the C call, as the onnxruntime path does (the C
+    # library's own bad_size and bad_input refusals: c_runtime/nn/tests/test_nn.c)
+    with pytest.raises(InputError, match=r"expected \(16,\) or \(B, 16\) numbers, got \(17,\)"):
         net.run(np.zeros(17))
     for bad in (np.nan, np.inf):
         x[3] = bad
-        with pytest.raises(FlightNetError, match="NaN or infinite") as info:
+        with pytest.raises(InputError, match="not finite"):
             net.run(x)
-        assert info.value.status == "bad_input"
     with pytest.raises(FlightNetError, match="bad_size"):
         net.tight_mask(np.zeros(851))  # a solution network has no mask
 
@@ -316,3 +318,95 @@ def test_no_heap_allocation_inside_run(kind: str) -> None:
     assert kv["status"] == "ok" and kv["kind"] == kind
     assert kv["heap_allocations_in_run"] == "0"
     assert 0 < int(kv["stack_high_water"]) < 16384
+
+
+# ---- the network wrappers' inputs (adversarial review, 26 Nov) ---------------------------
+
+
+def test_self_test_takes_turns_with_inferences_on_one_network() -> None:
+    """self_test runs an inference in the network's arena but did not take its lock: beside
+    run() in another thread it corrupted run's outputs without a word (13 of 200 to all)."""
+    import threading
+
+    net = FlightNet((BUILD_MODELS / "constraint.tnn").read_bytes())
+    rng = np.random.default_rng(5)
+    X = rng.standard_normal((40, net.d_in))
+    want = net.run(X)
+    stop = threading.Event()
+
+    def keep_testing() -> None:
+        while not stop.is_set():
+            net.self_test()
+
+    t = threading.Thread(target=keep_testing)
+    t.start()
+    try:
+        got = [net.run(X) for _ in range(10)]
+    finally:
+        stop.set()
+        t.join()
+    assert all(np.array_equal(g, want) for g in got)
+
+
+def test_both_network_paths_refuse_the_same_inputs() -> None:
+    """The onnxruntime path took NaN and returned NaN (a mask of all "drop" bits), raised
+    onnxruntime's own error for a 3-D input, and the C path flattened 3-D inputs; both now
+    take (d_in,) or (B, d_in) finite numbers, and refuse the rest with the same message."""
+    from guidance.errors import InputError
+    from guidance.nn.infer import load_model
+
+    onnx_net = load_model(MODELS / "constraint.onnx", "constraint")
+    c_net = FlightNet((BUILD_MODELS / "constraint.tnn").read_bytes())
+    d = c_net.d_in
+    good = np.zeros(d)
+    for bad in (np.full(d, np.nan), np.zeros((1, d, 1)), np.zeros(d + 1), np.zeros((2, 4, 4))):
+        with pytest.raises(InputError) as a:
+            onnx_net.run(bad)
+        with pytest.raises(InputError) as b:
+            c_net.run(bad)
+        assert str(a.value) == str(b.value)
+    assert onnx_net.run(good).shape == c_net.run(good).shape == (1, c_net.d_out)
+
+
+def test_a_constraint_mask_from_a_non_finite_output_is_the_full_problem() -> None:
+    """A finite input beyond float32 (1e39) overflows in the onnxruntime network: every
+    probability NaN, and the mask read every bit as "drop" (0 of 350 kept). It is now None,
+    the full problem, as the flight library takes a failed mask inference."""
+    from guidance.dataset import theta_of
+    from guidance.nn.infer import load_model
+    from guidance.params import Scenario
+
+    net = load_model(MODELS / "constraint.onnx", "constraint")
+    theta = theta_of(Scenario())
+    assert net.mask(theta, 1) is not None
+    theta[3] = 1e39
+    assert net.mask(theta, 1) is None
+
+
+@pytest.mark.parametrize("damage", ["not JSON", "no arch"])
+def test_a_damaged_metadata_entry_is_refused_by_name(damage: str, tmp_path: Path) -> None:
+    """A hand-edited metadata entry raised KeyError or JSONDecodeError from inside the readers
+    (the CLI printed a traceback); both paths now refuse the file by name."""
+    import onnx
+
+    from guidance.cguidance import FlightNetsError, flight_net
+    from guidance.nn.flight import OnnxLayoutError, read_onnx
+    from guidance.nn.infer import ModelMismatchError, load_model
+
+    model = onnx.load(str(MODELS / "solution.onnx"))
+    entry = next(p for p in model.metadata_props if p.key == "tscvx")
+    if damage == "not JSON":
+        entry.value = entry.value[:-5]
+    else:
+        meta = json.loads(entry.value)
+        del meta["arch"]
+        entry.value = json.dumps(meta)
+    path = tmp_path / "solution.onnx"
+    onnx.save(model, str(path))
+    with pytest.raises(OnnxLayoutError, match="'tscvx' metadata"):
+        read_onnx(path)
+    with pytest.raises(FlightNetsError, match=r"solution\.onnx"):
+        flight_net(tmp_path, "solution")
+    if damage == "not JSON":
+        with pytest.raises(ModelMismatchError, match="metadata is not JSON"):
+            load_model(path, "solution")

@@ -149,6 +149,13 @@ def read_onnx(path: str | Path) -> FlightWeights:
     recorded in its metadata; OnnxLayoutError when the file is not such an export."""
     model = load_onnx(path)
     meta = _tscvx_metadata(path, model)
+    try:
+        return _weights_of(path, model, meta)
+    except (KeyError, TypeError) as exc:  # a hand-edited or foreign metadata entry
+        raise OnnxLayoutError(f"{path}: 'tscvx' metadata without a valid {exc}") from None
+
+
+def _weights_of(path: str | Path, model: Any, meta: dict[str, Any]) -> FlightWeights:
     arch = meta["arch"]
     _check_operators(path, model.graph)
     inits = _Initializers(path, model.graph)
@@ -174,7 +181,13 @@ def _tscvx_metadata(path: str | Path, model: Any) -> dict[str, Any]:
     props = {p.key: p.value for p in model.metadata_props}
     if "tscvx" not in props:
         raise OnnxLayoutError(f"{path}: no 'tscvx' metadata: not a T-SCvx model export")
-    return json.loads(props["tscvx"])
+    try:
+        meta = json.loads(props["tscvx"])
+    except json.JSONDecodeError as exc:
+        raise OnnxLayoutError(f"{path}: 'tscvx' metadata is not JSON ({exc})") from None
+    if not isinstance(meta, dict):
+        raise OnnxLayoutError(f"{path}: 'tscvx' metadata is not a JSON object")
+    return meta
 
 
 def _check_operators(path: str | Path, graph: Any) -> None:
@@ -446,7 +459,9 @@ class FlightNet:
         self.lock = threading.Lock()
 
     def run(self, inputs: np.ndarray) -> np.ndarray:
-        x = np.atleast_2d(np.asarray(inputs, np.float64))
+        from guidance.nn.infer import checked_inputs
+
+        x = checked_inputs(inputs, self.d_in, np.float64)
         out = np.empty((len(x), self.d_out))
         with self.lock:
             for i, row in enumerate(x):
@@ -467,7 +482,9 @@ class FlightNet:
 
     def self_test(self) -> float:
         err = ctypes.c_double()
-        _check(library().tscvx_nn_self_test(self._net, ctypes.byref(err)), "tscvx_nn_self_test")
+        with self.lock:  # an inference too: its activations go into the arena
+            st = library().tscvx_nn_self_test(self._net, ctypes.byref(err))
+        _check(st, "tscvx_nn_self_test")
         return err.value
 
 

@@ -29,6 +29,33 @@ TRAINED_PARAMS = tuple(name for name in PARAM_NAMES if name not in INPUT_PARAMS)
 PROBE_RTOL = 1e-4
 
 
+def _metadata_object(path: str | Path, raw: str) -> dict[str, Any]:
+    """The model's metadata entry as a JSON object, or ModelMismatchError."""
+    try:
+        meta = json.loads(raw)
+    except json.JSONDecodeError as exc:
+        raise _fail(path, f"its '{META_KEY}' metadata is not JSON ({exc})") from None
+    if not isinstance(meta, dict):
+        raise _fail(path, f"its '{META_KEY}' metadata is not a JSON object")
+    return meta
+
+
+def checked_inputs(inputs: object, d_in: int, dtype: type) -> np.ndarray:
+    """Network inputs as a (B, d_in) array of ``dtype``: one input (d_in,) or a batch
+    (B, d_in) of finite numbers; InputError otherwise. The onnxruntime and flight-library
+    paths take the same inputs through it."""
+    a = np.asarray(inputs)
+    if a.ndim not in (1, 2) or a.shape[-1] != d_in or a.dtype.kind not in "biuf":
+        raise InputError(
+            f"network inputs: expected ({d_in},) or (B, {d_in}) numbers, got {a.shape} "
+            f"{a.dtype} values"
+        )
+    if not np.isfinite(a).all():
+        raise InputError("network inputs: not finite (NaN or infinity)")
+    with np.errstate(over="ignore"):  # beyond float32: inf, and the output says so
+        return np.atleast_2d(a).astype(dtype)
+
+
 class ModelMismatchError(InputError):
     """The model file cannot serve this problem; the message says why."""
 
@@ -104,7 +131,7 @@ class OnnxModel:
         raw = self.session.get_modelmeta().custom_metadata_map.get(META_KEY)
         if raw is None:
             raise _fail(path, f"no '{META_KEY}' metadata: not a T-SCvx model export")
-        meta = json.loads(raw)
+        meta = _metadata_object(path, raw)
         if meta.get("format") != META_FORMAT or meta.get("format_version") != META_VERSION:
             raise _fail(path, f"unsupported metadata format {meta.get('format')!r}")
         if meta.get("kind") != kind:
@@ -164,9 +191,7 @@ class OnnxModel:
             )
 
     def run(self, inputs: np.ndarray) -> np.ndarray:
-        a = np.atleast_2d(np.asarray(inputs, np.float32))
-        if a.shape[1] != self.meta["d_in"]:
-            raise ValueError(f"expected inputs of size {self.meta['d_in']}, got {a.shape[1]}")
+        a = checked_inputs(inputs, self.meta["d_in"], np.float32)
         return self.session.run(None, {self.input_name: a})[0]
 
 
@@ -180,11 +205,14 @@ class ConstraintModel(OnnxModel):
         logits = self.run(np.concatenate([theta, kk], axis=1))
         return 1.0 / (1.0 + np.exp(-logits.astype(np.float64)))
 
-    def mask(self, theta: np.ndarray, k: int) -> np.ndarray:
-        """Predicted tight mask (7N bools) of iteration k for one scenario."""
-        return self.probabilities(theta, k)[0] >= self.threshold
+    def mask(self, theta: np.ndarray, k: int) -> np.ndarray | None:
+        """Predicted tight mask (7N bools) of iteration k for one scenario; None (the full
+        problem, as the flight library takes a failed inference) when the network's output
+        is not finite (an overflow inside it), where every bit would read "drop"."""
+        p = self.probabilities(theta, k)[0]
+        return p >= self.threshold if np.isfinite(p).all() else None
 
-    def mask_fn(self, theta: np.ndarray) -> Callable[[int], np.ndarray]:
+    def mask_fn(self, theta: np.ndarray) -> Callable[[int], np.ndarray | None]:
         """The ``masks`` argument of ``SCvxSolver.solve``: k -> predicted mask."""
         return lambda k: self.mask(theta, k)
 
