@@ -10,6 +10,7 @@ written, before the work that would fill it.
 
 from __future__ import annotations
 
+import os
 import tempfile
 from pathlib import Path
 
@@ -26,16 +27,17 @@ class ModelEvaluationError(ArithmeticError):
 def check_output_path(flag: str, path: Path) -> None:
     """Create an output file's folder and make sure the file can be written there, before
     solving: a solve must not end in an error because of where its result goes."""
+    target = Path(os.path.realpath(path))  # where the writers write: a link's target
     try:
-        path.parent.mkdir(parents=True, exist_ok=True)
+        target.parent.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise InputError(f"{flag} {path}: cannot create its folder ({exc.strerror})") from None
-    if path.is_dir():
+    if target.is_dir():
         raise InputError(f"{flag} {path}: is a folder, not a file")
-    if path.exists() and not path.is_file():  # the writers replace what is there
+    if target.exists() and not target.is_file():  # the writers replace what is there
         raise InputError(f"{flag} {path}: is a device, pipe or socket, not a regular file")
     try:  # a file written and removed beside it, as the writers do (root passes os.access)
-        with tempfile.NamedTemporaryFile(dir=path.parent, prefix=".write-check-"):
+        with tempfile.NamedTemporaryFile(dir=target.parent, prefix=".write-check-"):
             pass
     except OSError as exc:
         raise InputError(f"{flag} {path}: cannot write there ({exc.strerror})") from None

@@ -162,13 +162,17 @@ def params_from_dict(data: dict[str, Any]) -> Params:
 def load_scenario(path: str | Path) -> Scenario:
     path = Path(path)
     try:
-        text = path.read_text()
+        text = path.read_text(encoding="utf-8")
     except OSError as exc:
         raise ScenarioError("<file>", f"cannot read {path}: {exc.strerror}") from exc
+    except UnicodeDecodeError as exc:  # e.g. UTF-16, as some shells redirect
+        raise ScenarioError("<file>", f"{path} is not UTF-8 text ({exc.reason})") from None
     try:
         data = json.loads(text, parse_constant=_reject_constant, object_pairs_hook=_unique_keys)
-    except json.JSONDecodeError as exc:
-        raise ScenarioError("<file>", f"{path} is not valid JSON: {exc}") from exc
+    except ScenarioError:
+        raise
+    except (ValueError, RecursionError) as exc:  # JSONDecodeError, a 4,300-digit integer, nesting
+        raise ScenarioError("<file>", f"{path} is not valid JSON: {exc}") from None
     return scenario_from_dict(data)
 
 

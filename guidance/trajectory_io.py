@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import zipfile
+import zlib
 from pathlib import Path
 
 import numpy as np
@@ -58,6 +59,14 @@ def write_trajectory(
         )
 
 
+# What reading a damaged or foreign .npz can raise: zlib.error from a compressed member,
+# RecursionError from deeply nested JSON entries, MemoryError from a header claiming a huge
+# shape, ValueError from object arrays (allow_pickle=False) or bad JSON.
+_UNREADABLE = (
+    OSError, ValueError, EOFError, zipfile.BadZipFile, zlib.error, RecursionError, MemoryError
+)  # fmt: skip
+
+
 def read_trajectory(path: str | Path) -> dict[str, object]:
     """The file's arrays, its JSON entries decoded to dictionaries. A file that is not a
     trajectory file raises InputError saying why."""
@@ -71,7 +80,7 @@ def read_trajectory(path: str | Path) -> dict[str, object]:
         for key in JSON_KEYS:  # decoded to dictionaries
             if key in out:
                 out[key] = json.loads(str(out[key]))
-    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
+    except _UNREADABLE as exc:
         raise InputError(f"{path}: not a readable trajectory file ({exc})") from exc
     missing = [k for k in REQUIRED_KEYS if k not in out]
     if missing:

@@ -95,3 +95,32 @@ def test_two_writers_of_one_file_never_share_a_temporary(tmp_path: Path) -> None
     assert errors == []
     assert len(np.unique(np.load(path)["a"])) == 1
     assert [p.name for p in tmp_path.iterdir()] == ["out.npz"]
+
+
+def test_a_replaced_file_keeps_its_permissions(tmp_path: Path) -> None:
+    """A private (0600) file rewritten through atomic_write became 0644, readable by all (the
+    temporary file took the umask's mode); it now keeps the replaced file's mode."""
+    import os
+    import stat
+
+    path = tmp_path / "private.json"
+    path.write_text("{}")
+    path.chmod(0o600)
+    write_text_atomic(path, '{"a": 1}')
+    assert stat.S_IMODE(os.stat(path).st_mode) == 0o600
+    assert path.read_text() == '{"a": 1}'
+
+
+def test_an_output_through_a_link_into_a_missing_folder_is_checked_and_written(
+    tmp_path: Path,
+) -> None:
+    """--out as a link whose target folder did not exist passed the pre-solve check (made in
+    the link's folder) and then failed after the solve (FileNotFoundError, exit 1): the check
+    and the writers now work in the target's folder, and the file is written there."""
+    from guidance.cli import main
+
+    link = tmp_path / "out.npz"
+    target = tmp_path / "not" / "yet" / "there.npz"
+    link.symlink_to(target)
+    assert main(["solve", "--backend", "c", "--out", str(link)]) == 0
+    assert link.is_symlink() and read_trajectory(target)["status"] == "solved"

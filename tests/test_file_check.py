@@ -314,3 +314,41 @@ def test_a_file_without_its_scenario_says_what_is_not_checked(
     out = capsys.readouterr().out
     assert "no scenario in the file: x[0] not checked against one" in out
     assert "initial state vs scenario" not in out
+
+
+def test_damaged_or_crafted_archives_are_refused_with_exit_2(tmp_path: Path) -> None:
+    """A compressed member with a bad CRC (zlib.error), deeply nested JSON in an entry
+    (RecursionError) and a member whose header claims 10^12 values (MemoryError) escaped
+    read_trajectory as tracebacks (exit 1); all three are now 'not a readable trajectory file'."""
+    import zipfile
+
+    import numpy as np
+
+    good = tmp_path / "good.npz"
+    assert main(["solve", "--backend", "c", "--out", str(good)]) == 0
+    arrays = dict(np.load(good, allow_pickle=False))
+    cases = {}
+    damaged = tmp_path / "damaged.npz"  # a byte of x's compressed data flipped
+    np.savez_compressed(damaged, **arrays)
+    with zipfile.ZipFile(damaged) as z:
+        info = z.getinfo("x.npy")
+    raw = bytearray(damaged.read_bytes())
+    start = info.header_offset + 30 + len(info.filename) + len(info.extra)
+    raw[start + info.compress_size // 2] ^= 0xFF
+    damaged.write_bytes(bytes(raw))
+    cases["damaged"] = damaged
+    nested = tmp_path / "nested.npz"
+    np.savez(nested, **{**arrays, "params": np.array("[" * 100_000 + "]" * 100_000)})
+    cases["nested"] = nested
+    huge = tmp_path / "huge.npz"
+    header = b"{'descr': '<f8', 'fortran_order': False, 'shape': (100000000000, 14), }"
+    header += b" " * (118 - len(header)) + b"\n"
+    with zipfile.ZipFile(huge, "w") as z:
+        for k, v in arrays.items():
+            if k != "x":
+                with z.open(f"{k}.npy", "w") as f:
+                    np.lib.format.write_array(f, v, allow_pickle=False)
+        z.writestr("x.npy", b"\x93NUMPY\x01\x00" + len(header).to_bytes(2, "little") + header)
+    cases["huge"] = huge
+    for name, path in cases.items():
+        assert main(["verify", str(path)]) == 2, name

@@ -288,3 +288,20 @@ def test_scenario_all_lists_every_parameter_and_reads_back(
     assert set(Params().to_json_dict()) <= set(printed)
     assert printed["T_max"] == 4.5 and printed["m_dry"] == Params().m_dry
     assert scenario_from_dict(printed) == scenario_from_dict({**GOOD, "T_max": 4.5})
+
+
+@pytest.mark.parametrize("content", ["utf16", "digits", "nested"])
+def test_unreadable_scenario_files_are_refused_by_name(content: str, tmp_path: Path) -> None:
+    """A UTF-16 file (what some shells write), an integer of 5,000 digits and arrays nested
+    100,000 deep escaped load_scenario as UnicodeDecodeError, ValueError and RecursionError
+    (a traceback, exit 1); each is now a ScenarioError of the file (exit 2)."""
+    path = tmp_path / "s.json"
+    if content == "utf16":
+        path.write_text(json.dumps({"m0": 3.0}), encoding="utf-16")
+    elif content == "digits":
+        path.write_text('{"m0": ' + "3" * 5000 + "}")
+    else:
+        path.write_text('{"r0": ' + "[" * 100_000 + "]" * 100_000 + "}")
+    with pytest.raises(ScenarioError, match=r"scenario file: .* is not (UTF-8 text|valid JSON)"):
+        load_scenario(path)
+    assert main(["scenario", str(path)]) == 2
