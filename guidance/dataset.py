@@ -289,6 +289,20 @@ def _run_config_path(out_dir: Path) -> Path:
     return out_dir / "run.json"
 
 
+def _read_run_config(out_dir: Path) -> dict:
+    """The run's run.json: a JSON object with the keys of RUN_KEYS; InputError naming the file
+    otherwise (a damaged or hand-edited one)."""
+    path = _run_config_path(out_dir)
+    try:
+        config = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError, RecursionError) as exc:
+        raise InputError(f"{path}: not a readable run record ({exc})") from None
+    missing = [k for k in RUN_KEYS if k not in config] if isinstance(config, dict) else RUN_KEYS
+    if missing:
+        raise InputError(f"{path}: not a run record (missing {', '.join(missing)})")
+    return config
+
+
 RUN_KEYS = ("seed", "ranges", "params", "scvx_settings", "backend")
 
 
@@ -299,7 +313,7 @@ def _check_run_config(out_dir: Path, config: dict) -> None:
     if not path.exists():
         record_code_version(path, config)
         return
-    old = json.loads(path.read_text())
+    old = _read_run_config(out_dir)
     for key in RUN_KEYS:
         if old.get(key) != config[key]:
             new = config[key]
@@ -470,7 +484,7 @@ def pack(out_dir: str | Path, dataset_path: str | Path, n_base: int | None = Non
             f"{out} is not a dataset run directory (no run.json): run `guidance dataset` "
             "without --pack-only to make one"
         )
-    config = json.loads(_run_config_path(out).read_text())
+    config = _read_run_config(out)
     ids = sorted(done_ids(out))
     if n_base is not None:
         ids = [i for i in ids if i < n_base]

@@ -299,3 +299,16 @@ def test_feasible_fraction_counts_base_samples(tiny_run) -> None:
     assert header["base_status_counts"] == {"solved": 2}
     assert np.all(ds.status == "solved")
     assert header["feasible_fraction"] == 1.0
+
+
+@pytest.mark.parametrize("record", ["{not json", "[1, 2]", '{"seed": 0}'])
+def test_a_damaged_run_record_is_refused_by_name(record: str, tmp_path) -> None:
+    """A run.json that is not JSON, not an object or missing keys raised JSONDecodeError,
+    AttributeError or KeyError on resume and on --pack-only (a traceback); both now refuse
+    the run directory by naming the file (exit 2 from the CLI)."""
+    (tmp_path / "samples").mkdir()
+    (tmp_path / "run.json").write_text(record)
+    with pytest.raises(dataset.InputError, match=r"run\.json: not a"):
+        dataset.generate(tmp_path, 1, progress=False, workers=1)
+    with pytest.raises(dataset.InputError, match=r"run\.json: not a"):
+        dataset.pack(tmp_path, tmp_path / "d.npz")
