@@ -254,21 +254,51 @@ def write_sample(out_dir: Path, rec: dict[str, Any]) -> None:
 UNREADABLE = (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile)
 
 
-def read_sample(path: Path) -> dict[str, Any]:
+def read_sample(path: Path, N: int | None = None) -> dict[str, Any]:
+    """A sample file's arrays; with the run's ``N``, also checked to fit the run (keys,
+    shapes, its id): a readable sample of another run is refused as an unreadable one is."""
     try:
         with np.load(path, allow_pickle=False) as f:
-            return {k: f[k] for k in f.files}
+            rec = {k: f[k] for k in f.files}
     except UNREADABLE as exc:
         raise InputError(
             f"sample file {path} is unreadable ({exc}): run `guidance dataset` with the same "
             "settings again, which solves it again"
         ) from None
+    if N is not None:
+        misfit = _sample_misfit(rec, N, int(path.name[:6]))
+        if misfit:
+            raise InputError(
+                f"sample file {path} does not fit this run ({misfit}): run `guidance dataset` "
+                "with the same settings again, which solves it again"
+            )
+    return rec
 
 
-def done_ids(out_dir: Path, set_aside_unreadable: bool = False) -> set[int]:
+_SAMPLE_SCALARS = ("t_f", "status", "iterations", "subproblems", "solve_time_s", "id")
+
+
+def _sample_misfit(rec: dict[str, Any], N: int, i: int) -> str | None:
+    """Why a readable sample cannot be sample ``i`` of a run of this N, or None."""
+    shapes = {"theta": (N_THETA,), "x": (N, NX), "u": (N, NU)}
+    missing = [k for k in (*shapes, "masks", *_SAMPLE_SCALARS) if k not in rec]
+    if missing:
+        return f"no {', '.join(missing)}"
+    for key, shape in shapes.items():
+        if rec[key].shape != shape:
+            return f"{key} is {rec[key].shape}, the run asks for {shape}"
+    if rec["masks"].ndim != 2 or rec["masks"].shape[1] != NC * N:
+        return f"masks is {rec['masks'].shape}, the run asks for (iterations, {NC * N})"
+    if any(rec[k].size != 1 for k in _SAMPLE_SCALARS) or int(rec["id"]) != i:
+        return f"its id or one of {', '.join(_SAMPLE_SCALARS)} is not sample {i}'s"
+    return None
+
+
+def done_ids(out_dir: Path, set_aside_unreadable: bool = False, N: int | None = None) -> set[int]:
     """The ids solved in ``out_dir``. Writes are atomic, but a file can still be damaged
     later (a full disk, a copy cut short): with ``set_aside_unreadable`` (a run resuming)
-    such a file is renamed ``*.unreadable`` and its sample solved again."""
+    such a file, or (given the run's ``N``) one that does not fit the run, is renamed
+    ``*.unreadable`` and its sample solved again."""
     d = out_dir / "samples"
     if not d.is_dir():
         return set()
@@ -276,7 +306,7 @@ def done_ids(out_dir: Path, set_aside_unreadable: bool = False) -> set[int]:
     for p in d.glob("[0-9]" * 6 + ".npz"):
         if set_aside_unreadable:
             try:
-                read_sample(p)
+                read_sample(p, N)
             except InputError:
                 p.rename(p.with_suffix(".unreadable"))
                 print(f"{p}: unreadable, set aside; its sample is solved again", file=sys.stderr)
@@ -368,7 +398,8 @@ def generate(
     }
     _check_run_config(out, config)
     version = code_version()
-    todo = [i for i in range(n_base) if i not in done_ids(out, set_aside_unreadable=True)]
+    done = done_ids(out, set_aside_unreadable=True, N=params.N)
+    todo = [i for i in range(n_base) if i not in done]
     jobs = [
         (i, seed, config["ranges"], config["params"], config["scvx_settings"], config["backend"])
         for i in todo
@@ -490,8 +521,8 @@ def pack(out_dir: str | Path, dataset_path: str | Path, n_base: int | None = Non
         ids = [i for i in ids if i < n_base]
     if not ids:
         raise InputError(f"no solved samples in {out}: run `guidance dataset` to solve some")
-    recs = [read_sample(sample_path(out, i)) for i in ids]
     N = int(config["params"]["N"])
+    recs = [read_sample(sample_path(out, i), N) for i in ids]
     it_max = int(config["scvx_settings"]["iter_max"])
     M = len(recs) * N_ROTATIONS
     theta = np.zeros((M, N_THETA))

@@ -115,6 +115,31 @@ def test_a_damaged_sample_is_named_by_pack_and_solved_again_on_resume(tiny_run, 
     assert pack(run, tmp_path / "d.npz")["n_base"] == 2
 
 
+@pytest.mark.parametrize("misfit", ["another N", "no masks", "another id"])
+def test_a_sample_that_does_not_fit_the_run_is_named_and_solved_again(
+    misfit: str, tiny_run, tmp_path
+) -> None:
+    """A readable sample of another run (another N), one without masks, or one whose id is
+    not its file's counted as done: resume kept it and pack crashed with numpy's broadcast
+    error or a KeyError, naming no file. pack now names it, and resume solves it again."""
+    run = tmp_path / "run"
+    shutil.copytree(tiny_run[0], run)
+    path = sample_path(run, 1)
+    rec = dict(np.load(path, allow_pickle=False))
+    if misfit == "another N":
+        rec["x"], rec["u"] = rec["x"][:10], rec["u"][:10]
+    elif misfit == "no masks":
+        del rec["masks"]
+    else:
+        rec["id"] = np.asarray(7)
+    np.savez(path, **rec)
+    with pytest.raises(InputError, match=f"sample file {path} does not fit this run"):
+        pack(run, tmp_path / "d.npz")
+    again = generate(run, 2, seed=11, ranges=EASY, workers=1, progress=False, backend="clarabel")
+    assert sum(again.values()) == 1  # id 1 alone
+    assert pack(run, tmp_path / "d.npz")["n_base"] == 2
+
+
 def test_cli_refuses_a_resume_with_other_options(tiny_run, tmp_path, capsys) -> None:
     argv = ["dataset", "--run-dir", str(tiny_run[0]), "--output", str(tmp_path / "d.npz")]
     assert main([*argv, "--n-base", "60", "--seed", "1", "--no-progress"]) == 2
