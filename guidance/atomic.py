@@ -6,7 +6,8 @@ then replaces the target in one step. An interruption (Ctrl-C, a killed job, an 
 the writer) leaves the previous file or the new one, never a truncated one, and no temporary
 file. A target that is a symbolic link is written through the link: the link stays and the
 file it points to gets the new content, as a shell redirection would do (a plain rename would
-replace the link by a regular file). A file replaced keeps its permissions (a private file
+replace the link by a regular file). A missing folder is made here (a link's target's), for
+every writer. A file replaced keeps its permissions (a private file
 stays private); being a new file, it is no longer shared with any hard link to the old one.
 """
 
@@ -25,7 +26,7 @@ from typing import BinaryIO
 def atomic_write(path: str | Path) -> Iterator[BinaryIO]:
     """``with atomic_write(path) as f: np.savez(f, ...)``: the binary file to write."""
     target = Path(os.path.realpath(path))
-    target.parent.mkdir(parents=True, exist_ok=True)  # a link's target folder too
+    target.parent.mkdir(parents=True, exist_ok=True)  # the one place writers make folders
     tmp = target.with_name(f".{target.name}.{os.getpid()}-{threading.get_ident()}.tmp")
     try:
         with open(tmp, "wb") as f:

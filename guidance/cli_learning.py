@@ -536,7 +536,6 @@ def cmd_baselines(args: argparse.Namespace) -> int:
         print()
     models = Path(args.models_dir)
     out = Path(args.json) if args.json else models / "baselines.json"
-    out.parent.mkdir(parents=True, exist_ok=True)
     report = {"provenance": provenance(), "dataset": ds.header, "results": res}
     write_text_atomic(out, results_json(report))
     print(f"wrote {out}")
@@ -595,7 +594,6 @@ def cmd_mask_ceiling(args: argparse.Namespace) -> int:
     models = Path(args.models_dir)
     out = Path(args.json) if args.json else models / "mask_ceiling.json"
     run = dict(landings=args.landings, neighbours=args.neighbours, backend=backend, seed=args.seed)
-    out.parent.mkdir(parents=True, exist_ok=True)
     write_text_atomic(out, json.dumps(results_dict(scores, spacing, n_train, **run), indent=1))
     print(f"wrote {out}")
     if not args.json and metrics.exists():

@@ -580,7 +580,6 @@ def pack(out_dir: str | Path, dataset_path: str | Path, n_base: int | None = Non
         "mask_rule": "bit 7k + c, tight at the accepted subproblem of iteration k (scvx.py)",
     }
     path = Path(dataset_path)
-    path.parent.mkdir(parents=True, exist_ok=True)
     with atomic_write(path) as f:
         np.savez_compressed(
             f,

@@ -34,7 +34,6 @@ def write_trajectory(
     the solve ran with (``result.settings``, when known) and provenance (with the path and
     sha256 of each file in ``inputs``, such as the networks of a T-SCvx solve)."""
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
     with atomic_write(path) as f:
         np.savez(
             f,

@@ -124,3 +124,11 @@ def test_an_output_through_a_link_into_a_missing_folder_is_checked_and_written(
     link.symlink_to(target)
     assert main(["solve", "--backend", "c", "--out", str(link)]) == 0
     assert link.is_symlink() and read_trajectory(target)["status"] == "solved"
+
+
+def test_the_writers_folder_is_made_in_one_place(tmp_path: Path) -> None:
+    """atomic_write makes a missing folder (the target's, for a link): the writers no longer
+    each make their own."""
+    path = tmp_path / "a" / "b" / "c.json"
+    write_text_atomic(path, "{}")
+    assert path.read_text() == "{}"

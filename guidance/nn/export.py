@@ -104,7 +104,6 @@ def export_onnx(
     entry.key, entry.value = META_KEY, json.dumps(meta)
     proto.doc_string = f"T-SCvx {res.kind} network {res.arch.label()}"
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
     onnx.checker.check_model(proto)
     with atomic_write(path) as f:  # an interrupted export leaves the previous model whole
         onnx.save_model(proto, f, save_as_external_data=False)

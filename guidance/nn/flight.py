@@ -363,7 +363,6 @@ def write_tnn(onnx_path: str | Path, out_path: str | Path) -> bool:
     out = Path(out_path)
     if out.is_file() and out.read_bytes() == blob:
         return False
-    out.parent.mkdir(parents=True, exist_ok=True)
     write_bytes_atomic(out, blob)
     return True
 
