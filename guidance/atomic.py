@@ -7,35 +7,48 @@ the writer) leaves the previous file or the new one, never a truncated one, and 
 file. A target that is a symbolic link is written through the link: the link stays and the
 file it points to gets the new content, as a shell redirection would do (a plain rename would
 replace the link by a regular file). A missing folder is made here (a link's target's), for
-every writer. A file replaced keeps its permissions (a private file
-stays private); being a new file, it is no longer shared with any hard link to the old one.
+every writer, and only here; a write that fails removes the folders it made (when still
+empty), so a failed command leaves no trace. A file replaced keeps its permissions (a private
+file stays private); being a new file, it is no longer shared with any hard link to the old one.
+
+``check_outputs`` is the commands' check before their work: each output can be written, and
+no two of them are one file (or one inside the other). It makes no folder: a refused command
+leaves nothing behind, and one that stops before writing leaves no empty folder.
 """
 
 from __future__ import annotations
 
+import itertools
 import os
 import stat
+import tempfile
 import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from typing import BinaryIO
 
+from guidance.errors import InputError
+
 
 @contextmanager
 def atomic_write(path: str | Path) -> Iterator[BinaryIO]:
     """``with atomic_write(path) as f: np.savez(f, ...)``: the binary file to write."""
     target = Path(os.path.realpath(path))
-    target.parent.mkdir(parents=True, exist_ok=True)  # the one place writers make folders
+    made = _make_folders(target.parent)  # the one place writers make folders
     tmp = target.with_name(f".{target.name}.{os.getpid()}-{threading.get_ident()}.tmp")
+    written = False
     try:
         with open(tmp, "wb") as f:
             yield f
         if target.exists():  # the replaced file's permissions, not the umask's default
             os.chmod(tmp, stat.S_IMODE(target.stat().st_mode))
         os.replace(tmp, target)
+        written = True
     finally:
         tmp.unlink(missing_ok=True)
+        if not written:
+            _remove_folders(made)
 
 
 def write_bytes_atomic(path: str | Path, data: bytes) -> None:
@@ -45,3 +58,82 @@ def write_bytes_atomic(path: str | Path, data: bytes) -> None:
 
 def write_text_atomic(path: str | Path, text: str) -> None:
     write_bytes_atomic(path, text.encode())
+
+
+def _make_folders(folder: Path) -> list[Path]:
+    """Make ``folder`` and its missing parents; the ones this call made, outermost first."""
+    missing: list[Path] = []
+    while not folder.is_dir() and folder != folder.parent:
+        missing.append(folder)
+        folder = folder.parent
+    made: list[Path] = []
+    try:
+        for p in reversed(missing):
+            try:
+                p.mkdir()
+            except FileExistsError:
+                if not p.is_dir():
+                    raise
+                continue  # made meanwhile by another writer: not ours to remove
+            made.append(p)
+    except BaseException:
+        _remove_folders(made)
+        raise
+    return made
+
+
+def _remove_folders(made: list[Path]) -> None:
+    """Remove the folders a failed write made, innermost first, while they are empty."""
+    for p in reversed(made):
+        try:
+            p.rmdir()
+        except OSError:  # another writer's file is in it now: it stays, and so do its parents
+            return
+
+
+def check_outputs(*outputs: tuple[str, str | Path | None]) -> None:
+    """Refuse, before the work, outputs ``(flag, path)`` (None: not asked for) that could not be
+    written or that are one file: the second written would overwrite the first."""
+    given = [(flag, path) for flag, path in outputs if path]  # named as the user wrote them
+    _check_distinct(given)
+    for flag, path in given:
+        _check_writable(flag, path)
+
+
+def _check_distinct(outputs: list[tuple[str, str | Path]]) -> None:
+    # compared where the writers write: links, "./" and ".." resolved
+    where = [(flag, path, Path(os.path.normcase(os.path.realpath(path)))) for flag, path in outputs]
+    for first, second in itertools.combinations(where, 2):
+        if first[2] == second[2]:
+            raise InputError(
+                f"{first[0]} {first[1]} and {second[0]} {second[1]}: both are {first[2]} (one "
+                "output would overwrite the other)"
+            )
+        for (flag, path, inner), (outer_flag, outer_path, outer) in (
+            (first, second),
+            (second, first),
+        ):
+            if outer in inner.parents:
+                raise InputError(
+                    f"{flag} {path}: inside {outer_flag} {outer_path}, which is to be a file"
+                )
+
+
+def _check_writable(flag: str, path: str | Path) -> None:
+    """The file can be written, its missing folders made: checked without making them."""
+    target = Path(os.path.realpath(path))  # where the writers write: a link's target
+    if target.is_dir():
+        raise InputError(f"{flag} {path}: is a folder, not a file")
+    if target.exists() and not target.is_file():  # the writers replace what is there
+        raise InputError(f"{flag} {path}: is a device, pipe or socket, not a regular file")
+    folder = target.parent
+    while not os.path.lexists(folder):  # the folder the first missing one would be made in
+        folder = folder.parent
+    what = "write there" if folder == target.parent else "create its folder"
+    if not folder.is_dir():
+        raise InputError(f"{flag} {path}: cannot {what} ({folder} is not a folder)")
+    try:  # a file written and removed there, as the writers do (root passes os.access)
+        with tempfile.NamedTemporaryFile(dir=folder, prefix=".write-check-"):
+            pass
+    except OSError as exc:
+        raise InputError(f"{flag} {path}: cannot {what} ({exc.strerror})") from None

@@ -15,7 +15,8 @@ import numpy as np
 
 from guidance import file_check
 from guidance.api import BACKENDS, CONSTRAINT_MODEL, METHODS, MODELS_DIR, SOLUTION_MODEL, solve
-from guidance.errors import InputError, check_output_path
+from guidance.atomic import check_outputs
+from guidance.errors import InputError
 from guidance.params import IM, Params, Scenario, SCvxSettings
 from guidance.scenario import load_scenario, scenario_to_dict
 from guidance.tscvx import REDUCED_ETA_INIT
@@ -161,12 +162,11 @@ def _read_guess(path: str | None, p: Params) -> tuple[np.ndarray, np.ndarray, fl
 
 
 def _check_output_files(out: str | None, plot: str | None) -> None:
-    """Refuse an output the solve could not write, before solving."""
+    """Refuse, before solving, an output the solve could not write or two outputs that are
+    one file (the figure would overwrite the trajectory); no folder is made until written."""
     if plot:
         _check_plot_format(plot)
-    for flag, path in (("--out", out), ("--plot", plot)):
-        if path:
-            check_output_path(flag, Path(path))
+    check_outputs(("--out", out), ("--plot", plot))
 
 
 def _print_problem(args: argparse.Namespace, scenario: Scenario, settings: SCvxSettings) -> None:

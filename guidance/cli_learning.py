@@ -203,13 +203,14 @@ def _add_mask_ceiling(sub: argparse._SubParsersAction) -> None:
 
 # ---- dataset ------------------------------------------------------------------------------
 def cmd_dataset(args: argparse.Namespace) -> int:
+    from guidance.atomic import check_outputs
     from guidance.dataset import WorkerDiedError, generate, pack, summary
-    from guidance.errors import InputError, check_output_path
+    from guidance.errors import InputError
     from guidance.params import SCvxSettings
 
     if Path(args.run_dir).exists() and not Path(args.run_dir).is_dir():
         raise InputError(f"--run-dir {args.run_dir}: is a file, not a folder")
-    check_output_path("--output", Path(args.output))  # before the solving, not after
+    check_outputs(("--output", args.output))  # before the solving, not after
     if not args.pack_only:
         try:
             counts = generate(

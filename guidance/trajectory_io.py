@@ -1,4 +1,11 @@
-"""Trajectory .npz files (DESIGN.md contract) and their provenance."""
+"""Trajectory .npz files (DESIGN.md contract) and their provenance.
+
+Text entries (``status``, ``reason``, ``method``, ``backend``) hold no NUL character: numpy
+stores them as fixed-width strings padded with NULs, so a trailing NUL would be read back as
+padding, by this reader and any other, and lost. A text with one is refused on writing, and a
+file with one in its text is refused on reading. The JSON entries refuse a key given twice
+(``json`` would keep the last and say nothing).
+"""
 
 from __future__ import annotations
 
@@ -7,6 +14,7 @@ import json
 import zipfile
 import zlib
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -32,8 +40,12 @@ def write_trajectory(
 ) -> None:
     """Writes the contract keys plus the iteration masks, reason, scenario, the SCvx settings
     the solve ran with (``result.settings``, when known) and provenance (with the path and
-    sha256 of each file in ``inputs``, such as the networks of a T-SCvx solve)."""
+    sha256 of each file in ``inputs``, such as the networks of a T-SCvx solve). A text with a
+    NUL character raises InputError before anything is written."""
     path = Path(path)
+    text = {"status": result.status, "reason": result.reason, "method": method, "backend": backend}
+    for key, value in text.items():
+        _check_no_nul(path, key, value)
     with atomic_write(path) as f:
         np.savez(
             f,
@@ -73,15 +85,57 @@ def read_trajectory(path: str | Path) -> dict[str, object]:
         raise InputError(f"{path}: no such file")
     if not zipfile.is_zipfile(path):
         raise InputError(f"{path}: not a trajectory file (not an .npz archive)")
+    out = _load(path)
+    missing = [k for k in REQUIRED_KEYS if k not in out]
+    if missing:
+        raise InputError(f"{path}: not a trajectory file, missing {', '.join(missing)}")
+    for key, value in out.items():
+        if isinstance(value, np.ndarray) and value.dtype.kind == "U":  # the text entries
+            for item in value.ravel().tolist():
+                _check_no_nul(path, key, item)
+    return out
+
+
+def _load(path: str | Path) -> dict[str, object]:
     try:
         with np.load(path, allow_pickle=False) as data:
             out: dict[str, object] = {k: data[k] for k in data.files}
         for key in JSON_KEYS:  # decoded to dictionaries
             if key in out:
-                out[key] = json.loads(str(out[key]))
+                out[key] = _decode_json(path, key, str(out[key]))
+    except InputError:
+        raise  # already names the file and says what is wrong
     except _UNREADABLE as exc:
         raise InputError(f"{path}: not a readable trajectory file ({exc})") from exc
-    missing = [k for k in REQUIRED_KEYS if k not in out]
-    if missing:
-        raise InputError(f"{path}: not a trajectory file, missing {', '.join(missing)}")
     return out
+
+
+def _check_no_nul(path: str | Path, key: str, text: str) -> None:
+    if "\x00" in text:
+        raise InputError(
+            f"{path}: {key} {text!r} holds a NUL character (a trajectory file's text cannot: "
+            ".npz strings are NUL-padded, a trailing NUL would be lost)"
+        )
+
+
+class _DuplicateKeyError(ValueError):
+    def __init__(self, key: str) -> None:
+        super().__init__(key)
+        self.key = key
+
+
+def _unique_keys(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    seen: dict[str, Any] = {}
+    for key, value in pairs:
+        if key in seen:
+            raise _DuplicateKeyError(key)
+        seen[key] = value
+    return seen
+
+
+def _decode_json(path: str | Path, entry: str, text: str) -> object:
+    """A JSON entry; a key given twice in any of its objects is refused, not the last kept."""
+    try:
+        return json.loads(text, object_pairs_hook=_unique_keys)
+    except _DuplicateKeyError as exc:
+        raise InputError(f"{path}: {entry}: key {exc.key!r} given twice") from None

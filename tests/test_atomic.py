@@ -132,3 +132,91 @@ def test_the_writers_folder_is_made_in_one_place(tmp_path: Path) -> None:
     path = tmp_path / "a" / "b" / "c.json"
     write_text_atomic(path, "{}")
     assert path.read_text() == "{}"
+
+
+def test_a_failed_write_removes_the_folders_it_made_and_only_those(tmp_path: Path) -> None:
+    """A write that failed left the folders atomic_write had made for it, empty."""
+    kept = tmp_path / "kept"
+    kept.mkdir()
+    with pytest.raises(RuntimeError), atomic_write(kept / "new" / "deeper" / "f.json") as f:
+        f.write(b"{")
+        raise RuntimeError("the writer failed")
+    assert [p.name for p in tmp_path.iterdir()] == ["kept"]
+    assert list(kept.iterdir()) == []
+
+
+def test_a_made_folder_another_writer_filled_is_kept(tmp_path: Path) -> None:
+    """Only empty folders are removed: a file written there meanwhile stays, with its folder."""
+    other = tmp_path / "new" / "other.json"
+    with pytest.raises(RuntimeError), atomic_write(tmp_path / "new" / "f.json"):
+        other.write_text("{}")
+        raise RuntimeError("the writer failed")
+    assert [p.name for p in other.parent.iterdir()] == ["other.json"]
+
+
+def _no_solve(*args: object, **kwargs: object) -> None:
+    raise AssertionError("the solve ran: the outputs were not checked before it")
+
+
+@pytest.mark.parametrize(
+    ("out", "plot"),
+    [
+        ("f.png", "f.png"),  # the same name
+        ("./f.png", "f.png"),  # the same file by another name
+        ("sub/../f.png", "f.png"),
+        ("f.npz", "link.png"),  # a link to the trajectory file
+        ("fig.png/t.npz", "fig.png"),  # the trajectory inside the figure, to be a file
+    ],
+)
+def test_two_outputs_that_are_one_file_are_refused_before_solving(
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+    out: str,
+    plot: str,
+) -> None:
+    """--out and --plot naming one file: the figure overwrote the trajectory file, after the
+    solve; now exit 2 before solving, nothing written and no folder made."""
+    from guidance import cli
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "link.png").symlink_to(tmp_path / "f.npz")
+    monkeypatch.setattr(cli, "solve", _no_solve)
+    assert cli.main(["solve", "--out", out, "--plot", plot]) == 2
+    err = capsys.readouterr().err
+    assert "error: " in err and "Traceback" not in err
+    assert ("would overwrite the other" in err) or ("which is to be a file" in err), err
+    assert [p.name for p in tmp_path.iterdir()] == ["link.png"]
+
+
+def test_a_refused_output_leaves_no_folder(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """--out into new folders with a --plot that is refused: the check made the --out
+    folders, and they stayed; the check now makes none."""
+    from guidance import cli
+
+    (tmp_path / "fig.png").mkdir()
+    monkeypatch.setattr(cli, "solve", _no_solve)
+    out = tmp_path / "new" / "sub" / "t.npz"
+    assert cli.main(["solve", "--out", str(out), "--plot", str(tmp_path / "fig.png")]) == 2
+    assert "is a folder" in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["fig.png"]
+
+
+def test_a_solve_that_writes_nothing_leaves_no_folder(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A solve that stops before its first subproblem (exit 3, nothing written) left the
+    output folders the pre-solve check had made."""
+    from guidance import cli
+
+    def stopped(*args: object, **kwargs: object) -> SCvxResult:
+        nan = float("nan")
+        return SCvxResult("solver_error", "stopped", np.zeros((0, 14)), np.zeros((0, 3)), nan,
+                          0, 0, 0.0)  # fmt: skip
+
+    monkeypatch.setattr(cli, "solve", stopped)
+    out, plot = tmp_path / "a" / "t.npz", tmp_path / "b" / "c" / "f.png"
+    assert cli.main(["solve", "--out", str(out), "--plot", str(plot)]) == cli.EXIT_NO_TRAJECTORY
+    assert list(tmp_path.iterdir()) == []

@@ -239,6 +239,11 @@ _UNCHECKABLE: dict[str, Callable[[Path, Path], object]] = {
     "no_t_min": lambda src, dst: _with_params(
         src, dst, {k: v for k, v in _params_json(src).items() if k != "T_min"}
     ),
+    # json kept the last of two equal keys; a text with a NUL (a trailing one is lost) passed
+    "t_max_twice": lambda src, dst: _edited(
+        src, dst, params=str(_array(src, "params")).replace("{", '{"T_max": 4.0, ', 1)
+    ),
+    "status_nul": lambda src, dst: _edited(src, dst, status="sol\x00ved"),
 }
 
 
@@ -261,6 +266,8 @@ _UNCHECKABLE: dict[str, Callable[[Path, Path], object]] = {
         ("u_huge", "u: values beyond 1e+09"),
         ("no_params", "params field 'g_I': missing"),
         ("no_t_min", "params field 'T_min': missing"),
+        ("t_max_twice", "params: key 'T_max' given twice"),
+        ("status_nul", "status 'sol\\x00ved' holds a NUL character"),
     ],
 )
 def test_files_that_cannot_be_checked_exit_2(

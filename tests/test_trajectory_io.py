@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from guidance.errors import InputError
 from guidance.params import NC, Params, Scenario, SCvxSettings
 from guidance.scvx import SCvxResult
 from guidance.trajectory_io import REQUIRED_KEYS, read_trajectory, write_trajectory
@@ -56,3 +58,78 @@ def test_a_file_missing_a_required_key_is_refused(tmp_path: Path, missing: str) 
     assert missing in REQUIRED_KEYS
     with pytest.raises(ValueError, match=f"not a trajectory file, missing {missing}"):
         read_trajectory(bad)
+
+
+def _rewritten(tmp_path: Path, **changes: object) -> Path:
+    """A written trajectory file with some entries replaced, as another tool could write it."""
+    path = tmp_path / "t.npz"
+    p = Params(N=N)
+    write_trajectory(path, _result("solved", "converged"), p, Scenario(params=p), "scvx", "c")
+    with np.load(path) as data:
+        entries = {k: data[k] for k in data.files}
+    bad = tmp_path / "bad.npz"
+    np.savez(bad, **{**entries, **changes})
+    return bad
+
+
+@pytest.mark.parametrize(
+    ("entry", "key"),
+    [("params", "N"), ("scenario", "r0"), ("settings", "iter_max")],
+)
+def test_a_json_key_given_twice_is_refused(tmp_path: Path, entry: str, key: str) -> None:
+    """json.loads kept the last of two equal keys: a file could say N = 5 and N = 6."""
+    with np.load(_rewritten(tmp_path)) as data:
+        text = str(data[entry])
+    doubled = text.replace("{", f'{{"{key}": 6, ', 1)
+    bad = _rewritten(tmp_path, **{entry: np.str_(doubled)})
+    with pytest.raises(
+        InputError, match=rf"{re.escape(str(bad))}: {entry}: key '{key}' given twice"
+    ):
+        read_trajectory(bad)
+
+
+def test_a_json_key_given_twice_in_a_nested_object_is_refused(tmp_path: Path) -> None:
+    nested = '{"params": {"N": 5, "N": 6}}'
+    bad = _rewritten(tmp_path, scenario=np.str_(nested))
+    with pytest.raises(InputError, match="scenario: key 'N' given twice"):
+        read_trajectory(bad)
+
+
+@pytest.mark.parametrize("reason", ["stopped\x00", "a\x00b", "\x00"])
+def test_a_text_with_a_nul_is_refused_before_writing(tmp_path: Path, reason: str) -> None:
+    """A reason ending in NUL was written and read back without it (numpy's fixed-width
+    strings are NUL-padded): the contract's texts hold no NUL, refused before any file or
+    folder is made."""
+    path = tmp_path / "new" / "t.npz"
+    p = Params(N=N)
+    with pytest.raises(InputError, match=r"reason .* holds a NUL character"):
+        write_trajectory(path, _result("solved", reason), p, Scenario(params=p), "scvx", "c")
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("key", ["status", "method", "backend"])
+def test_every_text_entry_is_checked_for_nul_on_writing(tmp_path: Path, key: str) -> None:
+    text = {"status": "solved", "method": "scvx", "backend": "c", key: "x\x00"}
+    p = Params(N=N)
+    result = _result(text["status"], "converged")
+    with pytest.raises(InputError, match=rf"{key} .* holds a NUL character"):
+        write_trajectory(
+            tmp_path / "t.npz", result, p, Scenario(params=p), text["method"], text["backend"]
+        )
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("key", ["status", "reason", "method"])
+def test_a_file_with_a_nul_in_its_text_is_refused(tmp_path: Path, key: str) -> None:
+    """A file another tool wrote with a NUL inside a text (a trailing one reads back as
+    padding): refused on reading too, naming the file and the entry."""
+    bad = _rewritten(tmp_path, **{key: np.str_("sol\x00ved")})
+    with pytest.raises(InputError, match=rf"{re.escape(str(bad))}: {key} .* holds a NUL character"):
+        read_trajectory(bad)
+
+
+def test_json_texts_keep_their_nul_characters(tmp_path: Path) -> None:
+    """A NUL inside a JSON value is written escaped (\\u0000) and round-trips."""
+    prov = '{"note": "end\\u0000"}'
+    data = read_trajectory(_rewritten(tmp_path, provenance=np.str_(prov)))
+    assert data["provenance"] == {"note": "end\x00"}
