@@ -8,8 +8,9 @@ Pipeline (paper, "Data Sampling Strategy"):
    prefix of any larger one with the same seed and ranges.
 2. Solve. Every base sample is solved by the reference SCvx in a pool of worker processes
    (one thread each). Each finished sample is written atomically to
-   ``OUT/samples/NNNNNN.npz``; a restart skips the ids already there, so an interrupted run
-   loses at most the solves in flight.
+   ``OUT/samples/NNNNNN.npz`` (its id: 6 digits, more from 1,000,000) with the record of its
+   run (seed, ranges, parameters, SCvx settings, backend); a restart skips the ids already
+   there that fit the run, so an interrupted run loses at most the solves in flight.
 3. Augment and pack. The solved base samples are rotated about the up axis by 0, 45, ..., 315
    degrees (``guidance.symmetry``: rotated r, v and q; same omega_B, T_B, m, t_f and masks) and
    written as one versioned ``.npz`` with a JSON header (ranges, seed, SCvx settings,
@@ -29,7 +30,6 @@ import os
 import signal
 import sys
 import time
-import zipfile
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
@@ -39,7 +39,7 @@ from typing import Any
 import numpy as np
 
 from guidance.atomic import atomic_write
-from guidance.errors import InputError
+from guidance.errors import UNREADABLE_NPZ, InputError
 from guidance.params import NC, NU, NX, InitialState, Params, Scenario, SCvxSettings
 from guidance.provenance import code_version, provenance, record_code_version
 from guidance.scenario import ScenarioError, params_from_dict, validate
@@ -241,8 +241,27 @@ def scvx_solver(backend: str) -> Callable[[Scenario, SCvxSettings], Any]:
     return lambda scenario, settings: solve_scvx(scenario, settings, backend)
 
 
+def _sample_name(i: int) -> str:
+    return f"{i:06d}.npz"  # 6 digits, more from id 1,000,000
+
+
 def sample_path(out_dir: Path, i: int) -> Path:
-    return out_dir / "samples" / f"{i:06d}.npz"
+    return out_dir / "samples" / _sample_name(i)
+
+
+def _sample_id(path: Path) -> int | None:
+    """The id of a file named as sample files are named, else None (a temporary file, one set
+    aside, one named by hand such as 0000001.npz)."""
+    stem = path.name.removesuffix(".npz")
+    if stem == path.name or not (stem.isascii() and stem.isdigit()):
+        return None
+    return int(stem) if _sample_name(int(stem)) == path.name else None
+
+
+def run_record(config: dict) -> str:
+    """What defines a run's samples (RUN_KEYS of its run.json), as JSON; each sample file
+    carries it, so that a sample of another run is recognized without run.json."""
+    return json.dumps({k: config[k] for k in RUN_KEYS}, sort_keys=True)
 
 
 def write_sample(out_dir: Path, rec: dict[str, Any]) -> None:
@@ -251,34 +270,43 @@ def write_sample(out_dir: Path, rec: dict[str, Any]) -> None:
         np.savez(f, **{k: np.asarray(v) for k, v in rec.items()})
 
 
-UNREADABLE = (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile)
+class SampleError(InputError):
+    """A sample file that is unreadable or does not fit its run; ``problem`` says which."""
+
+    def __init__(self, path: Path, problem: str) -> None:
+        super().__init__(
+            f"sample file {path} {problem}: run `guidance dataset` with the same settings "
+            "again, which solves it again"
+        )
+        self.problem = problem
 
 
-def read_sample(path: Path, N: int | None = None) -> dict[str, Any]:
-    """A sample file's arrays; with the run's ``N``, also checked to fit the run (keys,
-    shapes, its id): a readable sample of another run is refused as an unreadable one is."""
+def read_sample(path: Path, run: dict | None = None) -> dict[str, Any]:
+    """A sample file's arrays; with the run's record (run.json), also checked to fit the run
+    (keys, shapes, its id, the run it records): a readable sample of another run is refused
+    as an unreadable one is."""
     try:
         with np.load(path, allow_pickle=False) as f:
             rec = {k: f[k] for k in f.files}
-    except UNREADABLE as exc:
-        raise InputError(
-            f"sample file {path} is unreadable ({exc}): run `guidance dataset` with the same "
-            "settings again, which solves it again"
-        ) from None
-    if N is not None:
-        misfit = _sample_misfit(rec, N, int(path.name[:6]))
+    except UNREADABLE_NPZ as exc:
+        raise SampleError(path, f"is unreadable ({exc})") from None
+    if run is not None:
+        i = _sample_id(path)
+        misfit = "its name is no sample id" if i is None else _sample_misfit(rec, run, i)
         if misfit:
-            raise InputError(
-                f"sample file {path} does not fit this run ({misfit}): run `guidance dataset` "
-                "with the same settings again, which solves it again"
-            )
+            raise SampleError(path, f"does not fit this run ({misfit})")
     return rec
 
 
 _SAMPLE_SCALARS = ("t_f", "status", "iterations", "subproblems", "solve_time_s", "id")
 
 
-def _sample_misfit(rec: dict[str, Any], N: int, i: int) -> str | None:
+def _sample_misfit(rec: dict[str, Any], run: dict, i: int) -> str | None:
+    """Why a readable sample cannot be sample ``i`` of the run of this record, or None."""
+    return _layout_misfit(rec, int(run["params"]["N"]), i) or _run_misfit(rec, run, i)
+
+
+def _layout_misfit(rec: dict[str, Any], N: int, i: int) -> str | None:
     """Why a readable sample cannot be sample ``i`` of a run of this N, or None."""
     shapes = {"theta": (N_THETA,), "x": (N, NX), "u": (N, NU)}
     missing = [k for k in (*shapes, "masks", *_SAMPLE_SCALARS) if k not in rec]
@@ -294,24 +322,59 @@ def _sample_misfit(rec: dict[str, Any], N: int, i: int) -> str | None:
     return None
 
 
-def done_ids(out_dir: Path, set_aside_unreadable: bool = False, N: int | None = None) -> set[int]:
+def _run_misfit(rec: dict[str, Any], run: dict, i: int) -> str | None:
+    """Why a sample of the right layout was not solved in this run, or None. A sample written
+    before samples recorded their run is kept when its theta is this run's draw ``i`` (seed,
+    ranges and parameters agree; settings and backend only run.json records)."""
+    if "run" not in rec:
+        return _theta_misfit(rec, run, i)
+    try:
+        recorded = json.loads(str(rec["run"]))
+    except (ValueError, RecursionError):
+        recorded = None
+    if not isinstance(recorded, dict):
+        return "its run record is not a JSON object"
+    wanted = json.loads(run_record(run))
+    differ = [k for k in RUN_KEYS if recorded.get(k) != wanted[k]]
+    if not differ:
+        return None
+    seed = f" (seed {recorded.get('seed')!r}, not {run['seed']!r})" if "seed" in differ else ""
+    return f"solved in a run with another {', '.join(differ)}{seed}"
+
+
+def _theta_misfit(rec: dict[str, Any], run: dict, i: int) -> str | None:
+    """Why a sample that records no run is not draw ``i`` of this run, or None."""
+    ranges = SamplingRanges.from_json_dict(run["ranges"])
+    scenario, _ = base_scenario(run["seed"], i, ranges, params_from_dict(run["params"]))
+    # a tolerance, not equality: another machine's libm may round the quaternion otherwise
+    if np.allclose(rec["theta"], theta_of(scenario), rtol=1e-9, atol=1e-12):
+        return None
+    return f"it records no run, and its theta is not draw {i} of this run's seed and ranges"
+
+
+def done_ids(
+    out_dir: Path, set_aside_unreadable: bool = False, run: dict | None = None
+) -> set[int]:
     """The ids solved in ``out_dir``. Writes are atomic, but a file can still be damaged
     later (a full disk, a copy cut short): with ``set_aside_unreadable`` (a run resuming)
-    such a file, or (given the run's ``N``) one that does not fit the run, is renamed
+    such a file, or (given the run's record) one that does not fit the run, is renamed
     ``*.unreadable`` and its sample solved again."""
     d = out_dir / "samples"
     if not d.is_dir():
         return set()
     ids = set()
-    for p in d.glob("[0-9]" * 6 + ".npz"):
+    for p in d.glob("*.npz"):  # not a fixed number of digits: ids past 999,999 have more
+        i = _sample_id(p)
+        if i is None:
+            continue
         if set_aside_unreadable:
             try:
-                read_sample(p, N)
-            except InputError:
+                read_sample(p, run)
+            except SampleError as exc:
                 p.rename(p.with_suffix(".unreadable"))
-                print(f"{p}: unreadable, set aside; its sample is solved again", file=sys.stderr)
+                print(f"{p} {exc.problem}: set aside as .unreadable, solved again", file=sys.stderr)
                 continue
-        ids.add(int(p.name[:6]))
+        ids.add(i)
     return ids
 
 
@@ -397,8 +460,8 @@ def generate(
         "backend": backend or default_backend(),
     }
     _check_run_config(out, config)
-    version = code_version()
-    done = done_ids(out, set_aside_unreadable=True, N=params.N)
+    version, record = code_version(), run_record(config)
+    done = done_ids(out, set_aside_unreadable=True, run=config)
     todo = [i for i in range(n_base) if i not in done]
     jobs = [
         (i, seed, config["ranges"], config["params"], config["scvx_settings"], config["backend"])
@@ -412,7 +475,7 @@ def generate(
     results = imap_pool(solve_sample, jobs, workers)
     try:
         for rec in results:
-            write_sample(out, {**rec, "code_version": version})
+            write_sample(out, {**rec, "code_version": version, "run": record})
             counts[str(rec["status"])] = counts.get(str(rec["status"]), 0) + 1
             bar.update(1)
             bar.set_postfix(counts)
@@ -522,7 +585,7 @@ def pack(out_dir: str | Path, dataset_path: str | Path, n_base: int | None = Non
     if not ids:
         raise InputError(f"no solved samples in {out}: run `guidance dataset` to solve some")
     N = int(config["params"]["N"])
-    recs = [read_sample(sample_path(out, i), N) for i in ids]
+    recs = [read_sample(sample_path(out, i), config) for i in ids]
     it_max = int(config["scvx_settings"]["iter_max"])
     M = len(recs) * N_ROTATIONS
     theta = np.zeros((M, N_THETA))
@@ -652,26 +715,11 @@ class Dataset:
 
 
 def load_dataset(path: str | Path) -> Dataset:
-    if not Path(path).is_file():
-        raise InputError(f"dataset {path}: no such file (`guidance dataset` makes one)")
-    try:
-        f = np.load(path, allow_pickle=False)
-    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
-        raise InputError(f"{path} is not a {FORMAT} file (not a readable .npz)") from exc
-    if not isinstance(f, np.lib.npyio.NpzFile):
-        raise InputError(f"{path} is not a {FORMAT} file (a single array, not an .npz)")
+    """A packed dataset, checked whole: its header, every member readable, and every array of
+    the shape the header's sizes give and of its kind. InputError names the file and member."""
+    f = _open_dataset(path)
     with f:
-        try:
-            header = json.loads(str(f["header"])) if "header" in f.files else {}
-        except json.JSONDecodeError as exc:
-            raise InputError(f"{path}: its header is not JSON ({exc})") from exc
-        if not isinstance(header, dict) or header.get("format") != FORMAT:
-            raise InputError(f"{path} is not a {FORMAT} file")
-        if header.get("format_version") != FORMAT_VERSION:
-            raise InputError(
-                f"{path} has format version {header.get('format_version')}, "
-                f"this code reads version {FORMAT_VERSION}"
-            )
+        header = _dataset_header(path, f)
         names = {fd.name for fd in dataclasses.fields(Dataset)} - {"header"}
         if set(f.files) - {"header"} != names:
             missing, extra = names - set(f.files), set(f.files) - names - {"header"}
@@ -679,8 +727,99 @@ def load_dataset(path: str | Path) -> Dataset:
                 f"{path}: arrays do not match the {FORMAT} layout (missing "
                 f"{sorted(missing) or 'none'}, unknown {sorted(extra) or 'none'})"
             )
-        arrays = {k: f[k] for k in names}
+        arrays = {k: _member(path, f, k) for k in sorted(names)}
+    _check_arrays(path, header, arrays)
     return Dataset(header=header, **arrays)
+
+
+def _open_dataset(path: str | Path) -> Any:
+    if not Path(path).is_file():
+        raise InputError(f"dataset {path}: no such file (`guidance dataset` makes one)")
+    try:
+        f = np.load(path, allow_pickle=False)
+    except UNREADABLE_NPZ as exc:
+        raise InputError(f"{path} is not a {FORMAT} file (not a readable .npz)") from exc
+    if not isinstance(f, np.lib.npyio.NpzFile):
+        raise InputError(f"{path} is not a {FORMAT} file (a single array, not an .npz)")
+    return f
+
+
+def _member(path: str | Path, f: Any, name: str) -> np.ndarray:
+    """One array of the file; a damaged one (zlib.error, a bad CRC, an object array...) is
+    InputError naming it, not numpy's or zipfile's error naming nothing."""
+    try:
+        return f[name]
+    except UNREADABLE_NPZ as exc:
+        raise InputError(
+            f"{path}: member {name} is unreadable ({type(exc).__name__}: {exc})"
+        ) from exc
+
+
+def _dataset_header(path: str | Path, f: Any) -> dict:
+    raw = _member(path, f, "header") if "header" in f.files else np.array("{}")
+    try:
+        header = json.loads(str(raw))
+    except (ValueError, RecursionError) as exc:
+        raise InputError(f"{path}: its header is not JSON ({exc})") from exc
+    if not isinstance(header, dict) or header.get("format") != FORMAT:
+        raise InputError(f"{path} is not a {FORMAT} file")
+    if header.get("format_version") != FORMAT_VERSION:
+        raise InputError(
+            f"{path} has format version {header.get('format_version')}, "
+            f"this code reads version {FORMAT_VERSION}"
+        )
+    return header
+
+
+# Each array's dtype kinds, as pack writes them (masks may also be booleans).
+_KINDS = {
+    **dict.fromkeys(("theta", "x", "u", "t_f", "solve_time_s"), "f"),
+    **dict.fromkeys(("n_masks", "iterations", "subproblems", "base_id", "rotation"), "iu"),
+    "masks": "biu",
+    "status": "U",
+}
+_KIND_WORDS = {"f": "floats", "iu": "integers", "biu": "integers or booleans", "U": "strings"}
+
+
+def _check_arrays(path: str | Path, header: dict, arrays: dict[str, np.ndarray]) -> None:
+    """Every array of the shape the header's sizes give and of its kind: a file cut or
+    patched by hand fails here, by name, not later in training with numpy's broadcast error."""
+    shapes = _dataset_shapes(path, header)
+    for name, a in arrays.items():
+        shape, kinds = shapes[name], _KINDS[name]
+        fits = a.ndim == len(shape) and all(
+            w is None or w == n for w, n in zip(shape, a.shape, strict=True)
+        )
+        if not fits or a.dtype.kind not in kinds:
+            want = ", ".join("any" if w is None else str(w) for w in shape)
+            raise InputError(
+                f"{path}: member {name} holds {a.shape} {a.dtype}, the header's sizes ask "
+                f"for ({want}) {_KIND_WORDS[kinds]}"
+            )
+
+
+def _dataset_shapes(path: str | Path, header: dict) -> dict[str, tuple[int | None, ...]]:
+    """Each array's shape from the header: n_samples rows, params.N nodes and, when the header
+    records the settings (every packed file does), scvx_settings.iter_max mask rows."""
+    M = _header_size(path, header, "n_samples")
+    N = _header_size(path, header, "params", "N")
+    K = (
+        _header_size(path, header, "scvx_settings", "iter_max")
+        if "scvx_settings" in header
+        else None
+    )
+    shapes: dict[str, tuple[int | None, ...]] = dict.fromkeys(_KINDS, (M,))
+    shapes.update(theta=(M, N_THETA), x=(M, N, NX), u=(M, N, NU), masks=(M, K, NC * N))
+    return shapes
+
+
+def _header_size(path: str | Path, header: dict, *keys: str) -> int:
+    value: Any = header
+    for key in keys:
+        value = value.get(key) if isinstance(value, dict) else None
+    if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+        raise InputError(f"{path}: its header gives no {'.'.join(keys)} count ({value!r})")
+    return value
 
 
 def summary(header: dict) -> str:

@@ -10,6 +10,9 @@ be written, before the work that would fill it.)
 
 from __future__ import annotations
 
+import zipfile
+import zlib
+
 
 class InputError(ValueError):
     """Input that cannot be used as given; the message names it and says why."""
@@ -18,3 +21,14 @@ class InputError(ValueError):
 class ModelEvaluationError(ArithmeticError):
     """The dynamics or their discretization are not finite at a trajectory (an iterate or a
     guess at the edge of the range the model is meant for, e.g. v0 = 1e4)."""
+
+
+# What reading a damaged or foreign .npz (or one of its members) can raise: OSError and
+# BadZipFile from a cut file, zlib.error from a damaged compressed member, RecursionError
+# from deeply nested JSON entries, MemoryError from a header claiming a huge shape,
+# ValueError from object arrays (allow_pickle=False) or bad JSON, KeyError from a missing
+# member. The readers turn it into an InputError naming the file.
+UNREADABLE_NPZ = (
+    OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile, zlib.error, RecursionError,
+    MemoryError,
+)  # fmt: skip

@@ -12,14 +12,13 @@ from __future__ import annotations
 import dataclasses
 import json
 import zipfile
-import zlib
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from guidance.atomic import atomic_write
-from guidance.errors import InputError
+from guidance.errors import UNREADABLE_NPZ, InputError
 from guidance.params import Params
 from guidance.provenance import provenance
 from guidance.scenario import scenario_to_dict
@@ -70,14 +69,6 @@ def write_trajectory(
         )
 
 
-# What reading a damaged or foreign .npz can raise: zlib.error from a compressed member,
-# RecursionError from deeply nested JSON entries, MemoryError from a header claiming a huge
-# shape, ValueError from object arrays (allow_pickle=False) or bad JSON.
-_UNREADABLE = (
-    OSError, ValueError, EOFError, zipfile.BadZipFile, zlib.error, RecursionError, MemoryError
-)  # fmt: skip
-
-
 def read_trajectory(path: str | Path) -> dict[str, object]:
     """The file's arrays, its JSON entries decoded to dictionaries. A file that is not a
     trajectory file raises InputError saying why."""
@@ -105,7 +96,7 @@ def _load(path: str | Path) -> dict[str, object]:
                 out[key] = _decode_json(path, key, str(out[key]))
     except InputError:
         raise  # already names the file and says what is wrong
-    except _UNREADABLE as exc:
+    except UNREADABLE_NPZ as exc:
         raise InputError(f"{path}: not a readable trajectory file ({exc})") from exc
     return out
 

@@ -5,10 +5,14 @@ from __future__ import annotations
 import json
 import math
 import os
+import re
 import shutil
 import signal
+import struct
 import time
+import zipfile
 from concurrent.futures.process import BrokenProcessPool
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -31,6 +35,7 @@ from guidance.dataset import (
     sample_path,
     scenario_of,
     scvx_solver,
+    solve_sample,
     theta_of,
     write_sample,
 )
@@ -337,3 +342,167 @@ def test_a_damaged_run_record_is_refused_by_name(record: str, tmp_path) -> None:
         dataset.generate(tmp_path, 1, progress=False, workers=1)
     with pytest.raises(dataset.InputError, match=r"run\.json: not a"):
         dataset.pack(tmp_path, tmp_path / "d.npz")
+
+
+# ---- samples record their run; sample ids past six digits; packed files checked whole ------
+def _copy_run(tiny_run, tmp_path: Path) -> Path:
+    run = tmp_path / "run"
+    shutil.copytree(tiny_run[0], run)
+    return run
+
+
+def _another_run(config: dict, key: str) -> dict:
+    """run.json as a run differing from ``config`` in ``key`` alone would have it."""
+    other = {
+        "seed": 12,
+        "ranges": {**config["ranges"], "m0": [2.8, 3.0]},
+        "params": {**config["params"], "T_max": 4.5},
+        "scvx_settings": {**config["scvx_settings"], "prox_u": 0.0},
+        "backend": "c",
+    }
+    return {**config, key: other[key]}
+
+
+@pytest.mark.parametrize("key", RUN_KEYS)
+def test_pack_refuses_samples_of_another_run(key: str, tiny_run, tmp_path) -> None:
+    """With run.json replaced by another run's, pack wrote the samples under the other run's
+    seed, ranges, ... without a word. Each sample now records its run: pack names it."""
+    run = _copy_run(tiny_run, tmp_path)
+    config = json.loads((run / "run.json").read_text())
+    (run / "run.json").write_text(json.dumps(_another_run(config, key)))
+    path = re.escape(str(sample_path(run, 0)))
+    with pytest.raises(
+        InputError, match=rf"sample file {path} does not fit this run .*another {key}"
+    ):
+        pack(run, tmp_path / "d.npz")
+    assert not (tmp_path / "d.npz").exists()
+
+
+def test_a_resume_without_run_json_sets_aside_samples_of_another_seed(
+    tiny_run, tmp_path, capsys
+) -> None:
+    """run.json lost, the run resumed with another seed: the seed-11 samples were kept as
+    seed 12's (nothing solved, a mixed dataset). They are now set aside and solved again."""
+    run = _copy_run(tiny_run, tmp_path)
+    (run / "run.json").unlink()
+    again = generate(run, 1, seed=12, ranges=EASY, workers=1, progress=False, backend="clarabel")
+    assert sum(again.values()) == 1  # id 0, for seed 12
+    assert "another seed (seed 11, not 12)" in capsys.readouterr().err
+    for i in (0, 1):
+        assert sample_path(run, i).with_suffix(".unreadable").exists()
+    assert done_ids(run) == {0}
+    header = pack(run, tmp_path / "d.npz")
+    assert header["seed"] == 12 and header["n_base"] == 1
+    theta = load_dataset(tmp_path / "d.npz").theta[0]  # rotation 0 of base sample 0
+    np.testing.assert_allclose(theta, theta_of(base_scenario(12, 0, EASY)[0]), rtol=1e-12)
+
+
+def test_samples_that_record_no_run_are_checked_by_their_theta(tiny_run, tmp_path) -> None:
+    """Samples written before samples recorded their run: a resume of their own run keeps
+    them (an upgrade mid-run loses no solve), as their theta is the run's draw; with another
+    seed or ranges in run.json, their theta is not, and pack names them."""
+    run = _copy_run(tiny_run, tmp_path)
+    for i in (0, 1):
+        rec = read_sample(sample_path(run, i))
+        rec.pop("run", None)
+        np.savez(sample_path(run, i), **rec)
+    kept = generate(run, 2, seed=11, ranges=EASY, workers=1, progress=False, backend="clarabel")
+    assert kept == {} and done_ids(run) == {0, 1}
+    assert pack(run, tmp_path / "d.npz")["n_base"] == 2
+    config = json.loads((run / "run.json").read_text())
+    for key in ("seed", "ranges"):
+        (run / "run.json").write_text(json.dumps(_another_run(config, key)))
+        path = re.escape(str(sample_path(run, 0)))
+        with pytest.raises(InputError, match=rf"{path} does not fit .*theta is not draw 0"):
+            pack(run, tmp_path / "d.npz")
+
+
+def test_sample_ids_past_999999_are_found_resumed_and_packed(tiny_run, tmp_path) -> None:
+    """Sample 1,000,000 is named 1000000.npz; the 6-digit glob of done_ids missed it, so a
+    resume solved it again and pack left it out."""
+    run = _copy_run(tiny_run, tmp_path)
+    config = json.loads((run / "run.json").read_text())
+    i = 1_000_000
+    job = (i, 11, config["ranges"], config["params"], config["scvx_settings"], "clarabel")
+    recorded = {k: v for k, v in read_sample(sample_path(run, 0)).items() if k == "run"}
+    write_sample(run, {**solve_sample(job), "code_version": code_version(), **recorded})
+    assert sample_path(run, i).name == "1000000.npz"
+    for name in ("0000002.npz", "12.npz", ".1000001.npz.tmp", "1000003.unreadable"):
+        (run / "samples" / name).write_bytes(b"")  # not names of sample files: not counted
+    assert done_ids(run) == {0, 1, i}
+    resumed = generate(run, 2, seed=11, ranges=EASY, workers=1, progress=False, backend="clarabel")
+    assert resumed == {} and sample_path(run, i).exists()  # fits the run: not set aside
+    assert pack(run, tmp_path / "d.npz")["n_base"] == 3
+    ds = load_dataset(tmp_path / "d.npz")
+    assert sorted(set(ds.base_id.tolist())) == [0, 1, i]
+    first = np.flatnonzero((ds.base_id == i) & (ds.rotation == 0))[0]
+    np.testing.assert_allclose(ds.theta[first], theta_of(base_scenario(11, i, EASY)[0]))
+    assert pack(run, tmp_path / "d2.npz", n_base=2)["n_base"] == 2
+
+
+def _rewritten(tiny_run, path: Path, header: dict | None = None, **arrays) -> Path:
+    """The tiny run's dataset with some arrays (or the header) replaced."""
+    with np.load(tiny_run[0] / "dataset.npz", allow_pickle=False) as f:
+        members = {k: f[k] for k in f.files}
+    if header is not None:
+        members["header"] = np.array(json.dumps(header))
+    np.savez_compressed(path, **{**members, **arrays})
+    return path
+
+
+DAMAGES = (
+    "x of another N",
+    "a theta row short",
+    "fewer mask rows",
+    "float masks",
+    "numeric status",
+    "object status",
+    "no n_samples",
+)
+
+
+@pytest.mark.parametrize("damage", DAMAGES)
+def test_load_dataset_checks_every_array_against_the_header(damage: str, tiny_run, tmp_path):
+    """load_dataset returned arrays of any shape or kind (training then failed far from the
+    file, or learnt from garbage) and let numpy's ValueError of an object array through. Each
+    is now InputError naming the file and the member."""
+    ds, header = tiny_run[4], tiny_run[3]
+    changes, message = {
+        "x of another N": ({"x": ds.x[:, :10]}, "member x holds"),
+        "a theta row short": ({"theta": ds.theta[:-1]}, "member theta holds"),
+        "fewer mask rows": ({"masks": ds.masks[:, :5]}, "member masks holds"),
+        "float masks": ({"masks": ds.masks.astype(float)}, "member masks holds"),
+        "numeric status": ({"status": np.zeros(len(ds.status))}, "member status holds"),
+        "object status": ({"status": ds.status.astype(object)}, "member status is unreadable"),
+        "no n_samples": (
+            {"header": {k: v for k, v in header.items() if k != "n_samples"}},
+            "its header gives no n_samples count",
+        ),
+    }[damage]
+    path = _rewritten(tiny_run, tmp_path / "d.npz", **changes)
+    with pytest.raises(InputError, match=rf"{re.escape(str(path))}: {message}"):
+        load_dataset(path)
+
+
+def _damage_member(path: Path, name: str) -> None:
+    """Flips bytes in the middle of a member's compressed data (the archive's index intact)."""
+    with zipfile.ZipFile(path) as z:
+        info = z.getinfo(f"{name}.npy")
+    data = bytearray(path.read_bytes())
+    name_len, extra_len = struct.unpack(
+        "<HH", data[info.header_offset + 26 : info.header_offset + 30]
+    )
+    middle = info.header_offset + 30 + name_len + extra_len + info.compress_size // 2
+    data[middle : middle + 16] = bytes(b ^ 0xFF for b in data[middle : middle + 16])
+    path.write_bytes(bytes(data))
+
+
+@pytest.mark.parametrize("member", ["x", "header"])
+def test_load_dataset_names_a_damaged_member(member: str, tiny_run, tmp_path) -> None:
+    """A damaged compressed member raised zlib.error or zipfile's BadZipFile (a traceback
+    naming neither file nor member)."""
+    path = tmp_path / "d.npz"
+    shutil.copy(tiny_run[0] / "dataset.npz", path)
+    _damage_member(path, member)
+    with pytest.raises(InputError, match=rf"{re.escape(str(path))}: member {member} is unreadable"):
+        load_dataset(path)
