@@ -144,7 +144,9 @@ def _check_method_options(args: argparse.Namespace) -> None:
     if args.trust_update is not None and args.method != "tscvx":
         raise InputError("--trust-update: applies to --method tscvx only (SCvx has no masks)")
     if args.guess and args.method != "scvx":
-        raise InputError("--guess: applies to --method scvx only (T-SCvx starts from its network)")
+        raise InputError(
+            f"--guess {args.guess}: applies to --method scvx only (T-SCvx starts from its network)"
+        )
 
 
 def _read_guess(path: str | None, p: Params) -> tuple[np.ndarray, np.ndarray, float] | None:
@@ -154,8 +156,8 @@ def _read_guess(path: str | None, p: Params) -> tuple[np.ndarray, np.ndarray, fl
     from guidance.trajectory_io import read_trajectory
     from guidance.verify import checked_trajectory
 
-    data = read_trajectory(path)
-    try:
+    try:  # the flag named in every refusal: the file alone does not say which input it was
+        data = read_trajectory(path)
         return checked_trajectory(data["x"], data["u"], data["t_f"], p)
     except InputError as exc:
         raise InputError(f"--guess {path}: {exc}") from None

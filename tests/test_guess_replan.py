@@ -97,8 +97,11 @@ def test_a_guess_that_does_not_fit_is_refused(default_plan: Path, tmp_path: Path
     cases = [
         (["--guess", str(short)], f"--guess {short}: x is (30, 14), the params ask for (50, 14)"),
         (["--guess", str(nan)], f"--guess {nan}: u: holds no trajectory (values not finite)"),
-        (["--guess", str(default_plan), "--method", "tscvx"], "applies to --method scvx only"),
-        (["--guess", str(tmp_path / "none.npz")], "no such file"),
+        (
+            ["--guess", str(default_plan), "--method", "tscvx"],
+            f"--guess {default_plan}: applies to --method scvx only",
+        ),
+        (["--guess", str(tmp_path / "none.npz")], f"--guess {tmp_path / 'none.npz'}: "),
     ]
     for extra, message in cases:
         assert main(["solve", "--backend", "c", *extra]) == 2
