@@ -34,16 +34,23 @@ from typing import TypeVar
 
 import numpy as np
 
+from guidance.cgnc import LIB_PATH, LibraryNotBuiltError  # one library path (TSCVX_GNC_LIB)
 from guidance.csocp import SOLVE_STATUS
 from guidance.errors import InputError
 from guidance.guess import checked_guess
 from guidance.model import param_vector, pattern_index
 from guidance.params import NC, NU, NX, Params, Scenario, SCvxSettings
 from guidance.scenario import ScenarioError
-from guidance.scvx import IterationRecord, SCvxResult, mask_bits, mask_table
+from guidance.scvx import (
+    IterationRecord,
+    SCvxResult,
+    check_masks_argument,
+    describe,
+    mask_bits,
+    mask_table,
+)
 from guidance.tscvx import REDUCED_ETA_INIT
 
-LIB_PATH = Path(__file__).resolve().parent.parent / "build" / "libtscvx_gnc.so"
 MESSAGE_LEN = 256
 STATUS_NAMES = ("solved", "infeasible", "max_iterations", "solver_error", "invalid_input")
 SOCP_STATUS_NAMES = SOLVE_STATUS  # one table of the SOCP runtime's statuses (csocp)
@@ -52,10 +59,6 @@ _d = ct.c_double
 _i = ct.c_int
 _dp = ct.POINTER(ct.c_double)
 _ucp = ct.POINTER(ct.c_ubyte)
-
-
-class LibraryNotBuiltError(RuntimeError):
-    pass
 
 
 class _Params(ct.Structure):
@@ -312,11 +315,13 @@ def solve_c(
     **socp: float | int,
 ) -> SCvxResult:
     """The whole SCvx / T-SCvx solve in the C library. Bad input raises ScenarioError (the
-    C validation's message, naming the field) like the Python reference."""
+    C validation's message, naming the field) like the Python reference. Masks hold 0/1 bits
+    only (guidance.scvx.mask_bits: probabilities are refused, not read nonzero = keep)."""
     lib = library()
     N = scenario.params.N
     if not 3 <= N <= 400:
         raise ScenarioError("N", f"must lie in [3, 400], got {N}")
+    check_masks_argument(masks)  # True or a number: refused by name, before the solve
     ran_with = _ran_with(settings, socp)  # a bad setting refused before the solve
     ws = workspace(scenario, settings, **socp)
     cs = c_scenario(scenario)
@@ -465,7 +470,7 @@ def _collect(
 
 # ---- T-SCvx on board (pdg_solve_tscvx) -----------------------------------------------------
 
-BUILD_MODELS_DIR = LIB_PATH.parent / "models"
+BUILD_MODELS_DIR = Path(__file__).resolve().parents[1] / "build" / "models"  # `make lib`'s .tnn
 NET_KINDS = ("solution", "constraint")
 
 
@@ -494,11 +499,15 @@ def flight_net(models_dir: Path | str, kind: str):
 
     def load() -> FlightNet:
         try:
-            return FlightNet(tnn_bytes(path) if path.suffix == ".onnx" else path.read_bytes())
+            blob = tnn_bytes(path) if path.suffix == ".onnx" else path.read_bytes()
+        except OSError as exc:  # the CLI prints an InputError; an OSError was a traceback
+            raise FlightNetsError(f"model {path}: cannot read it ({exc.strerror or exc})") from None
+        except InputError as exc:  # an ONNX file unreadable or not a T-SCvx export
+            raise FlightNetsError(f"model {path}: {exc}") from exc
+        try:
+            return FlightNet(blob)
         except FlightNetError as exc:
             raise FlightNetsError(f"model {path}: refused by the C library: {exc}") from exc
-        except InputError as exc:  # an ONNX file that is not a T-SCvx export (its reader's)
-            raise FlightNetsError(f"model {path}: {exc}") from exc
 
     return _thread_cached("nets", key, load)
 
@@ -579,6 +588,7 @@ def solve_tscvx_c(
     N = scenario.params.N
     if not 3 <= N <= 400:
         raise ScenarioError("N", f"must lie in [3, 400], got {N}")
+    _check_tscvx_arguments(masks, nets)
     ran_with = _ran_with(settings, socp)  # a bad setting refused before the solve
     sol, con = nets if nets is not None else _nets(models_dir, masks, scenario.params)
     ws = workspace(scenario, settings, **socp)
@@ -609,10 +619,36 @@ def solve_tscvx_c(
     return out
 
 
+def _check_tscvx_arguments(masks: object, nets: object) -> None:
+    """masks is a bool here (the constraint network's masks or none): a table or function
+    of masks would be truthy and silently replaced by the network's, an array ambiguous.
+    nets is None or a pair of FlightNets (None allowed), not file names."""
+    if not isinstance(masks, (bool, np.bool_)):
+        raise InputError(
+            "masks: True (the constraint network's masks) or False (warm start only), got "
+            f"{type(masks).__name__}; masks of your own go to solve_c(..., masks=...)"
+        )
+    if nets is None:
+        return
+    if not isinstance(nets, (tuple, list)) or len(nets) != 2:
+        raise InputError(f"nets: expected (solution, constraint) FlightNets, got {describe(nets)}")
+    for role, net in zip(NET_KINDS, nets, strict=True):
+        _check_net(f"nets: the {role} network", net)
+
+
+def _check_net(what: str, net: object) -> None:
+    """A FlightNet or None (a path or a blob is loaded with flight_net / FlightNet first)."""
+    from guidance.nn.flight import FlightNet
+
+    if net is not None and not isinstance(net, FlightNet):
+        raise InputError(f"{what}: expected a FlightNet or None, got {describe(net)}")
+
+
 def tscvx_guess_c(
     scenario: Scenario, models_dir: Path | str | None = None, net=None
 ) -> tuple[np.ndarray, np.ndarray, float]:
     """The projected warm start computed on board (pdg_tscvx_guess)."""
+    _check_net("net", net)
     sol = net if net is not None else _nets(models_dir, False, scenario.params)[0]
     ws = workspace(scenario)
     N = scenario.params.N

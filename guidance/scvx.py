@@ -214,6 +214,7 @@ class SCvxSolver:
         rejects).
         """
         t_start = time.perf_counter()
+        check_masks_argument(masks)
         if masks is not None and not callable(masks):
             masks = mask_table(masks, self.p.N)
         s = self._start(guess)
@@ -495,16 +496,48 @@ def _failed_record(k: int, J: float, eta: float, sol: conic.ConicSolution) -> It
 
 
 def mask_bits(mask: object, N: int, k: int) -> np.ndarray:
-    """Iteration k's mask as 7N booleans (nonzero = keep): a vector of 7N entries or an N x 7
-    array (node-major either way); InputError otherwise. Both loops (this one and the C
-    library's through guidance.cguidance) read masks through it."""
+    """Iteration k's mask as 7N booleans: a vector of 7N entries or an N x 7 array
+    (node-major either way) of bits, bools or numbers equal to 0 or 1; InputError otherwise.
+    Read as nonzero = keep, a network's probabilities (never exactly 0) would keep every
+    constraint without a word. Both loops (this one and the C library's through
+    guidance.cguidance) read masks through it."""
     a = np.asarray(mask)
     if a.shape not in ((NC * N,), (N, NC)) or a.dtype.kind not in "biuf":
         raise InputError(
             f"masks: iteration {k}'s mask is {a.shape} {a.dtype} values, not 7N = {NC * N} "
             f"numbers (or N x 7 = {N} x {NC})"
         )
-    return a.reshape(-1) != 0
+    a = a.reshape(-1)
+    if a.dtype != bool:
+        odd = a[~np.isin(a, (0, 1))]
+        if odd.size:
+            raise InputError(
+                f"masks: iteration {k}'s mask holds {odd[0].item()!r} ({odd.size} values not "
+                "0 or 1): give 0/1 bits (threshold the network's probabilities first)"
+            )
+    return a != 0
+
+
+def describe(value: object) -> str:
+    """A wrong argument named in a message: its type and the start of its repr."""
+    text = repr(value)
+    return f"{type(value).__name__} {text if len(text) <= 40 else text[:37] + '...'}"
+
+
+def check_masks_argument(masks: object) -> None:
+    """A ``masks`` argument is a table (a sequence or an array of masks), a function
+    k -> mask, or None; anything else (True, a number, a string, a dict) is refused here
+    by name instead of a TypeError from len() deep in the loop."""
+    if masks is None or callable(masks):
+        return
+    if isinstance(masks, np.ndarray) and masks.ndim >= 1:
+        return
+    if isinstance(masks, Sequence) and not isinstance(masks, (str, bytes, bytearray)):
+        return
+    raise InputError(
+        "masks: expected a table of masks (one per iteration), a function k -> mask, or "
+        f"None; got {describe(masks)}"
+    )
 
 
 def mask_table(masks: Sequence[object], N: int) -> list[np.ndarray]:

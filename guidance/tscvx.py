@@ -5,7 +5,7 @@ The predictors are plain callables so that any model (the shipped ONNX networks,
 table, or an oracle in tests) can drive it:
 
     predict_solution(scenario) -> (x (N, 14), u (N, 3), t_f)
-    predict_mask(scenario, k)  -> 7N tight-constraint probabilities or bits for iteration k
+    predict_mask(scenario, k)  -> 7N tight-constraint bits (0/1) for iteration k, or None
 
 The penalty J is always evaluated on the full constraint set, and before returning the full
 problem's constraints are checked: a violated constraint that the mask dropped is put back and
@@ -22,7 +22,7 @@ import numpy as np
 from guidance.errors import InputError
 from guidance.guess import is_finite_guess, project_guess
 from guidance.params import Scenario, SCvxSettings
-from guidance.scvx import SCvxResult, SCvxSolver
+from guidance.scvx import SCvxResult, SCvxSolver, describe
 
 REDUCED_ETA_INIT = 0.01  # Table 1: eta_reduced,init
 
@@ -44,8 +44,11 @@ def solve_tscvx(
     The predicted solution, projected as on board, starts the solve at the trust radius
     ``eta_init`` (Table 1's reduced one); without a solution predictor the cubic guess starts it
     at ``settings.eta_init``. ``predict_mask(scenario, k)`` gives the 7N mask bits of
-    succession k (a network's probabilities thresholded by the caller, at the threshold its
-    model card states); without it every subproblem is the full one."""
+    succession k, 0/1 only (a network's probabilities thresholded by the caller, at the
+    threshold its model card states; see scvx.mask_bits); without it every subproblem is the
+    full one. A predictor that is not a function (None aside) is refused (InputError)."""
+    _check_predictor("predict_solution", predict_solution, "scenario -> (x, u, t_f)")
+    _check_predictor("predict_mask", predict_mask, "(scenario, k) -> 7N 0/1 bits")
     t_start = time.perf_counter()
     st = settings or SCvxSettings()
     guess = None
@@ -62,14 +65,15 @@ def solve_tscvx(
     masks = None
     if predict_mask is not None:
 
-        def masks(k: int) -> np.ndarray | None:
-            bits = predict_mask(scenario, k)
-            if bits is None:  # the full problem, as in the C loop
-                return None
-            bits = np.asarray(bits)
-            if bits.dtype != bool and not np.isin(bits, (0, 1)).all():
-                raise InputError("predict_mask must give 0/1 bits (threshold probabilities first)")
-            return bits.astype(bool)
+        def masks(k: int) -> object:  # checked by the loop (scvx.mask_bits); None: the full problem
+            return predict_mask(scenario, k)
 
     solver = SCvxSolver(scenario, st, backend=backend, log=log)
     return solver.solve(guess=guess, masks=masks)
+
+
+def _check_predictor(name: str, fn: object, form: str) -> None:
+    """A predictor must be a function or None: True or a mask table given instead would
+    fail deep inside the solve (a TypeError after the first subproblem's set-up)."""
+    if fn is not None and not callable(fn):
+        raise InputError(f"{name}: expected a function {form}, or None; got {describe(fn)}")

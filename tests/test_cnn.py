@@ -410,3 +410,80 @@ def test_a_damaged_metadata_entry_is_refused_by_name(damage: str, tmp_path: Path
     if damage == "not JSON":
         with pytest.raises(ModelMismatchError, match="metadata is not JSON"):
             load_model(path, "solution")
+
+
+# ---- weights and inputs given as other types (review of the wrappers, 26 Nov) ------------
+
+
+@needs_shipped
+@needs_lib
+def test_a_blob_in_any_bytes_like_container_is_the_same_network(blobs: dict[str, bytes]) -> None:
+    """len() of a memoryview or array of doubles counts values, not bytes: FlightNet sized
+    its copy of the blob by it and failed with ctypes' "byte string too long". Any bytes-like
+    object is now its raw bytes; an object that is not one is refused by name (5 was read as
+    5 zero bytes, None raised TypeError)."""
+    import array
+
+    blob = blobs["solution"]
+    x = np.zeros(16)
+    x[6] = 1.0
+    want = FlightNet(blob).run(x)
+    doubles = memoryview(blob).cast("d")
+    for held in (doubles, np.frombuffer(blob, np.float64), array.array("d", doubles)):
+        np.testing.assert_array_equal(FlightNet(held).run(x), want)
+    for bad in (None, 5, [1.0, 2.0]):
+        with pytest.raises(FlightNetError, match="bytes-like") as info:
+            FlightNet(bad)  # type: ignore[arg-type]
+        assert info.value.status == flight.NOT_BYTES
+
+
+@needs_lib
+def test_a_weight_file_that_cannot_be_read_is_an_input_error(tmp_path: Path) -> None:
+    """FlightNet(folder) raised IsADirectoryError, load_onnx(folder) too (the CLI printed a
+    traceback): both are now the modules' InputError, naming the path."""
+    with pytest.raises(FlightNetError, match="Is a directory") as info:
+        FlightNet(tmp_path)
+    assert info.value.status == flight.UNREADABLE and str(tmp_path) in str(info.value)
+    with pytest.raises(InputError, match="cannot read it"):
+        flight.load_onnx(tmp_path)
+
+
+@needs_shipped
+@needs_lib
+def test_flight_net_errors_are_input_errors(blobs: dict[str, bytes], tmp_path: Path) -> None:
+    """FlightNetError was a plain ValueError, unlike every other refusal of a user's model
+    or input (OnnxLayoutError, ModelMismatchError, ScenarioError): code catching InputError,
+    as the CLI does to print the message and exit 2, let it through. cguidance still names a
+    library refusal as one (FlightNetsError)."""
+    from guidance.cguidance import FlightNetsError, flight_net
+
+    assert issubclass(FlightNetError, InputError)
+    with pytest.raises(InputError, match="bad_magic"):
+        FlightNet(b"XSCVXNN\0" + blobs["solution"][8:])
+    with pytest.raises(InputError, match="bad_size"):
+        FlightNet(blobs["solution"]).tight_mask(np.zeros(851))
+    (tmp_path / "solution.tnn").write_bytes(blobs["solution"][:-8])
+    with pytest.raises(FlightNetsError, match=r"refused by the C library: .*truncated"):
+        flight_net(tmp_path, "solution")
+
+
+@needs_shipped
+@needs_built
+@needs_lib
+def test_raw_bytes_are_not_read_as_one_input_per_byte() -> None:
+    """numpy reads a bytearray (or a memoryview of format B) as one number per byte: the bytes
+    of two doubles passed as the 16 inputs of the solution network, and were run. Both paths
+    now refuse raw bytes with the same message; a memoryview of doubles is its values."""
+    from guidance.nn.infer import load_model
+
+    onnx_net = load_model(MODELS / "solution.onnx", "solution")
+    c_net = FlightNet(BUILD_MODELS / "solution.tnn")
+    two_doubles = np.array([0.5, 2.0]).tobytes()  # 16 bytes
+    for raw in (bytearray(two_doubles), memoryview(two_doubles), two_doubles):
+        with pytest.raises(InputError, match="raw bytes") as a:
+            onnx_net.run(raw)
+        with pytest.raises(InputError, match="raw bytes") as b:
+            c_net.run(raw)
+        assert str(a.value) == str(b.value)
+    x = np.linspace(-1.0, 1.0, 16)
+    np.testing.assert_array_equal(c_net.run(memoryview(x)), c_net.run(x))

@@ -266,3 +266,84 @@ def test_a_non_finite_prediction_ends_with_the_flight_librarys_status(
         "solution network: the network output is not finite (overflow inside the network)"
     )
     assert np.isnan(r.t_f) and np.isnan(r.x).all()
+
+
+# ---- one mask rule at every entry point (review of the T-SCvx entry points, 26 Nov) ---------
+
+SHORT = SCvxSettings(iter_max=2)
+MASK_ENTRY_POINTS = [
+    "solve_tscvx",
+    "solve_c function",
+    "solve_c table",
+    "SCvxSolver",
+]
+
+
+def _c_library():  # type: ignore[no-untyped-def]
+    cguidance = pytest.importorskip("guidance.cguidance")
+    if not cguidance.LIB_PATH.exists():
+        pytest.skip("run `make lib` first")
+    return cguidance
+
+
+def _loop(where: str, masks: object) -> SCvxResult:
+    """Two iterations of the default landing in the C loop (solve_c) or the Python one."""
+    scenario = SCENARIOS["default"]
+    if where == "SCvxSolver":
+        return SCvxSolver(scenario, SHORT).solve(masks=masks)  # type: ignore[arg-type]
+    return _c_library().solve_c(scenario, SHORT, masks=masks)
+
+
+def _masked_solve(where: str, mask: np.ndarray) -> SCvxResult:
+    """Two iterations of the default landing with ``mask`` at every one, through one entry
+    point."""
+    if where == "solve_tscvx":
+        return solve_tscvx(SCENARIOS["default"], None, lambda s, k: mask, SHORT)
+    return _loop(where, [mask] if where == "solve_c table" else lambda k: mask)
+
+
+@pytest.mark.parametrize("where", MASK_ENTRY_POINTS)
+def test_every_entry_point_takes_0_1_bits_and_refuses_probabilities(where: str) -> None:
+    """solve_tscvx refused a network's probabilities while solve_c (and the Python loop) read
+    them as nonzero = keep: sigmoid outputs, never exactly 0, kept every constraint without a
+    word. One rule now: bools or numbers equal to 0 or 1, anything else refused by value."""
+    N = SCENARIOS["default"].params.N
+    bits = np.ones((N, NC), bool)
+    bits[:20, 0] = False  # the mass bound dropped at early nodes: never put back
+    as_bools = _masked_solve(where, bits.reshape(-1))
+    as_floats = _masked_solve(where, bits.reshape(-1).astype(float))
+    assert as_bools.status == as_floats.status and as_bools.m_f == as_floats.m_f
+    probs = np.full(NC * N, 0.7)
+    probs[::3] = 0.2
+    with pytest.raises(InputError, match=r"mask holds 0\.2 \(350 values not 0 or 1\): give 0/1"):
+        _masked_solve(where, probs)
+    with_nan = bits.reshape(-1).astype(float)
+    with_nan[5] = np.nan  # read as "keep" by nonzero = keep
+    with pytest.raises(InputError, match=r"iteration 1's mask holds nan \(1 values"):
+        _masked_solve(where, with_nan)
+
+
+C_AND_PYTHON_LOOPS = ["solve_c", "SCvxSolver"]
+
+
+@pytest.mark.parametrize("where", C_AND_PYTHON_LOOPS)
+def test_a_masks_argument_of_another_type_is_refused_by_name(where: str) -> None:
+    """masks=True (meant: the networks' masks) raised TypeError from len() inside the loop;
+    a number, a string or a dict likewise or as a misleading shape error. Refused by name."""
+    mask = np.ones(NC * SCENARIOS["default"].params.N, bool)
+    for bad in (True, np.bool_(True), 5, 0.5, "ones", {1: mask}, np.array(True)):
+        with pytest.raises(InputError, match=r"masks: expected a table of masks .* got "):
+            _loop(where, bad)
+
+
+def test_solve_tscvx_refuses_a_predictor_that_is_not_a_function(reference: SCvxResult) -> None:
+    """A mask table, True or the predicted (x, u, t_f) itself in place of the function raised
+    TypeError ("object is not callable") from inside the solve; refused by name first."""
+    scenario = SCENARIOS["north"]
+    final = reference.final_mask
+    for bad in (True, [final], final):
+        with pytest.raises(InputError, match="predict_mask: expected a function"):
+            solve_tscvx(scenario, None, bad)  # type: ignore[arg-type]
+    with pytest.raises(InputError, match="predict_solution: expected a function"):
+        guess = (reference.x, reference.u, reference.t_f)
+        solve_tscvx(scenario, guess, None)  # type: ignore[arg-type]

@@ -352,3 +352,58 @@ def test_the_reduced_radius_goes_with_the_warm_start_only(nets) -> None:
     assert res.history[0].eta == SCvxSettings().eta_init
     with pytest.raises(InputError, match=r"got 10\.000000999999999"):  # all its digits
         cguidance.solve_tscvx_c(SCENARIOS["default"], nets=(None, nets[1]), eta_init=10.000001)
+
+
+# ---- arguments of another type, unreadable files (review of the entry points, 26 Nov) -------
+
+
+def test_masks_is_true_or_false_only(nets) -> None:
+    """masks is the choice of the constraint network's masks: a table or a function of masks
+    of one's own was truthy and silently replaced by the network's, an array raised numpy's
+    "truth value is ambiguous". Refused by name, pointing at solve_c."""
+    scn = SCENARIOS["default"]
+    mask = np.ones(NC * scn.params.N, bool)
+    for bad in ([mask], lambda k: mask, mask, None, 1):
+        with pytest.raises(InputError, match=r"masks: True .* or False .*solve_c"):
+            cguidance.solve_tscvx_c(scn, SCvxSettings(iter_max=1), masks=bad, nets=nets)
+    ok = cguidance.solve_tscvx_c(scn, SCvxSettings(iter_max=1), masks=np.True_, nets=nets)
+    assert ok.tscvx_report["masks_predicted"] == 1
+
+
+def test_nets_that_are_not_flight_nets_are_refused_by_name(nets) -> None:
+    """A weight file's path in place of its FlightNet raised AttributeError ('_net')."""
+    scn = SCENARIOS["default"]
+    path = str(cguidance.BUILD_MODELS_DIR / "solution.tnn")
+    with pytest.raises(InputError, match="nets: the solution network: expected a FlightNet"):
+        cguidance.solve_tscvx_c(scn, nets=(path, None))
+    with pytest.raises(InputError, match="nets: the constraint network: expected a FlightNet"):
+        cguidance.solve_tscvx_c(scn, nets=(nets[0], b"blob"))
+    with pytest.raises(InputError, match=r"nets: expected \(solution, constraint\)"):
+        cguidance.solve_tscvx_c(scn, nets=nets[:1])
+    with pytest.raises(InputError, match="net: expected a FlightNet"):
+        cguidance.tscvx_guess_c(scn, net=path)
+
+
+def test_cli_refuses_a_network_file_it_cannot_read(tmp_path: Path, monkeypatch, capsys) -> None:
+    """An unreadable weight file (simulated: root reads any file) escaped `guidance solve
+    --method tscvx --backend c` as a PermissionError traceback; now exit 2 and the message."""
+    import shutil
+
+    from guidance.cli import main
+
+    for kind in cguidance.NET_KINDS:  # copies: a link resolves to the cached networks' key
+        shutil.copy(cguidance.BUILD_MODELS_DIR / f"{kind}.tnn", tmp_path)
+    locked = tmp_path / "solution.tnn"
+    read_bytes = Path.read_bytes
+
+    def refuse(self: Path) -> bytes:
+        if self == locked:
+            raise PermissionError(13, "Permission denied", str(self))
+        return read_bytes(self)
+
+    monkeypatch.setattr(Path, "read_bytes", refuse)
+    args = ["solve", "--method", "tscvx", "--backend", "c", "--models", str(tmp_path)]
+    assert main([*args, "--out", str(tmp_path / "out.npz")]) == 2
+    err = capsys.readouterr().err
+    assert "solution.tnn" in err and "Permission denied" in err
+    assert not (tmp_path / "out.npz").exists()

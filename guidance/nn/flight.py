@@ -22,8 +22,9 @@ constraint network runs up to 20 times per trajectory. The cost is 8.8 + 9.8 MB 
 files instead of 4.4 + 4.9 MB, of the 60 MB memory budget. (On the PowerPC 750 ``lfs`` and
 ``lfd`` cost the same, so the float64 count is also the closer model of the target.)
 
-``FlightNet(blob)`` runs the blob in the C library (build/libtscvx_gnc.so); a blob the library
-refuses raises ``FlightNetError`` with the library's status name and message.
+``FlightNet(blob)`` runs the blob (its path, or any bytes-like object) in the C library
+(build/libtscvx_gnc.so); a blob the library refuses, or a file that cannot be read, raises
+``FlightNetError`` (an ``InputError``) with the status name and message.
 """
 
 from __future__ import annotations
@@ -142,6 +143,8 @@ def load_onnx(path: str | Path, load_external_data: bool = True) -> Any:
         return onnx.load(str(path), load_external_data=load_external_data)
     except DecodeError as exc:
         raise OnnxLayoutError(f"{path}: not an ONNX model file ({exc})") from exc
+    except OSError as exc:  # a folder or an unreadable file: the user's path
+        raise InputError(f"{path}: cannot read it ({exc.strerror or exc})") from None
 
 
 def read_onnx(path: str | Path) -> FlightWeights:
@@ -370,12 +373,38 @@ def write_tnn(onnx_path: str | Path, out_path: str | Path) -> bool:
 # ---- ctypes bindings --------------------------------------------------------------------------
 
 
-class FlightNetError(ValueError):
-    """The C library refused a blob, an input or a call; ``status`` is its name."""
+class FlightNetError(InputError):
+    """The C library refused a blob, an input or a call (``status`` its status name), or the
+    wrapper refused the weights before it (``status`` UNREADABLE or NOT_BYTES). An
+    InputError: a weight file or an input the user gave, the CLI prints it and exits 2."""
 
-    def __init__(self, status: int, message: str, where: str) -> None:
-        self.status = STATUS_NAMES[status] if 0 <= status < len(STATUS_NAMES) else str(status)
+    def __init__(self, status: int | str, message: str, where: str) -> None:
+        if isinstance(status, str):
+            self.status = status
+        else:
+            known = 0 <= status < len(STATUS_NAMES)
+            self.status = STATUS_NAMES[status] if known else str(status)
         super().__init__(f"{where}: {self.status}: {message}")
+
+
+UNREADABLE = "unreadable"  # FlightNetError.status of a weight file that cannot be read
+NOT_BYTES = "not_bytes"  # of weights that are neither a path nor a bytes-like object
+
+
+def blob_bytes(blob: object) -> bytes:
+    """The weights as bytes: a path's file content, or a bytes-like object's raw bytes whatever
+    its item size (len() of a memoryview or array of doubles counts values, not bytes)."""
+    if isinstance(blob, (str, Path)):
+        try:
+            return Path(blob).read_bytes()
+        except OSError as exc:  # a folder, a missing or unreadable file
+            why = f"cannot read the weight file ({exc.strerror or exc})"
+            raise FlightNetError(UNREADABLE, why, str(blob)) from None
+    try:
+        return memoryview(blob).tobytes()  # type: ignore[arg-type]
+    except TypeError:  # bytes(5) would be 5 zero bytes, bytes([1, 2]) a 2-byte blob
+        why = f"expected a .tnn path or its bytes (bytes-like), got {type(blob).__name__}"
+        raise FlightNetError(NOT_BYTES, why, "FlightNet") from None
 
 
 class NetInfo(ctypes.Structure):
@@ -432,9 +461,8 @@ class FlightNet:
 
     def __init__(self, blob: bytes | str | Path, copy_weights: bool = False) -> None:
         lib = library()
-        if isinstance(blob, (str, Path)):
-            blob = Path(blob).read_bytes()
-        self._blob = ctypes.create_string_buffer(bytes(blob), len(blob))  # malloc: aligned
+        blob = blob_bytes(blob)
+        self._blob = ctypes.create_string_buffer(blob, len(blob))  # malloc: aligned
         flags = COPY_WEIGHTS if copy_weights else 0
         size = ctypes.c_size_t()
         status = lib.tscvx_nn_arena_size(self._blob, len(blob), flags, ctypes.byref(size))
@@ -498,8 +526,9 @@ def load_flight_model(path: str | Path, kind: str, params=None) -> FlightNet:
     path = Path(path)
     if not path.is_file():
         raise ModelMismatchError(f"model {path}: file not found (run `make lib`)")
+    blob = blob_bytes(path)  # FlightNetError (unreadable) as it is: not the library's refusal
     try:
-        net = FlightNet(path)
+        net = FlightNet(blob)
     except FlightNetError as exc:
         raise ModelMismatchError(f"model {path}: refused by the C library: {exc}") from exc
     got = {v: k for k, v in KINDS.items()}.get(net.info.kind)
@@ -535,7 +564,7 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     try:
         wrote = write_tnn(args.onnx, args.out)
-    except (OnnxLayoutError, KeyError, OSError) as exc:
+    except (InputError, KeyError, OSError) as exc:  # OnnxLayoutError, an unreadable file
         print(f"error: {exc}", file=sys.stderr)
         return 2
     print(f"{args.out}: {'written' if wrote else 'unchanged'}")

@@ -43,7 +43,13 @@ def _metadata_object(path: str | Path, raw: str) -> dict[str, Any]:
 def checked_inputs(inputs: object, d_in: int, dtype: type) -> np.ndarray:
     """Network inputs as a (B, d_in) array of ``dtype``: one input (d_in,) or a batch
     (B, d_in) of finite numbers; InputError otherwise. The onnxruntime and flight-library
-    paths take the same inputs through it."""
+    paths take the same inputs through it. Raw bytes are refused: numpy would read each byte
+    as one number (16 bytes, two doubles, as 16 inputs)."""
+    if _is_raw_bytes(inputs):
+        raise InputError(
+            f"network inputs: raw bytes ({type(inputs).__name__}), not numbers; give the "
+            "values (np.frombuffer(data, np.float64) for the bytes of float64 values)"
+        )
     a = np.asarray(inputs)
     if a.ndim not in (1, 2) or a.shape[-1] != d_in or a.dtype.kind not in "biuf":
         raise InputError(
@@ -54,6 +60,13 @@ def checked_inputs(inputs: object, d_in: int, dtype: type) -> np.ndarray:
         raise InputError("network inputs: not finite (NaN or infinity)")
     with np.errstate(over="ignore"):  # beyond float32: inf, and the output says so
         return np.atleast_2d(a).astype(dtype)
+
+
+def _is_raw_bytes(inputs: object) -> bool:
+    """bytes, bytearray or a memoryview of bytes (format B, b or c): data, not numbers."""
+    if isinstance(inputs, memoryview):
+        return inputs.format in ("B", "b", "c")
+    return isinstance(inputs, (bytes, bytearray))
 
 
 class ModelMismatchError(InputError):
