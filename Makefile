@@ -13,7 +13,7 @@ GUIDANCE := $(PY) -m guidance
 APT_PACKAGES := libeigen3-dev libsuitesparse-dev valgrind gcc python3-venv
 BUILD  := build
 
-.PHONY: all setup apt lib gnc ctest pytest test lint analyze demo bench budget models clean
+.PHONY: all setup apt lib gnc ctest pytest test lint analyze demo bench budget models coverage clean
 
 all: lib
 
@@ -53,6 +53,7 @@ FLIGHT_CFLAGS := -std=c99 $(FLIGHT_WARNINGS) -O3 -fno-tree-vectorize \
 include c_runtime/runtime.mk
 include c_runtime/nn.mk
 include c_runtime/guidance.mk
+include c_runtime/coverage.mk
 
 # ---- tests ---------------------------------------------------------------------------------
 pytest: setup lib

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import ctypes
+import os
 from functools import lru_cache
 from pathlib import Path
 
@@ -13,7 +14,14 @@ from guidance.model import N_AUG, NP
 from guidance.params import NU, NX
 
 FOH_NOT_FINITE = -2  # pdg_foh_interval's status for a non-finite model evaluation (foh.h)
-LIB_PATH = Path(__file__).resolve().parent.parent / "build" / "libtscvx_gnc.so"
+# The guidance library (the SOCP runtime inside); TSCVX_GNC_LIB points elsewhere (`make
+# coverage` runs the suite against an instrumented build). One path for every binding.
+LIB_ENV = "TSCVX_GNC_LIB"
+LIB_PATH = Path(
+    os.environ.get(
+        LIB_ENV, str(Path(__file__).resolve().parent.parent / "build" / "libtscvx_gnc.so")
+    )
+)
 _dp = ctypes.POINTER(ctypes.c_double)
 
 

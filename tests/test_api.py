@@ -15,7 +15,7 @@ README = Path(__file__).resolve().parent.parent / "README.md"
 
 def _readme_example() -> str:
     text = README.read_text()
-    blocks = re.findall(r"### From Python\n.*?```python\n(.*?)```", text, re.S)
+    blocks = re.findall(r"## From Python\n.*?```python\n(.*?)```", text, re.S)
     assert len(blocks) == 1, "README: one python block under 'From Python'"
     return blocks[0]
 

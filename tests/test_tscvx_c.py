@@ -30,6 +30,8 @@ from guidance.params import IM, NC, NU, NX, InitialState, Params, Scenario, SCvx
 from guidance.scenario import ScenarioError
 from guidance.verify import audit
 
+EXAMPLE = Path(__file__).resolve().parents[1] / "build" / "pdg_example"  # `make lib`
+
 pytestmark = pytest.mark.skipif(
     not cguidance.LIB_PATH.exists()
     or not all((cguidance.BUILD_MODELS_DIR / f"{k}.tnn").exists() for k in cguidance.NET_KINDS),
@@ -321,7 +323,7 @@ def test_example_program_refuses_swapped_networks_and_prints_nothing_else() -> N
     refusal, exit 2, and no log or trajectory table of a solve that did not happen."""
     import subprocess
 
-    example = cguidance.LIB_PATH.parent / "pdg_example"
+    example = EXAMPLE
     models = cguidance.BUILD_MODELS_DIR
     run = subprocess.run(
         [str(example), str(models / "constraint.tnn"), str(models / "solution.tnn")],
@@ -338,7 +340,7 @@ def test_example_program_refuses_a_bad_command_line_with_its_usage(args: list[st
     name or an argument silently ignored."""
     import subprocess
 
-    example = cguidance.LIB_PATH.parent / "pdg_example"
+    example = EXAMPLE
     run = subprocess.run([str(example), *args], capture_output=True, text=True, check=False,
                          timeout=60)  # fmt: skip
     assert run.returncode == 2 and run.stderr.startswith("usage: ") and run.stdout == ""
