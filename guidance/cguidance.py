@@ -145,6 +145,7 @@ def library() -> ct.CDLL:
                               ct.POINTER(_Result)]  # fmt: skip
     lib.pdg_validate_scenario.argtypes = [ct.POINTER(_Scenario), ct.c_char_p]
     lib.pdg_check_settings.argtypes = [ct.POINTER(_Settings), ct.c_char_p]
+    lib.pdg_check_vehicle.argtypes = [ct.POINTER(_Params), ct.c_char_p]
     lib.pdg_get_log.argtypes = [ct.c_void_p, _i, ct.POINTER(_LogRow)]
     lib.pdg_get_mask.argtypes = [ct.c_void_p, _i, _ucp]
     lib.pdg_log_length.argtypes = [ct.c_void_p]
@@ -223,6 +224,8 @@ class Workspace:
         msg = ct.create_string_buffer(MESSAGE_LEN)
         if lib.pdg_check_settings(ct.byref(settings), msg) != 0:
             raise InputError(msg.value.decode())
+        if lib.pdg_check_vehicle(ct.byref(cv), msg) != 0:  # the scenario's params, as a solve would
+            raise _refusal(msg.value.decode())
         need = ct.c_size_t(0)
         scratch = None
         for _ in range(4):  # bounded: pattern size, then analysis size, then exact size
@@ -296,6 +299,14 @@ def validate_c(scenario: Scenario) -> str | None:
 
 def _dptr(a: np.ndarray) -> _dp:
     return a.ctypes.data_as(_dp)
+
+
+def _refusal(message: str) -> InputError:
+    """The C library's refusal as the Python reference raises it: a ScenarioError naming the
+    field when the message names one ("scenario field 'X': why")."""
+    if message.startswith("scenario field '"):
+        return ScenarioError(message.split("'")[1], message.split("': ", 1)[1])
+    return InputError(message)
 
 
 def _result_buffers(N: int) -> tuple[np.ndarray, np.ndarray, _Result]:
@@ -422,9 +433,7 @@ def _collect(
     N = ws.N
     message = res.message.decode()
     if status == 4:  # PDG_INVALID_INPUT
-        if message.startswith("scenario field '"):
-            raise ScenarioError(message.split("'")[1], message.split("': ", 1)[1])
-        raise InputError(message)
+        raise _refusal(message)
     history = []
     row = _LogRow()
     for i in range(lib.pdg_log_length(ws.ws)):

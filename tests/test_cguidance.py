@@ -1079,3 +1079,17 @@ def test_solve_c_refuses_an_unknown_setting_and_takes_params_holding_arrays() ->
     for r_f in (np.zeros(3), [0.0, 0.0, 0.0]):
         other = cguidance.solve_c(Scenario(params=Params(r_f=r_f)), st)  # type: ignore[arg-type]
         assert np.array_equal(plain.x, other.x)
+
+
+@pytest.mark.parametrize(
+    ("field", "value"),
+    [("r_cp_B", (math.nan, 0.0, 0.0)), ("m_dry", -3.0), ("g_I", (math.inf, 0, 0))],
+)
+def test_a_vehicle_the_scenario_rules_refuse_is_refused_at_set_up(field: str, value) -> None:
+    """pdg_setup checks the vehicle by the scenario rules (pdg_check_vehicle): a NaN r_cp_B
+    used to set up a workspace that then refused every scenario as "r_cp_B not zero"."""
+    params = dataclasses.replace(SCENARIOS["default"].params, **{field: value})
+    with pytest.raises(ScenarioError, match=f"'{field}'"):
+        cguidance.Workspace(params, cguidance.c_settings(None))
+    with pytest.raises(ScenarioError, match=f"'{field}'"):
+        cguidance.solve_c(dataclasses.replace(SCENARIOS["default"], params=params))

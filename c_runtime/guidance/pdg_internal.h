@@ -112,11 +112,17 @@ struct pdg_workspace {
     unsigned char *masks_out;
     int n_masks_out;
     size_t arena_bytes, arena_high;
+    /* 1 while a solve runs: a callback calling back into this workspace (another solve, a
+     * T-SCvx guess) would overwrite the running solve's buffers, so it is refused */
+    int busy;
     uint64_t layout_sum; /* FNV-1a of the set-up constants above (pdg_layout_sum) */
 };
 
 uint64_t pdg_layout_sum(const pdg_workspace *ws);
 int pdg_ws_ready(const pdg_workspace *ws);
+/* Set up (pdg_ws_ready) and no solve running on it: the calls that write its buffers. */
+int pdg_ws_idle(const pdg_workspace *ws);
+#define PDG_BUSY_MESSAGE "workspace busy: called from inside a callback of a solve running on it"
 
 /* pdg_scvx.c */
 /* Clears `res` to "invalid input" and, when `ws` is set up, the record of its last solve (log

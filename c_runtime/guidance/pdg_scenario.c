@@ -398,3 +398,19 @@ int pdg_validate_scenario(const pdg_scenario *scenario, char *message)
 {
     return pdg_check_scenario(scenario, message);
 }
+
+/* The params' part of pdg_check_scenario: its number checks on a scenario holding the vehicle
+ * and the default initial state (which passes them), then the parameters' own rules. */
+pdg_setup_status pdg_check_vehicle(const pdg_params *vehicle, char *message)
+{
+    pdg_scenario s;
+    if (!vehicle) {
+        return PDG_SETUP_NULL_ARGUMENT;
+    }
+    pdg_default_scenario(&s);
+    s.params = *vehicle;
+    if (check_numbers(&s, message) || check_params(vehicle, message)) {
+        return PDG_SETUP_BAD_VEHICLE;
+    }
+    return PDG_SETUP_OK;
+}

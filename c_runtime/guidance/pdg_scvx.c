@@ -22,6 +22,7 @@ static const char *const setup_messages[PDG_SETUP_NSTATUS] = {
     "the SOCP runtime refused the subproblem",
     "workspace not set up",
     "index out of range",
+    "a vehicle parameter is NaN or out of range (pdg_check_vehicle names it)",
 };
 
 static const char *const status_messages[PDG_NSTATUS] = {
@@ -548,6 +549,9 @@ static pdg_setup_status build(void *mem, size_t bytes, const pdg_params *vehicle
     if (pdg_check_settings(st, NULL) != PDG_SETUP_OK) {
         return PDG_SETUP_BAD_SETTINGS;
     }
+    if (pdg_check_vehicle(vehicle, NULL) != PDG_SETUP_OK) {
+        return PDG_SETUP_BAD_VEHICLE;
+    }
     if (mem) { /* align the arena start; the +ALIGN of every size covers this */
         skip = (ALIGN - ((uintptr_t)mem % ALIGN)) % ALIGN;
     }
@@ -584,6 +588,7 @@ static pdg_setup_status build(void *mem, size_t bytes, const pdg_params *vehicle
         return status;
     }
     ws->arena_bytes = bytes;
+    ws->busy = 0;
     ws->layout_sum = pdg_layout_sum(ws);
     ws->magic = PDG_WS_MAGIC;
     *out = ws;
@@ -616,6 +621,8 @@ int pdg_ws_ready(const pdg_workspace *ws)
 {
     return ws && ws->magic == PDG_WS_MAGIC && ws->layout_sum == pdg_layout_sum(ws);
 }
+
+int pdg_ws_idle(const pdg_workspace *ws) { return pdg_ws_ready(ws) && !ws->busy; }
 
 pdg_setup_status pdg_workspace_size(const pdg_params *vehicle, const pdg_settings *settings,
                                     void *scratch, size_t scratch_bytes, size_t *bytes)
@@ -1048,6 +1055,10 @@ static pdg_status start(pdg_workspace *ws, const pdg_scenario *scn, const pdg_op
         snprintf(res->message, PDG_MESSAGE_LEN, "masks: n_masks must be at least 1");
         return PDG_INVALID_INPUT;
     }
+    if (opt->masks && opt->mask_fn) { /* one would be ignored without a word */
+        snprintf(res->message, PDG_MESSAGE_LEN, "masks: give a table or a callback, not both");
+        return PDG_INVALID_INPUT;
+    }
     if ((opt->guess_x != NULL) != (opt->guess_u != NULL)) {
         snprintf(res->message, PDG_MESSAGE_LEN, "guess: give x, u and t_f together");
         return PDG_INVALID_INPUT;
@@ -1355,24 +1366,23 @@ int pdg_result_begin(pdg_workspace *ws, pdg_result *res)
         snprintf(res->message, PDG_MESSAGE_LEN, "workspace not set up (call pdg_setup)");
         return -1;
     }
+    if (ws->busy) { /* the running solve's record stays as it is */
+        snprintf(res->message, PDG_MESSAGE_LEN, PDG_BUSY_MESSAGE);
+        return -1;
+    }
     ws->n_log = ws->n_masks_out = 0;
     return 0;
 }
 
 /* Paper Algorithm 1 (Algorithm 2 when the options carry masks): subproblems until
  * convergence on the full constraint set, a stall, a failure or the settings' limits. */
-pdg_status pdg_solve_from(pdg_workspace *ws, const pdg_scenario *scenario,
-                          const pdg_options *opt, pdg_result *res, double eta_init)
+static pdg_status run_scvx(pdg_workspace *ws, const pdg_scenario *scenario,
+                           const pdg_options *opt, pdg_result *res, double eta_init)
 {
-    static const pdg_options no_options = {NULL, NULL, 0.0, NULL, 0, NULL, NULL, NULL};
     pdg_status status;
     scvx_state s = {0, 0.0, NAN, NAN, NAN, INFINITY, 0, 0, 0, 0};
     int it;
 
-    if (pdg_result_begin(ws, res) != 0) {
-        return PDG_INVALID_INPUT;
-    }
-    opt = opt ? opt : &no_options;
     status = start(ws, scenario, opt, res, &s.J, &s.defect, &s.viol);
     if (status != PDG_SOLVED) {
         res->status = status;
@@ -1398,9 +1408,31 @@ pdg_status pdg_solve_from(pdg_workspace *ws, const pdg_scenario *scenario,
     return status;
 }
 
+pdg_status pdg_solve_from(pdg_workspace *ws, const pdg_scenario *scenario,
+                          const pdg_options *opt, pdg_result *res, double eta_init)
+{
+    static const pdg_options no_options = {NULL, NULL, 0.0, NULL, 0, NULL, NULL, NULL};
+    pdg_status status;
+    if (pdg_result_begin(ws, res) != 0) {
+        return PDG_INVALID_INPUT;
+    }
+    ws->busy = 1; /* pdg_result_begin and pdg_ws_idle refuse calls from its callbacks */
+    status = run_scvx(ws, scenario, opt ? opt : &no_options, res, eta_init);
+    ws->busy = 0;
+    return status;
+}
+
 /* ---- record of the last solve ------------------------------------------------------------ */
 
-int pdg_log_length(const pdg_workspace *ws) { return PDG_WS_READY(ws) ? ws->n_log : 0; }
+/* The record's counters are written by every solve and not in the checksum: its reads are
+ * bounded by the capacities set-up fixed (max_subproblems log rows, iter_max masks) too. */
+static int log_rows(const pdg_workspace *ws)
+{
+    const int n = ws->n_log < ws->st.max_subproblems ? ws->n_log : ws->st.max_subproblems;
+    return n > 0 ? n : 0;
+}
+
+int pdg_log_length(const pdg_workspace *ws) { return PDG_WS_READY(ws) ? log_rows(ws) : 0; }
 
 pdg_setup_status pdg_get_log(const pdg_workspace *ws, int i, pdg_log_row *row)
 {
@@ -1410,7 +1442,7 @@ pdg_setup_status pdg_get_log(const pdg_workspace *ws, int i, pdg_log_row *row)
     if (!PDG_WS_READY(ws)) {
         return PDG_SETUP_NOT_READY;
     }
-    if (i < 0 || i >= ws->n_log) {
+    if (i < 0 || i >= log_rows(ws)) {
         return PDG_SETUP_BAD_INDEX;
     }
     *row = ws->log[i];
@@ -1425,7 +1457,7 @@ pdg_setup_status pdg_get_mask(const pdg_workspace *ws, int k, unsigned char *mas
     if (!PDG_WS_READY(ws)) {
         return PDG_SETUP_NOT_READY;
     }
-    if (k < 0 || k >= ws->n_masks_out) {
+    if (k < 0 || k >= ws->n_masks_out || k >= ws->st.iter_max) {
         return PDG_SETUP_BAD_INDEX;
     }
     memcpy(mask, ws->masks_out + (size_t)k * NC * ws->N, (size_t)NC * ws->N);
@@ -1456,7 +1488,7 @@ pdg_setup_status pdg_problem_size(const pdg_workspace *ws, int *n, int *p, int *
 int pdg_debug_guess(pdg_workspace *ws, const pdg_scenario *s, double *x, double *u, double *t_f)
 {
     char msg[PDG_MESSAGE_LEN];
-    if (!PDG_WS_READY(ws) || !x || !u || !t_f) {
+    if (!pdg_ws_idle(ws) || !x || !u || !t_f) {
         return PDG_INVALID_INPUT;
     }
     if (pdg_check_workspace_scenario(ws, s, msg)) {
@@ -1473,7 +1505,7 @@ int pdg_debug_assemble(pdg_workspace *ws, const pdg_scenario *s, const double *x
     char msg[PDG_MESSAGE_LEN];
     double tf2;
     int i;
-    if (!PDG_WS_READY(ws) || !x || !u || !(eta > 0.0 && isfinite(eta))) {
+    if (!pdg_ws_idle(ws) || !x || !u || !(eta > 0.0 && isfinite(eta))) {
         return PDG_INVALID_INPUT;
     }
     if (pdg_check_workspace_scenario(ws, s, msg)) {

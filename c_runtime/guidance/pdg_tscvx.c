@@ -162,6 +162,10 @@ int pdg_tscvx_guess(pdg_workspace *ws, const pdg_scenario *s, tscvx_nn *solution
         snprintf(msg, PDG_MESSAGE_LEN, "a required pointer is NULL or the workspace not set up");
         return PDG_INVALID_INPUT;
     }
+    if (!pdg_ws_idle(ws)) {
+        snprintf(msg, PDG_MESSAGE_LEN, PDG_BUSY_MESSAGE);
+        return PDG_INVALID_INPUT;
+    }
     if (pdg_check_workspace_scenario(ws, s, msg) ||
         check_net(solution, TSCVX_NN_KIND_SOLUTION, &s->params, msg)) {
         return PDG_INVALID_INPUT;

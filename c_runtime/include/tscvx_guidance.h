@@ -81,6 +81,8 @@ typedef enum {
     PDG_SETUP_SOCP_ERROR,        /* the SOCP runtime refused the subproblem pattern */
     PDG_SETUP_NOT_READY,         /* workspace not set up */
     PDG_SETUP_BAD_INDEX,         /* log or mask index out of range */
+    PDG_SETUP_BAD_VEHICLE,       /* a vehicle parameter is NaN or out of its range
+                                    (pdg_check_vehicle names it) */
     PDG_SETUP_NSTATUS
 } pdg_setup_status;
 
@@ -93,9 +95,11 @@ typedef enum {
     PDG_SOLVER_ERROR,      /* a subproblem could not be solved (or the model failed) */
     PDG_INVALID_INPUT,     /* bad scenario, guess (NaN/inf, t_f <= 0, one of x, u alone),
                               mask or workspace: nothing was solved. A finite guess where
-                              the model cannot be evaluated (m <= 0, far outside the model's
-                              range) is PDG_SOLVER_ERROR, "model evaluation failed at the
-                              initial guess", as in the Python reference */
+                              the model cannot be evaluated (m = 0 at a node, far outside
+                              the model's range) is PDG_SOLVER_ERROR, "model evaluation
+                              failed at the initial guess"; one it evaluates but no landing
+                              can follow (m < 0) is PDG_SOLVER_ERROR from its first
+                              subproblem. Both as in the Python reference */
     PDG_NSTATUS
 } pdg_status;
 
@@ -230,6 +234,12 @@ pdg_setup_status pdg_default_scenario(pdg_scenario *scenario);
 /* PDG_SETUP_OK, or PDG_SETUP_BAD_SETTINGS with the field, its range and the value in `message`
  * (PDG_MESSAGE_LEN bytes; may be NULL): what pdg_workspace_size and pdg_setup refuse. */
 pdg_setup_status pdg_check_settings(const pdg_settings *settings, char *message);
+
+/* PDG_SETUP_OK, or PDG_SETUP_BAD_VEHICLE with the field and why in `message` (PDG_MESSAGE_LEN
+ * bytes; may be NULL), by the rules pdg_validate_scenario applies to a scenario's params:
+ * what pdg_workspace_size and pdg_setup refuse (a NaN r_cp_B used to set up a workspace that
+ * then refused every scenario as "a vehicle with r_cp_B not zero"). */
+pdg_setup_status pdg_check_vehicle(const pdg_params *vehicle, char *message);
 
 /* The workspace is built for a vehicle: its N, its terminal condition (final_roll_free) and
  * the structure of its dynamics' Jacobian (whether r_cp_B is zero, which removes entries of

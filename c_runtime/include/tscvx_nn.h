@@ -129,11 +129,14 @@ const char *tscvx_nn_status_message(tscvx_nn_status status);
 /* Validates `blob` (len bytes) as tscvx_nn_init does and, when `message` is not NULL, writes
  * into it (TSCVX_NN_MESSAGE_LEN bytes) what is wrong, naming the field and its value
  * ("d_model = 300 is not a multiple of n_heads = 7"), or "ok". For a refused blob's report;
- * the status is the one tscvx_nn_arena_size and tscvx_nn_init return. */
+ * the status is the one tscvx_nn_arena_size and tscvx_nn_init return for the blob's content
+ * (where the blob lies is theirs to check: an in-place blob not 8-byte aligned is
+ * TSCVX_NN_BAD_ALIGNMENT from both). */
 #define TSCVX_NN_MESSAGE_LEN 160
 tscvx_nn_status tscvx_nn_check_blob(const void *blob, size_t len, char *message);
 
-/* Validates `blob` (len bytes) and writes the arena size it needs into *bytes. */
+/* Validates `blob` (len bytes) as tscvx_nn_init does, but for the arena, and writes the arena
+ * size it needs into *bytes (0 when refused). */
 tscvx_nn_status tscvx_nn_arena_size(const void *blob, size_t len, unsigned flags, size_t *bytes);
 
 /* Validates `blob` and builds the net in `arena` (any alignment; `arena_bytes` at least

@@ -406,41 +406,11 @@ static int must_copy(unsigned flags)
     return (flags & TSCVX_NN_COPY_WEIGHTS) || !nn_host_is_little_endian();
 }
 
-tscvx_nn_status tscvx_nn_arena_size(const void *blob, size_t len, unsigned flags, size_t *bytes)
-{
-    nn_header hd;
-    tscvx_nn_status st;
-    if (!blob || !bytes) {
-        return TSCVX_NN_NULL_ARGUMENT;
-    }
-    if (flags & ~TSCVX_NN_COPY_WEIGHTS) {
-        return TSCVX_NN_BAD_FLAGS;
-    }
-    st = nn_parse(blob, len, &hd, NULL);
-    if (st != TSCVX_NN_OK) {
-        return st;
-    }
-    *bytes = layout_bytes(&hd, must_copy(flags));
-    if (*bytes == 0) {
-        return TSCVX_NN_BAD_DIMENSIONS;
-    }
-    *bytes += ALIGN; /* slack to align the base */
-    return TSCVX_NN_OK;
-}
-
-/* Bump allocation from the aligned arena (sizes were checked against layout_bytes). */
-static void *take(unsigned char **cur, size_t n)
-{
-    void *p = *cur;
-    *cur += round_up(n);
-    return p;
-}
-
-/* Everything init refuses after its NULL checks, in tscvx_nn_arena_size's order, then the
- * arena's size and the blob's alignment. *copy: weights go into the arena; *need: the arena
- * bytes, alignment slack included. */
-static tscvx_nn_status check_init(size_t arena_bytes, const void *blob, size_t len,
-                                  unsigned flags, nn_header *hd, int *copy, size_t *need)
+/* What tscvx_nn_arena_size and tscvx_nn_init both refuse, in this order: the flags, the blob
+ * (nn_parse), its layout and, for weights read in place, the blob's alignment. *copy: weights
+ * go into the arena; *need: the arena bytes, alignment slack included. */
+static tscvx_nn_status check_layout(const void *blob, size_t len, unsigned flags,
+                                    nn_header *hd, int *copy, size_t *need)
 {
     tscvx_nn_status st;
     if (flags & ~TSCVX_NN_COPY_WEIGHTS) {
@@ -455,14 +425,45 @@ static tscvx_nn_status check_init(size_t arena_bytes, const void *blob, size_t l
     if (*need == 0) {
         return TSCVX_NN_BAD_DIMENSIONS;
     }
-    *need += ALIGN; /* as tscvx_nn_arena_size */
-    if (arena_bytes < *need) {
-        return TSCVX_NN_ARENA_TOO_SMALL;
-    }
+    *need += ALIGN; /* slack to align the base */
     if (!*copy && ((uintptr_t)blob % sizeof(double)) != 0) {
         return TSCVX_NN_BAD_ALIGNMENT;
     }
     return TSCVX_NN_OK;
+}
+
+tscvx_nn_status tscvx_nn_arena_size(const void *blob, size_t len, unsigned flags, size_t *bytes)
+{
+    nn_header hd;
+    int copy = 0;
+    size_t need = 0;
+    tscvx_nn_status st;
+    if (!blob || !bytes) {
+        return TSCVX_NN_NULL_ARGUMENT;
+    }
+    st = check_layout(blob, len, flags, &hd, &copy, &need);
+    *bytes = st == TSCVX_NN_OK ? need : 0;
+    return st;
+}
+
+/* Bump allocation from the aligned arena (sizes were checked against layout_bytes). */
+static void *take(unsigned char **cur, size_t n)
+{
+    void *p = *cur;
+    *cur += round_up(n);
+    return p;
+}
+
+/* Everything init refuses after its NULL checks: tscvx_nn_arena_size's refusals, then the
+ * arena's size. */
+static tscvx_nn_status check_init(size_t arena_bytes, const void *blob, size_t len,
+                                  unsigned flags, nn_header *hd, int *copy, size_t *need)
+{
+    const tscvx_nn_status st = check_layout(blob, len, flags, hd, copy, need);
+    if (st != TSCVX_NN_OK) {
+        return st;
+    }
+    return arena_bytes < *need ? TSCVX_NN_ARENA_TOO_SMALL : TSCVX_NN_OK;
 }
 
 /* The net's struct at the arena's first aligned byte, zeroed (its padding too: nn_layout_sum
@@ -618,10 +619,14 @@ uint64_t nn_layout_sum(const tscvx_nn *net)
     return tscvx_fnv1a(h, net->layers, sizeof(nn_layer) * net->hdr.n_layers);
 }
 
+/* The checksum covers the layer table, so it reads through net->layers: that pointer must
+ * first be where init put it, right after the struct (place_buffers), or a flipped or
+ * overwritten pointer would be followed before the checksum could refuse it. */
 int nn_live(const tscvx_nn *net)
 {
+    const unsigned char *table = (const unsigned char *)net + round_up(sizeof *net);
     return net->cookie == NN_COOKIE && net->hdr.n_layers <= TSCVX_NN_MAX_LAYERS &&
-           net->layout_sum == nn_layout_sum(net);
+           (const unsigned char *)net->layers == table && net->layout_sum == nn_layout_sum(net);
 }
 
 tscvx_nn_status tscvx_nn_get_info(const tscvx_nn *net, tscvx_nn_info *info)

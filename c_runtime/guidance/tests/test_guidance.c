@@ -183,6 +183,30 @@ static void test_settings_and_sizes(void)
         CHECK(pdg_check_settings(&st, msg) == PDG_SETUP_BAD_SETTINGS);
         CHECK(strstr(msg, "beta") != NULL);
     }
+    {   /* a vehicle the scenario rules refuse is refused at set-up, by name (a NaN r_cp_B set
+         * up a workspace that then refused every scenario as "r_cp_B not zero") */
+        char msg[PDG_MESSAGE_LEN];
+        pdg_params p;
+        pdg_default_settings(&st);
+        pdg_default_params(&p);
+        CHECK(pdg_check_vehicle(&p, msg) == PDG_SETUP_OK);
+        CHECK(pdg_check_vehicle(NULL, msg) == PDG_SETUP_NULL_ARGUMENT);
+        p.r_cp_B[0] = NAN;
+        CHECK(pdg_check_vehicle(&p, msg) == PDG_SETUP_BAD_VEHICLE);
+        CHECK(strcmp(msg, "scenario field 'r_cp_B': must be finite") == 0);
+        CHECK(pdg_workspace_size(&p, &st, NULL, 0, &need) == PDG_SETUP_BAD_VEHICLE);
+        CHECK(pdg_setup(&ws, buf, sizeof buf, &p, &st) == PDG_SETUP_BAD_VEHICLE && ws == NULL);
+        pdg_default_params(&p);
+        p.m_dry = -3.0;
+        CHECK(pdg_check_vehicle(&p, msg) == PDG_SETUP_BAD_VEHICLE && strstr(msg, "'m_dry'"));
+        pdg_default_params(&p);
+        p.final_roll_free = 5;
+        CHECK(pdg_check_vehicle(&p, NULL) == PDG_SETUP_BAD_VEHICLE);
+        pdg_default_params(&p);
+        p.g_I[0] = INFINITY;
+        CHECK(pdg_workspace_size(&p, &st, NULL, 0, &need) == PDG_SETUP_BAD_VEHICLE);
+        CHECK(strlen(pdg_setup_status_message(PDG_SETUP_BAD_VEHICLE)) > 0);
+    }
 }
 
 /* A workspace whose arena was overwritten (reused for something else) is refused, not
@@ -248,6 +272,30 @@ static int drop_glideslope(void *ctx, int k, unsigned char *mask, int n)
     return 1;
 }
 
+/* Mask callback calling back into the workspace whose solve calls it: another solve and a
+ * debug guess, each refused (they would overwrite the running solve's buffers); then the
+ * full problem. ctx: the workspace, its refusals counted in `reentry_refused`. */
+static int reentry_refused;
+static double inner_x[PDG_NSTATE * 50], inner_u[PDG_NCTRL * 50];
+static int call_back_in(void *ctx, int k, unsigned char *mask, int n)
+{
+    pdg_workspace *ws = (pdg_workspace *)ctx;
+    pdg_scenario s;
+    pdg_result r;
+    double t_f;
+    (void)k, (void)mask, (void)n;
+    pdg_default_scenario(&s);
+    r.x = inner_x;
+    r.u = inner_u;
+    if (pdg_solve(ws, &s, NULL, &r) == PDG_INVALID_INPUT && strstr(r.message, "busy")) {
+        ++reentry_refused;
+    }
+    if (pdg_debug_guess(ws, &s, inner_x, inner_u, &t_f) == PDG_INVALID_INPUT) {
+        ++reentry_refused;
+    }
+    return 0;
+}
+
 static void test_solve(pdg_workspace *ws, int with_masks)
 {
     pdg_scenario s;
@@ -277,6 +325,36 @@ static void test_solve(pdg_workspace *ws, int with_masks)
     CHECK(pdg_get_log(ws, -1, &row) == PDG_SETUP_BAD_INDEX);
     CHECK(pdg_get_mask(ws, r.iterations - 1, m) == PDG_SETUP_OK);
     CHECK(pdg_get_mask(ws, r.iterations, m) == PDG_SETUP_BAD_INDEX);
+    {   /* the record's counters (written by every solve, outside the checksum) damaged: reads
+         * stay within the capacities set-up fixed (they used to read past the 60-row log) */
+        const int n_log = ws->n_log, n_masks = ws->n_masks_out;
+        ws->n_log = 600;
+        ws->n_masks_out = 600;
+        CHECK(pdg_log_length(ws) == ws->st.max_subproblems);
+        CHECK(pdg_get_log(ws, ws->st.max_subproblems, &row) == PDG_SETUP_BAD_INDEX);
+        CHECK(pdg_get_log(ws, 599, &row) == PDG_SETUP_BAD_INDEX);
+        CHECK(pdg_get_mask(ws, ws->st.iter_max, m) == PDG_SETUP_BAD_INDEX);
+        ws->n_log = -5;
+        CHECK(pdg_log_length(ws) == 0);
+        ws->n_log = n_log, ws->n_masks_out = n_masks;
+    }
+    {   /* a solve called from inside its own mask callback is refused, and the outer solve
+         * ends as a plain one (it used to run the inner solve over the outer's buffers) */
+        pdg_options o;
+        memset(&o, 0, sizeof o);
+        o.mask_fn = call_back_in;
+        o.mask_ctx = ws;
+        reentry_refused = 0;
+        CHECK(pdg_solve(ws, &s, &o, &r) == PDG_SOLVED);
+        CHECK(reentry_refused == 2 * r.subproblems_solved);
+        CHECK(fabs(x[PDG_NSTATE * 49 + 13] - mf) < 1e-3);
+        /* both a table and a callback: refused (the callback was ignored) */
+        o.masks = m;
+        o.n_masks = 1;
+        CHECK(pdg_solve(ws, &s, &o, &r) == PDG_INVALID_INPUT);
+        CHECK(strstr(r.message, "not both") != NULL);
+        CHECK(pdg_solve(ws, &s, NULL, &r) == PDG_SOLVED); /* not left busy */
+    }
     /* boundary conditions hold exactly enough */
     CHECK(fabs(x[0] - 4.0) < 1e-7 && fabs(x[PDG_NSTATE * 49 + 3] + 0.1) < 1e-7);
     if (!with_masks) {
