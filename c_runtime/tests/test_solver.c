@@ -299,6 +299,48 @@ static void test_update(void) {
           x[1] - xf[1]);
 }
 
+/* Settings changed between solves: the iteration limit and tolerances take effect on the next
+ * solve; what set-up fixed (the KKT method, Ruiz passes, the dense SOC size, a limit beyond
+ * the log set-up sized) and a setting out of range are refused, the settings in force kept. */
+static void test_update_settings(void) {
+    small_soc p;
+    const tscvx_data d = small_soc_data(&p);
+    tscvx_float x[2];
+    tscvx_settings st, st2;
+    tscvx_default_settings(&st);
+    st.max_iter = 50;
+    tscvx_workspace *ws = NULL;
+    tscvx_info info;
+    CHECK(tscvx_setup(&ws, arena2, sizeof arena2, &d, &st) == TSCVX_SETUP_OK, "setup");
+    CHECK(tscvx_solve(ws) == TSCVX_SOLVED, "solve");
+    tscvx_get_info(ws, &info);
+    const tscvx_int iters = info.iterations;
+    CHECK(iters > 2, "iterations %d", (int)iters);
+    st2 = st;
+    st2.max_iter = 2;
+    CHECK(tscvx_update_settings(ws, &st2) == TSCVX_SETUP_OK, "a lower iteration limit");
+    CHECK(tscvx_solve(ws) == TSCVX_MAX_ITER, "stops at the new limit");
+    tscvx_get_info(ws, &info);
+    CHECK(info.iterations == 2, "iterations %d", (int)info.iterations);
+    for (int which = 0; which < 5; which++) {
+        tscvx_settings bad = st2;
+        if (which == 0) bad.max_iter = st.max_iter + 1; /* beyond the log set-up sized */
+        if (which == 1) bad.kkt_backend = TSCVX_KKT_LDL;
+        if (which == 2) bad.ruiz_iters = st.ruiz_iters + 1;
+        if (which == 3) bad.soc_dense_max = st.soc_dense_max + 1;
+        if (which == 4) bad.tol_feas = NAN;
+        CHECK(tscvx_update_settings(ws, &bad) == TSCVX_SETUP_BAD_SETTINGS, "refused %d", which);
+    }
+    CHECK(tscvx_solve(ws) == TSCVX_MAX_ITER, "the settings in force kept");
+    CHECK(tscvx_update_settings(ws, &st) == TSCVX_SETUP_OK, "back to set-up's settings");
+    CHECK(tscvx_solve(ws) == TSCVX_SOLVED, "solved again");
+    tscvx_get_info(ws, &info);
+    CHECK(info.iterations == iters, "same iterations %d %d", (int)info.iterations, (int)iters);
+    tscvx_get_solution(ws, x, NULL, NULL, NULL);
+    CHECK(fabs(x[0] - sqrt(0.5)) < 1e-6 && fabs(x[1] - sqrt(0.5)) < 1e-6, "x = (1, 1)/sqrt 2");
+    CHECK(tscvx_update_settings(ws, NULL) == TSCVX_SETUP_NULL_ARGUMENT, "NULL settings");
+}
+
 /* Every call on a stale workspace (arena overwritten after setup, or cleaned up) is refused
  * before any of its pointers is followed; so is one whose KKT method pointer is not ours. */
 static void test_stale_workspace(void) {
@@ -870,6 +912,7 @@ int main(void) {
     test_bad_input();
     test_update();
     test_stale_workspace();
+    test_update_settings();
     test_psd_check();
     test_indefinite_p_every_method();
     test_ill_conditioned_p_every_method();

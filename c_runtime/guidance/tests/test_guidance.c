@@ -159,6 +159,15 @@ static void test_settings_and_sizes(void)
     CHECK(strcmp(pdg_status_name(PDG_INFEASIBLE), "infeasible") == 0);
     CHECK(strcmp(pdg_status_name((pdg_status)99), "unknown") == 0);
     CHECK(strlen(pdg_setup_status_message(PDG_SETUP_ARENA_TOO_SMALL)) > 0);
+    {   /* every solve status has its message; one out of range is named as such */
+        int k;
+        for (k = 0; k < PDG_NSTATUS; ++k) {
+            CHECK(strlen(pdg_status_message((pdg_status)k)) > 8);
+        }
+        CHECK(strcmp(pdg_status_message(PDG_NSTATUS), "unknown status") == 0);
+        CHECK(strcmp(pdg_status_message((pdg_status)-1), "unknown status") == 0);
+        CHECK(strcmp(pdg_setup_status_message(PDG_SETUP_NSTATUS), "unknown status") == 0);
+    }
     {   /* the check names the setting, its range and the value */
         char msg[PDG_MESSAGE_LEN];
         pdg_default_settings(&st);
