@@ -91,18 +91,31 @@ def _remove_folders(made: list[Path]) -> None:
             return
 
 
-def check_outputs(*outputs: tuple[str, str | Path | None]) -> None:
+def check_outputs(
+    *outputs: tuple[str, str | Path | None],
+    inputs: tuple[tuple[str, str | Path | None], ...] = (),
+) -> None:
     """Refuse, before the work, outputs ``(flag, path)`` (None: not asked for) that could not be
-    written or that are one file: the second written would overwrite the first."""
+    written or that are one file (the second written would overwrite the first), and outputs
+    that are one of the ``inputs`` ``(what, path)`` the work reads (a scenario file)."""
     given = [(flag, path) for flag, path in outputs if path]  # named as the user wrote them
     _check_distinct(given)
+    for what, source in inputs:
+        for flag, path in given:
+            if source and _where(path) == _where(source):
+                raise InputError(f"{flag} {path}: is the {what} {source} (it would be overwritten)")
     for flag, path in given:
         _check_writable(flag, path)
 
 
+def _where(path: str | Path) -> Path:
+    """Where a path's writes land: links, "./" and ".." resolved."""
+    return Path(os.path.normcase(os.path.realpath(path)))
+
+
 def _check_distinct(outputs: list[tuple[str, str | Path]]) -> None:
     # compared where the writers write: links, "./" and ".." resolved
-    where = [(flag, path, Path(os.path.normcase(os.path.realpath(path)))) for flag, path in outputs]
+    where = [(flag, path, _where(path)) for flag, path in outputs]
     for first, second in itertools.combinations(where, 2):
         if first[2] == second[2]:
             raise InputError(

@@ -107,7 +107,7 @@ def cmd_solve(args: argparse.Namespace) -> int:
     scenario = _load(args.scenario, args.pin_final_attitude)
     _check_method_options(args)
     guess = _read_guess(args.guess, scenario.params)
-    _check_output_files(args.out, args.plot)
+    _check_output_files(args.out, args.plot, args.scenario)
     settings = SCvxSettings(
         iter_max=args.iter_max,
         tau_r_update=args.trust_update != "alg1",
@@ -163,12 +163,13 @@ def _read_guess(path: str | None, p: Params) -> tuple[np.ndarray, np.ndarray, fl
         raise InputError(f"--guess {path}: {exc}") from None
 
 
-def _check_output_files(out: str | None, plot: str | None) -> None:
-    """Refuse, before solving, an output the solve could not write or two outputs that are
-    one file (the figure would overwrite the trajectory); no folder is made until written."""
+def _check_output_files(out: str | None, plot: str | None, scenario: str | None) -> None:
+    """Refuse, before solving, an output the solve could not write, two outputs that are one
+    file (the figure would overwrite the trajectory) or an output that is the scenario file;
+    no folder is made until written. (--out may replace the --guess file: a re-planning loop.)"""
     if plot:
         _check_plot_format(plot)
-    check_outputs(("--out", out), ("--plot", plot))
+    check_outputs(("--out", out), ("--plot", plot), inputs=(("scenario file", scenario),))
 
 
 def _print_problem(args: argparse.Namespace, scenario: Scenario, settings: SCvxSettings) -> None:

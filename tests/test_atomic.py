@@ -220,3 +220,26 @@ def test_a_solve_that_writes_nothing_leaves_no_folder(
     out, plot = tmp_path / "a" / "t.npz", tmp_path / "b" / "c" / "f.png"
     assert cli.main(["solve", "--out", str(out), "--plot", str(plot)]) == cli.EXIT_NO_TRAJECTORY
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("out", ["./s.json", "link.json"])
+def test_an_output_that_is_the_scenario_file_is_refused_before_solving(
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+    out: str,
+) -> None:
+    """`guidance solve s.json --out s.json` wrote the trajectory over the scenario it read;
+    now exit 2 before solving, the scenario file as it was (by another name or a link too)."""
+    from guidance import cli
+
+    scenario = tmp_path / "s.json"
+    text = '{"r0": [4, 4, 0], "v0": [0, -1, -2], "q0": [1, 0, 0, 0], "w0": [0, 0, 0], "m0": 3.0,'
+    scenario.write_text(text + ' "glideslope_deg": 20.0, "tilt_max_deg": 90.0}')
+    (tmp_path / "link.json").symlink_to(scenario)
+    before = scenario.read_bytes()
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(cli, "solve", _no_solve)
+    assert cli.main(["solve", str(scenario), "--out", out]) == 2
+    assert "is the scenario file" in capsys.readouterr().err
+    assert scenario.read_bytes() == before

@@ -274,9 +274,12 @@ tscvx_setup_status tscvx_warm_start(tscvx_workspace *ws, const tscvx_float *x,
 tscvx_solve_status tscvx_solve(tscvx_workspace *ws);
 
 /* Copies the last solution (original units) into caller arrays; any may be NULL.
- * x: n, y: p, z: m, s: m. For infeasible statuses these hold the certificate; for
- * SOLVED_INACCURATE and MAX_ITER the best or last iterate. TSCVX_SETUP_NO_SOLUTION (arrays
- * untouched) before a solve since the last setup or data update, and after NUMERICAL_ERROR. */
+ * x: n, y: p, z: m, s: m. For infeasible statuses these hold the certificate, normalized to
+ * b'y + h'z = -1 (primal) or c'x = -1 (dual), and the arrays it does not use are NaN (x and s
+ * for PRIMAL_INFEASIBLE, y and z for DUAL_INFEASIBLE: no number there to be taken for a
+ * solution); for SOLVED_INACCURATE and MAX_ITER the best or last iterate.
+ * TSCVX_SETUP_NO_SOLUTION (arrays untouched) before a solve since the last setup or data
+ * update, and after NUMERICAL_ERROR. */
 tscvx_setup_status tscvx_get_solution(const tscvx_workspace *ws, tscvx_float *x, tscvx_float *y,
                                       tscvx_float *z, tscvx_float *s);
 

@@ -68,12 +68,15 @@ static void test_infeasible(void) {
     tscvx_float Gx[] = {-1, 1}, h[] = {-1, 0}, c[] = {1};
     tscvx_data d = {1, 0, 2, NULL, NULL, NULL, c, NULL, NULL, NULL, NULL, Gp, Gi, Gx, h, 2, 0, NULL};
     tscvx_info info;
-    CHECK(solve(&d, NULL, &info) == TSCVX_PRIMAL_INFEASIBLE, "primal infeasible");
+    tscvx_float x[1] = {0.0};
+    CHECK(solve(&d, x, &info) == TSCVX_PRIMAL_INFEASIBLE, "primal infeasible");
+    CHECK(isnan(x[0]), "x of a primal certificate is NaN (no solution)");
     tscvx_int Gp2[] = {0, 1}, Gi2[] = {0};
     tscvx_float Gx2[] = {-1}, h2[] = {0}, c2[] = {-1};
     tscvx_data d2 = {1, 0, 1, NULL, NULL, NULL, c2, NULL, NULL, NULL, NULL, Gp2, Gi2, Gx2, h2,
                      1, 0, NULL};
-    CHECK(solve(&d2, NULL, &info) == TSCVX_DUAL_INFEASIBLE, "dual infeasible");
+    CHECK(solve(&d2, x, &info) == TSCVX_DUAL_INFEASIBLE, "dual infeasible");
+    CHECK(fabs(c2[0] * x[0] + 1.0) < 1e-12, "the dual certificate normalized: c'x = -1");
 }
 
 /* Scaling the objective (c) or the right-hand sides (b, h) of a feasible, bounded problem by
