@@ -210,7 +210,8 @@ def cmd_dataset(args: argparse.Namespace) -> int:
 
     if Path(args.run_dir).exists() and not Path(args.run_dir).is_dir():
         raise InputError(f"--run-dir {args.run_dir}: is a file, not a folder")
-    check_outputs(("--output", args.output))  # before the solving, not after
+    # before the solving, not after (the output cannot be the run's folder, made by the solve)
+    check_outputs(("--output", args.output), inputs=(("--run-dir folder", args.run_dir),))
     if not args.pack_only:
         try:
             counts = generate(

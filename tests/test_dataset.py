@@ -176,6 +176,8 @@ def test_unusable_outputs_are_refused_before_solving(tmp_path, capsys) -> None:
     for args, message in [
         (["--run-dir", str(tmp_path / "a_file")], "is a file, not a folder"),
         (["--output", "/proc/d.npz"], "--output /proc/d.npz: cannot write there"),
+        # the run's folder, not made yet: the pack failed after every solve
+        (["--output", str(tmp_path / "run")], "is the --run-dir folder"),
     ]:
         argv = ["dataset", "--n-base", "1", "--run-dir", str(tmp_path / "run"),
                 "--output", str(tmp_path / "d.npz"), *args]  # fmt: skip

@@ -52,6 +52,29 @@ static void expect_refused(pdg_workspace *ws, const pdg_scenario *s, tscvx_nn *s
     }
 }
 
+/* Mask callback asking for a T-SCvx guess on the workspace whose solve calls it: refused as
+ * busy (it would overwrite the running solve's buffers); then the full problem. */
+typedef struct {
+    pdg_workspace *ws;
+    const pdg_scenario *s;
+    tscvx_nn *sol;
+    int refused;
+} guess_inside_ctx;
+
+static int guess_inside(void *ctx, int k, unsigned char *mask, int n)
+{
+    static double gx2[PDG_N_MAX * PDG_NSTATE], gu2[PDG_N_MAX * PDG_NCTRL];
+    guess_inside_ctx *g = (guess_inside_ctx *)ctx;
+    char m[PDG_MESSAGE_LEN];
+    double tf2;
+    (void)k, (void)mask, (void)n;
+    if (pdg_tscvx_guess(g->ws, g->s, g->sol, gx2, gu2, &tf2, m) == PDG_INVALID_INPUT &&
+        strstr(m, "busy") != NULL) {
+        ++g->refused;
+    }
+    return 0;
+}
+
 int main(int argc, char **argv)
 {
     const char *paths[2] = {"build/models/solution.tnn", "build/models/constraint.tnn"};
@@ -139,6 +162,35 @@ int main(int argc, char **argv)
         expect_refused(ws30, &s30, NULL, con, "N = 30");
         CHECK(pdg_tscvx_guess(ws30, &s30, sol, gx, gu, &tf, msg) == PDG_INVALID_INPUT);
         CHECK(strstr(msg, "N = 30") != NULL);
+    }
+
+    /* pdg_tscvx_guess refuses a missing output, a network overwritten since its init and a
+     * call from inside a running solve on the workspace, each with its message */
+    CHECK(pdg_tscvx_guess(ws, &s, sol, NULL, gu, &tf, msg) == PDG_INVALID_INPUT);
+    CHECK(strstr(msg, "NULL") != NULL);
+    {
+        unsigned char *saved = malloc(net_bytes[0]);
+        CHECK(saved != NULL);
+        if (saved) {
+            memcpy(saved, net_arena[0], net_bytes[0]);
+            memset(net_arena[0], 0x5A, net_bytes[0]);
+            CHECK(pdg_tscvx_guess(ws, &s, sol, gx, gu, &tf, msg) == PDG_INVALID_INPUT);
+            CHECK(strstr(msg, "nets: the solution network: ") != NULL);
+            memcpy(net_arena[0], saved, net_bytes[0]); /* the same bytes: the same net */
+            free(saved);
+        }
+    }
+    {
+        guess_inside_ctx g = {NULL, NULL, NULL, 0};
+        pdg_options po;
+        memset(&po, 0, sizeof po);
+        g.ws = ws, g.s = &s, g.sol = sol;
+        po.mask_fn = guess_inside;
+        po.mask_ctx = &g;
+        r0.x = x;
+        r0.u = u;
+        CHECK(pdg_solve(ws, &s, &po, &r0) == PDG_SOLVED);
+        CHECK(g.refused == r0.subproblems_solved && g.refused > 0);
     }
 
     /* the projected warm start meets the boundary conditions */
