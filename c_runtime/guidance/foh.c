@@ -32,24 +32,20 @@ static void initial_augmented_state(const double *x_k, double *P)
     }
 }
 
-int pdg_foh_interval(const double *x_k, const double *u_k, const double *u_k1, double sigma,
-                     double dtau, const double *p, int substeps, double *aug, double *z,
-                     double *work)
+/* The augmented state at tau = dtau into aug: `substeps` RK4 steps of the generated
+ * tscvx_foh_step from initial_augmented_state, ping-ponging between aug and work. 0, or -2
+ * when the generated code fails. */
+static int integrate(const double *x_k, const double *u_k, const double *u_k1, double sigma,
+                     double dtau, const double *p, int substeps, double *aug, double *work)
 {
     const double *arg[tscvx_foh_step_SZ_ARG];
     double *res[tscvx_foh_step_SZ_RES];
-    const unsigned char *pattern;
     double *cur = aug;
     double *next = work;
     double s = 0.0;
-    double h;
-    int step, i, j;
+    const double h = dtau / substeps;
+    int step, i;
 
-    if (!x_k || !u_k || !u_k1 || !p || !aug || !z || !work || substeps < 1 ||
-        substeps > PDG_MAX_SUBSTEPS || !(dtau > 0.0) || !(sigma > 0.0)) {
-        return -1;
-    }
-    h = dtau / substeps;
     initial_augmented_state(x_k, cur);
     for (step = 0; step < substeps; ++step) {
         s = step * h;
@@ -76,7 +72,14 @@ int pdg_foh_interval(const double *x_k, const double *u_k, const double *u_k1, d
             aug[i] = cur[i];
         }
     }
-    /* z_k = x(dtau) - A x_k - B- u_k - B+ u_k1 - Sigma sigma (column-major blocks) */
+    return 0;
+}
+
+/* z_k = x(dtau) - A x_k - B- u_k - B+ u_k1 - Sigma sigma (column-major blocks of aug) */
+static void defect(const double *aug, const double *x_k, const double *u_k, const double *u_k1,
+                   double sigma, double *z)
+{
+    int i, j;
     for (i = 0; i < PDG_NX; ++i) {
         double v = aug[PDG_AUG_X + i] - aug[PDG_AUG_S + i] * sigma;
         for (j = 0; j < PDG_NX; ++j) {
@@ -87,13 +90,19 @@ int pdg_foh_interval(const double *x_k, const double *u_k, const double *u_k1, d
         }
         z[i] = v;
     }
+}
+
+/* 0 when every entry is finite and A_k is exactly zero off the vehicle's structural pattern
+ * (it is, for finite numbers: the subproblem leaves those entries out); -2 otherwise. */
+static int check_result(const double *aug, const double *p)
+{
+    const unsigned char *pattern;
+    int i, j;
     for (i = 0; i < PDG_NAUG; ++i) {
         if (!isfinite(aug[i])) {
             return -2;
         }
     }
-    /* Exact zeros off the structural pattern (they are, for finite numbers): the subproblem
-     * leaves those entries out */
     pattern = pdg_phi_a_pattern(p, NULL);
     for (i = 0; i < PDG_NX; ++i) {
         for (j = 0; j < PDG_NX; ++j) {
@@ -103,6 +112,21 @@ int pdg_foh_interval(const double *x_k, const double *u_k, const double *u_k1, d
         }
     }
     return 0;
+}
+
+int pdg_foh_interval(const double *x_k, const double *u_k, const double *u_k1, double sigma,
+                     double dtau, const double *p, int substeps, double *aug, double *z,
+                     double *work)
+{
+    if (!x_k || !u_k || !u_k1 || !p || !aug || !z || !work || substeps < 1 ||
+        substeps > PDG_MAX_SUBSTEPS || !(dtau > 0.0) || !(sigma > 0.0)) {
+        return -1;
+    }
+    if (integrate(x_k, u_k, u_k1, sigma, dtau, p, substeps, aug, work) != 0) {
+        return -2;
+    }
+    defect(aug, x_k, u_k, u_k1, sigma, z);
+    return check_result(aug, p);
 }
 
 int pdg_foh_all(int N, const double *x, const double *u, double sigma, const double *p,

@@ -104,7 +104,12 @@ static int bad_setting(char *msg, const char *text)
 
 /* The ranges of SCvxSettings.__post_init__ (guidance/params.py); the integer bounds bound the
  * solve's loops and the log. */
-static pdg_setup_status check_settings(const pdg_settings *s, char *msg)
+/* The settings' checks in three groups, each 1 with the refusal in `text` (the one field at
+ * fault and its value, in the order of params.py), 0 when they pass. */
+#define SETTING_TEXT (PDG_MESSAGE_LEN - 16)
+
+/* Every real finite, every integer within its range. */
+static int numbers_fault(const pdg_settings *s, char *text)
 {
     const struct {
         const char *name;
@@ -116,13 +121,6 @@ static pdg_setup_status check_settings(const pdg_settings *s, char *msg)
              {"tight_tol", s->tight_tol}, {"socp_tol", s->socp_tol}, {"prox_u", s->prox_u}};
     const struct {
         const char *name;
-        double v;
-    } factor[] = {{"alpha", s->alpha}, {"beta", s->beta}},
-      nonneg[] = {{"step_tol", s->step_tol},   {"vc_tol", s->vc_tol},
-                  {"defect_tol", s->defect_tol}, {"tight_tol", s->tight_tol},
-                  {"prox_u", s->prox_u}};
-    const struct {
-        const char *name;
         int v, lo, hi;
     } n[] = {{"iter_max", s->iter_max, 1, 100},
              {"max_subproblems", s->max_subproblems, 1, 500},
@@ -130,66 +128,95 @@ static pdg_setup_status check_settings(const pdg_settings *s, char *msg)
              {"socp_max_iter", s->socp_max_iter, 1, 500},
              {"socp_warm_start", s->socp_warm_start, 0, 1},
              {"tau_r_update", s->tau_r_update, 0, 1}};
-    char text[PDG_MESSAGE_LEN - 16];
     size_t i;
     for (i = 0; i < sizeof d / sizeof d[0]; ++i) {
         if (!isfinite(d[i].v)) {
-            snprintf(text, sizeof text, "%s: must be finite, got %g", d[i].name, d[i].v);
-            return bad_setting(msg, text);
+            snprintf(text, SETTING_TEXT, "%s: must be finite, got %g", d[i].name, d[i].v);
+            return 1;
         }
     }
     for (i = 0; i < sizeof n / sizeof n[0]; ++i) {
         if (n[i].v < n[i].lo || n[i].v > n[i].hi) {
-            snprintf(text, sizeof text, "%s: must lie within %d..%d, got %d", n[i].name,
+            snprintf(text, SETTING_TEXT, "%s: must lie within %d..%d, got %d", n[i].name,
                      n[i].lo, n[i].hi, n[i].v);
-            return bad_setting(msg, text);
+            return 1;
         }
     }
-    /* each refusal names the one field at fault and its value (the order of params.py) */
+    return 0;
+}
+
+/* The trust region's radii (eta_lb <= eta_init <= eta_ub), the penalty weight and the ratio
+ * thresholds of Algorithm 1 (rho0 <= rho1 <= rho2). */
+static int trust_region_fault(const pdg_settings *s, char *text)
+{
     if (!(s->eta_lb > 0)) {
-        snprintf(text, sizeof text, "eta_lb: must be > 0, got %g", s->eta_lb);
-        return bad_setting(msg, text);
+        snprintf(text, SETTING_TEXT, "eta_lb: must be > 0, got %g", s->eta_lb);
+        return 1;
     }
     if (!(s->eta_ub >= s->eta_lb)) {
-        snprintf(text, sizeof text, "eta_ub: must be >= eta_lb = %g, got %g", s->eta_lb,
+        snprintf(text, SETTING_TEXT, "eta_ub: must be >= eta_lb = %g, got %g", s->eta_lb,
                  s->eta_ub);
-        return bad_setting(msg, text);
+        return 1;
     }
     if (!(s->eta_lb <= s->eta_init && s->eta_init <= s->eta_ub)) {
-        snprintf(text, sizeof text,
+        snprintf(text, SETTING_TEXT,
                  "eta_init: must lie within [eta_lb, eta_ub] = [%g, %g], got %.17g", s->eta_lb,
                  s->eta_ub, s->eta_init);
-        return bad_setting(msg, text);
+        return 1;
     }
     if (!(s->lam > 0)) {
-        snprintf(text, sizeof text, "lam: must be > 0, got %g", s->lam);
-        return bad_setting(msg, text);
+        snprintf(text, SETTING_TEXT, "lam: must be > 0, got %g", s->lam);
+        return 1;
     }
     if (!(s->rho0 <= s->rho1)) {
-        snprintf(text, sizeof text, "rho1: must satisfy rho0 <= rho1 (rho0 = %g), got %g", s->rho0,
-                 s->rho1);
-        return bad_setting(msg, text);
+        snprintf(text, SETTING_TEXT, "rho1: must satisfy rho0 <= rho1 (rho0 = %g), got %g",
+                 s->rho0, s->rho1);
+        return 1;
     }
     if (!(s->rho1 <= s->rho2)) {
-        snprintf(text, sizeof text, "rho2: must satisfy rho1 <= rho2 (rho1 = %g), got %g", s->rho1,
-                 s->rho2);
-        return bad_setting(msg, text);
+        snprintf(text, SETTING_TEXT, "rho2: must satisfy rho1 <= rho2 (rho1 = %g), got %g",
+                 s->rho1, s->rho2);
+        return 1;
     }
+    return 0;
+}
+
+/* The trust-region factors (>= 1), the tolerances and the proximal weight. */
+static int tolerance_fault(const pdg_settings *s, char *text)
+{
+    const struct {
+        const char *name;
+        double v;
+    } factor[] = {{"alpha", s->alpha}, {"beta", s->beta}},
+      nonneg[] = {{"step_tol", s->step_tol},   {"vc_tol", s->vc_tol},
+                  {"defect_tol", s->defect_tol}, {"tight_tol", s->tight_tol},
+                  {"prox_u", s->prox_u}};
+    size_t i;
     for (i = 0; i < sizeof factor / sizeof factor[0]; ++i) {
         if (!(factor[i].v >= 1.0)) {
-            snprintf(text, sizeof text, "%s: must be >= 1 (a trust-region factor), got %g",
+            snprintf(text, SETTING_TEXT, "%s: must be >= 1 (a trust-region factor), got %g",
                      factor[i].name, factor[i].v);
-            return bad_setting(msg, text);
+            return 1;
         }
     }
     for (i = 0; i < sizeof nonneg / sizeof nonneg[0]; ++i) {
         if (!(nonneg[i].v >= 0)) {
-            snprintf(text, sizeof text, "%s: must be >= 0, got %g", nonneg[i].name, nonneg[i].v);
-            return bad_setting(msg, text);
+            snprintf(text, SETTING_TEXT, "%s: must be >= 0, got %g", nonneg[i].name,
+                     nonneg[i].v);
+            return 1;
         }
     }
     if (!(s->socp_tol > 0 && s->socp_tol < 1)) {
-        snprintf(text, sizeof text, "socp_tol: must lie within (0, 1), got %g", s->socp_tol);
+        snprintf(text, SETTING_TEXT, "socp_tol: must lie within (0, 1), got %g", s->socp_tol);
+        return 1;
+    }
+    return 0;
+}
+
+static pdg_setup_status check_settings(const pdg_settings *s, char *msg)
+{
+    char text[SETTING_TEXT];
+    if (numbers_fault(s, text) || trust_region_fault(s, text) || tolerance_fault(s, text)) {
         return bad_setting(msg, text);
     }
     return PDG_SETUP_OK;
