@@ -215,8 +215,10 @@ static int p_maybe_psd(const tscvx_int *Pp, const tscvx_int *Pi, const tscvx_flo
 
 /* Everything setup checks in the data before building anything (the factorization test of
  * P comes later); msg (may be NULL) receives the array and entry at fault. */
-static tscvx_setup_status check_data(const tscvx_data *d, char *msg) {
-    if (msg) msg[0] = '\0';
+/* check_data's steps, in its order; each refuses with its status and message. */
+
+/* Sizes in range, and every array that the sizes say is used given. */
+static tscvx_setup_status check_sizes(const tscvx_data *d, char *msg) {
     if (d->n < 1 || d->p < 0 || d->m < 0)
         return refuse(msg, TSCVX_SETUP_BAD_DIMENSIONS, "n = %d, p = %d, m = %d: need n >= 1, "
                       "p >= 0, m >= 0", d->n, d->p, d->m);
@@ -231,6 +233,11 @@ static tscvx_setup_status check_data(const tscvx_data *d, char *msg) {
                       d->m);
     if (d->Pp != NULL && (d->Pi == NULL || d->Px == NULL))
         return refuse(msg, TSCVX_SETUP_NULL_ARGUMENT, "Pp given, Pi or Px NULL");
+    return TSCVX_SETUP_OK;
+}
+
+/* The cones: l >= 0 orthant rows, then nsoc cones of q[k] >= 1 rows, m rows in all. */
+static tscvx_setup_status check_cones(const tscvx_data *d, char *msg) {
     if (d->l < 0 || d->nsoc < 0 || (d->nsoc > 0 && d->q == NULL))
         return refuse(msg, TSCVX_SETUP_BAD_CONES, "l = %d, nsoc = %d%s: need l, nsoc >= 0",
                       d->l, d->nsoc, d->nsoc > 0 && d->q == NULL ? ", q NULL" : "");
@@ -247,6 +254,11 @@ static tscvx_setup_status check_data(const tscvx_data *d, char *msg) {
     if (rows != d->m)
         return refuse(msg, TSCVX_SETUP_BAD_CONES, "l + sum(q) = %lld rows, G has m = %d", rows,
                       d->m);
+    return TSCVX_SETUP_OK;
+}
+
+/* P (upper triangle), A and G as valid CSC of their sizes. */
+static tscvx_setup_status check_patterns(const tscvx_data *d, char *msg) {
     tscvx_setup_status s;
     if (d->Pp && (s = check_csc("P", d->Pp, d->Pi, d->n, d->n, 1, msg)) != TSCVX_SETUP_OK)
         return s;
@@ -260,6 +272,11 @@ static tscvx_setup_status check_data(const tscvx_data *d, char *msg) {
                       d->Gp[d->n]);
     if (d->Gp && (s = check_csc("G", d->Gp, d->Gi, d->m, d->n, 0, msg)) != TSCVX_SETUP_OK)
         return s;
+    return TSCVX_SETUP_OK;
+}
+
+/* Every number finite, and P passing the cheap semidefiniteness test. */
+static tscvx_setup_status check_values(const tscvx_data *d, char *msg) {
     const struct {
         const char *name;
         const tscvx_float *v;
@@ -280,6 +297,15 @@ static tscvx_setup_status check_data(const tscvx_data *d, char *msg) {
         return refuse(msg, TSCVX_SETUP_P_NOT_PSD, "P: a negative diagonal entry or an entry with "
                       "P_ij^2 > P_ii P_jj");
     return TSCVX_SETUP_OK;
+}
+
+static tscvx_setup_status check_data(const tscvx_data *d, char *msg) {
+    tscvx_setup_status s;
+    if (msg) msg[0] = '\0';
+    if ((s = check_sizes(d, msg)) != TSCVX_SETUP_OK || (s = check_cones(d, msg)) != TSCVX_SETUP_OK ||
+        (s = check_patterns(d, msg)) != TSCVX_SETUP_OK)
+        return s;
+    return check_values(d, msg);
 }
 
 tscvx_setup_status tscvx_check_data(const tscvx_data *data, char *message) {
