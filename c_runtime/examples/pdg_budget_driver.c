@@ -54,99 +54,158 @@ static void print_result(pdg_status status, const pdg_result *res, int N)
     printf("m_f %.12f\n", res->x[PDG_NSTATE * (N - 1) + 13]);
 }
 
-int main(int argc, char **argv)
-{
-    static double x[PDG_N_MAX * PDG_NSTATE], u[PDG_N_MAX * PDG_NCTRL];
-    pdg_settings st;
-    pdg_scenario scn;
-    pdg_result res;
-    pdg_workspace *ws = NULL;
-    pdg_setup_status s = PDG_SETUP_SCRATCH_TOO_SMALL;
-    void *arena = NULL;
-    size_t need = 0, stack;
-    int repeat = 1, i, tries;
-    double t0, wall;
-    pdg_status status;
-    const char *net_path[2] = {NULL, NULL};
-    unsigned char *blob[2] = {NULL, NULL};
-    void *net_arena[2] = {NULL, NULL};
-    size_t blob_len[2] = {0, 0}, net_bytes[2] = {0, 0};
-    tscvx_nn *net[2] = {NULL, NULL};
+/* The two networks of a T-SCvx call: the files, their blobs and arenas (index 0: solution,
+ * 1: constraint; none for SCvx). */
+typedef struct {
+    const char *path[2];
+    unsigned char *blob[2];
+    void *arena[2];
+    size_t blob_len[2], bytes[2];
+    tscvx_nn *net[2];
+} networks;
 
+/* --repeat R, --tscvx FILE, --masks FILE; 0, or 1 when --masks comes without --tscvx. */
+static int parse_args(int argc, char **argv, int *repeat, networks *nn)
+{
+    int i;
     for (i = 1; i + 1 < argc; ++i) {
         if (strcmp(argv[i], "--repeat") == 0) {
-            repeat = atoi(argv[i + 1]);
-            repeat = repeat < 1 ? 1 : (repeat > 1000 ? 1000 : repeat);
+            *repeat = atoi(argv[i + 1]);
+            *repeat = *repeat < 1 ? 1 : (*repeat > 1000 ? 1000 : *repeat);
         } else if (strcmp(argv[i], "--tscvx") == 0) {
-            net_path[0] = argv[i + 1];
+            nn->path[0] = argv[i + 1];
         } else if (strcmp(argv[i], "--masks") == 0) {
-            net_path[1] = argv[i + 1];
+            nn->path[1] = argv[i + 1];
         }
     }
-    if (net_path[1] && !net_path[0]) {
+    if (nn->path[1] && !nn->path[0]) {
         fprintf(stderr, "--masks needs --tscvx\n");
         return 1;
     }
-    for (i = 0; i < 2; ++i) {
-        if (net_path[i] && load_net(net_path[i], &blob[i], &blob_len[i], &net_arena[i],
-                                    &net_bytes[i], &net[i])) {
-            return 1;
-        }
-    }
-    use_tscvx = net_path[0] != NULL;
-    tscvx_opt.solution = net[0];
-    tscvx_opt.constraint = net[1];
-    pdg_default_settings(&st);
-    pdg_default_scenario(&scn);
+    return 0;
+}
+
+/* The default scenario's workspace in a zeroed malloc'ed arena (*need bytes), sized by the
+ * library's retry protocol; NULL (with the reason on stderr) when that fails. */
+static pdg_workspace *set_up(const pdg_scenario *scn, const pdg_settings *st, void **arena,
+                             size_t *need)
+{
+    pdg_workspace *ws = NULL;
+    pdg_setup_status s = PDG_SETUP_SCRATCH_TOO_SMALL;
+    int tries;
+    *arena = NULL;
+    *need = 0;
     for (tries = 0; tries < 4 && s == PDG_SETUP_SCRATCH_TOO_SMALL; ++tries) {
-        free(arena);
-        arena = need ? malloc(need) : NULL;
-        s = pdg_workspace_size(&scn.params, &st, arena, need, &need);
+        free(*arena);
+        *arena = *need ? malloc(*need) : NULL;
+        s = pdg_workspace_size(&scn->params, st, *arena, *need, need);
     }
-    free(arena);
-    if (s != PDG_SETUP_OK || !(arena = malloc(need))) {
+    free(*arena);
+    if (s != PDG_SETUP_OK || !(*arena = malloc(*need))) {
         fprintf(stderr, "sizing failed: %s\n", pdg_setup_status_message(s));
-        return 1;
+        return NULL;
     }
-    memset(arena, 0, need);
-    s = pdg_setup(&ws, arena, need, &scn.params, &st);
+    memset(*arena, 0, *need);
+    s = pdg_setup(&ws, *arena, *need, &scn->params, st);
     if (s != PDG_SETUP_OK) {
         fprintf(stderr, "pdg_setup: %s\n", pdg_setup_status_message(s));
-        return 1;
+        return NULL;
     }
-    res.x = x;
-    res.u = u;
+    return ws;
+}
+
+/* The measured call: once with the stack painted and allocations counted, then repeat - 1
+ * more times for the fastest wall time. */
+static pdg_status measure(pdg_workspace *ws, const pdg_scenario *scn, pdg_result *res,
+                          int repeat, double *wall, size_t *stack)
+{
+    pdg_status status;
+    double t0;
+    int i;
     paint_stack();
     counting = 1;
     t0 = now_s();
-    status = measured_call(ws, &scn, &res);
-    wall = now_s() - t0;
+    status = measured_call(ws, scn, res);
+    *wall = now_s() - t0;
     counting = 0;
-    stack = painted_depth();
+    *stack = painted_depth();
     for (i = 1; i < repeat; ++i) {
         double dt;
         t0 = now_s();
-        measured_call(ws, &scn, &res);
+        measured_call(ws, scn, res);
         dt = now_s() - t0; /* read once: the minimum is of measured times */
-        wall = dt < wall ? dt : wall;
+        *wall = dt < *wall ? dt : *wall;
     }
-    printf("mode %s\n", !use_tscvx ? "scvx" : (net[1] ? "tscvx_masks" : "tscvx"));
-    print_result(status, &res, scn.params.N);
+    return status;
+}
+
+static void print_report(pdg_status status, const pdg_result *res, const pdg_scenario *scn,
+                         const pdg_workspace *ws, size_t need, size_t stack, double wall,
+                         const networks *nn)
+{
+    printf("mode %s\n", !use_tscvx ? "scvx" : (nn->net[1] ? "tscvx_masks" : "tscvx"));
+    print_result(status, res, scn->params.N);
     printf("arena_bytes %zu\n", need);
     printf("arena_high_water %zu\n", pdg_arena_high_water(ws));
     printf("stack_high_water %zu\n", stack);
     printf("heap_allocations_in_solve %ld\n", n_alloc);
     printf("wall_s_min %.6f\n", wall);
-    printf("nn_weights_bytes %zu\n", blob_len[0] + blob_len[1]);
-    printf("nn_arena_bytes %zu\n", net_bytes[0] + net_bytes[1]);
+    printf("nn_weights_bytes %zu\n", nn->blob_len[0] + nn->blob_len[1]);
+    printf("nn_arena_bytes %zu\n", nn->bytes[0] + nn->bytes[1]);
     if (use_tscvx) {
         printf("masks_predicted %d\n", tscvx_rep.masks_predicted);
         printf("mask_failures %d\n", tscvx_rep.mask_failures);
     }
+}
+
+static void release(void *arena, networks *nn)
+{
+    int i;
     free(arena);
     for (i = 0; i < 2; ++i) {
-        free(net_arena[i]);
-        free(blob[i]);
+        free(nn->arena[i]);
+        free(nn->blob[i]);
     }
+}
+
+int main(int argc, char **argv)
+{
+    static double x[PDG_N_MAX * PDG_NSTATE], u[PDG_N_MAX * PDG_NCTRL];
+    static networks nn; /* zeroed */
+    pdg_settings st;
+    pdg_scenario scn;
+    pdg_result res;
+    pdg_workspace *ws;
+    void *arena = NULL;
+    size_t need = 0, stack = 0;
+    int repeat = 1, i;
+    double wall = 0.0;
+    pdg_status status;
+
+    if (parse_args(argc, argv, &repeat, &nn)) {
+        return 1;
+    }
+    for (i = 0; i < 2; ++i) {
+        if (nn.path[i] && load_net(nn.path[i], &nn.blob[i], &nn.blob_len[i], &nn.arena[i],
+                                   &nn.bytes[i], &nn.net[i])) {
+            release(NULL, &nn);
+            return 1;
+        }
+    }
+    use_tscvx = nn.path[0] != NULL;
+    tscvx_opt.solution = nn.net[0];
+    tscvx_opt.constraint = nn.net[1];
+    pdg_default_settings(&st);
+    pdg_default_scenario(&scn);
+    ws = set_up(&scn, &st, &arena, &need);
+    if (!ws) {
+        release(arena, &nn);
+        return 1;
+    }
+    res.x = x;
+    res.u = u;
+    status = measure(ws, &scn, &res, repeat, &wall, &stack);
+    print_report(status, &res, &scn, ws, need, stack, wall, &nn);
+    release(arena, &nn);
     return status == PDG_SOLVED ? 0 : 3;
 }
