@@ -650,12 +650,11 @@ static int size_values(tscvx_workspace *ws, const analysis_tmp *t) {
     return 0;
 }
 
-int tscvx_banded_analyse(tscvx_workspace *ws, tscvx_arena *a) {
+/* The arrays whose sizes the problem's dimensions fix, kept for the workspace's life. */
+static void claim_persistent(tscvx_workspace *ws, tscvx_arena *a) {
     tscvx_banded *bd = &ws->bd;
     const tscvx_int n = ws->n, p = ws->p, m = ws->m, l = ws->K.l, nsoc = ws->K.nsoc;
     const tscvx_int nnzA = ws->A.nnz, nnzG = ws->G.nnz, nnzP = ws->P.nnz;
-    const size_t entry = a->top;
-    /* persistent arrays of known size */
     CLAIM(bd->gp, n + 1, tscvx_int);
     CLAIM(bd->gvar, n, tscvx_int);
     CLAIM(bd->loc, n, tscvx_int);
@@ -685,17 +684,39 @@ int tscvx_banded_analyse(tscvx_workspace *ws, tscvx_arena *a) {
                            &bd->t, &bd->res_z, &bd->ez, &bd->ewz};
     const tscvx_int len[] = {n, n, n, p, p, p, m, m, m, m};
     for (size_t i = 0; i < sizeof len / sizeof len[0]; i++) CLAIM(*vec[i], len[i], tscvx_float);
+}
+
+/* The analysis's temporaries (released once it is done). */
+static void claim_temporaries(const tscvx_workspace *ws, tscvx_arena *a, analysis_tmp *t) {
+    const tscvx_int n = ws->n, p = ws->p, nnzA = ws->A.nnz, nnzG = ws->G.nnz;
+    CLAIM(t->parent, n, tscvx_int);
+    CLAIM(t->gid, n, tscvx_int);
+    CLAIM(t->Grc, nnzG, tscvx_int);
+    CLAIM(t->rgp, p + 1, tscvx_int);
+    CLAIM(t->rgg, nnzA, tscvx_int);
+    CLAIM(t->deg, p, tscvx_int);
+    CLAIM(t->seen, p, tscvx_int);
+    CLAIM(t->queue, p, tscvx_int);
+    CLAIM(t->order, p, tscvx_int);
+}
+
+/* The numeric arrays, of the sizes the analysis found (size_values). */
+static void claim_values(tscvx_workspace *ws, tscvx_arena *a) {
+    tscvx_banded *bd = &ws->bd;
+    CLAIM(bd->H, bd->nH, tscvx_float);
+    CLAIM(bd->PF, ws->P.nnz > 0 ? bd->nH : 0, tscvx_float);
+    CLAIM(bd->CT, bd->nCT, tscvx_float);
+    CLAIM(bd->Y, bd->nY, tscvx_float);
+    CLAIM(bd->V, (size_t)ws->p * bd->nb, tscvx_float);
+    CLAIM(bd->B, bd->bp[ws->K.nsoc], tscvx_float);
+}
+
+int tscvx_banded_analyse(tscvx_workspace *ws, tscvx_arena *a) {
+    const size_t entry = a->top;
+    claim_persistent(ws, a);
     const size_t mark = a->top;
     analysis_tmp t;
-    CLAIM(t.parent, n, tscvx_int);
-    CLAIM(t.gid, n, tscvx_int);
-    CLAIM(t.Grc, nnzG, tscvx_int);
-    CLAIM(t.rgp, p + 1, tscvx_int);
-    CLAIM(t.rgg, nnzA, tscvx_int);
-    CLAIM(t.deg, p, tscvx_int);
-    CLAIM(t.seen, p, tscvx_int);
-    CLAIM(t.queue, p, tscvx_int);
-    CLAIM(t.order, p, tscvx_int);
+    claim_temporaries(ws, a, &t);
     if (a->base == NULL) { /* counting: the value arrays are sized by the analysis itself */
         a->top = mark;
         return 1;
@@ -712,12 +733,7 @@ int tscvx_banded_analyse(tscvx_workspace *ws, tscvx_arena *a) {
         return 0;
     }
     a->top = mark; /* temporaries released; the value arrays */
-    CLAIM(bd->H, bd->nH, tscvx_float);
-    CLAIM(bd->PF, nnzP > 0 ? bd->nH : 0, tscvx_float);
-    CLAIM(bd->CT, bd->nCT, tscvx_float);
-    CLAIM(bd->Y, bd->nY, tscvx_float);
-    CLAIM(bd->V, (size_t)p * bd->nb, tscvx_float);
-    CLAIM(bd->B, bd->bp[nsoc], tscvx_float);
+    claim_values(ws, a);
     return 1;
 }
 
