@@ -122,19 +122,20 @@ size_t tscvx_kkt_temp_ints(tscvx_int dim, tscvx_int nnz) {
 
 /* Build the permuted pattern, the maps and the symbolic factorization. `tmp` holds
  * tscvx_kkt_temp_ints() ints. Returns nnz(L), or -1 on failure. */
-long tscvx_kkt_build(tscvx_workspace *ws, tscvx_int *tmp) {
+/* AMD's ordering of the KKT pattern (nnz entries (Ti, Tj), upper triangle) into kk->pinv,
+ * with each pivot's block in kk->rowblk; w: AMD's work arrays (10 dim + iwlen). 0, or -1
+ * when AMD's permutation is not one. */
+static int order_by_amd(tscvx_workspace *ws, const tscvx_int *Ti, const tscvx_int *Tj,
+                     tscvx_int *w) {
     tscvx_kkt *kk = &ws->kkt;
     const tscvx_int dim = kk->dim, nnz = kk->nnz;
-    tscvx_int *Ti = tmp, *Tj = Ti + nnz, *slot = Tj + nnz;
-    tscvx_int *Pe = slot + nnz, *Len = Pe + dim, *Nv = Len + dim, *Next = Nv + dim;
+    tscvx_int *Pe = w, *Len = Pe + dim, *Nv = Len + dim, *Next = Nv + dim;
     tscvx_int *Last = Next + dim, *Head = Last + dim, *Elen = Head + dim, *Deg = Elen + dim;
     tscvx_int *Wk = Deg + dim, *Iw = Wk + dim;
     const size_t nz2 = 2 * (size_t)nnz;
     const tscvx_int iwlen = (tscvx_int)(nz2 + nz2 / 5 + 2 * (size_t)dim);
 
-    if (enumerate(ws, Ti, Tj) != nnz) return -1;
-
-    /* AMD on the symmetric pattern without diagonal (amd_2 wants both triangles) */
+    /* the symmetric pattern without diagonal (amd_2 wants both triangles) */
     for (tscvx_int i = 0; i < dim; i++) Len[i] = 0;
     for (tscvx_int t = 0; t < nnz; t++)
         if (Ti[t] != Tj[t]) Len[Ti[t]]++, Len[Tj[t]]++;
@@ -154,23 +155,32 @@ long tscvx_kkt_build(tscvx_workspace *ws, tscvx_int *tmp) {
                                       : i < ws->n + ws->p ? KKT_ROW_Y
                                       : i < ws->n + ws->p + ws->m ? KKT_ROW_Z : KKT_ROW_EXP);
     }
+    return 0;
+}
 
-    /* permuted upper triangle: entry (i, j) goes to column max(pinv i, pinv j) */
+/* The permuted upper triangle (Kp, Ki): entry t, (i, j), goes to column max(pinv i, pinv j),
+ * at slot[t]; next: dim temporaries. */
+static void permuted_pattern(tscvx_kkt *kk, const tscvx_int *Ti, const tscvx_int *Tj,
+                             tscvx_int *slot, tscvx_int *next) {
+    const tscvx_int dim = kk->dim, nnz = kk->nnz;
     for (tscvx_int k = 0; k <= dim; k++) kk->Kp[k] = 0;
     for (tscvx_int t = 0; t < nnz; t++) {
         const tscvx_int a = kk->pinv[Ti[t]], b = kk->pinv[Tj[t]];
         kk->Kp[(a > b ? a : b) + 1]++;
     }
     for (tscvx_int k = 0; k < dim; k++) kk->Kp[k + 1] += kk->Kp[k];
-    for (tscvx_int k = 0; k < dim; k++) Len[k] = kk->Kp[k];
+    for (tscvx_int k = 0; k < dim; k++) next[k] = kk->Kp[k];
     for (tscvx_int t = 0; t < nnz; t++) {
         const tscvx_int a = kk->pinv[Ti[t]], b = kk->pinv[Tj[t]];
         const tscvx_int col = a > b ? a : b;
-        slot[t] = Len[col]++;
+        slot[t] = next[col]++;
         kk->Ki[slot[t]] = a < b ? a : b;
     }
+}
 
-    /* distribute the slots to the maps, in the order of enumerate() */
+/* The slots to the maps from the problem's data into K, in the order of enumerate(). */
+static void distribute_slots(tscvx_workspace *ws, const tscvx_int *slot) {
+    tscvx_kkt *kk = &ws->kkt;
     tscvx_int t = 0;
     for (tscvx_int j = 0; j < ws->n; j++) {
         int has_diag = 0;
@@ -184,7 +194,17 @@ long tscvx_kkt_build(tscvx_workspace *ws, tscvx_int *tmp) {
     for (tscvx_int i = 0; i < ws->p; i++) kk->mapDiag[ws->n + i] = slot[t++];
     for (tscvx_int k = 0; k < ws->G.nnz; k++) kk->mapG[k] = slot[t++];
     for (tscvx_int k = 0; k < kk->ncone; k++) kk->mapCone[k] = slot[t++];
+}
 
+long tscvx_kkt_build(tscvx_workspace *ws, tscvx_int *tmp) {
+    tscvx_kkt *kk = &ws->kkt;
+    const tscvx_int nnz = kk->nnz;
+    tscvx_int *Ti = tmp, *Tj = Ti + nnz, *slot = Tj + nnz, *work = slot + nnz;
+
+    if (enumerate(ws, Ti, Tj) != nnz) return -1;
+    if (order_by_amd(ws, Ti, Tj, work) != 0) return -1;
+    permuted_pattern(kk, Ti, Tj, slot, work);
+    distribute_slots(ws, slot);
     for (tscvx_int k = 0, e = 0; k < ws->K.nsoc; k++)
         kk->expanded[k] = is_expanded(ws->K.q[k], ws->st.soc_dense_max) ? e++ : -1;
     kk->npos = ws->n + kk->nexp;
