@@ -519,11 +519,15 @@ def _brief(m: dict) -> dict:
 
 # ---- baselines ----------------------------------------------------------------------------
 def cmd_baselines(args: argparse.Namespace) -> int:
+    from guidance.atomic import check_outputs
     from guidance.baselines import format_table, results_json, run_baselines
     from guidance.dataset import load_dataset
     from guidance.nn.card import write_card
     from guidance.provenance import provenance
 
+    models = Path(args.models_dir)
+    out = Path(args.json) if args.json else models / "baselines.json"
+    check_outputs(("--json", out))  # before the baselines, not after
     ds = load_dataset(args.dataset)
     res = run_baselines(
         ds,
@@ -536,8 +540,6 @@ def cmd_baselines(args: argparse.Namespace) -> int:
     for kind in res:
         print(format_table(kind, res[kind]))
         print()
-    models = Path(args.models_dir)
-    out = Path(args.json) if args.json else models / "baselines.json"
     report = {"provenance": provenance(), "dataset": ds.header, "results": res}
     write_text_atomic(out, results_json(report))
     print(f"wrote {out}")
@@ -562,6 +564,7 @@ def _radii(text: str) -> list[float]:
 
 
 def cmd_mask_ceiling(args: argparse.Namespace) -> int:
+    from guidance.atomic import check_outputs
     from guidance.dataset import WorkerDiedError, default_backend
     from guidance.mask_ceiling import (
         data_spacing,
@@ -572,9 +575,13 @@ def cmd_mask_ceiling(args: argparse.Namespace) -> int:
     )
     from guidance.nn.card import write_card
 
+    models = Path(args.models_dir)
+    out = Path(args.json) if args.json else models / "mask_ceiling.json"
+    # before the solves, not after; nor the run's folder, which the solves fill
+    check_outputs(("--json", out), inputs=(("--run-dir folder", args.run_dir),))
     eps = args.eps
     n_train = args.train_landings
-    metrics = Path(args.models_dir) / "metrics.json"
+    metrics = models / "metrics.json"
     if n_train is None and metrics.exists():
         n_train = json.loads(metrics.read_text())["shipped"]["constraint"]["n_trainval_bases"]
     std = theta_spread()
@@ -593,8 +600,6 @@ def cmd_mask_ceiling(args: argparse.Namespace) -> int:
         return 1
     spacing = data_spacing(n_train, std) if n_train else None
     print(format_table(scores, args.neighbours, spacing, n_train))
-    models = Path(args.models_dir)
-    out = Path(args.json) if args.json else models / "mask_ceiling.json"
     run = dict(landings=args.landings, neighbours=args.neighbours, backend=backend, seed=args.seed)
     write_text_atomic(out, json.dumps(results_dict(scores, spacing, n_train, **run), indent=1))
     print(f"wrote {out}")

@@ -164,3 +164,29 @@ def test_card_compares_the_data_spacing_with_where_the_goal_is_met(scores, expec
     )
     text = "\n".join(lines)
     assert f"The training landings are {expected}:" in text
+
+
+@pytest.mark.parametrize("where", ["folder", "run dir"])
+def test_cli_refuses_a_json_it_could_not_write_before_solving(where, tmp_path, capsys, monkeypatch):
+    """--json was written only after every neighbourhood was solved: a folder in its place or
+    the run's folder failed at the end. Now exit 2 before any solve."""
+    (tmp_path / "taken").mkdir()
+    out = {"folder": tmp_path / "taken", "run dir": tmp_path / "run"}[where]
+
+    def no_measure(*args, **kwargs):
+        raise AssertionError("measured before the output was checked")
+
+    monkeypatch.setattr(mask_ceiling, "measure", no_measure)
+    argv = ["mask-ceiling", "--run-dir", str(tmp_path / "run"), "--json", str(out),
+            "--models-dir", str(tmp_path / "models")]  # fmt: skip
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "--json" in err and ("is a folder" in err or "is the --run-dir folder" in err), err
+
+
+def test_baselines_refuse_a_json_they_could_not_write_before_running(tmp_path, capsys) -> None:
+    """The baselines' report was checked only when written, after every baseline ran."""
+    (tmp_path / "taken").mkdir()
+    argv = ["baselines", "--dataset", str(tmp_path / "none.npz"), "--json", str(tmp_path / "taken")]
+    assert main(argv) == 2
+    assert "--json" in capsys.readouterr().err
