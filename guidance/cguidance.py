@@ -36,7 +36,7 @@ import numpy as np
 
 from guidance.cgnc import LIB_PATH, LibraryNotBuiltError  # one library path (TSCVX_GNC_LIB)
 from guidance.csocp import SOLVE_STATUS
-from guidance.errors import InputError
+from guidance.errors import InputError, describe
 from guidance.guess import checked_guess
 from guidance.model import param_vector, pattern_index
 from guidance.params import NC, NU, NX, Params, Scenario, SCvxSettings
@@ -45,7 +45,6 @@ from guidance.scvx import (
     IterationRecord,
     SCvxResult,
     check_masks_argument,
-    describe,
     mask_bits,
     mask_table,
 )

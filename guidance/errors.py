@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import zipfile
 import zlib
+from typing import Any
 
 
 class InputError(ValueError):
@@ -32,3 +33,28 @@ UNREADABLE_NPZ = (
     OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile, zlib.error, RecursionError,
     MemoryError,
 )  # fmt: skip
+
+
+class DuplicateKeyError(ValueError):
+    """A JSON object with a key given twice (``unique_keys``); ``key`` names it."""
+
+    def __init__(self, key: str) -> None:
+        super().__init__(key)
+        self.key = key
+
+
+def unique_keys(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    """``json.loads(..., object_pairs_hook=unique_keys)``: json keeps the last of two equal
+    keys without a word; in a file a person wrote, the second is a typo, not a choice."""
+    seen: dict[str, Any] = {}
+    for key, value in pairs:
+        if key in seen:
+            raise DuplicateKeyError(key)
+        seen[key] = value
+    return seen
+
+
+def describe(value: object) -> str:
+    """A wrong argument named in a message: its type and the start of its repr."""
+    text = repr(value)
+    return f"{type(value).__name__} {text if len(text) <= 40 else text[:37] + '...'}"

@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from guidance.errors import InputError
+from guidance.errors import DuplicateKeyError, InputError, unique_keys
 from guidance.params import (
     PARAM_NAMES,
     VECTOR_PARAM_SIZES,
@@ -168,22 +168,12 @@ def load_scenario(path: str | Path) -> Scenario:
     except UnicodeDecodeError as exc:  # e.g. UTF-16, as some shells redirect
         raise ScenarioError("<file>", f"{path} is not UTF-8 text ({exc.reason})") from None
     try:
-        data = json.loads(text, parse_constant=_reject_constant, object_pairs_hook=_unique_keys)
-    except ScenarioError:
-        raise
+        data = json.loads(text, parse_constant=_reject_constant, object_pairs_hook=unique_keys)
+    except DuplicateKeyError as exc:
+        raise ScenarioError(exc.key, "given twice") from None
     except (ValueError, RecursionError) as exc:  # JSONDecodeError, a 4,300-digit integer, nesting
         raise ScenarioError("<file>", f"{path} is not valid JSON: {exc}") from None
     return scenario_from_dict(data)
-
-
-def _unique_keys(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
-    # json keeps the last of two equal keys; a scenario given twice is a typo, not a choice
-    seen: dict[str, Any] = {}
-    for key, value in pairs:
-        if key in seen:
-            raise ScenarioError(key, "given twice")
-        seen[key] = value
-    return seen
 
 
 def _reject_constant(name: str) -> float:

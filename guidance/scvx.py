@@ -21,7 +21,7 @@ import numpy as np
 from guidance import conic
 from guidance.conic import ConicProblem, ConicSolution
 from guidance.constraints import constraint_scales, path_constraint_values, tight_mask
-from guidance.errors import InputError, ModelEvaluationError
+from guidance.errors import InputError, ModelEvaluationError, describe
 from guidance.guess import checked_guess, initial_guess
 from guidance.model import discretize, vehicle_pattern
 from guidance.params import IM, NC, NU, NX, Scenario, SCvxSettings
@@ -516,12 +516,6 @@ def mask_bits(mask: object, N: int, k: int) -> np.ndarray:
                 "0 or 1): give 0/1 bits (threshold the network's probabilities first)"
             )
     return a != 0
-
-
-def describe(value: object) -> str:
-    """A wrong argument named in a message: its type and the start of its repr."""
-    text = repr(value)
-    return f"{type(value).__name__} {text if len(text) <= 40 else text[:37] + '...'}"
 
 
 def check_masks_argument(masks: object) -> None:

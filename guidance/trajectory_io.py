@@ -13,12 +13,11 @@ import dataclasses
 import json
 import zipfile
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
 from guidance.atomic import atomic_write
-from guidance.errors import UNREADABLE_NPZ, InputError
+from guidance.errors import UNREADABLE_NPZ, DuplicateKeyError, InputError, unique_keys
 from guidance.params import Params
 from guidance.provenance import provenance
 from guidance.scenario import scenario_to_dict
@@ -109,24 +108,9 @@ def _check_no_nul(path: str | Path, key: str, text: str) -> None:
         )
 
 
-class _DuplicateKeyError(ValueError):
-    def __init__(self, key: str) -> None:
-        super().__init__(key)
-        self.key = key
-
-
-def _unique_keys(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
-    seen: dict[str, Any] = {}
-    for key, value in pairs:
-        if key in seen:
-            raise _DuplicateKeyError(key)
-        seen[key] = value
-    return seen
-
-
 def _decode_json(path: str | Path, entry: str, text: str) -> object:
     """A JSON entry; a key given twice in any of its objects is refused, not the last kept."""
     try:
-        return json.loads(text, object_pairs_hook=_unique_keys)
-    except _DuplicateKeyError as exc:
+        return json.loads(text, object_pairs_hook=unique_keys)
+    except DuplicateKeyError as exc:
         raise InputError(f"{path}: {entry}: key {exc.key!r} given twice") from None

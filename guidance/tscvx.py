@@ -19,10 +19,10 @@ from collections.abc import Callable
 
 import numpy as np
 
-from guidance.errors import InputError
+from guidance.errors import InputError, describe
 from guidance.guess import is_finite_guess, project_guess
 from guidance.params import Scenario, SCvxSettings
-from guidance.scvx import SCvxResult, SCvxSolver, describe
+from guidance.scvx import SCvxResult, SCvxSolver
 
 REDUCED_ETA_INIT = 0.01  # Table 1: eta_reduced,init
 
