@@ -25,11 +25,11 @@ $(GEN_DIR)/tscvx_model.c $(GEN_DIR)/tscvx_model.h &: codegen/generate.py guidanc
 
 # CasADi's generated entry points share one signature and ignore some arguments, and the
 # generated file defines them (and its helpers) without including its header.
-$(GNC_OBJDIR)/tscvx_model.o: $(GEN_DIR)/tscvx_model.c
+$(GNC_OBJDIR)/tscvx_model.o: $(GEN_DIR)/tscvx_model.c $(FLAGS_STAMP)
 	@mkdir -p $(GNC_OBJDIR)
 	$(CC) $(GNC_CFLAGS) -Wno-unused-parameter -Wno-missing-prototypes -c $< -o $@
 
-$(GNC_OBJDIR)/%.o: c_runtime/guidance/%.c $(GNC_HDRS) $(GEN_DIR)/tscvx_model.h
+$(GNC_OBJDIR)/%.o: c_runtime/guidance/%.c $(GNC_HDRS) $(GEN_DIR)/tscvx_model.h $(FLAGS_STAMP)
 	@mkdir -p $(GNC_OBJDIR)
 	$(CC) $(GNC_CFLAGS) -c $< -o $@
 

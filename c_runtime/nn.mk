@@ -15,7 +15,7 @@ NN_CFLAGS  := $(FLIGHT_CFLAGS) -fPIC -Ic_runtime/include
 NN_MODELS  := $(BUILD)/models/constraint.tnn $(BUILD)/models/solution.tnn
 NN_TESTS   := test_nn
 
-$(NN_OBJDIR)/%.o: c_runtime/nn/%.c $(NN_HDRS)
+$(NN_OBJDIR)/%.o: c_runtime/nn/%.c $(NN_HDRS) $(FLAGS_STAMP)
 	@mkdir -p $(NN_OBJDIR)
 	$(CC) $(NN_CFLAGS) -c $< -o $@
 

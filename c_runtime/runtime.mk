@@ -20,7 +20,7 @@ VALGRIND    := valgrind -q --error-exitcode=1 --leak-check=full --errors-for-lea
 
 lib: apt $(BUILD)/libtscvx.a $(BUILD)/libtscvx.so
 
-$(CRT_OBJDIR)/%.o: $(CRT_DIR)/src/%.c $(CRT_HDRS)
+$(CRT_OBJDIR)/%.o: $(CRT_DIR)/src/%.c $(CRT_HDRS) $(FLAGS_STAMP)
 	@mkdir -p $(CRT_OBJDIR)
 	$(CRT_CC) $(CRT_CFLAGS) -c $< -o $@
 
