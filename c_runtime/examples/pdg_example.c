@@ -147,6 +147,22 @@ static void print_trajectory(const pdg_scenario *scn, const pdg_result *res)
     }
 }
 
+/* T-SCvx's networks (solution, then constraint), each in its own arena. 0 = ok, else a
+ * message on stderr. */
+static int load_nets(int count, char **paths, memory *m)
+{
+    int i;
+    for (i = 0; i < count && i < 2; ++i) {
+        if (load_net(paths[i], &m->blobs[i], &m->blob_len[i], &m->net_arenas[i],
+                     &m->net_bytes[i], &m->nets[i])) {
+            return 1;
+        }
+        printf("network %s: %zu bytes of weights, arena %zu bytes\n", paths[i], m->blob_len[i],
+               m->net_bytes[i]);
+    }
+    return 0;
+}
+
 int main(int argc, char **argv)
 {
     memory mem = {0};
@@ -160,7 +176,6 @@ int main(int argc, char **argv)
     pdg_status status;
     double x[PDG_N_MAX * PDG_NSTATE], u[PDG_N_MAX * PDG_NCTRL], t0;
     const int tscvx = argc > 1;
-    int i;
 
     if (argc > 3 || (argc > 1 && argv[1][0] == '-') || (argc > 2 && argv[2][0] == '-')) {
         fprintf(stderr, "usage: %s [SOLUTION.tnn [CONSTRAINT.tnn]]\n", argv[0]);
@@ -173,15 +188,10 @@ int main(int argc, char **argv)
         release(&mem);
         return 1;
     }
-    /* T-SCvx: the networks, each in its own arena */
-    for (i = 1; i < argc && i <= 2; ++i) {
-        if (load_net(argv[i], &mem.blobs[i - 1], &mem.blob_len[i - 1], &mem.net_arenas[i - 1],
-                     &mem.net_bytes[i - 1], &mem.nets[i - 1])) {
-            release(&mem);
-            return 1;
-        }
-        printf("network %s: %zu bytes of weights, arena %zu bytes\n", argv[i],
-               mem.blob_len[i - 1], mem.net_bytes[i - 1]);
+    /* T-SCvx: the networks */
+    if (load_nets(argc - 1, argv + 1, &mem) != 0) {
+        release(&mem);
+        return 1;
     }
     /* 4. solve */
     res.x = x;

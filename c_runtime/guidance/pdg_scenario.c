@@ -276,7 +276,8 @@ static int check_terminal(const pdg_params *p, char *msg)
     return 0;
 }
 
-static int check_params(const pdg_params *p, char *msg)
+/* The vehicle's rates, masses, inertia and thrust limits: positive, T_min below T_max. */
+static int check_vehicle_sizes(const pdg_params *p, char *msg)
 {
     char text[200];
     struct {
@@ -304,6 +305,15 @@ static int check_params(const pdg_params *p, char *msg)
     if (p->T_min >= p->T_max) {
         snprintf(text, sizeof text, "T_min = %g must be below T_max = %g", p->T_min, p->T_max);
         return fail(msg, "T_min", text);
+    }
+    return 0;
+}
+
+static int check_params(const pdg_params *p, char *msg)
+{
+    char text[200];
+    if (check_vehicle_sizes(p, msg)) {
+        return 1;
     }
     if (!(p->r_T_B[0] < 0.0)) { /* the gimbal's lever arm; the guess divides by it */
         snprintf(text, sizeof text, "r_T_B[0] = %.17g: the engine sits below the centre of "

@@ -277,6 +277,30 @@ static void prox_pattern(pdg_workspace *ws)
     ws->Pp[ws->n] = e;
 }
 
+/* Sorts the rows within each of the n columns of a CSC pattern (insertion sort; the columns
+ * are short), the entry map en alongside. Returns 0, or -1 on a row given twice in a column. */
+static int sort_columns(const int *Pp, int *Pi, int *en, int n)
+{
+    int j, a, b;
+    for (j = 0; j < n; ++j) {
+        for (a = Pp[j] + 1; a < Pp[j + 1]; ++a) {
+            const int r = Pi[a], t = en[a];
+            for (b = a - 1; b >= Pp[j] && Pi[b] > r; --b) {
+                Pi[b + 1] = Pi[b];
+                en[b + 1] = en[b];
+            }
+            Pi[b + 1] = r;
+            en[b + 1] = t;
+        }
+        for (a = Pp[j] + 1; a < Pp[j + 1]; ++a) {
+            if (Pi[a] == Pi[a - 1]) {
+                return -1;
+            }
+        }
+    }
+    return 0;
+}
+
 /* Builds the CSC patterns of A and G from the emitted (row, col) list and the map from
  * emission order to value slots. Returns 0, or -1 on a duplicate entry. */
 static int build_csc(pdg_workspace *ws, const int *row, const int *col, int *ent)
@@ -315,28 +339,8 @@ static int build_csc(pdg_workspace *ws, const int *row, const int *col, int *ent
         ws->Gp[j] = ws->Gp[j - 1];
     }
     ws->Ap[0] = ws->Gp[0] = 0;
-    /* sort rows within each column (insertion sort; columns are short) */
-    for (k = 0; k < 2; ++k) {
-        const int *Pp = k ? ws->Gp : ws->Ap;
-        int *Pi = k ? ws->Gi : ws->Ai;
-        int *en = k ? ent + ws->nnz_A : ent;
-        for (j = 0; j < n; ++j) {
-            int a, b;
-            for (a = Pp[j] + 1; a < Pp[j + 1]; ++a) {
-                const int r = Pi[a], t = en[a];
-                for (b = a - 1; b >= Pp[j] && Pi[b] > r; --b) {
-                    Pi[b + 1] = Pi[b];
-                    en[b + 1] = en[b];
-                }
-                Pi[b + 1] = r;
-                en[b + 1] = t;
-            }
-            for (a = Pp[j] + 1; a < Pp[j + 1]; ++a) {
-                if (Pi[a] == Pi[a - 1]) {
-                    return -1;
-                }
-            }
-        }
+    if (sort_columns(ws->Ap, ws->Ai, ent, n) || sort_columns(ws->Gp, ws->Gi, ent + ws->nnz_A, n)) {
+        return -1;
     }
     for (k = 0; k < ws->nnz_A + ws->nnz_G; ++k) {
         ws->dest[ent[k]] = k;
@@ -556,20 +560,9 @@ static pdg_setup_status socp_workspace(pdg_workspace *ws, const arena *a,
 /* The one set-up path. BUILD_SIZE stops after the SOCP's analysis and returns the arena size
  * in *need; BUILD_SETUP builds the workspace. When the memory is short, *need is a size that
  * gets further (the exact one once the pattern fits). */
-static pdg_setup_status build(void *mem, size_t bytes, const pdg_params *vehicle,
-                              const pdg_settings *st, int mode, pdg_workspace **out,
-                              size_t *need)
+/* The set-up arguments a size query checks too: N, the settings and the vehicle. */
+static pdg_setup_status check_inputs(const pdg_params *vehicle, const pdg_settings *st)
 {
-    arena a;
-    pdg_workspace dims, *ws;
-    pdg_setup_status status;
-    size_t mark, skip = 0;
-    int *row, *col, *ent;
-
-    if (!vehicle || !st || !need) {
-        return PDG_SETUP_NULL_ARGUMENT;
-    }
-    *need = 0;
     if (vehicle->N < PDG_N_MIN || vehicle->N > PDG_N_MAX) {
         return PDG_SETUP_BAD_SIZE;
     }
@@ -579,13 +572,40 @@ static pdg_setup_status build(void *mem, size_t bytes, const pdg_params *vehicle
     if (pdg_check_vehicle(vehicle, NULL) != PDG_SETUP_OK) {
         return PDG_SETUP_BAD_VEHICLE;
     }
-    if (mem) { /* align the arena start; the +ALIGN of every size covers this */
-        skip = (ALIGN - ((uintptr_t)mem % ALIGN)) % ALIGN;
+    return PDG_SETUP_OK;
+}
+
+/* An empty arena over mem (NULL: counting only), its start aligned; returns the bytes skipped
+ * (the +ALIGN of every size covers them). */
+static size_t arena_init(arena *a, void *mem, size_t bytes)
+{
+    const size_t skip = mem ? (ALIGN - ((uintptr_t)mem % ALIGN)) % ALIGN : 0;
+    a->base = mem && bytes > skip ? (unsigned char *)mem + skip : NULL;
+    a->cap = mem && bytes > skip ? bytes - skip : 0;
+    a->top = a->high = 0;
+    a->overflow = 0;
+    return skip;
+}
+
+static pdg_setup_status build(void *mem, size_t bytes, const pdg_params *vehicle,
+                              const pdg_settings *st, int mode, pdg_workspace **out,
+                              size_t *need)
+{
+    arena a;
+    pdg_workspace dims, *ws;
+    pdg_setup_status status;
+    size_t mark, skip;
+    int *row, *col, *ent;
+
+    if (!vehicle || !st || !need) {
+        return PDG_SETUP_NULL_ARGUMENT;
     }
-    a.base = mem && bytes > skip ? (unsigned char *)mem + skip : NULL;
-    a.cap = mem && bytes > skip ? bytes - skip : 0;
-    a.top = a.high = 0;
-    a.overflow = 0;
+    *need = 0;
+    status = check_inputs(vehicle, st);
+    if (status != PDG_SETUP_OK) {
+        return status;
+    }
+    skip = arena_init(&a, mem, bytes);
 
     /* 1. the workspace, its arrays and the temporaries of the pattern build */
     problem_dims(&dims, vehicle, st);

@@ -499,6 +499,32 @@ static void report_setup(tscvx_workspace *ws, int banded) {
     ws->info.arena_used = ws->arena_used, ws->info.arena_high_water = ws->arena_high;
 }
 
+/* The KKT method: banded when asked for (or, by default, when the problem has the
+ * structure), else the sparse LDL' of the whole KKT matrix. *banded: the banded analysis
+ * found the structure. Returns the status that ends set-up, or OK. */
+static tscvx_setup_status choose_method(tscvx_workspace *ws, const tscvx_settings *st,
+                                        tscvx_arena *a, int mode,
+                                        tscvx_setup_status short_memory, int *banded) {
+    const size_t mark = a->top;
+    if (st->kkt_backend == TSCVX_KKT_AUTO || st->kkt_backend == TSCVX_KKT_BANDED) {
+        *banded = tscvx_banded_analyse(ws, a); /* counting mode: claims, says 1 */
+        if (*banded < 0) return short_memory;
+        if (!*banded && st->kkt_backend == TSCVX_KKT_BANDED) return TSCVX_SETUP_NOT_BANDED;
+        ws->method = &tscvx_method_banded;
+    }
+    if (mode == MODE_COUNT) {
+        if (st->kkt_backend != TSCVX_KKT_BANDED) { /* the sparse method may be needed too */
+            a->top = mark;
+            if (setup_sparse(ws, a) != 0) return TSCVX_SETUP_TOO_LARGE;
+        }
+        return TSCVX_SETUP_OK;
+    }
+    if (!*banded && setup_sparse(ws, a) != 0) return TSCVX_SETUP_TOO_LARGE;
+    if (a->overflow && (mode == MODE_SETUP || ws->method == &tscvx_method_sparse))
+        return short_memory; /* the analysis itself did not fit */
+    return TSCVX_SETUP_OK;
+}
+
 /* The one set-up path. MODE_COUNT only counts bytes (scratch size); MODE_ANALYSE runs up to
  * the symbolic analysis and reports the arena size; MODE_SETUP builds the workspace. */
 static tscvx_setup_status build(const tscvx_data *d, const tscvx_settings *st, tscvx_arena *a,
@@ -528,28 +554,13 @@ static tscvx_setup_status build(const tscvx_data *d, const tscvx_settings *st, t
     if (a->overflow && mode != MODE_COUNT) return short_memory;
     if (mode != MODE_COUNT) copy_problem(ws, d, q, off);
 
-    /* the KKT method: banded when asked for (or, by default, when the problem has the
-     * structure), else the sparse LDL' of the whole KKT matrix */
-    const size_t mark = a->top;
-    const int try_banded = st->kkt_backend == TSCVX_KKT_AUTO || st->kkt_backend == TSCVX_KKT_BANDED;
     int banded = 0;
-    if (try_banded) {
-        banded = tscvx_banded_analyse(ws, a); /* counting mode: claims, says 1 */
-        if (banded < 0) return short_memory;
-        if (!banded && st->kkt_backend == TSCVX_KKT_BANDED) return TSCVX_SETUP_NOT_BANDED;
-        ws->method = &tscvx_method_banded;
-    }
+    status = choose_method(ws, st, a, mode, short_memory, &banded);
+    if (status != TSCVX_SETUP_OK) return status;
     if (mode == MODE_COUNT) {
-        if (st->kkt_backend != TSCVX_KKT_BANDED) { /* the sparse method may be needed too */
-            a->top = mark;
-            if (setup_sparse(ws, a) != 0) return TSCVX_SETUP_TOO_LARGE;
-        }
         *need = a->high + TSCVX_ALIGN; /* + worst-case alignment of the caller's pointer */
         return TSCVX_SETUP_OK;
     }
-    if (!banded && setup_sparse(ws, a) != 0) return TSCVX_SETUP_TOO_LARGE;
-    if (a->overflow && (mode == MODE_SETUP || ws->method == &tscvx_method_sparse))
-        return short_memory; /* the analysis itself did not fit */
     if (alloc_iterates(ws, a) != 0) return TSCVX_SETUP_TOO_LARGE;
     if (mode == MODE_ANALYSE) {
         *need = a->high + TSCVX_ALIGN;

@@ -994,22 +994,15 @@ static inline group_blocks group_blocks_of(const tscvx_banded *bd, tscvx_int g) 
     return b;
 }
 
-/* One solve of the regularized system (no refinement) into (dx, dy, dz) and wdz = W dz;
- * outputs do not alias inputs. The cone rows NT-scaled (CVXOPT's condensed solver), with
- * Gt = W^-1 G (orthant rows G_i / w_i, SOC blocks kept from the factorization):
- *   t = W^-1 rz,  rx~ = rx + Gt't,  ...,  wdz = Gt dx - t,  dz = W^-1 wdz.
- * The variables are handled in group order (xg) throughout. */
-static void base_solve(tscvx_workspace *ws, const tscvx_float *rx, const tscvx_float *ry,
-                       const tscvx_float *rz, tscvx_float *dx, tscvx_float *dy,
-                       tscvx_float *dz, tscvx_float *wdz) {
+/* Cone rows in: t = W^-1 rz and xg = rx~ = rx + Gt't in group order (Gt = W^-1 G: orthant
+ * rows G_i / w_i, SOC blocks kept from the factorization). */
+static void cone_rows_in(tscvx_workspace *ws, const tscvx_float *rx, const tscvx_float *rz) {
     tscvx_banded *bd = &ws->bd;
     const tscvx_cones *K = &ws->K;
     const tscvx_float *Gx = ws->G.x, *w = ws->W.w;
-    const tscvx_int n = ws->n, p = ws->p, nb = bd->nb;
-    tscvx_float *xg = bd->xg, *yb = bd->yb, *t = bd->t;
-    /* cone rows: t = W^-1 rz; rx~ = rx + Gt't */
+    tscvx_float *xg = bd->xg, *t = bd->t;
     tscvx_nt_apply(K, &ws->W, 1, rz, t);
-    for (tscvx_int v = 0; v < n; v++) xg[v] = rx[bd->gvar[v]];
+    for (tscvx_int v = 0; v < ws->n; v++) xg[v] = rx[bd->gvar[v]];
     for (tscvx_int i = 0; i < K->l; i++) {
         const tscvx_int g = bd->cgroup[i];
         if (g < 0) continue;
@@ -1027,12 +1020,17 @@ static void base_solve(tscvx_workspace *ws, const tscvx_float *rx, const tscvx_f
         DISPATCH_S(s, SCATTER)
 #undef SCATTER
     }
-    /* groups: w_g = L_g^-1 rx~_g; ry~ = ry - sum_g C_g' w_g (band order) */
-    for (tscvx_int i = 0; i < p; i++) yb[bd->iperm[i]] = ry[i];
+}
+
+/* Groups forward: w_g = L_g^-1 rx~_g (in xg); yb = ry~ = ry - sum_g C_g' w_g (band order) */
+static void groups_forward(tscvx_workspace *ws, const tscvx_float *ry) {
+    tscvx_banded *bd = &ws->bd;
+    tscvx_float *yb = bd->yb;
+    for (tscvx_int i = 0; i < ws->p; i++) yb[bd->iperm[i]] = ry[i];
     for (tscvx_int g = 0; g < bd->ngroup; g++) {
         if (bd->border[g]) continue;
         const group_blocks b = group_blocks_of(bd, g);
-        tscvx_float *wg = xg + bd->gp[g];
+        tscvx_float *wg = bd->xg + bd->gp[g];
 #define FORWARD(S, SE) group_forward(b.L, b.dinv, S, SE, wg, b.rows, b.CT, b.R, yb)
         if (b.R > 0) {
             DISPATCH_S_SE(b.s, b.se, FORWARD)
@@ -1041,7 +1039,14 @@ static void base_solve(tscvx_workspace *ws, const tscvx_float *rx, const tscvx_f
         }
 #undef FORWARD
     }
-    /* equalities: -Y dy + A_B dx_B = ry~, H_B dx_B + A_B' dy = rx~_B */
+}
+
+/* Equalities and border: -Y dy + A_B dx_B = ry~, H_B dx_B + A_B' dy = rx~_B. Leaves dy in yb
+ * (band order) and dx_B in the border variables' places of xg. */
+static void equalities(tscvx_workspace *ws) {
+    tscvx_banded *bd = &ws->bd;
+    const tscvx_int p = ws->p, nb = bd->nb;
+    tscvx_float *xg = bd->xg, *yb = bd->yb;
     profile_solve(bd, p, yb); /* yb = Y^-1 ry~ */
     tscvx_float dxb[TSCVX_BANDED_BORDER_MAX];
     for (tscvx_int b = 0; b < nb; b++) {
@@ -1057,17 +1062,28 @@ static void base_solve(tscvx_workspace *ws, const tscvx_float *rx, const tscvx_f
         for (tscvx_int b = 0; b < nb; b++) v += bd->V[(size_t)b * p + i] * dxb[b];
         yb[i] = v;
     }
-    /* groups back: dx_g = L_g'^-1 (w_g - C_g dy) */
+    for (tscvx_int b = 0; b < nb; b++) xg[bd->gp[bd->bgroup[b]] + bd->loc[bd->bvar[b]]] = dxb[b];
+}
+
+/* Groups back: dx_g = L_g'^-1 (w_g - C_g dy), in xg (the border groups' values kept) */
+static void groups_backward(tscvx_workspace *ws) {
+    tscvx_banded *bd = &ws->bd;
     for (tscvx_int g = 0; g < bd->ngroup; g++) {
         if (bd->border[g]) continue;
         const group_blocks b = group_blocks_of(bd, g);
-        tscvx_float *wg = xg + bd->gp[g];
-#define BACKWARD(S, SE) group_backward(b.L, b.dinv, S, SE, wg, b.rows, b.CT, b.R, yb)
+        tscvx_float *wg = bd->xg + bd->gp[g];
+#define BACKWARD(S, SE) group_backward(b.L, b.dinv, S, SE, wg, b.rows, b.CT, b.R, bd->yb)
         DISPATCH_S_SE(b.s, b.se, BACKWARD)
 #undef BACKWARD
     }
-    for (tscvx_int b = 0; b < nb; b++) xg[bd->gp[bd->bgroup[b]] + bd->loc[bd->bvar[b]]] = dxb[b];
-    /* cone rows: wdz = Gt dx - t, dz = W^-1 wdz */
+}
+
+/* Cone rows out: wdz = Gt dx - t, dz = W^-1 wdz; dx and dy back in the original order. */
+static void cone_rows_out(tscvx_workspace *ws, tscvx_float *dx, tscvx_float *dy,
+                          tscvx_float *dz, tscvx_float *wdz) {
+    tscvx_banded *bd = &ws->bd;
+    const tscvx_cones *K = &ws->K;
+    const tscvx_float *Gx = ws->G.x, *w = ws->W.w, *xg = bd->xg, *t = bd->t;
     for (tscvx_int i = 0; i < K->l; i++) {
         const tscvx_int g = bd->cgroup[i];
         tscvx_float v = 0.0;
@@ -1090,8 +1106,22 @@ static void base_solve(tscvx_workspace *ws, const tscvx_float *rx, const tscvx_f
 #undef GATHER
     }
     tscvx_nt_apply(K, &ws->W, 1, wdz, dz);
-    for (tscvx_int v = 0; v < n; v++) dx[bd->gvar[v]] = xg[v];
-    for (tscvx_int i = 0; i < p; i++) dy[i] = yb[bd->iperm[i]];
+    for (tscvx_int v = 0; v < ws->n; v++) dx[bd->gvar[v]] = xg[v];
+    for (tscvx_int i = 0; i < ws->p; i++) dy[i] = bd->yb[bd->iperm[i]];
+}
+
+/* One solve of the regularized system (no refinement) into (dx, dy, dz) and wdz = W dz;
+ * outputs do not alias inputs. The cone rows NT-scaled (CVXOPT's condensed solver):
+ *   t = W^-1 rz,  rx~ = rx + Gt't,  ...,  wdz = Gt dx - t,  dz = W^-1 wdz.
+ * The variables are handled in group order (xg) throughout. */
+static void base_solve(tscvx_workspace *ws, const tscvx_float *rx, const tscvx_float *ry,
+                       const tscvx_float *rz, tscvx_float *dx, tscvx_float *dy,
+                       tscvx_float *dz, tscvx_float *wdz) {
+    cone_rows_in(ws, rx, rz);
+    groups_forward(ws, ry);
+    equalities(ws);
+    groups_backward(ws);
+    cone_rows_out(ws, dx, dy, dz, wdz);
 }
 
 /* Residual of the unregularized KKT system, into res_x, res_y, res_z:
