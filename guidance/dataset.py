@@ -34,7 +34,7 @@ from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, NoReturn
 
 import numpy as np
 
@@ -358,7 +358,8 @@ def done_ids(
     """The ids solved in ``out_dir``. Writes are atomic, but a file can still be damaged
     later (a full disk, a copy cut short): with ``set_aside_unreadable`` (a run resuming)
     such a file, or (given the run's record) one that does not fit the run, is renamed
-    ``*.unreadable`` and its sample solved again."""
+    ``*.unreadable`` (``*.unreadable.1``, ... when that name is taken) and its sample solved
+    again."""
     d = out_dir / "samples"
     if not d.is_dir():
         return set()
@@ -371,11 +372,30 @@ def done_ids(
             try:
                 read_sample(p, run)
             except SampleError as exc:
-                p.rename(p.with_suffix(".unreadable"))
-                print(f"{p} {exc.problem}: set aside as .unreadable, solved again", file=sys.stderr)
+                aside = _set_aside(p)
+                print(f"{p} {exc.problem}: set aside as {aside}, solved again", file=sys.stderr)
                 continue
         ids.add(i)
     return ids
+
+
+MAX_SET_ASIDE = 1000
+
+
+def _set_aside(p: Path) -> Path:
+    """Renames a damaged sample file to the first free name of NNNNNN.unreadable,
+    NNNNNN.unreadable.1, ... and returns it: a sample damaged again keeps the earlier
+    evidence (a rename would replace it). InputError when MAX_SET_ASIDE names are taken."""
+    first = p.with_suffix(".unreadable")
+    for n in range(MAX_SET_ASIDE):
+        aside = first if n == 0 else first.with_name(f"{first.name}.{n}")
+        if not (aside.exists() or aside.is_symlink()):
+            p.rename(aside)
+            return aside
+    raise InputError(
+        f"{p} cannot be set aside: {first.name} to {first.name}.{MAX_SET_ASIDE - 1} "
+        "exist; move the old ones away and resume"
+    )
 
 
 def _run_config_path(out_dir: Path) -> Path:
@@ -598,7 +618,7 @@ def pack(out_dir: str | Path, dataset_path: str | Path, n_base: int | None = Non
     iterations = np.zeros(M, np.int16)
     subproblems = np.zeros(M, np.int16)
     solve_time = np.zeros(M)
-    base_id = np.zeros(M, np.int32)
+    base_id = np.zeros(M, np.int64)  # ids have no upper bound (files packed before: int32)
     rot = np.zeros(M, np.int8)
     for b, rec in enumerate(recs):
         nm = min(len(rec["masks"]), it_max)
@@ -715,8 +735,10 @@ class Dataset:
 
 
 def load_dataset(path: str | Path) -> Dataset:
-    """A packed dataset, checked whole: its header, every member readable, and every array of
-    the shape the header's sizes give and of its kind. InputError names the file and member."""
+    """A packed dataset, checked whole: its header, every member readable, every array of
+    the shape the header's sizes give and of its kind, and of values pack writes (0/1 masks,
+    counts and ids in range, finite theta and solved trajectories). InputError names the
+    file and member."""
     f = _open_dataset(path)
     with f:
         header = _dataset_header(path, f)
@@ -729,6 +751,7 @@ def load_dataset(path: str | Path) -> Dataset:
             )
         arrays = {k: _member(path, f, k) for k in sorted(names)}
     _check_arrays(path, header, arrays)
+    _check_values(path, arrays)
     return Dataset(header=header, **arrays)
 
 
@@ -798,6 +821,54 @@ def _check_arrays(path: str | Path, header: dict, arrays: dict[str, np.ndarray])
             )
 
 
+def _check_values(path: str | Path, arrays: dict[str, np.ndarray]) -> None:
+    """The values pack writes (arrays of checked shapes and kinds): a file patched by hand
+    or written by other code fails here, by member and sample, not in training as a NaN loss
+    or a mask row past the recorded ones. NaN is the padding of x, u and t_f in a sample that
+    was not solved (a crashed or failed solve), so only the solved samples' must be finite."""
+    K = arrays["masks"].shape[1]  # the header's iter_max (checked by _check_arrays)
+    ranges: dict[str, tuple[int, int | None, str]] = {
+        "masks": (0, 1, "mask bits 0 or 1"),
+        "n_masks": (0, K, f"mask counts within 0..{K} (iter_max)"),
+        "iterations": (0, K, f"iteration counts within 0..{K} (iter_max)"),
+        "subproblems": (0, None, "non-negative subproblem counts"),
+        "base_id": (0, None, "non-negative sample ids"),
+        "rotation": (0, N_ROTATIONS - 1, f"rotation indices within 0..{N_ROTATIONS - 1}"),
+    }
+    for name, (lo, hi, want) in ranges.items():
+        a = arrays[name]
+        if a.size and (a.min() < lo or (hi is not None and a.max() > hi)):
+            bad = (a < lo) | (a > hi) if hi is not None else a < lo
+            _bad_value(path, name, a, bad, want)
+    solved = arrays["status"] == "solved"
+    finite = {
+        "theta": None,
+        "solve_time_s": None,
+        "x": solved,
+        "u": solved,
+        "t_f": solved,
+    }
+    for name, rows in finite.items():
+        a = arrays[name]
+        ok = np.isfinite(a) if rows is None else np.isfinite(a) | ~_along(rows, a)
+        if not ok.all():
+            where = "finite values" if rows is None else "finite values in solved samples"
+            _bad_value(path, name, a, ~ok, where)
+
+
+def _along(rows: np.ndarray, a: np.ndarray) -> np.ndarray:
+    """A per-sample (M,) flag broadcast over the other axes of ``a``."""
+    return rows.reshape(rows.shape + (1,) * (a.ndim - 1))
+
+
+def _bad_value(path: str | Path, name: str, a: np.ndarray, bad: np.ndarray, want: str) -> NoReturn:
+    first = tuple(int(i) for i in np.argwhere(bad)[0])
+    raise InputError(
+        f"{path}: member {name} holds {a[first].item()!r} at {first} (sample {first[0]}; "
+        f"{int(np.count_nonzero(bad))} such values), pack writes {want}"
+    )
+
+
 def _dataset_shapes(path: str | Path, header: dict) -> dict[str, tuple[int | None, ...]]:
     """Each array's shape from the header: n_samples rows, params.N nodes and, when the header
     records the settings (every packed file does), scvx_settings.iter_max mask rows."""
@@ -864,6 +935,6 @@ def random_dataset(n_base: int = 12, N: int = 50, seed: int = 0, iters: int = 5)
         iterations=np.full(M, iters, np.int16),
         subproblems=np.full(M, iters, np.int16),
         solve_time_s=np.ones(M),
-        base_id=np.repeat(np.arange(n_base), N_ROTATIONS).astype(np.int32),
+        base_id=np.repeat(np.arange(n_base), N_ROTATIONS).astype(np.int64),
         rotation=np.tile(np.arange(N_ROTATIONS), n_base).astype(np.int8),
     )

@@ -508,3 +508,108 @@ def test_load_dataset_names_a_damaged_member(member: str, tiny_run, tmp_path) ->
     _damage_member(path, member)
     with pytest.raises(InputError, match=rf"{re.escape(str(path))}: member {member} is unreadable"):
         load_dataset(path)
+
+
+def test_a_sample_damaged_again_keeps_every_set_aside_file(tiny_run, tmp_path, capsys) -> None:
+    """A resume renamed a damaged sample to NNNNNN.unreadable, replacing the one set aside by
+    an earlier resume: a sample damaged twice lost the first evidence. Each is now kept, under
+    the first free name, and the message names the file written."""
+    run = _copy_run(tiny_run, tmp_path)
+    config = json.loads((run / "run.json").read_text())
+    damaged = sample_path(run, 1)
+    first = damaged.with_suffix(".unreadable")
+    names = [first, first.with_name(f"{first.name}.1"), first.with_name(f"{first.name}.2")]
+    for n, aside in enumerate(names):
+        damaged.write_bytes(f"damage {n}".encode())
+        assert done_ids(run, set_aside_unreadable=True, run=config) == {0}
+        assert f"set aside as {aside}, solved again" in capsys.readouterr().err
+    for n, aside in enumerate(names):
+        assert aside.read_bytes() == f"damage {n}".encode()
+    assert not damaged.exists()
+
+
+def test_pack_stores_sample_ids_as_int64_and_loads_int32_files(tiny_run, tmp_path) -> None:
+    """pack stored base_id as int32: an id past 2**31 - 1 wrapped. It is int64 now, and a
+    dataset packed before (int32 ids) still loads."""
+    run = _copy_run(tiny_run, tmp_path)
+    i = 2**31 + 5
+    rec = {**read_sample(sample_path(run, 0)), "id": np.asarray(i)}  # a sample of this run
+    np.savez(sample_path(run, i), **rec)
+    pack(run, tmp_path / "d.npz")
+    ds = load_dataset(tmp_path / "d.npz")
+    assert ds.base_id.dtype == np.int64
+    assert sorted(set(ds.base_id.tolist())) == [0, 1, i]
+    old = _rewritten(tiny_run, tmp_path / "old.npz", base_id=tiny_run[4].base_id.astype(np.int32))
+    assert load_dataset(old).base_id.tolist() == tiny_run[4].base_id.tolist()
+
+
+def _with(a: np.ndarray, index: tuple, value) -> np.ndarray:
+    out = a.copy()
+    out[index] = value
+    return out
+
+
+VALUE_DAMAGES = (
+    "mask bit 2",
+    "negative mask bit",
+    "n_masks past iter_max",
+    "negative n_masks",
+    "iterations past iter_max",
+    "negative subproblems",
+    "negative base_id",
+    "rotation 8",
+    "NaN theta",
+    "infinite solve time",
+    "NaN x of a solved sample",
+    "NaN u of a solved sample",
+    "NaN t_f of a solved sample",
+)
+
+
+@pytest.mark.parametrize("damage", VALUE_DAMAGES)
+def test_load_dataset_checks_the_values_pack_writes(damage: str, tiny_run, tmp_path) -> None:
+    """load_dataset checked shapes and kinds but not values: a mask bit of 2, a mask count past
+    iter_max, a negative id or a NaN in a solved trajectory loaded, and training learnt from
+    it (or failed far from the file). Each is now InputError naming the file and member."""
+    ds = tiny_run[4]
+    K = ds.masks.shape[1]
+    assert ds.status[3] == "solved"
+    changes = {
+        "mask bit 2": {"masks": _with(ds.masks, (3, 0, 5), 2)},
+        "negative mask bit": {"masks": _with(ds.masks.astype(np.int8), (3, 0, 5), -1)},
+        "n_masks past iter_max": {"n_masks": _with(ds.n_masks, 3, K + 1)},
+        "negative n_masks": {"n_masks": _with(ds.n_masks, 3, -1)},
+        "iterations past iter_max": {"iterations": _with(ds.iterations, 3, K + 1)},
+        "negative subproblems": {"subproblems": _with(ds.subproblems, 3, -2)},
+        "negative base_id": {"base_id": _with(ds.base_id, 3, -1)},
+        "rotation 8": {"rotation": _with(ds.rotation, 3, N_ROTATIONS)},
+        "NaN theta": {"theta": _with(ds.theta, (3, 13), np.nan)},
+        "infinite solve time": {"solve_time_s": _with(ds.solve_time_s, 3, np.inf)},
+        "NaN x of a solved sample": {"x": _with(ds.x, (3, 7, 2), np.nan)},
+        "NaN u of a solved sample": {"u": _with(ds.u, (3, 7, 2), np.nan)},
+        "NaN t_f of a solved sample": {"t_f": _with(ds.t_f, 3, np.nan)},
+    }[damage]
+    (member,) = changes
+    path = _rewritten(tiny_run, tmp_path / "d.npz", **changes)
+    with pytest.raises(
+        InputError, match=rf"{re.escape(str(path))}: member {member} holds .*sample 3"
+    ):
+        load_dataset(path)
+
+
+def test_load_dataset_accepts_the_nan_padding_of_unsolved_samples(tiny_run, tmp_path) -> None:
+    """A crashed solve is written with NaN x, u and t_f and no masks: such a sample loads."""
+    ds = tiny_run[4]
+    path = _rewritten(
+        tiny_run,
+        tmp_path / "d.npz",
+        status=_with(ds.status, 3, "error"),
+        x=_with(ds.x, 3, np.nan),
+        u=_with(ds.u, 3, np.nan),
+        t_f=_with(ds.t_f, 3, np.nan),
+        masks=_with(ds.masks, 3, 0),
+        n_masks=_with(ds.n_masks, 3, 0),
+        iterations=_with(ds.iterations, 3, 0),
+    )
+    loaded = load_dataset(path)
+    assert np.isnan(loaded.x[3]).all() and len(loaded.solved().theta) == len(ds.theta) - 1

@@ -157,6 +157,19 @@ def test_model_for_another_problem_is_refused(trained) -> None:
     load_model(paths["solution"], "solution", Params(glideslope_deg=30.0))
 
 
+@pytest.mark.parametrize("content", [b"\x00garbage\xff\x01", b""])
+def test_a_damaged_onnx_file_is_named_once(content: bytes, tmp_path: Path) -> None:
+    """onnxruntime's reason repeats the path ("model X: ...: Load model from X failed:..."):
+    the message now names the file once and keeps the reason."""
+    path = tmp_path / "damaged.onnx"
+    path.write_bytes(content)
+    with pytest.raises(ModelMismatchError, match="onnxruntime cannot load it") as err:
+        load_model(path, "solution")
+    message = str(err.value)
+    assert message.count(str(path)) == 1 and message.startswith(f"model {path}: ")
+    assert "ONNXRuntimeError" in message
+
+
 def _rewrite_meta(src: Path, dst: Path, edit) -> Path:
     m = onnx.load(str(src))
     entry = next(e for e in m.metadata_props if e.key == META_KEY)

@@ -85,6 +85,13 @@ def _fail(path: Path, msg: str) -> ModelMismatchError:
     return ModelMismatchError(f"model {path}: {msg}")
 
 
+def _load_reason(exc: Exception, path: Path) -> str:
+    """onnxruntime's reason for refusing a file without the path it repeats ("Load model from
+    PATH failed:..."): _fail names the path once."""
+    reason = str(exc).replace(f"Load model from {path} failed:", "")
+    return reason.replace(str(path), "the file").strip() or type(exc).__name__
+
+
 def trained_vector(values: dict[str, Any]) -> np.ndarray:
     """The problem parameters a network was trained for (``Params.to_json_dict`` form), flat
     in TRAINED_PARAMS order, booleans as 0/1: what a .tnn blob records and the C library
@@ -140,7 +147,7 @@ class OnnxModel:
         try:
             self.session = ort.InferenceSession(str(path), opts, providers=["CPUExecutionProvider"])
         except Exception as exc:
-            raise _fail(path, f"onnxruntime cannot load it: {exc}") from exc
+            raise _fail(path, f"onnxruntime cannot load it: {_load_reason(exc, path)}") from exc
         raw = self.session.get_modelmeta().custom_metadata_map.get(META_KEY)
         if raw is None:
             raise _fail(path, f"no '{META_KEY}' metadata: not a T-SCvx model export")
