@@ -276,7 +276,8 @@ static int check_terminal(const pdg_params *p, char *msg)
     return 0;
 }
 
-/* The vehicle's rates, masses, inertia and thrust limits: positive, T_min below T_max. */
+/* The vehicle's rates, masses, inertia and thrust limits: positive (beta_mdot non-negative),
+ * T_min below T_max. */
 static int check_vehicle_sizes(const pdg_params *p, char *msg)
 {
     char text[200];

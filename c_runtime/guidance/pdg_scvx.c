@@ -339,7 +339,8 @@ static int build_csc(pdg_workspace *ws, const int *row, const int *col, int *ent
         ws->Gp[j] = ws->Gp[j - 1];
     }
     ws->Ap[0] = ws->Gp[0] = 0;
-    if (sort_columns(ws->Ap, ws->Ai, ent, n) || sort_columns(ws->Gp, ws->Gi, ent + ws->nnz_A, n)) {
+    if (sort_columns(ws->Ap, ws->Ai, ent, n) ||
+        sort_columns(ws->Gp, ws->Gi, ent + ws->nnz_A, n)) {
         return -1;
     }
     for (k = 0; k < ws->nnz_A + ws->nnz_G; ++k) {
@@ -557,9 +558,6 @@ static pdg_setup_status socp_workspace(pdg_workspace *ws, const arena *a,
     return PDG_SETUP_OK;
 }
 
-/* The one set-up path. BUILD_SIZE stops after the SOCP's analysis and returns the arena size
- * in *need; BUILD_SETUP builds the workspace. When the memory is short, *need is a size that
- * gets further (the exact one once the pattern fits). */
 /* The set-up arguments a size query checks too: N, the settings and the vehicle. */
 static pdg_setup_status check_inputs(const pdg_params *vehicle, const pdg_settings *st)
 {
@@ -587,6 +585,9 @@ static size_t arena_init(arena *a, void *mem, size_t bytes)
     return skip;
 }
 
+/* The one set-up path. BUILD_SIZE stops after the SOCP's analysis and returns the arena size
+ * in *need; BUILD_SETUP builds the workspace. When the memory is short, *need is a size that
+ * gets further (the exact one once the pattern fits). */
 static pdg_setup_status build(void *mem, size_t bytes, const pdg_params *vehicle,
                               const pdg_settings *st, int mode, pdg_workspace **out,
                               size_t *need)
