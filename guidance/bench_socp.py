@@ -563,11 +563,16 @@ ARENA_TARGET_BYTES = 2_000_000  # 2 MB of arena at most at N = 50, read in decim
 QOCO_INSTRUCTION_TARGET = 5.0  # at most a fifth of QOCO's instructions per solve on (a)
 
 
-def targets(landing: SetResult, lcvx: SetResult, qoco_ratio: float | None) -> list[str]:
+def targets(
+    landing: SetResult, lcvx: SetResult, qoco_ratio: float | None, counted: bool = False
+) -> list[str]:
     """Issue 3's targets next to this run's figures: faster than every other solver on the
     landing subproblems (a) and the 3-DoF problem (b), the arena of (a) within 2 MB, and on (a)
     at most a fifth of QOCO's instructions per solve (``qoco_ratio`` = QOCO's instructions over
-    this runtime's; None without ``--callgrind``)."""
+    this runtime's on the first landing subproblem; None when not measured: ``counted`` says
+    whether callgrind was asked for, so that a failed count is not reported as one not asked
+    for). Figures are printed to three decimals, so that none reads as its target when the
+    verdict says otherwise."""
 
     def verdict(ok: bool) -> str:
         return "met" if ok else "not met"
@@ -577,18 +582,20 @@ def targets(landing: SetResult, lcvx: SetResult, qoco_ratio: float | None) -> li
         nearest = min(r.others.values(), default=math.nan) / r.seconds
         lines.append(
             f"  {label} faster than {', '.join(r.others) or 'no other solver'}: the nearest "
-            f"takes {nearest:.2f}x this runtime's time: {verdict(nearest > 1.0)}"
+            f"takes {nearest:.3f}x this runtime's time: {verdict(nearest > 1.0)}"
         )
     lines.append(
         f"  (a) arena <= {ARENA_TARGET_BYTES / 1e6:.0f} MB: {landing.arena_bytes} bytes: "
         f"{verdict(landing.arena_bytes <= ARENA_TARGET_BYTES)}"
     )
+    target = f"  (a) at most 1/{QOCO_INSTRUCTION_TARGET:.0f} of QOCO's instructions"
     if qoco_ratio is None:
-        lines.append("  (a) at most 1/5 of QOCO's instructions: not measured (--callgrind)")
+        why = "callgrind gave no count (see above)" if counted else "not measured (--callgrind)"
+        lines.append(f"{target}: {why}")
     else:
         lines.append(
-            f"  (a) at most 1/{QOCO_INSTRUCTION_TARGET:.0f} of QOCO's instructions: "
-            f"1/{qoco_ratio:.2f}: {verdict(qoco_ratio >= QOCO_INSTRUCTION_TARGET)}"
+            f"{target} (first landing subproblem): 1/{qoco_ratio:.3f}: "
+            f"{verdict(qoco_ratio >= QOCO_INSTRUCTION_TARGET)}"
         )
     return lines
 
@@ -648,7 +655,7 @@ def main(argv: list[str] | None = None) -> int:
         for name, probs in sets[:2]:
             print(f"  {name[:4]:4} {_warm_counts(probs[: WARM_COUNTED + 1])}")
     landing, _, lcvx, _ = results  # (a), (a'), (b), (c)
-    print("\n".join(targets(landing, lcvx, qoco_ratio)))
+    print("\n".join(targets(landing, lcvx, qoco_ratio, counted=args.callgrind)))
     return 0
 
 

@@ -66,9 +66,14 @@ NN_CONSTRAINT_CALLS = 20  # T-SCvx: one mask per SCvx iteration, iter_max = 20 (
 # The driver's exit codes for a call made: 0 solved, 3 another status (printed, and judged by
 # the report); 1 is a failure before the call.
 DRIVER_OK = (0, 3)
-# The parts of a guidance call: function (inclusive cost) -> key in the report.
-PARTS = {"tscvx_solve": "socp_solve", "discretize": "discretization",
+# The parts of a guidance call: function (inclusive cost) -> key in the report. The SOCP
+# runtime's work outside its solves is its own parts: each subproblem's new numbers
+# (tscvx_update_data, with their Ruiz equilibration) and the warm start's point.
+PARTS = {"tscvx_solve": "socp_solve", "tscvx_update_data": "socp_data_update",
+         "tscvx_warm_start": "socp_warm_start", "discretize": "discretization",
          "tscvx_nn_run": "network_inference"}  # fmt: skip
+# What the report's "rest" is: the call less the parts above.
+REST = "rest: subproblem assembly, SCvx's decisions, reading answers"
 
 VARIANTS = {  # name -> (driver arguments, function counted by callgrind)
     "SCvx": ([], "pdg_solve"),
@@ -333,8 +338,8 @@ def report(b: Budget) -> str:
     lines += [
         f"  {'RAD750-equivalent time':44s} {b.rad750_s:14.3f} s {TIME_BUDGET_S:12.3f} s  "
         f"{'yes' if b.within_time() else 'NO'}",
-        f"  {'code (text of the static libraries)':44s} {_mb(b.code_bytes):>16s}",
-        f"  {'constant/static data (data + bss)':44s} {_mb(b.const_data_bytes):>16s}",
+        f"  {'code + read-only data (library text)':44s} {_mb(b.code_bytes):>16s}",
+        f"  {'writable static data (data + bss)':44s} {_mb(b.const_data_bytes):>16s}",
         f"  {'arena high-water (library report)':44s} {_mb(b.arena_high_water):>16s}"
         f"   (arena {b.arena_bytes} B)",
         f"  {'stack high-water (painted stack)':44s} {_mb(b.stack_high_water):>16s}"
@@ -353,6 +358,8 @@ def report(b: Budget) -> str:
         f"{0:14d}  {'yes' if b.heap_allocations_in_solve == 0 else 'NO'}",
         f"  {'host wall time (not the model)':44s} {b.host_wall_s * 1e3:14.1f} ms",
     ]
+    if "rest" in b.instructions_by_part:
+        lines.append(f"  {REST}")
     return "\n".join(lines)
 
 
@@ -380,27 +387,34 @@ def report_networks(nets: list[NetBudget], call: Budget | None = None) -> str:
             f"= {total / 1e6:.1f} M host instructions = {rad750_seconds(total):.3f} s "
             f"RAD750-equivalent (budget 1 s per trajectory, SCvx solves not included)"
         )
-    if call is not None:
-        mem = call.memory_bytes + sum(n.weights_bytes + n.arena_bytes for n in nets)
+    if call is not None:  # the T-SCvx call, networks included, with its own stack
+        nn = call.nn_weights_bytes + call.nn_arena_bytes
         lines.append(
-            f"  flight image with both networks: guidance call {_mb(call.memory_bytes).strip()}"
-            f" + weights and arenas = {_mb(mem).strip()} of {_mb(MEMORY_BUDGET_B).strip()}"
+            f"  flight image with both networks ({call.variant}): code, data, arena and stack "
+            f"{_mb(call.memory_bytes - nn).strip()} + weights and arenas {_mb(nn).strip()} = "
+            f"{_mb(call.memory_bytes).strip()} of {_mb(MEMORY_BUDGET_B).strip()}"
         )
     return "\n".join(lines)
 
 
-def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog="guidance budget", description=__doc__.splitlines()[0])
+def add_arguments(ap: argparse.ArgumentParser) -> None:
+    """The options, shared by ``python -m guidance.budget`` and ``guidance budget``."""
     ap.add_argument("--no-build", action="store_true", help="use the built driver as is")
     ap.add_argument("--json", action="store_true", help="print the figures as JSON")
     ap.add_argument(
         "--check-noalloc", action="store_true",
         help="only run the driver natively and fail unless pdg_solve made no heap allocation",
     )  # fmt: skip
-    if argv is None:  # `guidance budget` calls main() with the CLI's argv: drop the command
-        argv = sys.argv[1:]
-        argv = argv[1:] if argv[:1] == ["budget"] else argv
-    args = ap.parse_args(argv)
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(prog="guidance budget", description=__doc__.splitlines()[0])
+    add_arguments(ap)
+    return run(ap.parse_args(argv))
+
+
+def run(args: argparse.Namespace) -> int:
+    """The budget job for parsed options (add_arguments)."""
     if not args.no_build:
         build()
     if args.check_noalloc:
@@ -432,7 +446,7 @@ def main(argv: list[str] | None = None) -> int:
         print()
         print(report(calls[-1]))
         print()
-        print(report_networks(nets, b))
+        print(report_networks(nets, calls[-1]))
     return 0
 
 

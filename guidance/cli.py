@@ -295,7 +295,7 @@ def cmd_budget(args: argparse.Namespace) -> int:
     except ImportError:
         print("the budget tool is not available in this build", file=sys.stderr)
         return 1
-    return int(budget.main() or 0)
+    return int(budget.run(args) or 0)
 
 
 def cmd_verify(args: argparse.Namespace) -> int:
@@ -318,6 +318,12 @@ def build_parser() -> argparse.ArgumentParser:
     _add_verify(sub)
     g = sub.add_parser("budget", help="RAD750 time and memory budget of one C guidance call")
     g.set_defaults(func=cmd_budget)
+    try:
+        from guidance import budget
+    except ImportError:  # cmd_budget says so
+        pass
+    else:
+        budget.add_arguments(g)
 
     # Learning tools (dataset, train, export, baselines) register their own subcommands.
     from guidance import cli_learning

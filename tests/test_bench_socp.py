@@ -91,14 +91,19 @@ def test_issue_3_targets_are_judged_on_the_run_s_figures() -> None:
 
     fast = result(0.010, {"clarabel": 0.030, "qoco": 0.021})
     lines = targets(fast, result(0.003, {"ecos": 0.008}), 2.09)
-    assert lines[1].endswith("2.10x this runtime's time: met")  # the nearest one, QOCO
-    assert lines[2].endswith("2.67x this runtime's time: met")
+    assert lines[1].endswith("2.100x this runtime's time: met")  # the nearest one, QOCO
+    assert lines[2].endswith("2.667x this runtime's time: met")
     assert lines[3] == "  (a) arena <= 2 MB: 1800000 bytes: met"
-    assert lines[4].endswith("1/2.09: not met")
-    assert targets(fast, fast, 5.0)[4].endswith("1/5.00: met")
+    assert lines[4].endswith("(first landing subproblem): 1/2.090: not met")
+    assert targets(fast, fast, 5.0)[4].endswith("1/5.000: met")
+    # just short of a target: the figure must not print as the target itself
+    assert targets(fast, fast, 4.996)[4].endswith("1/4.996: not met")
+    barely = targets(result(0.010, {"qoco": 0.01004}), fast, None)
+    assert barely[1].endswith("1.004x this runtime's time: met")
     assert targets(result(0.01, {"qoco": 0.02}, arena=2_000_000), fast, None)[3].endswith(": met")
-    assert "not measured" in targets(fast, fast, None)[4]
+    assert "not measured (--callgrind)" in targets(fast, fast, None)[4]
+    assert "callgrind gave no count" in targets(fast, fast, None, counted=True)[4]
     beaten = result(0.010, {"clarabel": 0.030, "qoco": 0.009}, arena=2_000_001)
     lines = targets(beaten, fast, None)
-    assert lines[1].endswith("0.90x this runtime's time: not met")
+    assert lines[1].endswith("0.900x this runtime's time: not met")
     assert lines[3].endswith("2000001 bytes: not met")

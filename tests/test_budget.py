@@ -54,6 +54,11 @@ def test_figures_are_produced(figures: budget.Budget) -> None:
     for item in ("RAD750-equivalent time", "arena high-water", "stack high-water", "1.3 x"):
         assert item in text
     assert sum(figures.instructions_by_part.values()) == figures.instructions
+    # the SOCP runtime's work outside its solves is its own part, not hidden in "rest"
+    parts = figures.instructions_by_part
+    assert parts["socp_data_update"] > 0 and parts["socp_warm_start"] > 0
+    assert parts["rest"] < parts["socp_solve"] / 20
+    assert "rest: subproblem assembly" in text
 
 
 @needs_tscvx
@@ -119,6 +124,19 @@ def test_tscvx_call_memory_within_budget(calls: list[budget.Budget]) -> None:
         assert c.memory_bytes <= budget.MEMORY_BUDGET_B / 2  # 30 MB of 60, weights included
     report = budget.report(calls[-1])
     assert "network weights" in report and "pdg_solve_tscvx" in report
+    # the flight image with both networks is the Algorithm 2 call's own total (its stack)
+    line = budget.report_networks([], calls[-1]).splitlines()[-1]
+    assert line.startswith("  flight image with both networks (T-SCvx (Algorithm 2))")
+    assert line.endswith(f"= {budget._mb(calls[-1].memory_bytes).strip()} of 60.000 MiB")
+
+
+def test_guidance_budget_takes_the_tool_s_options() -> None:
+    """`guidance budget --no-build --json` reaches the budget tool (the CLI used to refuse
+    every option; only `python -m guidance.budget` took them)."""
+    from guidance.cli import build_parser, cmd_budget
+
+    args = build_parser().parse_args(["budget", "--no-build", "--json"])
+    assert args.func is cmd_budget and args.no_build and args.json and not args.check_noalloc
 
 
 # ---- network inference (tscvx_nn_run), issue 5's 5 M instructions per inference -------------
