@@ -28,6 +28,7 @@ import statistics
 import subprocess
 import tempfile
 import time
+from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -490,6 +491,13 @@ class SetResult:
     seconds: float  # this runtime's median solve time
     others: dict[str, float]  # the other solvers' median times (those that ran)
     arena_bytes: int  # this runtime's largest arena over the set
+    # this runtime's median over the problems each other solver answered (when not all:
+    # ECOS takes no quadratic objective), the base of that solver's ratio
+    ours_on: dict[str, float] = field(default_factory=dict)
+
+    def ratio(self, solver: str) -> float:
+        """The other solver's median time over this runtime's, on the same problems."""
+        return self.others[solver] / self.ours_on.get(solver, self.seconds)
 
 
 def bench_set(name: str, probs: list[ConicProblem], reps: int, sequence: bool = False) -> SetResult:
@@ -503,7 +511,9 @@ def bench_set(name: str, probs: list[ConicProblem], reps: int, sequence: bool = 
     ours_t, ours_it, arena, methods, bad = [], [], [], set(), 0
     sparse_t, sparse_it, sparse_arena = [], [], []
     others: dict[str, tuple[list[float], list[int]]] = {k: ([], []) for k in solvers}
-    for prob in probs:
+    statuses: dict[str, list[str]] = {k: [] for k in solvers}
+    answered: dict[str, list[int]] = {k: [] for k in solvers}  # problem indices
+    for i, prob in enumerate(probs):
         run, nbytes, method = run_ours(prob, reps)
         ours_t.append(run.seconds)
         ours_it.append(run.iterations)
@@ -523,6 +533,8 @@ def bench_set(name: str, probs: list[ConicProblem], reps: int, sequence: bool = 
             if r is not None:
                 others[key][0].append(r.seconds)
                 others[key][1].append(r.iterations)
+                statuses[key].append(r.status)
+                answered[key].append(i)
     t_ours = _median(ours_t)
     lines = [
         f"{name} ({len(probs)} problems, n={probs[0].n}, m={probs[0].m}, "
@@ -547,15 +559,32 @@ def bench_set(name: str, probs: list[ConicProblem], reps: int, sequence: bool = 
             f"{sum(r.status not in ('solved', 'solved_inaccurate') for r in runs)})"
         )
     medians = {key: _median(ts) for key, (ts, _) in others.items() if ts}
+    ours_on = {key: _median([ours_t[i] for i in answered[key]]) for key in medians}
+    result = SetResult(lines, t_ours, medians, max(arena), ours_on)
     for key, (_, its) in others.items():
         if key in medians:
-            t = medians[key]
             lines.append(
-                f"  {key:<10}{1e3 * t:>11.3f}{t / t_ours:>8.2f}{_median(its):>7.0f}{'heap':>10}"
+                f"  {key:<10}{1e3 * medians[key]:>11.3f}{result.ratio(key):>8.2f}"
+                f"{_median(its):>7.0f}{'heap':>10}"
+                f"   {_status_note(statuses[key], len(probs))}".rstrip()
             )
         else:
             lines.append(f"  {key:<10}{'n/a':>11}")
-    return SetResult(lines, t_ours, medians, max(arena))
+    return result
+
+
+def _status_note(statuses: list[str], n_problems: int) -> str:
+    """What another solver's row covers, when not one answer of the same status for every
+    problem: its statuses (its own words), and how many problems it did not answer (it takes
+    no such problem, or it raised); its ratio is then on the problems it answered."""
+    counts = Counter(statuses)
+    if len(counts) == 1 and len(statuses) == n_problems:
+        return ""
+    said = ", ".join(f"{status} {k}" for status, k in counts.most_common())
+    missing = n_problems - len(statuses)
+    return f"statuses: {said}" + (
+        f"; {missing} not answered, ratio on the others" if missing else ""
+    )
 
 
 # Issue 3's targets for this runtime
@@ -579,7 +608,7 @@ def targets(
 
     lines = ["issue 3's targets, this run:"]
     for label, r in (("(a)", landing), ("(b)", lcvx)):
-        nearest = min(r.others.values(), default=math.nan) / r.seconds
+        nearest = min((r.ratio(k) for k in r.others), default=math.nan)
         lines.append(
             f"  {label} faster than {', '.join(r.others) or 'no other solver'}: the nearest "
             f"takes {nearest:.3f}x this runtime's time: {verdict(nearest > 1.0)}"

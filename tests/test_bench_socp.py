@@ -107,3 +107,31 @@ def test_issue_3_targets_are_judged_on_the_run_s_figures() -> None:
     lines = targets(beaten, fast, None)
     assert lines[1].endswith("0.900x this runtime's time: not met")
     assert lines[3].endswith("2000001 bytes: not met")
+
+
+def test_another_solver_s_median_says_what_it_covers() -> None:
+    """A row of another solver notes its statuses when they are not one status for every
+    problem, and the problems it failed on: its median covers only what it answered."""
+    from guidance.bench_socp import _status_note
+
+    assert _status_note(["Solved"] * 3, 3) == ""
+    assert _status_note(["Solved", "MaxIterations", "Solved"], 3) == (
+        "statuses: Solved 2, MaxIterations 1"
+    )
+    assert _status_note(["Solved", "Solved"], 3) == (
+        "statuses: Solved 2; 1 not answered, ratio on the others"
+    )
+
+
+def test_a_solver_s_ratio_is_on_the_problems_it_answered() -> None:
+    """ECOS takes no quadratic objective: its ratio to this runtime is on the problems it
+    solved, this runtime's median taken over the same ones (not over the whole set)."""
+    import guidance.bench_socp as bs
+
+    lp = bs.random_set(4)  # a mix: some with P (ECOS answers None), some without
+    with_p = [p.P is not None for p in lp]
+    assert any(with_p) and not all(with_p)
+    r = bs.bench_set("(t)", lp, reps=1)
+    assert "not answered, ratio on the others" in next(ln for ln in r.lines if "ecos" in ln)
+    assert r.ours_on["clarabel"] == r.seconds  # every problem answered: the whole median
+    assert r.ratio("ecos") == r.others["ecos"] / r.ours_on["ecos"]
