@@ -93,8 +93,8 @@ class Budget:
     instructions: int
     instructions_by_part: dict[str, int]
     rad750_s: float
-    code_bytes: int  # text
-    const_data_bytes: int  # data (initialized); bss is counted too, it is zero here
+    code_bytes: int  # `size`'s text: code with the read-only data (.rodata) and unwind tables
+    const_data_bytes: int  # data + bss: the writable static data (the name kept for --json)
     arena_bytes: int
     arena_high_water: int
     stack_high_water: int
