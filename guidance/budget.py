@@ -12,8 +12,9 @@ scenario, workspace set up before the measured call, then one ``pdg_solve``), an
   libtscvx_gnc.a, libtscvx.a and SuiteSparse's libamd.a, libldl.a, libsuitesparseconfig.a;
   libc/libm are the flight OS's) + the guidance arena as reserved (the size query's answer;
   the library's high-water report is printed beside it) + the stack high-water mark of the
-  call (stack painting in the driver). Budget: DESIGN.md's 60 MB
-  of SRAM, read as 60 MiB (2^20 bytes, as memory parts are sized); every figure printed in MiB.
+  call (stack painting in the driver) + the caller's answer arrays x and u at N. Budget:
+  DESIGN.md's 60 MB of SRAM, read as 60 MiB (2^20 bytes, as memory parts are sized); every
+  figure printed in MiB.
 
 The driver also counts heap allocations inside the call (malloc interposition): it must be 0.
 
@@ -104,6 +105,7 @@ class Budget:
     variant: str = "SCvx"
     nn_weights_bytes: int = 0  # weight blobs of the networks the call runs (read in place)
     nn_arena_bytes: int = 0  # their arenas
+    result_bytes: int = 0  # the caller's answer arrays x (N x 14) and u (N x 3)
 
     @property
     def memory_bytes(self) -> int:
@@ -114,6 +116,7 @@ class Budget:
             + self.stack_high_water
             + self.nn_weights_bytes
             + self.nn_arena_bytes
+            + self.result_bytes
         )
 
     @property
@@ -269,6 +272,7 @@ def measure(do_build: bool = True, variant: str = "SCvx") -> Budget:
         variant=variant,
         nn_weights_bytes=int(native.get("nn_weights_bytes", 0)),
         nn_arena_bytes=int(native.get("nn_arena_bytes", 0)),
+        result_bytes=int(native["result_bytes"]),
     )
 
 
@@ -306,7 +310,7 @@ def report_variants(rows: list[Budget]) -> str:
                 f"{b.socp_iterations - base.socp_iterations:+d} IPM iterations"
             )
     lines.append(
-        "  memory: code + static data + guidance arena + stack high-water "
+        "  memory: code + static data + guidance arena + stack high-water + answer arrays "
         "+ network weights (read in place) + network arenas; budget "
         f"{_mb(MEMORY_BUDGET_B).strip()} and {TIME_BUDGET_S:.0f} s RAD750"
     )
@@ -345,6 +349,8 @@ def report(b: Budget) -> str:
         f"   ({b.arena_bytes} B; high-water {b.arena_high_water} B, library report)",
         f"  {'stack high-water (painted stack)':44s} {_mb(b.stack_high_water):>16s}"
         f"   ({b.stack_high_water} B)",
+        f"  {'answer arrays x, u (the caller, at N)':44s} {_mb(b.result_bytes):>16s}"
+        f"   ({b.result_bytes} B)",
         *(
             [
                 f"  {'network weights (blobs read in place)':44s} {_mb(b.nn_weights_bytes):>16s}",
@@ -391,7 +397,7 @@ def report_networks(nets: list[NetBudget], call: Budget | None = None) -> str:
     if call is not None:  # the T-SCvx call, networks included, with its own stack
         nn = call.nn_weights_bytes + call.nn_arena_bytes
         lines.append(
-            f"  flight image with both networks ({call.variant}): code, data, arena and stack "
+            f"  flight image with both networks ({call.variant}): code, data, arena, stack, answers "
             f"{_mb(call.memory_bytes - nn).strip()} + weights and arenas {_mb(nn).strip()} = "
             f"{_mb(call.memory_bytes).strip()} of {_mb(MEMORY_BUDGET_B).strip()}"
         )

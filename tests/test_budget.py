@@ -101,7 +101,8 @@ def test_tscvx_call_figures_are_produced(calls: list[budget.Budget]) -> None:
         # the arena the call is given (reserved), which its high-water mark cannot pass
         assert c.memory_bytes == (c.code_bytes + c.const_data_bytes + c.arena_bytes
                                   + c.stack_high_water + c.nn_weights_bytes
-                                  + c.nn_arena_bytes)  # fmt: skip
+                                  + c.nn_arena_bytes + c.result_bytes)  # fmt: skip
+        assert c.result_bytes == 8 * 50 * (14 + 3)  # x and u of the default N = 50
     assert scvx.nn_weights_bytes == scvx.nn_arena_bytes == 0
     assert scvx.instructions_by_part.get("network_inference", 0) == 0
     # the networks the call runs: their weights (in place) and arenas are in its memory

@@ -152,6 +152,10 @@ static void print_report(pdg_status status, const pdg_result *res, const pdg_sce
     printf("wall_s_min %.6f\n", wall);
     printf("nn_weights_bytes %zu\n", nn->blob_len[0] + nn->blob_len[1]);
     printf("nn_arena_bytes %zu\n", nn->bytes[0] + nn->bytes[1]);
+    /* the caller's answer arrays, x (N x 14) and u (N x 3), as a flight caller sizes them
+     * (this driver's are static at PDG_N_MAX) */
+    printf("result_bytes %zu\n",
+           sizeof(double) * (size_t)scn->params.N * (PDG_NSTATE + PDG_NCTRL));
     if (use_tscvx) {
         printf("masks_predicted %d\n", tscvx_rep.masks_predicted);
         printf("mask_failures %d\n", tscvx_rep.mask_failures);
