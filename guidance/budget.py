@@ -397,8 +397,9 @@ def report_networks(nets: list[NetBudget], call: Budget | None = None) -> str:
     if call is not None:  # the T-SCvx call, networks included, with its own stack
         nn = call.nn_weights_bytes + call.nn_arena_bytes
         lines.append(
-            f"  flight image with both networks ({call.variant}): code, data, arena, stack, answers "
-            f"{_mb(call.memory_bytes - nn).strip()} + weights and arenas {_mb(nn).strip()} = "
+            f"  flight image with both networks ({call.variant}): code, data, arena, stack, "
+            f"answers {_mb(call.memory_bytes - nn).strip()} + weights and arenas "
+            f"{_mb(nn).strip()} = "
             f"{_mb(call.memory_bytes).strip()} of {_mb(MEMORY_BUDGET_B).strip()}"
         )
     return "\n".join(lines)
