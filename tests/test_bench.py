@@ -66,3 +66,30 @@ def test_nothing_to_compare_without_the_reference_or_another_backend() -> None:
     assert against_reference({"c": runs}) == []
     assert against_reference({"clarabel": runs}) == []
     assert against_reference({"clarabel": runs, "c": {}}) == []
+
+
+def test_backends_take_turns_on_each_scenario(monkeypatch: pytest.MonkeyPatch) -> None:
+    """`guidance bench` solves each scenario on every backend in turn (and repeat), not one
+    backend's phase after another's: a slow spell of a shared machine then meets every
+    backend alike, and the speed-up is measured in pairs. The best time of the repeats is
+    kept."""
+    import guidance.api
+    from guidance import bench
+    from guidance.catalog import SCENARIOS
+
+    calls: list[tuple[str, str]] = []
+    clock = iter(range(10_000))
+
+    def fake_solve(scenario: object, method: str, backend: str, settings: object) -> Run:
+        name = next(n for n, s in SCENARIOS.items() if s is scenario)
+        calls.append((name, backend))
+        return Run("solved", 14, 2.0, 1.0 / (1 + next(clock)))  # later solves faster
+
+    monkeypatch.setattr(guidance.api, "solve", fake_solve)
+    results = bench.solve_interleaved(["clarabel", "c"], repeats=2, method="scvx")
+    names = list(SCENARIOS)
+    expected = [(n, b) for n in names for _ in range(2) for b in ("clarabel", "c")]
+    assert calls == expected
+    # the second repeat is the faster one: its time is kept
+    assert results["c"][names[0]].solve_time_s == pytest.approx(1.0 / 4)
+    assert list(results["clarabel"]) == names
