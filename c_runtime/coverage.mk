@@ -24,7 +24,7 @@ COV_TEST_CFLAGS := -std=c99 -O0 -g -Ic_runtime/include -Ic_runtime/src \
 
 vpath %.c c_runtime/src c_runtime/guidance c_runtime/nn
 
-$(COV_OBJDIR)/%.o: %.c $(CRT_HDRS) $(GNC_HDRS) $(NN_HDRS) $(GEN_DIR)/tscvx_model.h
+$(COV_OBJDIR)/%.o: %.c $(CRT_HDRS) $(GNC_HDRS) $(NN_HDRS) $(GEN_DIR)/tscvx_model.h $(FLAGS_STAMP)
 	@mkdir -p $(COV_OBJDIR)
 	$(CC) $(COV_CFLAGS) -c $< -o $@
 
