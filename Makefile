@@ -58,6 +58,10 @@ FLIGHT_CFLAGS := -std=c99 $(FLIGHT_WARNINGS) -O3 -funroll-loops -fno-tree-vector
 FLAGS_STAMP := $(BUILD)/flight_cflags
 $(shell mkdir -p $(BUILD) && (echo '$(FLIGHT_CFLAGS)' | cmp -s - $(FLAGS_STAMP) || \
         echo '$(FLIGHT_CFLAGS)' > $(FLAGS_STAMP)))
+# ... and written again when `make clean` removed it in the same run (`make clean lib`)
+$(FLAGS_STAMP):
+	@mkdir -p $(@D)
+	echo '$(FLIGHT_CFLAGS)' > $@
 include c_runtime/runtime.mk
 include c_runtime/nn.mk
 include c_runtime/guidance.mk
