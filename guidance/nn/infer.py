@@ -86,10 +86,11 @@ def _fail(path: Path, msg: str) -> ModelMismatchError:
 
 
 def _load_reason(exc: Exception, path: Path) -> str:
-    """onnxruntime's reason for refusing a file without the path it repeats ("Load model from
-    PATH failed:..."): _fail names the path once."""
+    """onnxruntime's reason for refusing a file without the phrase that repeats its path
+    ("Load model from PATH failed:"): _fail names the path once. Only that phrase goes (a
+    short path such as "O" also occurs inside the reason's own words)."""
     reason = str(exc).replace(f"Load model from {path} failed:", "")
-    return reason.replace(str(path), "the file").strip() or type(exc).__name__
+    return reason.strip() or type(exc).__name__
 
 
 def trained_vector(values: dict[str, Any]) -> np.ndarray:
