@@ -68,6 +68,10 @@ NN_CONSTRAINT_CALLS = 20  # T-SCvx: one mask per SCvx iteration, iter_max = 20 (
 # The driver's exit codes for a call made: 0 solved, 3 another status (printed, and judged by
 # the report); 1 is a failure before the call.
 DRIVER_OK = (0, 3)
+# The figures every driver run prints (``key value`` lines)
+DRIVER_KEYS = ("status", "iterations", "subproblems", "socp_iterations", "m_f", "arena_bytes",
+               "arena_high_water", "stack_high_water", "heap_allocations_in_solve",
+               "wall_s_min", "result_bytes")  # fmt: skip
 # The parts of a guidance call: function (inclusive cost) -> key in the report. The SOCP
 # runtime's work outside its solves is its own parts: each subproblem's new numbers
 # (tscvx_update_data, with their Ruiz equilibration) and the warm start's point.
@@ -184,6 +188,12 @@ def _run_driver(variant: str = "SCvx") -> dict[str, str]:
     for line in out.stdout.splitlines():
         key, _, value = line.partition(" ")
         kv[key] = value
+    missing = [k for k in DRIVER_KEYS if k not in kv]
+    if missing:  # a driver built before this tool (`--no-build`), or one that stopped early
+        raise RuntimeError(
+            f"{DRIVER} printed no {', '.join(missing)}: it is older than this tool or stopped "
+            "early; rebuild it (run without --no-build)"
+        )
     return kv
 
 

@@ -86,10 +86,44 @@ def test_backends_take_turns_on_each_scenario(monkeypatch: pytest.MonkeyPatch) -
         return Run("solved", 14, 2.0, 1.0 / (1 + next(clock)))  # later solves faster
 
     monkeypatch.setattr(guidance.api, "solve", fake_solve)
-    results = bench.solve_interleaved(["clarabel", "c"], repeats=2, method="scvx")
+    results, failures = bench.solve_interleaved(["clarabel", "c"], repeats=2, method="scvx")
+    assert failures == {}
     names = list(SCENARIOS)
     expected = [(n, b) for n in names for _ in range(2) for b in ("clarabel", "c")]
     assert calls == expected
     # the second repeat is the faster one: its time is kept
     assert results["c"][names[0]].solve_time_s == pytest.approx(1.0 / 4)
     assert list(results["clarabel"]) == names
+
+
+@dataclass(frozen=True)
+class _Step:  # what the table reads of an iteration
+    subproblem_time_s: float = 0.02
+
+
+@dataclass(frozen=True)
+class _Solved(Run):  # what the per-backend table reads of an SCvxResult
+    subproblems_solved: int = 20
+    t_f: float = 6.9
+    history: tuple[_Step, ...] = (_Step(),)
+
+
+def test_a_failing_backend_leaves_the_others_figures(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A backend that raises (its library not built) leaves the rotation; the others' tables
+    are printed, and the command still fails, naming the backend and the scenario."""
+    import guidance.api
+    from guidance import bench
+    from guidance.catalog import SCENARIOS
+
+    def fake_solve(scenario: object, method: str, backend: str, settings: object) -> _Solved:
+        if backend == "c":
+            raise RuntimeError("C library not built")
+        return _Solved("solved", 14, 2.0, 0.5)
+
+    monkeypatch.setattr(guidance.api, "solve", fake_solve)
+    with pytest.raises(RuntimeError, match=f"backend c failed on scenario {next(iter(SCENARIOS))}"):
+        bench.run_scvx_bench(["clarabel", "c"])
+    out = capsys.readouterr().out
+    assert "backend: clarabel" in out and "backend: c\n" not in out

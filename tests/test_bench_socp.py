@@ -98,6 +98,9 @@ def test_issue_3_targets_are_judged_on_the_run_s_figures() -> None:
     assert targets(fast, fast, 5.0)[4].endswith("1/5.000: met")
     # just short of a target: the figure must not print as the target itself
     assert targets(fast, fast, 4.996)[4].endswith("1/4.996: not met")
+    assert targets(fast, fast, 4.9996)[4].endswith("1/4.9996: not met")  # not "1/5.000"
+    near_one = targets(result(0.010, {"qoco": 0.009996}), fast, None)[1]
+    assert near_one.endswith("0.9996x this runtime's time: not met")
     barely = targets(result(0.010, {"qoco": 0.01004}), fast, None)
     assert barely[1].endswith("1.004x this runtime's time: met")
     assert targets(result(0.01, {"qoco": 0.02}, arena=2_000_000), fast, None)[3].endswith(": met")

@@ -209,3 +209,18 @@ def test_memory_budget_is_60_mb() -> None:
     assert _budget_with_memory(limit - 1).within_memory()
     assert not _budget_with_memory(limit + 1).within_memory()
     assert not _budget_with_memory(limit + limit // 2).within_memory()  # 90 MB
+
+
+def test_a_driver_older_than_the_tool_is_named(monkeypatch: pytest.MonkeyPatch) -> None:
+    """`guidance budget --no-build` with a driver built before a figure was added: a clear
+    error saying to rebuild, not a KeyError from inside the report."""
+    import subprocess
+
+    old = "\n".join(f"{k} 1" for k in budget.DRIVER_KEYS if k != "result_bytes")
+
+    def fake_run(*args: object, **kwargs: object) -> subprocess.CompletedProcess:
+        return subprocess.CompletedProcess(args, 0, stdout=old + "\n", stderr="")
+
+    monkeypatch.setattr(budget.subprocess, "run", fake_run)
+    with pytest.raises(RuntimeError, match=r"printed no result_bytes.*rebuild it"):
+        budget._run_driver()
