@@ -561,15 +561,15 @@ def bench_set(name: str, probs: list[ConicProblem], reps: int, sequence: bool = 
     medians = {key: _median(ts) for key, (ts, _) in others.items() if ts}
     ours_on = {key: _median([ours_t[i] for i in answered[key]]) for key in medians}
     result = SetResult(lines, t_ours, medians, max(arena), ours_on)
-    for key, (_, its) in others.items():
+    for key, (_, its) in others.items():  # the other solvers' rows, ratios by result.ratio
         if key in medians:
-            lines.append(
+            result.lines.append(
                 f"  {key:<10}{1e3 * medians[key]:>11.3f}{result.ratio(key):>8.2f}"
                 f"{_median(its):>7.0f}{'heap':>10}"
                 f"   {_status_note(statuses[key], len(probs))}".rstrip()
             )
         else:
-            lines.append(f"  {key:<10}{'n/a':>11}")
+            result.lines.append(f"  {key:<10}{'n/a':>11}")
     return result
 
 
