@@ -722,5 +722,11 @@ def _warm_counts(probs: list[ConicProblem]) -> str:
 if __name__ == "__main__":
     import sys
 
+    from guidance.errors import LibraryNotBuiltError
+
     os.environ.setdefault("OMP_NUM_THREADS", "1")
-    raise SystemExit(main(sys.argv[1:]))
+    try:
+        raise SystemExit(main(sys.argv[1:]))
+    except LibraryNotBuiltError as exc:  # as `guidance bench` reports it
+        print(f"error: {exc}", file=sys.stderr)
+        raise SystemExit(2) from None

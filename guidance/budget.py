@@ -43,6 +43,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 
 from guidance import callgrind
+from guidance.errors import LibraryNotBuiltError
 
 ROOT = Path(__file__).resolve().parent.parent
 BUILD = ROOT / "build"
@@ -435,6 +436,11 @@ def run(args: argparse.Namespace) -> int:
     """The budget job for parsed options (add_arguments)."""
     if not args.no_build:
         build()
+    missing = [str(d) for d in (DRIVER, NN_DRIVER) if not d.is_file()]
+    if missing:
+        raise LibraryNotBuiltError(
+            f"{', '.join(missing)} not found: run `make budget` (or drop --no-build)"
+        )
     if args.check_noalloc:
         kv = _run_driver()
         n = int(kv["heap_allocations_in_solve"])
@@ -469,4 +475,8 @@ def run(args: argparse.Namespace) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    try:
+        sys.exit(main())
+    except LibraryNotBuiltError as exc:  # as `guidance budget` reports it
+        print(f"error: {exc}", file=sys.stderr)
+        sys.exit(2)

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from guidance.errors import ModelEvaluationError
+from guidance.errors import LibraryNotBuiltError, ModelEvaluationError
 from guidance.model import N_AUG, NP
 from guidance.params import NU, NX
 
@@ -23,10 +23,6 @@ LIB_PATH = Path(
     )
 )
 _dp = ctypes.POINTER(ctypes.c_double)
-
-
-class LibraryNotBuiltError(RuntimeError):
-    pass
 
 
 @lru_cache(maxsize=1)

@@ -16,7 +16,7 @@ import numpy as np
 from guidance import file_check
 from guidance.api import BACKENDS, CONSTRAINT_MODEL, METHODS, MODELS_DIR, SOLUTION_MODEL, solve
 from guidance.atomic import check_outputs
-from guidance.errors import InputError
+from guidance.errors import InputError, LibraryNotBuiltError
 from guidance.params import IM, Params, Scenario, SCvxSettings
 from guidance.scenario import load_scenario, scenario_to_dict
 from guidance.tscvx import REDUCED_ETA_INIT
@@ -28,6 +28,7 @@ EXIT_BAD_INPUT = 2
 # No trajectory to write (the solve stopped before its first subproblem). Any status with a
 # trajectory exits 0: an infeasible landing is a normal answer, not an error (DESIGN.md).
 EXIT_NO_TRAJECTORY = 3
+EXIT_BROKEN_PIPE = 141  # as a shell reports a command killed by SIGPIPE (128 + 13)
 
 
 def _load(path: str | None, pin_final_attitude: bool) -> Scenario:
@@ -170,6 +171,8 @@ def _check_output_files(out: str | None, plot: str | None, scenario: str | None)
     if plot:
         _check_plot_format(plot)
     check_outputs(("--out", out), ("--plot", plot), inputs=(("scenario file", scenario),))
+    if out and not out.endswith(".npz"):  # README.md would be replaced by a zip archive
+        raise InputError(f"--out {out}: a trajectory file's name ends in .npz")
 
 
 def _print_problem(args: argparse.Namespace, scenario: Scenario, settings: SCvxSettings) -> None:
@@ -486,9 +489,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     try:
         return int(args.func(args))
-    except InputError as exc:  # a scenario, setting, model or data file that cannot be used
-        print(f"error: {exc}", file=sys.stderr)
+    except (InputError, LibraryNotBuiltError) as exc:  # input that cannot be used, or a C
+        print(f"error: {exc}", file=sys.stderr)  # library the command needs is not built
         return EXIT_BAD_INPUT
+    except BrokenPipeError:  # the reader of stdout left (`guidance solve | head`)
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # no error at exit
+        return EXIT_BROKEN_PIPE
 
 
 if __name__ == "__main__":  # pragma: no cover

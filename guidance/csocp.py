@@ -47,6 +47,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from guidance.conic import ConeKind, ConicProblem, ConicSolution, Pattern, Status, csc_key
+from guidance.errors import LibraryNotBuiltError
 
 _LIB_ENV = "TSCVX_LIB"
 _LIB_DEFAULT = Path(__file__).resolve().parents[1] / "build" / "libtscvx.so"
@@ -55,10 +56,6 @@ c_int = ct.c_int
 c_double = ct.c_double
 P_int = ct.POINTER(ct.c_int)
 P_double = ct.POINTER(ct.c_double)
-
-
-class LibraryNotBuiltError(RuntimeError):
-    """The shared library is missing: run ``make lib``."""
 
 
 MESSAGE_LEN = 160  # TSCVX_MESSAGE_LEN (tscvx_socp.h)

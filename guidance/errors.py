@@ -19,6 +19,11 @@ class InputError(ValueError):
     """Input that cannot be used as given; the message names it and says why."""
 
 
+class LibraryNotBuiltError(RuntimeError):
+    """A flight library or C driver the call needs is not built; the message names the file
+    and the make target that builds it. The command line prints it and exits with code 2."""
+
+
 class ModelEvaluationError(ArithmeticError):
     """The dynamics or their discretization are not finite at a trajectory (an iterate or a
     guess at the edge of the range the model is meant for, e.g. v0 = 1e4)."""

@@ -71,6 +71,8 @@ def write_trajectory(
 def read_trajectory(path: str | Path) -> dict[str, object]:
     """The file's arrays, its JSON entries decoded to dictionaries. A file that is not a
     trajectory file raises InputError saying why."""
+    if Path(path).is_dir():
+        raise InputError(f"{path}: is a folder, not a trajectory file")
     if not Path(path).is_file():
         raise InputError(f"{path}: no such file")
     if not zipfile.is_zipfile(path):
@@ -79,6 +81,9 @@ def read_trajectory(path: str | Path) -> dict[str, object]:
     missing = [k for k in REQUIRED_KEYS if k not in out]
     if missing:
         raise InputError(f"{path}: not a trajectory file, missing {', '.join(missing)}")
+    status = out["status"]
+    if not (isinstance(status, np.ndarray) and status.shape == () and status.dtype.kind == "U"):
+        raise InputError(f"{path}: status must be a text entry (DESIGN.md), got {status!r}")
     for key, value in out.items():
         if isinstance(value, np.ndarray) and value.dtype.kind == "U":  # the text entries
             for item in value.ravel().tolist():

@@ -244,6 +244,9 @@ _UNCHECKABLE: dict[str, Callable[[Path, Path], object]] = {
         src, dst, params=str(_array(src, "params")).replace("{", '{"T_max": 4.0, ', 1)
     ),
     "status_nul": lambda src, dst: _edited(src, dst, status="sol\x00ved"),
+    # DESIGN.md: status is text; an integer status passed (CLI review, 26 Nov)
+    "status_int": lambda src, dst: _edited(src, dst, status=5),
+    "folder": lambda src, dst: dst.mkdir(),
 }
 
 
@@ -268,6 +271,8 @@ _UNCHECKABLE: dict[str, Callable[[Path, Path], object]] = {
         ("no_t_min", "params field 'T_min': missing"),
         ("t_max_twice", "params: key 'T_max' given twice"),
         ("status_nul", "status 'sol\\x00ved' holds a NUL character"),
+        ("status_int", "status must be a text entry (DESIGN.md), got array(5)"),
+        ("folder", "folder.npz: is a folder, not a trajectory file"),
     ],
 )
 def test_files_that_cannot_be_checked_exit_2(

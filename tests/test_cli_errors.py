@@ -1,0 +1,75 @@
+"""What the command line does with a missing C library, an output name that is not a
+trajectory file's, a folder given as a file and a reader that leaves: one `error:` line and
+exit 2 (or the shell's 141 for the pipe), never a traceback (CLI review, 26 Nov)."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from guidance import budget, cli
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def _guidance(args: list[str], env: dict[str, str] | None = None) -> subprocess.CompletedProcess:
+    return subprocess.run(
+        [sys.executable, "-m", "guidance", *args],
+        capture_output=True, text=True, cwd=ROOT, env={**os.environ, **(env or {})}, check=False,
+    )  # fmt: skip
+
+
+@pytest.mark.parametrize("backend", ["c", "c-socp"])
+def test_a_c_backend_without_the_library_is_one_error_line(backend: str, tmp_path: Path) -> None:
+    missing = {"TSCVX_GNC_LIB": str(tmp_path / "no_gnc.so"), "TSCVX_LIB": str(tmp_path / "no.so")}
+    out = _guidance(["solve", "--backend", backend], missing)
+    assert out.returncode == 2, out.stderr
+    assert "Traceback" not in out.stderr
+    last = out.stderr.strip().splitlines()[-1]
+    assert last.startswith("error: ") and "not found" in last and "run `make lib`" in last
+
+
+def test_budget_without_its_drivers_says_how_to_build_them(monkeypatch, tmp_path, capsys) -> None:
+    monkeypatch.setattr(budget, "DRIVER", tmp_path / "pdg_budget_driver")
+    assert cli.main(["budget", "--no-build"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: ") and "pdg_budget_driver not found: run `make budget`" in err
+
+
+def _no_solve(*args: object, **kwargs: object) -> None:
+    raise AssertionError("the solve ran: the output was not checked before it")
+
+
+@pytest.mark.parametrize("name", ["README.md", "t.json", "t"])
+def test_an_output_that_is_not_an_npz_name_is_refused_before_solving(
+    name: str, tmp_path: Path, monkeypatch, capsys
+) -> None:
+    """`--out README.md` replaced the README with a zip archive."""
+    monkeypatch.setattr(cli, "solve", _no_solve)
+    out = tmp_path / name
+    assert cli.main(["solve", "--out", str(out)]) == 2
+    assert f"--out {out}: a trajectory file's name ends in .npz" in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_a_folder_given_as_the_guess_is_named_a_folder(tmp_path: Path, capsys) -> None:
+    assert cli.main(["solve", "--guess", str(tmp_path)]) == 2
+    assert f"--guess {tmp_path}: {tmp_path}: is a folder" in capsys.readouterr().err
+
+
+def test_a_reader_that_leaves_ends_the_command_without_a_traceback() -> None:
+    """`guidance solve | head -1`: a BrokenPipeError traceback; now exit 141, stderr clean."""
+    with subprocess.Popen(
+        [sys.executable, "-m", "guidance", "solve"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=ROOT,
+    ) as p:  # fmt: skip
+        assert p.stdout is not None and p.stderr is not None
+        assert p.stdout.readline().startswith("scenario:")
+        p.stdout.close()
+        err = p.stderr.read()
+    assert p.returncode == cli.EXIT_BROKEN_PIPE, err
+    assert "Traceback" not in err and err == ""
