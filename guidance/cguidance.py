@@ -78,11 +78,12 @@ class _Scenario(ct.Structure):
 SETTING_FIELDS = (
     "lam", "rho0", "rho1", "rho2", "alpha", "beta", "eta_init", "eta_lb", "eta_ub",
     "iter_max", "max_subproblems", "step_tol", "vc_tol", "defect_tol", "rk4_substeps",
-    "tight_tol", "socp_tol", "socp_max_iter", "socp_warm_start", "tau_r_update", "prox_u",
+    "tight_tol", "socp_tol", "socp_max_iter", "socp_max_iter_total", "socp_warm_start",
+    "tau_r_update", "prox_u",
 )  # fmt: skip
 _INT_SETTINGS = {
-    "iter_max", "max_subproblems", "rk4_substeps", "socp_max_iter", "socp_warm_start",
-    "tau_r_update",
+    "iter_max", "max_subproblems", "rk4_substeps", "socp_max_iter", "socp_max_iter_total",
+    "socp_warm_start", "tau_r_update",
 }  # fmt: skip
 
 

@@ -114,6 +114,7 @@ def cmd_solve(args: argparse.Namespace) -> int:
         tau_r_update=args.trust_update != "alg1",
         prox_u=args.prox_u,
         socp_warm_start=not args.cold_ipm,
+        socp_max_iter_total=args.ipm_budget,
     )
     _print_problem(args, scenario, settings)
     result = solve(
@@ -391,6 +392,15 @@ def _add_solve(sub: argparse._SubParsersAction) -> None:
         "--pin-final-attitude",
         action="store_true",
         help="require q(t_f) = q_f instead of only an upright touchdown",
+    )
+    s.add_argument(
+        "--ipm-budget",
+        type=_setting("socp_max_iter_total", int),
+        default=SCvxSettings().socp_max_iter_total,
+        metavar="N",
+        help="interior-point iterations of the whole solve at most (socp_max_iter_total): the "
+        "bound on a guidance call's time; once spent, the solve ends with max_iterations and "
+        "the last accepted iterate (default %(default)s: never binds)",
     )
     s.add_argument(
         "--cold-ipm",

@@ -213,13 +213,19 @@ class ClarabelSession:
     the format or storage order of the caller's matrices.
     """
 
+    warm_starts = False  # Clarabel has no warm start: the reference starts cold
+
     def __init__(self, tol: float = 1e-9, max_iter: int = 200) -> None:
         self.tol, self.max_iter = tol, max_iter
         self._solver: object | None = None
         self._pattern: Pattern | None = None
+        self._limit = max_iter  # the set-up solver's iteration limit now
 
-    def solve(self, prob: ConicProblem, warm: ConicSolution | None = None) -> ConicSolution:
-        """``warm`` is ignored: Clarabel has no warm start (the reference starts cold)."""
+    def solve(
+        self, prob: ConicProblem, warm: ConicSolution | None = None, max_iter: int | None = None
+    ) -> ConicSolution:
+        """``warm`` is ignored (``warm_starts``); ``max_iter``, at most the session's, limits
+        this solve's iterations (None: the session's)."""
         del warm
         A = canonical_csc(prob.A)
         P = None if prob.P is None else canonical_csc(prob.P)
@@ -229,18 +235,28 @@ class ClarabelSession:
             settings = _clarabel_settings(self.tol, self.max_iter, False)
             canonical = ConicProblem(P=P, q=prob.q, A=A, b=prob.b, cones=list(pattern.cones))
             self._solver, self._pattern = clarabel_solver(canonical, settings), pattern
+            self._limit = self.max_iter
         else:
             new = {"q": prob.q, "A": A.data, "b": prob.b}
             if P is not None:
                 new["P"] = P.data
             self._solver.update(**new)  # type: ignore[attr-defined]
+        limit = self.max_iter if max_iter is None else min(max_iter, self.max_iter)
+        if limit != self._limit:
+            settings = _clarabel_settings(self.tol, limit, False)
+            self._solver.update(settings=settings)  # type: ignore[attr-defined]
+            self._limit = limit
         t0 = time.perf_counter()
         sol = self._solver.solve()  # type: ignore[attr-defined]
         return _clarabel_solution(sol, time.perf_counter() - t0)
 
 
 class Session(Protocol):
-    def solve(self, prob: ConicProblem, warm: ConicSolution | None = None) -> ConicSolution: ...
+    warm_starts: bool  # whether solve starts from ``warm`` (else it is ignored)
+
+    def solve(
+        self, prob: ConicProblem, warm: ConicSolution | None = None, max_iter: int | None = None
+    ) -> ConicSolution: ...
 
 
 def session(backend: str, tol: float = 1e-9, max_iter: int = 200) -> Session:

@@ -491,6 +491,7 @@ class Solver:
         self._lock = threading.RLock()
         self.lib = load_library()
         self._settings = _settings_struct(self.lib, settings)
+        self._setup_max_iter = int(self._settings.max_iter)
         self.prob = prob  # the caller's object, kept for the caller: never read after set-up
         self.n, self.m = n, m = prob.n, prob.m
         q, b = _flat(prob.q), _flat(prob.b)
@@ -623,6 +624,26 @@ class Solver:
         return int(self.lib.tscvx_update_data(self.ws, *(_dptr(a) for a in arrays)))
 
     @_one_at_a_time
+    def limit_iterations(self, max_iter: int | None) -> int:
+        """The next solves' IPM iteration limit: ``max_iter`` (1 to the set-up's limit, which
+        fixes the log's size) or, with None, the set-up's (tscvx_update_settings). Returns
+        the C setup status (0 = ok)."""
+        if not self.ready:
+            return self.setup_status
+        limit = self._setup_max_iter if max_iter is None else max_iter
+        if limit == self._settings.max_iter:
+            return 0
+        settings = _Settings.from_buffer_copy(self._settings)
+        settings.max_iter = limit
+        st = int(self.lib.tscvx_update_settings(self.ws, ct.byref(settings)))
+        if st == 0:
+            self._settings = settings
+        else:
+            message = self.lib.tscvx_setup_status_message(st).decode()
+            self.message = f"{message} (max_iter {limit}: 1 to the set-up's {self._setup_max_iter})"
+        return st
+
+    @_one_at_a_time
     def warm_start(self, sol: ConicSolution) -> int:
         """Start the next solve from ``sol`` (Clarabel's form, e.g. the last solve's answer),
         centred into the cones (tscvx_warm_start). Returns the C setup status (0 = ok);
@@ -710,6 +731,8 @@ class Session:
     indefinite P) gets its invalid_input answer and is not kept: the next problem is set up
     afresh."""
 
+    warm_starts = True
+
     def __init__(self, **settings: float | int) -> None:
         self._lock = threading.RLock()
         self.settings = settings
@@ -718,9 +741,12 @@ class Session:
         self.setups = 0
 
     @_one_at_a_time
-    def solve(self, prob: ConicProblem, warm: ConicSolution | None = None) -> ConicSolution:
+    def solve(
+        self, prob: ConicProblem, warm: ConicSolution | None = None, max_iter: int | None = None
+    ) -> ConicSolution:
         """Solve ``prob``; ``warm``, a solution of a problem of the same size, is where the
-        interior-point method starts (Solver.warm_start)."""
+        interior-point method starts (Solver.warm_start); ``max_iter``, at most the set-up's,
+        limits this solve's IPM iterations (None: the set-up's limit)."""
         try:
             refused = self._load(prob)
         except InvalidProblemError as err:
@@ -728,6 +754,8 @@ class Session:
         if refused is not None:
             return refused
         assert self.solver is not None
+        if self.solver.limit_iterations(max_iter) != 0:
+            return _invalid(prob.n, prob.m, self.solver.message)
         if warm is not None and warm.ok:
             self.solver.warm_start(warm)
         return self.solver.solve()

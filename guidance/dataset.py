@@ -335,7 +335,7 @@ def _run_misfit(rec: dict[str, Any], run: dict, i: int) -> str | None:
     if not isinstance(recorded, dict):
         return "its run record is not a JSON object"
     wanted = json.loads(run_record(run))
-    differ = [k for k in RUN_KEYS if recorded.get(k) != wanted[k]]
+    differ = [k for k in RUN_KEYS if not _same_run_value(k, recorded.get(k), wanted[k])]
     if not differ:
         return None
     seed = f" (seed {recorded.get('seed')!r}, not {run['seed']!r})" if "seed" in differ else ""
@@ -419,6 +419,15 @@ def _read_run_config(out_dir: Path) -> dict:
 RUN_KEYS = ("seed", "ranges", "params", "scvx_settings", "backend")
 
 
+def _same_run_value(key: str, recorded: object, wanted: object) -> bool:
+    """Whether a run's recorded RUN_KEYS value is ``wanted``. A setting added to SCvxSettings
+    after the run was recorded takes its default, which keeps the behaviour of the code that
+    made the run (e.g. socp_max_iter_total): such a run resumes."""
+    if key == "scvx_settings" and isinstance(recorded, dict):
+        recorded = {**dataclasses.asdict(SCvxSettings()), **recorded}
+    return recorded == wanted
+
+
 def _check_run_config(out_dir: Path, config: dict) -> None:
     """A restart must use the same seed, ranges, parameters, settings and backend. The code
     versions that solved into the run are listed in run.json ("code_versions")."""
@@ -428,7 +437,7 @@ def _check_run_config(out_dir: Path, config: dict) -> None:
         return
     old = _read_run_config(out_dir)
     for key in RUN_KEYS:
-        if old.get(key) != config[key]:
+        if not _same_run_value(key, old.get(key), config[key]):
             new = config[key]
             given = "" if isinstance(new, dict) else f" ({old.get(key)!r}, not {new!r})"
             raise InputError(

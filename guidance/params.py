@@ -123,6 +123,7 @@ INT_SETTING_RANGES = {
     "max_subproblems": (1, 500),
     "rk4_substeps": (1, 64),
     "socp_max_iter": (1, 500),
+    "socp_max_iter_total": (1, 250_000),  # PDG_MAX_ITER_TOTAL
 }
 
 
@@ -166,6 +167,12 @@ class SCvxSettings:
     # tolerances, and the interior-point iteration limit.
     socp_tol: float = 1e-9
     socp_max_iter: int = 200
+    # IPM iterations of the whole solve at most (failed warm-started runs included): a
+    # subproblem is given at most what is left (scvx.iteration_cap), and none once it is
+    # spent, which ends the solve with status max_iterations at the last accepted iterate.
+    # The default, the 60 x 200 x 2 that max_subproblems and socp_max_iter allow, never
+    # binds; a flight configuration sets it to bound the time of a guidance call.
+    socp_max_iter_total: int = 24_000
     # The flight runtime's IPM starts each subproblem from the last subproblem's solution
     # (tscvx_warm_start: centred at a complementarity balanced against its residuals on the
     # new data), in the C loop and with `--backend c-socp` alike. Clarabel has no warm

@@ -129,6 +129,9 @@ class _LoopState:
     prev_pred: np.ndarray | None = None
     last_sol: ConicSolution | None = None  # where the next IPM starts
     stalled: bool = False  # rejected at the smallest radius
+    ipm_used: int = 0  # IPM iterations so far (failed warm-started runs included)
+    capped: bool = False  # the last subproblem's limit was the budget's, not socp_max_iter
+    spent: bool = False  # the IPM iteration budget (socp_max_iter_total) is spent
     status: str = "max_iterations"
     reason: str = "iteration limit reached"
     history: list[IterationRecord] = field(default_factory=list)
@@ -225,7 +228,12 @@ class SCvxSolver:
         if self.log:
             self.log(_HEADER)
         for _ in range(self.st.max_subproblems):
-            if s.k >= self.st.iter_max or not self._iteration(s, masks):
+            if s.k >= self.st.iter_max:
+                break
+            if s.ipm_used >= self.st.socp_max_iter_total:  # checked after iter_max, as in C
+                self._budget_spent(s)
+                break
+            if not self._iteration(s, masks):
                 break
         return self._result(s, t_start)
 
@@ -261,10 +269,7 @@ class SCvxSolver:
         prob, sol = self._solve_subproblem(s, tpl)
         cand = self._candidate(s, tpl, prob, sol)
         if isinstance(cand, str):
-            s.status, s.reason = "solver_error", cand
-            s.history.append(_failed_record(s.k + 1, s.J, s.eta, sol))
-            if self.log:
-                self.log(f"{s.k + 1:3d}  {cand}")
+            self._failed(s, sol, cand)
             return False
         # 4. acceptance and the next radius
         record, eta_new = self._judge(s, tpl, cand, sol, mask, pred, masks is not None)
@@ -287,6 +292,17 @@ class SCvxSolver:
         s.eta = eta_new
         return True
 
+    def _failed(self, s: _LoopState, sol: ConicSolution, why: str) -> None:
+        """The subproblem gave no candidate: a solver error, or the budget spent when the
+        IPM stopped at its share of it."""
+        s.history.append(_failed_record(s.k + 1, s.J, s.eta, sol))
+        if sol.status == "max_iterations" and s.capped:
+            self._budget_spent(s)
+        else:
+            s.status, s.reason = "solver_error", why
+        if self.log:
+            self.log(f"{s.k + 1:3d}  {s.reason}")
+
     def _solve_subproblem(
         self, s: _LoopState, tpl: SubproblemTemplate
     ) -> tuple[ConicProblem, ConicSolution]:
@@ -297,7 +313,12 @@ class SCvxSolver:
             s.subproblems.append(prob)
         if id(tpl) not in self._sessions:
             self._sessions[id(tpl)] = conic.session(self.backend, st.socp_tol, st.socp_max_iter)
-        sol = self._sessions[id(tpl)].solve(prob, s.last_sol if st.socp_warm_start else None)
+        session = self._sessions[id(tpl)]
+        warm = s.last_sol is not None and st.socp_warm_start and session.warm_starts
+        cap, warm = iteration_cap(st, s.ipm_used, warm)
+        s.capped = cap < st.socp_max_iter
+        sol = session.solve(prob, s.last_sol if warm else None, max_iter=cap)
+        s.ipm_used += sol.iterations
         if sol.ok:
             s.last_sol = sol  # the next subproblem's IPM starts from it (as the C loop)
         return prob, sol
@@ -400,9 +421,19 @@ class SCvxSolver:
             and s.viol <= st.defect_tol
         )
 
+    def _budget_spent(self, s: _LoopState) -> None:
+        """The solve's IPM iteration budget is spent: the result is the last accepted iterate
+        (the C library's message, pdg_scvx.c budget_spent)."""
+        s.spent, s.status = True, "max_iterations"
+        s.reason = (
+            f"IPM iteration budget spent ({s.ipm_used} of socp_max_iter_total = "
+            f"{self.st.socp_max_iter_total}) after {s.k} iterations; the last accepted iterate "
+            f"has largest defect {s.defect:.2e}, largest path-constraint value {s.viol:.2e}"
+        )
+
     def _result(self, s: _LoopState, t_start: float) -> SCvxResult:
         status, reason = s.status, s.reason
-        if status == "max_iterations":
+        if status == "max_iterations" and not s.spent:
             status, reason = self._diagnose(s.z, s.vc, s.defect, s.viol, s.k)
             if s.stalled:
                 reason = f"step rejected at the smallest trust radius {self.st.eta_lb:g}; " + reason
@@ -486,6 +517,19 @@ def _format(r: IterationRecord) -> str:
         f"{r.vc_norm1:8.1e} {r.n_tight:6d} {1e3 * r.subproblem_time_s:8.1f}  "
         f"{step_label(r.accepted, r.restored)}"
     )
+
+
+def iteration_cap(st: SCvxSettings, used: int, warm: bool) -> tuple[int, bool]:
+    """The IPM iteration limit of the next subproblem when ``used`` iterations of the
+    solve's budget (``st.socp_max_iter_total``) are spent, and whether it may be warm-started:
+    what is left, half of it when warm-started (the flight runtime runs a failed warm start
+    again cold, with the same limit), ``st.socp_max_iter`` at most; a single iteration left
+    is run cold. 0 when the budget is spent (the C library's iteration_cap, pdg_scvx.c)."""
+    left = st.socp_max_iter_total - used
+    if left <= 0:
+        return 0, False
+    warm = warm and left >= 2
+    return min(left // 2 if warm else left, st.socp_max_iter), warm
 
 
 def _failed_record(k: int, J: float, eta: float, sol: conic.ConicSolution) -> IterationRecord:

@@ -1093,3 +1093,50 @@ def test_a_vehicle_the_scenario_rules_refuse_is_refused_at_set_up(field: str, va
         cguidance.Workspace(params, cguidance.c_settings(None))
     with pytest.raises(ScenarioError, match=f"'{field}'"):
         cguidance.solve_c(dataclasses.replace(SCENARIOS["default"], params=params))
+
+
+@pytest.mark.parametrize("budget", [37, 150])
+def test_an_ipm_iteration_budget_ends_both_loops_alike(budget: int) -> None:
+    """socp_max_iter_total bounds a call's IPM iterations: the C library and the Python loop
+    on the same C SOCP runtime spend at most the budget, alike, and end with max_iterations
+    (Clarabel's loop within the budget too). At 37 the accepted step is a subproblem stopped
+    at its share (10 iterations) with the runtime's best iterate, solved_inaccurate."""
+    st = SCvxSettings(socp_max_iter_total=budget)
+    c = cguidance.solve_c(Scenario(), st)
+    ref = solve_scvx(Scenario(), st, backend="c")
+    for r in (c, ref):
+        used = sum(h.solver_iterations for h in r.history)
+        assert r.status == "max_iterations", r.reason
+        assert r.reason.startswith(f"IPM iteration budget spent ({used} of ")
+        assert used <= budget
+    assert (c.iterations, c.subproblems_solved) == (ref.iterations, ref.subproblems_solved)
+    assert c.iterations >= 1
+    assert abs(c.m_f - ref.m_f) <= STRICT_REL_MF * ref.m_f
+    clarabel = solve_scvx(Scenario(), st)
+    assert clarabel.status == "max_iterations"
+    assert sum(h.solver_iterations for h in clarabel.history) <= budget
+
+
+def test_a_budget_stop_returns_the_last_accepted_iterate() -> None:
+    """A subproblem that finishes within its share of the budget is the unlimited one, so a
+    call stopped by the budget returns, bit for bit, the trajectory of a call stopped after
+    as many accepted steps by iter_max."""
+    c = cguidance.solve_c(Scenario(), SCvxSettings(socp_max_iter_total=150))
+    accepted = [h for h in c.history if h.accepted]
+    assert c.status == "max_iterations" and len(accepted) == c.iterations >= 5
+    assert {h.solver_status for h in accepted} == {"solved"}
+    stopped = cguidance.solve_c(Scenario(), SCvxSettings(iter_max=c.iterations))
+    np.testing.assert_array_equal(c.x, stopped.x)
+    np.testing.assert_array_equal(c.u, stopped.u)
+
+
+def test_the_c_settings_are_the_references_with_its_defaults() -> None:
+    """pdg_settings holds every SCvxSettings field but the Python-only discretization choice,
+    and pdg_default_settings gives SCvxSettings' defaults: read through the ctypes layout, a
+    field out of place in it would read another field's value."""
+    shared = {f.name for f in dataclasses.fields(SCvxSettings)} - {"discretization"}
+    assert set(cguidance.SETTING_FIELDS) == shared
+    c, py = cguidance.c_settings(), SCvxSettings()
+    assert {name: getattr(c, name) for name in shared} == {
+        name: getattr(py, name) for name in shared
+    }

@@ -289,6 +289,30 @@ def test_resume_by_other_code_warns_and_the_header_lists_every_version(tiny_run,
     assert header["code_versions"] == sorted(["guidance 0.0 old", code_version()])
 
 
+def test_a_run_recorded_before_a_setting_existed_resumes_with_its_default(
+    tiny_run, tmp_path
+) -> None:
+    """A run whose run.json and samples record the settings without socp_max_iter_total
+    (added on 26 Nov with a default that keeps the older code's behaviour) resumes, its
+    samples kept; one recorded with another value of a setting is still refused."""
+    run = tmp_path / "run"
+    shutil.copytree(tiny_run[0], run)
+    config = json.loads((run / "run.json").read_text())
+    del config["scvx_settings"]["socp_max_iter_total"]
+    (run / "run.json").write_text(json.dumps(config))
+    rec = read_sample(sample_path(run, 0))
+    recorded = json.loads(str(rec["run"]))
+    del recorded["scvx_settings"]["socp_max_iter_total"]
+    write_sample(run, {**rec, "run": json.dumps(recorded, sort_keys=True)})
+    solved = generate(run, 2, seed=11, ranges=EASY, workers=1, progress=False, backend="clarabel")
+    assert sum(solved.values()) == 0  # both samples kept, none solved again
+    assert done_ids(run) == {0, 1}
+    config["scvx_settings"]["socp_max_iter"] = 199
+    (run / "run.json").write_text(json.dumps(config))
+    with pytest.raises(InputError, match="different scvx_settings"):
+        generate(run, 2, seed=11, ranges=EASY, workers=1, progress=False, backend="clarabel")
+
+
 def test_cli_prox_u_reaches_the_solves(tmp_path, monkeypatch) -> None:
     """`guidance dataset --prox-u 0` solves with the paper's objective (the data of the
     networks shipped until 23 Nov); the weight is part of the run's settings, so a resume with

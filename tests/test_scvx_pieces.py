@@ -19,7 +19,7 @@ from guidance.errors import InputError
 from guidance.guess import initial_guess
 from guidance.model import discretize
 from guidance.params import IM, NC, NX, Params, Scenario, SCvxSettings
-from guidance.scvx import SCvxSolver, _changed_fraction, _trust_update
+from guidance.scvx import SCvxSolver, _changed_fraction, _trust_update, iteration_cap
 from guidance.subproblem import (
     N_NU_BLOCKS,
     TR_PAIRS,
@@ -229,3 +229,20 @@ def test_settings_take_numpy_scalars_and_refuse_numbers_beyond_a_float() -> None
             SCvxSettings(**{name: 10**400})
     with pytest.raises(InputError, match="lam must be a number"):
         SCvxSettings(lam=np.bool_(True))
+
+
+def test_iteration_cap_gives_a_subproblem_what_is_left_of_the_budget() -> None:
+    """socp_max_iter at most; what is left of socp_max_iter_total, half of it when the
+    subproblem is warm-started (a failed warm run is run again cold with the same limit, and
+    both count); a single iteration left is run cold; nothing once the budget is spent."""
+    st = SCvxSettings(socp_max_iter=200, socp_max_iter_total=500)
+    assert iteration_cap(st, 0, True) == (200, True)
+    assert iteration_cap(st, 150, True) == (175, True)
+    assert iteration_cap(st, 150, False) == (200, False)
+    assert iteration_cap(st, 490, True) == (5, True)
+    assert iteration_cap(st, 490, False) == (10, False)
+    assert iteration_cap(st, 499, True) == (1, False)
+    assert iteration_cap(st, 500, True) == (0, False)
+    assert iteration_cap(st, 520, False) == (0, False)
+    with pytest.raises(InputError, match="socp_max_iter_total must be an integer within"):
+        SCvxSettings(socp_max_iter_total=0)

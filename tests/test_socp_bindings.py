@@ -759,3 +759,36 @@ def test_q_and_b_may_be_lists() -> None:
     sol, ref = csocp.solve(listed), solve_clarabel(prob)
     assert sol.status == ref.status == "solved"
     assert abs(sol.obj - ref.obj) <= 1e-6 * max(1.0, abs(ref.obj))
+
+
+@pytest.mark.parametrize("backend", ["clarabel", "c"])
+def test_a_session_solve_takes_a_lower_iteration_limit_and_the_next_gets_its_own_back(
+    backend: str,
+) -> None:
+    """session.solve(max_iter=k) stops that solve within k IPM iterations (what SCvx's
+    iteration budget gives a subproblem); the next solve without it has the session's limit
+    again and the unlimited answer."""
+    prob = random_feasible(5, n=30)
+    session = conic_session(backend, 1e-9, 200)
+    session.solve(prob)  # set-up (Clarabel's fresh set-up and its updates can differ)
+    full = session.solve(prob)
+    assert full.status == "solved" and full.iterations > 4
+    capped = session.solve(prob, max_iter=3)
+    assert capped.status in ("max_iterations", "solved_inaccurate")
+    assert capped.iterations <= 3
+    again = session.solve(prob)
+    assert again.status == "solved" and again.iterations == full.iterations
+    np.testing.assert_array_equal(again.x, full.x)
+
+
+def test_a_limit_above_the_setup_one_is_refused_by_name() -> None:
+    """The set-up's limit fixes the iteration log's size: a higher one is refused (the solve
+    answers invalid_input with the reason), and the solver keeps its limit."""
+    solver = csocp.Solver(random_feasible(7, n=30), max_iter=50)
+    assert solver.limit_iterations(51) != 0
+    assert "max_iter 51: 1 to the set-up's 50" in solver.message
+    assert solver.limit_iterations(0) != 0
+    assert solver.solve().status == "solved"
+    session = csocp.Session(max_iter=50)
+    sol = session.solve(random_feasible(7, n=30), max_iter=51)
+    assert sol.status == "invalid_input" and "max_iter 51" in sol.info["message"]

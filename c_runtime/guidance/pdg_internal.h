@@ -115,6 +115,9 @@ struct pdg_workspace {
     /* 1 while a solve runs: a callback calling back into this workspace (another solve, a
      * T-SCvx guess) would overwrite the running solve's buffers, so it is refused */
     int busy;
+    /* the SOCP runtime's iteration limit now: socp_max_iter, or less where the call's
+     * budget (socp_max_iter_total) binds */
+    int socp_cap;
     uint64_t layout_sum; /* FNV-1a of the set-up constants above (pdg_layout_sum) */
 };
 

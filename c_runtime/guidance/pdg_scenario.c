@@ -76,6 +76,7 @@ pdg_setup_status pdg_default_settings(pdg_settings *st)
     st->tight_tol = 1e-6;
     st->socp_tol = 1e-9;
     st->socp_max_iter = 200;
+    st->socp_max_iter_total = 24000;
     st->socp_warm_start = 1;
     st->tau_r_update = 1;
     st->prox_u = 2e-2;

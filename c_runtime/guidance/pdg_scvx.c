@@ -126,6 +126,7 @@ static int numbers_fault(const pdg_settings *s, char *text)
              {"max_subproblems", s->max_subproblems, 1, 500},
              {"rk4_substeps", s->rk4_substeps, 1, PDG_MAX_SUBSTEPS},
              {"socp_max_iter", s->socp_max_iter, 1, 500},
+             {"socp_max_iter_total", s->socp_max_iter_total, 1, PDG_MAX_ITER_TOTAL},
              {"socp_warm_start", s->socp_warm_start, 0, 1},
              {"tau_r_update", s->tau_r_update, 0, 1}};
     size_t i;
@@ -375,6 +376,7 @@ static void copy_settings(pdg_settings *d, const pdg_settings *s)
     d->tight_tol = s->tight_tol;
     d->socp_tol = s->socp_tol;
     d->socp_max_iter = s->socp_max_iter;
+    d->socp_max_iter_total = s->socp_max_iter_total;
     d->socp_warm_start = s->socp_warm_start;
     d->tau_r_update = s->tau_r_update;
     d->prox_u = s->prox_u;
@@ -637,6 +639,7 @@ static pdg_setup_status build(void *mem, size_t bytes, const pdg_params *vehicle
     }
     ws->arena_bytes = bytes;
     ws->busy = 0;
+    ws->socp_cap = st->socp_max_iter;
     ws->layout_sum = pdg_layout_sum(ws);
     ws->magic = PDG_WS_MAGIC;
     *out = ws;
@@ -1222,6 +1225,7 @@ typedef struct {
     int prev_has_mask; /* the last accepted subproblem was masked (tau_r compares with it) */
     int have_solution; /* a subproblem solution to warm-start the next IPM from */
     int stalled;       /* rejected at the smallest radius: the same subproblem forever */
+    int spent;         /* the IPM iteration budget (socp_max_iter_total) is spent */
 } scvx_state;
 
 /* Step 1 (T-SCvx): the caller's mask for iteration k + 1 plus what the full-constraint guard
@@ -1252,9 +1256,45 @@ static int iteration_mask(pdg_workspace *ws, const pdg_options *opt, const scvx_
     return has_mask;
 }
 
+/* The IPM iteration limit of the next subproblem under the call's budget (guidance/scvx.py
+ * iteration_cap): what is left of socp_max_iter_total, half of it when warm-started (the
+ * runtime runs a failed warm start again cold, with the same limit), socp_max_iter at most.
+ * *warm is cleared when a single iteration is left. 0: the budget is spent. */
+static int iteration_cap(const pdg_settings *st, int used, int *warm)
+{
+    const int left = st->socp_max_iter_total - used;
+    int cap;
+    if (left <= 0) {
+        return 0;
+    }
+    *warm = *warm && left >= 2;
+    cap = *warm ? left / 2 : left;
+    return cap < st->socp_max_iter ? cap : st->socp_max_iter;
+}
+
+/* The SOCP runtime's iteration limit set to cap (the other settings as at set-up). */
+static int set_socp_cap(pdg_workspace *ws, int cap)
+{
+    tscvx_settings ts;
+    tscvx_info info;
+    if (cap == ws->socp_cap) {
+        return 0;
+    }
+    socp_settings(&ws->st, &ts);
+    tscvx_get_info(ws->socp, &info);
+    ts.kkt_backend = info.kkt_backend; /* the method set-up chose (structural) */
+    ts.max_iter = cap;
+    if (tscvx_update_settings(ws->socp, &ts) != TSCVX_SETUP_OK) {
+        return -1;
+    }
+    ws->socp_cap = cap;
+    return 0;
+}
+
 /* Step 2: the convex subproblem about z with radius eta, solved by the SOCP runtime into
- * ws->znew and its duals. Starts the log row (the time is the conic solve's alone, as in the
- * Python reference's log). Returns the SOCP status (TSCVX_INVALID_INPUT if assembly failed). */
+ * ws->znew and its duals, in at most cap IPM iterations (iteration_cap). Starts the log row
+ * (the time is the conic solve's alone, as in the Python reference's log). Returns the SOCP
+ * status (TSCVX_INVALID_INPUT if assembly failed). */
 static int solve_subproblem(pdg_workspace *ws, const pdg_options *opt,
                             const unsigned char *keep, scvx_state *s, pdg_log_row *r,
                             pdg_result *res)
@@ -1262,11 +1302,13 @@ static int solve_subproblem(pdg_workspace *ws, const pdg_options *opt,
     tscvx_info info;
     double t_solve = 0.0;
     int sst = TSCVX_INVALID_INPUT;
-    if (assemble(ws, ws->z, ws->disc, keep, s->eta) == 0) {
+    /* from the last subproblem's solution, accepted or not: the subproblems of a solve
+     * differ by one linearization or one radius (tscvx_warm_start) */
+    int warm = s->have_solution && ws->st.socp_warm_start;
+    const int cap = iteration_cap(&ws->st, res->socp_iterations, &warm);
+    if (set_socp_cap(ws, cap) == 0 && assemble(ws, ws->z, ws->disc, keep, s->eta) == 0) {
         const double t0 = opt->clock_s ? opt->clock_s() : 0.0;
-        /* from the last subproblem's solution, accepted or not: the subproblems of a
-         * solve differ by one linearization or one radius (tscvx_warm_start) */
-        if (s->have_solution && ws->st.socp_warm_start) {
+        if (warm) {
             tscvx_warm_start(ws->socp, ws->znew, ws->ydual, ws->zdual, ws->slack);
         }
         sst = (int)tscvx_solve(ws->socp);
@@ -1337,6 +1379,19 @@ static void succeed(pdg_workspace *ws, scvx_state *s, const candidate *cd, int h
     s->viol = cd->viol;
 }
 
+/* The call's IPM iteration budget is spent: the result is the last accepted iterate. */
+static void budget_spent(const pdg_workspace *ws, scvx_state *s, pdg_result *res,
+                         pdg_status *status)
+{
+    *status = PDG_MAX_ITERATIONS;
+    s->spent = 1;
+    snprintf(res->message, PDG_MESSAGE_LEN,
+             "IPM iteration budget spent (%d of socp_max_iter_total = %d) after %d "
+             "iterations; the last accepted iterate has largest defect %.2e, largest "
+             "path-constraint value %.2e",
+             res->socp_iterations, ws->st.socp_max_iter_total, s->k, s->defect, s->viol);
+}
+
 /* One subproblem of Algorithm 1 (Algorithm 2 with masks). Returns 1 to go on; 0 to stop,
  * with the status in *status (PDG_MAX_ITERATIONS when stalled, for diagnose). */
 static int scvx_iteration(pdg_workspace *ws, const pdg_options *opt, scvx_state *s,
@@ -1347,6 +1402,11 @@ static int scvx_iteration(pdg_workspace *ws, const pdg_options *opt, scvx_state 
     double tau_r = 0.0, eta_new;
     candidate cd;
     int sst;
+    if (res->socp_iterations >= st->socp_max_iter_total) {
+        ws->n_log--;
+        budget_spent(ws, s, res, status);
+        return 0;
+    }
     const int has_mask = iteration_mask(ws, opt, s, &tau_r, res->message);
     if (has_mask < 0) {
         ws->n_log--;
@@ -1354,6 +1414,11 @@ static int scvx_iteration(pdg_workspace *ws, const pdg_options *opt, scvx_state 
         return 0;
     }
     sst = solve_subproblem(ws, opt, has_mask ? ws->keep : NULL, s, r, res);
+    if (sst == TSCVX_MAX_ITER && ws->socp_cap < st->socp_max_iter) {
+        failed_row(r, s->J); /* stopped at its share of the budget */
+        budget_spent(ws, s, res, status);
+        return 0;
+    }
     if (sst != TSCVX_SOLVED && sst != TSCVX_SOLVED_INACCURATE) {
         failed_row(r, s->J);
         *status = PDG_SOLVER_ERROR;
@@ -1428,7 +1493,7 @@ static pdg_status run_scvx(pdg_workspace *ws, const pdg_scenario *scenario,
                            const pdg_options *opt, pdg_result *res, double eta_init)
 {
     pdg_status status;
-    scvx_state s = {0, 0.0, NAN, NAN, NAN, INFINITY, 0, 0, 0, 0};
+    scvx_state s = {0, 0.0, NAN, NAN, NAN, INFINITY, 0, 0, 0, 0, 0};
     int it;
 
     status = start(ws, scenario, opt, res, &s.J, &s.defect, &s.viol);
@@ -1444,7 +1509,7 @@ static pdg_status run_scvx(pdg_workspace *ws, const pdg_scenario *scenario,
             break;
         }
     }
-    if (status == PDG_MAX_ITERATIONS) {
+    if (status == PDG_MAX_ITERATIONS && !s.spent) {
         status = diagnose(ws, s.vc, s.defect, s.viol, s.k, s.stalled, res->message);
     }
     to_physical(ws, ws->z, res->x, res->u, &res->t_f);

@@ -65,6 +65,7 @@ extern "C" {
 #define PDG_N_MIN 3
 #define PDG_N_MAX 400
 #define PDG_MESSAGE_LEN 256
+#define PDG_MAX_ITER_TOTAL 250000 /* pdg_settings.socp_max_iter_total at most (500 x 500) */
 /* Largest magnitude of any real number in a scenario (guidance/scenario.py MAGNITUDE_MAX):
  * Table 1's landing is O(1) in these nondimensional units; beyond this input is refused. */
 #define PDG_MAGNITUDE_MAX 1e4
@@ -91,7 +92,9 @@ typedef enum {
     PDG_SOLVED = 0,        /* converged: small step, no virtual control, defects and path
                               constraints met (the FULL constraint set) */
     PDG_INFEASIBLE,        /* virtual control still > vc_tol after iter_max iterations */
-    PDG_MAX_ITERATIONS,    /* virtual control zero but not converged */
+    PDG_MAX_ITERATIONS,    /* virtual control zero but not converged, or the IPM iteration
+                              budget (socp_max_iter_total) spent: the result is the last
+                              accepted iterate */
     PDG_SOLVER_ERROR,      /* a subproblem could not be solved (or the model failed) */
     PDG_INVALID_INPUT,     /* bad scenario, guess (NaN/inf, t_f <= 0, one of x, u alone),
                               mask or workspace: nothing was solved. A finite guess where
@@ -154,6 +157,13 @@ typedef struct {
     /* conic subproblem solver (tscvx_socp.h) */
     double socp_tol;        /* gap and feasibility tolerances (the reference uses 1e-9) */
     int socp_max_iter;      /* IPM iteration limit, 1..500 */
+    int socp_max_iter_total;/* IPM iterations of the whole call at most, 1..250000: a
+                               subproblem is given at most what is left of it (half of it
+                               when warm-started: a failed warm run is run again cold), and
+                               none once it is spent, which ends the call with
+                               PDG_MAX_ITERATIONS. The default (24000, the 60 x 200 x 2 that
+                               max_subproblems and socp_max_iter allow) never binds; a flight
+                               configuration sets it to bound the call's time */
     int socp_warm_start;    /* 1: each subproblem's IPM starts from the last subproblem's
                                solution (tscvx_warm_start), 0: from the cold start */
     /* T-SCvx only: 1 = Algorithm 2's radius update (alpha^tau_r, beta^(1 - tau_r), tau_r the

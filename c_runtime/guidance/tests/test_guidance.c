@@ -177,6 +177,10 @@ static void test_settings_and_sizes(void)
         CHECK(pdg_check_settings(&st, msg) == PDG_SETUP_BAD_SETTINGS);
         CHECK(strcmp(msg, "settings.socp_max_iter: must lie within 1..500, got 501") == 0);
         pdg_default_settings(&st);
+        st.socp_max_iter_total = 0;
+        CHECK(pdg_check_settings(&st, msg) == PDG_SETUP_BAD_SETTINGS);
+        CHECK(strcmp(msg, "settings.socp_max_iter_total: must lie within 1..250000, got 0") == 0);
+        pdg_default_settings(&st);
         st.defect_tol = INFINITY;
         CHECK(pdg_check_settings(&st, msg) == PDG_SETUP_BAD_SETTINGS);
         CHECK(strstr(msg, "settings.defect_tol: must be finite") == msg);
@@ -407,6 +411,51 @@ static void test_solve(pdg_workspace *ws, int with_masks)
     }
 }
 
+/* The call's IPM iteration budget (socp_max_iter_total): the call ends at it with
+ * PDG_MAX_ITERATIONS and the last accepted iterate, having spent no more than it; the next
+ * call on the workspace has the whole budget again (the runtime's limit, lowered where the
+ * budget bound, is set back). */
+static void test_iteration_budget(void)
+{
+    static double x1[PDG_NSTATE * 12], u1[PDG_NCTRL * 12];
+    pdg_settings st;
+    pdg_scenario s;
+    pdg_result r;
+    pdg_log_row row;
+    void *arena = NULL;
+    size_t bytes = 0;
+    pdg_workspace *ws;
+    int i, sum = 0, first_total;
+    pdg_default_settings(&st);
+    st.socp_max_iter_total = 80;
+    st.socp_max_iter = 30;
+    pdg_default_scenario(&s);
+    s.params.N = 12;
+    ws = make_ws(12, 1, &st, &arena, &bytes);
+    if (!ws) {
+        free(arena);
+        return;
+    }
+    r.x = x1;
+    r.u = u1;
+    CHECK(pdg_solve(ws, &s, NULL, &r) == PDG_MAX_ITERATIONS);
+    printf("budget 80: %d IPM iterations, %d subproblems, %d iterations (%s)\n",
+           r.socp_iterations, r.subproblems_solved, r.iterations, r.message);
+    CHECK(strstr(r.message, "IPM iteration budget spent (") == r.message);
+    CHECK(r.socp_iterations <= 80 && r.socp_iterations >= 60 && r.iterations >= 1);
+    for (i = 0; i < pdg_log_length(ws); ++i) {
+        CHECK(pdg_get_log(ws, i, &row) == PDG_SETUP_OK);
+        sum += row.solver_iterations;
+    }
+    CHECK(sum == r.socp_iterations);
+    CHECK(r.t_f > 0.0 && fabs(x1[0] - 4.0) < 1e-7); /* an iterate, not the caller's arrays */
+    first_total = r.socp_iterations;
+    memcpy(x, x1, sizeof x1);
+    CHECK(pdg_solve(ws, &s, NULL, &r) == PDG_MAX_ITERATIONS);
+    CHECK(r.socp_iterations == first_total && memcmp(x, x1, sizeof x1) == 0);
+    free(arena);
+}
+
 int main(void)
 {
     pdg_settings st;
@@ -415,6 +464,7 @@ int main(void)
     pdg_workspace *ws;
     const int full = getenv("PDG_TEST_QUICK") == NULL;
     test_settings_and_sizes();
+    test_iteration_budget();
     memset(&st, 0, sizeof st); /* padding zero, as the workspace's copy */
     pdg_default_settings(&st);
     ws = make_ws(50, 1, &st, &arena, &bytes);
