@@ -77,13 +77,16 @@ typedef enum {
     TSCVX_NN_BAD_CHECKSUM,     /* CRC-32 mismatch: the blob is corrupt */
     TSCVX_NN_BAD_DIMENSIONS,   /* dimensions out of range or inconsistent with each other (the
                                   input and output sizes with the kind and N) */
-    TSCVX_NN_BAD_WEIGHTS,      /* a weight or normalization value is NaN/inf, a scale <= 0,
-                                  or the threshold or LayerNorm epsilon is outside (0, 1) */
+    TSCVX_NN_BAD_WEIGHTS,      /* a weight or normalization value is NaN/inf or beyond the
+                                  float32 range, a scale <= 0, or the threshold or LayerNorm
+                                  epsilon is outside (0, 1) */
     TSCVX_NN_BAD_ALIGNMENT,    /* in-place weights need an 8-byte aligned blob */
     TSCVX_NN_ARENA_TOO_SMALL,  /* arena smaller than tscvx_nn_arena_size() */
-    TSCVX_NN_NOT_READY,        /* the net was not initialized, its arena was overwritten, or
-                                  a field init fixed (a dimension, a weight pointer) changed
-                                  since: every call checks a checksum of them */
+    TSCVX_NN_NOT_READY,        /* the net was not initialized, or a field init fixed (a
+                                  dimension, a weight pointer, the layer table) changed since:
+                                  every call checks checksums of them. The weight values
+                                  themselves (in the blob, or copied into the arena) only
+                                  tscvx_nn_self_test checks */
     TSCVX_NN_BAD_SIZE,         /* n_in / n_out differ from the network's input / output size */
     TSCVX_NN_BAD_INPUT,        /* an input value is NaN or infinite */
     TSCVX_NN_NUMERICAL_ERROR,  /* the output is not finite (overflow inside the network) */
@@ -158,7 +161,8 @@ tscvx_nn_status tscvx_nn_tight_mask(const tscvx_nn *net, const double *logits, i
 tscvx_nn_status tscvx_nn_get_info(const tscvx_nn *net, tscvx_nn_info *info);
 
 /* Runs the probes recorded in the blob; *max_rel_err (may be NULL) = max |y - y_rec| /
- * max(1, |y_rec|). TSCVX_NN_SELF_TEST_FAILED above 1e-4 (the exporter's probe tolerance). */
+ * max(1, |y_rec|). TSCVX_NN_SELF_TEST_FAILED above 1e-4 (the exporter's probe tolerance), and
+ * for a blob that records no probe (max_rel_err NaN): nothing tested is not a pass. */
 tscvx_nn_status tscvx_nn_self_test(tscvx_nn *net, double *max_rel_err);
 
 #ifdef __cplusplus

@@ -24,7 +24,8 @@ static const char *const status_messages[TSCVX_NN_NSTATUS] = {
     "network blob checksum (CRC-32) mismatch: the blob is corrupt",
     "network dimensions out of range or inconsistent (token mode, sequence length, heads, or "
     "input/output sizes that do not fit the kind and N)",
-    "network blob holds a NaN/inf value, a non-positive normalization scale, or a decision "
+    "network blob holds a NaN/inf value or one beyond the float32 range, a non-positive "
+    "normalization scale, or a decision "
     "threshold or LayerNorm epsilon outside (0, 1)",
     "in-place weights need an 8-byte aligned blob (or the TSCVX_NN_COPY_WEIGHTS flag)",
     "arena smaller than tscvx_nn_arena_size()",
@@ -141,6 +142,9 @@ static int sizes_fit_kind(const nn_header *hd)
 
 /* Non-finite binary64 bit pattern: exponent all ones. Positive: sign clear, not zero. */
 static int f64_bits_finite(uint64_t u) { return ((u >> 52) & 0x7FFu) != 0x7FFu; }
+/* |x| < 2^128 (biased exponent <= 1023 + 127): every float32 value is, and a network whose
+ * sums cannot reach inf from its weights alone keeps the NaN checks meaningful */
+static int f64_bits_float32_range(uint64_t u) { return ((u >> 52) & 0x7FFu) <= 1150u; }
 static int f64_bits_positive(uint64_t u)
 {
     return !(u >> 63) && (u & 0x7FFFFFFFFFFFFFFFull) != 0;
@@ -317,6 +321,12 @@ static tscvx_nn_status check_values(const unsigned char *w, const nn_header *hd,
         if (!f64_bits_finite(rd_u64(w + 8 * i))) {
             return refuse(why, TSCVX_NN_BAD_WEIGHTS, "value %zu of %zu is NaN or infinite", i,
                           n_values);
+        }
+        if (!f64_bits_float32_range(rd_u64(w + 8 * i))) {
+            return refuse(why, TSCVX_NN_BAD_WEIGHTS,
+                          "value %zu of %zu = %g is beyond the float32 range the exporter "
+                          "writes (|x| < 2^128)",
+                          i, n_values, rd_f64(w + 8 * i));
         }
     }
     for (i = 0; i < hd->d_in; ++i) { /* in_scale */
@@ -609,24 +619,32 @@ tscvx_nn_status tscvx_nn_init(tscvx_nn **out, void *arena, size_t arena_bytes, c
     carve_values(net, place_values(net, &cur, blob, copy));
     net->cookie = NN_COOKIE; /* cookie and checksum last: nn_live only for a complete net */
     net->layout_sum = nn_layout_sum(net);
+    net->table_sum = nn_table_sum(net);
     *out = net;
     return TSCVX_NN_OK;
 }
 
 uint64_t nn_layout_sum(const tscvx_nn *net)
 {
-    const uint64_t h = tscvx_fnv1a(TSCVX_FNV1A_START, net, offsetof(tscvx_nn, layout_sum));
-    return tscvx_fnv1a(h, net->layers, sizeof(nn_layer) * net->hdr.n_layers);
+    return tscvx_fnv1a(TSCVX_FNV1A_START, net, offsetof(tscvx_nn, layout_sum));
 }
 
-/* The checksum covers the layer table, so it reads through net->layers: that pointer must
- * first be where init put it, right after the struct (place_buffers), or a flipped or
- * overwritten pointer would be followed before the checksum could refuse it. */
+uint64_t nn_table_sum(const tscvx_nn *net)
+{
+    return tscvx_fnv1a(TSCVX_FNV1A_START, net->layers, sizeof(nn_layer) * net->hdr.n_layers);
+}
+
+/* The second checksum covers the layer table, so it reads through net->layers for
+ * hdr.n_layers entries: both must first be what init set, the pointer right after the
+ * struct (place_buffers) and the count vouched for by the struct's checksum, or a flipped
+ * or overwritten field would be followed (past a small arena's end) before a checksum
+ * could refuse it. */
 int nn_live(const tscvx_nn *net)
 {
     const unsigned char *table = (const unsigned char *)net + round_up(sizeof *net);
-    return net->cookie == NN_COOKIE && net->hdr.n_layers <= TSCVX_NN_MAX_LAYERS &&
-           (const unsigned char *)net->layers == table && net->layout_sum == nn_layout_sum(net);
+    return net->cookie == NN_COOKIE && (const unsigned char *)net->layers == table &&
+           net->layout_sum == nn_layout_sum(net) && net->hdr.n_layers <= TSCVX_NN_MAX_LAYERS &&
+           net->table_sum == nn_table_sum(net);
 }
 
 tscvx_nn_status tscvx_nn_get_info(const tscvx_nn *net, tscvx_nn_info *info)
@@ -709,6 +727,9 @@ tscvx_nn_status tscvx_nn_self_test(tscvx_nn *net, double *max_rel_err)
             double err = fabs(net->yb[i] - ref) / (fabs(ref) > 1.0 ? fabs(ref) : 1.0);
             worst = err > worst ? err : worst;
         }
+    }
+    if (net->hdr.n_probes == 0) { /* nothing tested is not a pass */
+        worst = NAN;
     }
     if (max_rel_err) {
         *max_rel_err = worst;

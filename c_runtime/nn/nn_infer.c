@@ -66,7 +66,9 @@ static void layer_norm(const double *x, const double *g, const double *b, int n,
     for (i = 0; i < n; ++i) {
         var += (x[i] - mean) * (x[i] - mean);
     }
-    inv = 1.0 / sqrt(var / n + eps);
+    /* a variance past the double range (inputs near 1e154) would give inv = 0 and the bias
+     * alone, whatever the input: NaN instead, which tscvx_nn_run reports */
+    inv = isfinite(var) ? 1.0 / sqrt(var / n + eps) : (double)NAN;
     for (i = 0; i < n; ++i) {
         y[i] = (x[i] - mean) * inv * g[i] + b[i];
     }
@@ -135,7 +137,7 @@ static void encoder_layer(tscvx_nn *net, const nn_layer *ly)
         /* h = LN2(h + W_2 relu(W_1 h + b_1) + b_2) */
         linear(ly->W_1, ly->b_1, h, net->ff, d, net->f);
         for (c = 0; c < net->ff; ++c) {
-            net->f[c] = net->f[c] > 0.0 ? net->f[c] : 0.0;
+            net->f[c] = net->f[c] < 0.0 ? 0.0 : net->f[c]; /* a NaN stays NaN (reported) */
         }
         linear(ly->W_2, ly->b_2, net->f, d, net->ff, net->t);
         for (c = 0; c < d; ++c) {

@@ -93,14 +93,17 @@ struct tscvx_nn {
     double *sc;  /* L: attention scores of one query */
     double *xb;  /* d_in: self-test input */
     double *yb;  /* d_out: self-test output */
-    uint64_t layout_sum; /* FNV-1a of everything above and of the layers' pointers (nn_live) */
+    uint64_t layout_sum; /* FNV-1a of everything above (nn_live) */
+    uint64_t table_sum;  /* FNV-1a of the layer table (its pointers), read once layout_sum
+                            has vouched for n_layers */
 };
 
-/* The net is initialized (cookie) and nothing init fixed has changed since (the checksum):
+/* The net is initialized (cookie) and nothing init fixed has changed since (the checksums):
  * every field of the net is set by init and read-only after it, so a bit flipped in a
  * dimension or a pointer is refused instead of followed. */
 int nn_live(const tscvx_nn *net);
 uint64_t nn_layout_sum(const tscvx_nn *net);
+uint64_t nn_table_sum(const tscvx_nn *net);
 
 /* nn_blob.c: decodes and validates a blob (magic, version, sizes, CRC-32, input and output
  * sizes against the kind and N, finite weights, positive scales); `why` (NULL, or
