@@ -25,7 +25,8 @@ def run_scvx_bench(backends: list[str], repeats: int = 1, method: str = "scvx") 
     """Solves every catalog scenario on each backend (best of ``repeats`` wall times), prints a
     table per backend, then each backend against the reference if it ran."""
     print(
-        f"SCvx benchmark: {len(SCENARIOS)} scenarios, N = 50, host {platform.machine()}, "
+        f"{'T-SCvx' if method == 'tscvx' else 'SCvx'} benchmark: {len(SCENARIOS)} scenarios, "
+        f"N = 50, host {platform.machine()}, "
         f"{os.cpu_count()} cores, repeats {repeats}; the backends take turns on each scenario"
     )
     results, failures = solve_interleaved(backends, repeats, method)
@@ -47,7 +48,7 @@ def run_scvx_bench(backends: list[str], repeats: int = 1, method: str = "scvx") 
         done = results[backend].values()
         print(
             f"median: total {np.median([r.solve_time_s for r in done]):.3f} s per solve, "
-            f"subproblem {1e3 * np.median(subs):.1f} ms, "
+            f"subproblem {1e3 * np.median(subs):.1f} ms (over all subproblems), "
             f"iterations {np.median([r.iterations for r in done]):.0f}"
         )
     for line in against_reference(results):

@@ -345,36 +345,38 @@ def report(b: Budget) -> str:
         "  model: RAD750 s = 1.3 x instructions / (0.5 x 200e6); budget 1 s "
         f"= {b.instruction_budget / 1e6:.1f} M host instructions",
         "",
-        f"  {'item':44s} {'measured':>16s} {'budget':>14s}  ok",
-        f"  {'host instructions (callgrind)':44s} {b.instructions / 1e6:14.1f} M "
+        f"  {'item':48s} {'measured':>16s} {'budget':>14s}  ok",
+        f"  {'host instructions (callgrind)':48s} {b.instructions / 1e6:14.1f} M "
         f"{b.instruction_budget / 1e6:12.1f} M  {'yes' if b.within_time() else 'NO'}",
     ]
+    counted = {key: function for function, key in PARTS.items()}
     for key, val in b.instructions_by_part.items():
-        lines.append(f"  {'  of which ' + key:44s} {val / 1e6:14.1f} M")
+        label = f"  of which {key}" + (f" ({counted[key]})" if key in counted else "")
+        lines.append(f"  {label:48s} {val / 1e6:14.1f} M")
     lines += [
-        f"  {'RAD750-equivalent time':44s} {b.rad750_s:14.3f} s {TIME_BUDGET_S:12.3f} s  "
+        f"  {'RAD750-equivalent time':48s} {b.rad750_s:14.3f} s {TIME_BUDGET_S:12.3f} s  "
         f"{'yes' if b.within_time() else 'NO'}",
-        f"  {'code + read-only data (library text)':44s} {_mb(b.code_bytes):>16s}",
-        f"  {'writable static data (data + bss)':44s} {_mb(b.const_data_bytes):>16s}",
-        f"  {'guidance arena (as sized and reserved)':44s} {_mb(b.arena_bytes):>16s}"
+        f"  {'code + read-only data (library text)':48s} {_mb(b.code_bytes):>16s}",
+        f"  {'writable static data (data + bss)':48s} {_mb(b.const_data_bytes):>16s}",
+        f"  {'guidance arena (as sized and reserved)':48s} {_mb(b.arena_bytes):>16s}"
         f"   ({b.arena_bytes} B; high-water {b.arena_high_water} B, library report)",
-        f"  {'stack high-water (painted stack)':44s} {_mb(b.stack_high_water):>16s}"
+        f"  {'stack high-water (painted stack)':48s} {_mb(b.stack_high_water):>16s}"
         f"   ({b.stack_high_water} B)",
-        f"  {'answer arrays x, u (the caller, at N)':44s} {_mb(b.result_bytes):>16s}"
+        f"  {'answer arrays x, u (the caller, at N)':48s} {_mb(b.result_bytes):>16s}"
         f"   ({b.result_bytes} B)",
         *(
             [
-                f"  {'network weights (blobs read in place)':44s} {_mb(b.nn_weights_bytes):>16s}",
-                f"  {'network arenas':44s} {_mb(b.nn_arena_bytes):>16s}",
+                f"  {'network weights (blobs read in place)':48s} {_mb(b.nn_weights_bytes):>16s}",
+                f"  {'network arenas':48s} {_mb(b.nn_arena_bytes):>16s}",
             ]
             if b.nn_weights_bytes
             else []
         ),
-        f"  {'memory total':44s} {_mb(b.memory_bytes):>16s} {_mb(MEMORY_BUDGET_B):>14s}  "
+        f"  {'memory total':48s} {_mb(b.memory_bytes):>16s} {_mb(MEMORY_BUDGET_B):>14s}  "
         f"{'yes' if b.within_memory() else 'NO'}",
-        f"  {'heap allocations inside the call':44s} {b.heap_allocations_in_solve:16d} "
+        f"  {'heap allocations inside the call':48s} {b.heap_allocations_in_solve:16d} "
         f"{0:14d}  {'yes' if b.heap_allocations_in_solve == 0 else 'NO'}",
-        f"  {'host wall time (not the model)':44s} {b.host_wall_s * 1e3:14.1f} ms",
+        f"  {'host wall time (not the model)':48s} {b.host_wall_s * 1e3:14.1f} ms",
     ]
     if "rest" in b.instructions_by_part:
         lines.append(f"  {REST}")

@@ -149,6 +149,8 @@ def _check_method_options(args: argparse.Namespace) -> None:
         raise InputError(
             f"--guess {args.guess}: applies to --method scvx only (T-SCvx starts from its network)"
         )
+    if args.method == "tscvx" and not Path(args.models).is_dir():  # before anything is printed
+        raise InputError(f"--models {args.models}: no such folder")
 
 
 def _read_guess(path: str | None, p: Params) -> tuple[np.ndarray, np.ndarray, float] | None:
@@ -195,7 +197,10 @@ def _print_landing(result: SCvxResult, scenario: Scenario) -> None:
     print(f"t_f           {result.t_f:.6f} U_T")
     print(f"final mass    {result.m_f:.6f} U_M")
     print(f"fuel          {fuel:.6f} U_M ({100 * fuel / propellant:.1f} % of the propellant)")
-    print(f"max defect    {result.max_defect:.2e}   max path violation {result.max_violation:.2e}")
+    print(  # the largest h: <= 0 when every path constraint holds
+        f"max defect    {result.max_defect:.2e}   largest path-constraint value "
+        f"{result.max_violation:.2e}"
+    )
     print(
         f"total time    {result.solve_time_s:.3f} s "
         f"(conic solves {sum(sub_times):.3f} s, median {1e3 * np.median(sub_times):.1f} ms)"
@@ -309,11 +314,27 @@ def cmd_verify(args: argparse.Namespace) -> int:
     return file_check.main(args.files, tol)
 
 
+class _PrintVersion(argparse.Action):
+    """--version: the package version and git commit (provenance.code_version, asked of git
+    only when the option is given)."""
+
+    def __init__(self, option_strings: Sequence[str], dest: str, **kwargs: object) -> None:
+        help_text = "print the version (package and git commit) and exit"
+        super().__init__(option_strings, dest, nargs=0, help=help_text)
+
+    def __call__(self, parser: argparse.ArgumentParser, *args: object, **kwargs: object) -> None:
+        from guidance.provenance import code_version
+
+        print(code_version())
+        parser.exit()
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="guidance",
         description="T-SCvx 6-DoF powered-descent guidance: ground tools.",
     )
+    parser.add_argument("--version", action=_PrintVersion)
     sub = parser.add_subparsers(dest="command", required=True)
     _add_solve(sub)
     _add_scenario(sub)

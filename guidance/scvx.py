@@ -428,7 +428,8 @@ class SCvxSolver:
         s.reason = (
             f"IPM iteration budget spent ({s.ipm_used} of socp_max_iter_total = "
             f"{self.st.socp_max_iter_total}) after {s.k} iterations; the last accepted iterate "
-            f"has largest defect {s.defect:.2e}, largest path-constraint value {s.viol:.2e}"
+            f"has largest nonlinear defect {s.defect:.2e}, largest path-constraint value "
+            f"{s.viol:.2e}"
         )
 
     def _result(self, s: _LoopState, t_start: float) -> SCvxResult:
@@ -481,8 +482,9 @@ class SCvxSolver:
         st = self.st
         if vc <= st.vc_tol:
             return "max_iterations", (
-                f"not converged after {k} iterations; virtual control is zero, largest "
-                f"defect {defect:.2e}, largest path-constraint value {viol:.2e}"
+                f"not converged after {k} iterations; virtual control is zero (the linearized "
+                f"dynamics are met), largest nonlinear defect {defect:.2e}, largest "
+                f"path-constraint value {viol:.2e}"
             )
         x, _, _ = physical(z, self.lay, self.sc)
         disc = self._discretize(z)

@@ -73,3 +73,20 @@ def test_a_reader_that_leaves_ends_the_command_without_a_traceback() -> None:
         err = p.stderr.read()
     assert p.returncode == cli.EXIT_BROKEN_PIPE, err
     assert "Traceback" not in err and err == ""
+
+
+def test_version_names_the_package_and_commit(capsys) -> None:
+    with pytest.raises(SystemExit) as exc:
+        cli.main(["--version"])
+    assert exc.value.code == 0
+    out = capsys.readouterr().out
+    assert out.startswith("guidance ") and " git " in out
+
+
+def test_a_models_folder_that_does_not_exist_is_refused_before_anything_is_printed(
+    tmp_path: Path, capsys
+) -> None:
+    assert cli.main(["solve", "--method", "tscvx", "--models", str(tmp_path / "none")]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    assert f"error: --models {tmp_path / 'none'}: no such folder" in captured.err

@@ -1013,8 +1013,9 @@ static pdg_status diagnose(pdg_workspace *ws, double vc, double defect, double v
     }
     if (vc <= st->vc_tol) {
         snprintf(msg + len, (size_t)(PDG_MESSAGE_LEN - len),
-                 "not converged after %d iterations; virtual control is zero, largest "
-                 "defect %.2e, largest path-constraint value %.2e",
+                 "not converged after %d iterations; virtual control is zero (the "
+                 "linearized dynamics are met), largest nonlinear defect %.2e, largest "
+                 "path-constraint value %.2e",
                  iterations, defect, viol);
         return PDG_MAX_ITERATIONS;
     }
@@ -1387,7 +1388,7 @@ static void budget_spent(const pdg_workspace *ws, scvx_state *s, pdg_result *res
     s->spent = 1;
     snprintf(res->message, PDG_MESSAGE_LEN,
              "IPM iteration budget spent (%d of socp_max_iter_total = %d) after %d "
-             "iterations; the last accepted iterate has largest defect %.2e, largest "
+             "iterations; the last accepted iterate has largest nonlinear defect %.2e, largest "
              "path-constraint value %.2e",
              res->socp_iterations, ws->st.socp_max_iter_total, s->k, s->defect, s->viol);
 }
