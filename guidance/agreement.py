@@ -124,7 +124,8 @@ def score(results: Sequence[dict[str, Outcome]], variant: str, baseline: str) ->
 def summary_table(results: Sequence[dict[str, Outcome]]) -> str:
     """Markdown table: each variant against the reference and against the converged answer."""
     lines = [
-        "| variant | same as reference | median / max gap | same as converged | median / max gap |",
+        "| variant | same as reference | median / max relative gap in m_f | same as converged "
+        "| median / max relative gap in m_f |",
         "|---|---|---|---|---|",
     ]
     for variant in VARIANTS:
@@ -153,7 +154,10 @@ def landing_table(names: Sequence[str], results: Sequence[dict[str, Outcome]]) -
             mark = " " if same_trajectory(o, ref) else "*"
             row += " | " + f"{rel_gap(o, ref):.1e}{mark} it {o.iterations:3d}".rjust(CELL)
         lines.append(row)
-    lines.append("(*: not the reference's trajectory: 1e-6 relative final mass, same iterations)")
+    lines.append(
+        "(each cell: the relative final-mass gap |m_f - m_f(ref)| / m_f(ref) and the iterations; "
+        "*: not the reference's trajectory: 1e-6 relative final mass, same iterations)"
+    )
     return "\n".join(lines)
 
 

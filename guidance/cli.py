@@ -57,8 +57,8 @@ def add_prox_u(parser: argparse.ArgumentParser, about_zero: str) -> None:
         "--prox-u",
         type=_setting("prox_u"),
         default=SCvxSettings().prox_u,
-        help="weight of the subproblems' proximal term on the scaled thrust (0: the paper's "
-        f"linear objective, {about_zero})",
+        help="weight of the subproblems' proximal term on the scaled thrust, >= 0 (default "
+        f"%(default)s; 0: the paper's linear objective, {about_zero})",
     )
 
 
@@ -385,7 +385,7 @@ def _add_solve(sub: argparse._SubParsersAction) -> None:
         "--iter-max",
         type=_setting("iter_max", int),
         default=SCvxSettings().iter_max,
-        help="accepted SCvx iterations at most (Table 1: 20)",
+        help="accepted SCvx iterations at most, 1 to 100 (default: Table 1's 20)",
     )
     s.add_argument(
         "--trust-update",
@@ -399,8 +399,10 @@ def _add_solve(sub: argparse._SubParsersAction) -> None:
         "--eta-init",
         type=_setting("eta_init"),
         default=None,
-        help=f"initial trust radius (default: Table 1's, {SCvxSettings().eta_init:g} for scvx, "
-        f"{REDUCED_ETA_INIT:g} for tscvx from the networks' warm start)",
+        help="initial trust radius, within [eta_lb, eta_ub] = "
+        f"[{SCvxSettings().eta_lb:g}, {SCvxSettings().eta_ub:g}] (default: Table 1's, "
+        f"{SCvxSettings().eta_init:g} for scvx, {REDUCED_ETA_INIT:g} for tscvx from the "
+        "networks' warm start)",
     )
     s.add_argument(
         "--guess",
@@ -450,9 +452,23 @@ def _add_scenario(sub: argparse._SubParsersAction) -> None:
 
 def _add_bench(sub: argparse._SubParsersAction) -> None:
     b = sub.add_parser("bench", help="time the reference SCvx (and the conic solvers)")
-    b.add_argument("--backend", nargs="+", default=["clarabel"], choices=BACKENDS)
-    b.add_argument("--repeats", type=at_least(1), default=1)
-    b.add_argument("--method", choices=METHODS, default="scvx")
+    b.add_argument(
+        "--backend",
+        nargs="+",
+        default=["clarabel"],
+        choices=BACKENDS,
+        help="backends to time, taking turns on each scenario; the speed-ups are against "
+        "clarabel when it runs (default: clarabel)",
+    )
+    b.add_argument(
+        "--repeats",
+        type=at_least(1),
+        default=1,
+        help="solves per scenario and backend; the best time counts (default: 1)",
+    )
+    b.add_argument(
+        "--method", choices=METHODS, default="scvx", help="what is timed (default: scvx)"
+    )
     b.add_argument("--skip-socp", action="store_true", help="skip the conic solver benchmark")
     b.add_argument(
         "--callgrind",
@@ -465,7 +481,12 @@ def _add_bench(sub: argparse._SubParsersAction) -> None:
         default=0,
         help="also compare SCvx and T-SCvx on this many fresh sampled landings",
     )
-    b.add_argument("--tscvx-backend", default="c", choices=BACKENDS)
+    b.add_argument(
+        "--tscvx-backend",
+        default="c",
+        choices=BACKENDS,
+        help="backend of the --tscvx-landings comparison (default: c)",
+    )
     b.set_defaults(func=cmd_bench)
 
 
@@ -483,7 +504,12 @@ def _add_agreement(sub: argparse._SubParsersAction) -> None:
     a.add_argument(
         "--landings", type=at_least(0), help="fresh sampled landings to add (default: 20)"
     )
-    a.add_argument("--workers", type=at_least(1), default=os.cpu_count() or 1)
+    a.add_argument(
+        "--workers",
+        type=at_least(1),
+        default=os.cpu_count() or 1,
+        help="landings solved at once, one process each (default: the cores, %(default)s)",
+    )
     add_prox_u(a, "on which the solvers part")
     a.set_defaults(func=cmd_agreement)
 
