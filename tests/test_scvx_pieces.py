@@ -8,6 +8,7 @@ earlier output of the code.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -246,3 +247,34 @@ def test_iteration_cap_gives_a_subproblem_what_is_left_of_the_budget() -> None:
     assert iteration_cap(st, 520, False) == (0, False)
     with pytest.raises(InputError, match="socp_max_iter_total must be an integer within"):
         SCvxSettings(socp_max_iter_total=0)
+
+
+def test_the_guard_puts_back_only_what_the_subproblem_dropped() -> None:
+    """T-SCvx's full-constraint guard (step 5 of Algorithm 2): a candidate violating a
+    constraint the subproblem left out is rejected and the constraint put back; a violated
+    T_min (always kept, its buffer penalized) or a constraint already put back is not counted
+    again (review of 26 Nov: the guard reading the prediction instead of the subproblem's
+    mask failed no test). A synthetic candidate: the first subproblem's, its h edited."""
+    N = SCN.params.N
+    solver = SCvxSolver(SCN, SCvxSettings())
+    s = solver._start(None)
+    assert s is not None
+    tmin, glide = 6, 1  # constraint columns (constraints.CONSTRAINT_NAMES)
+    pred = np.ones((N, NC), bool)
+    pred[:, tmin] = False  # the network left T_min out: the subproblem keeps it anyway
+    pred[5, glide] = pred[9, glide] = False  # two glideslope rows left out ...
+    s.forced[9 * NC + glide] = True  # ... one of them put back by an earlier rejection
+    mask = pred.reshape(-1) | s.forced
+    tpl = solver.template(mask)
+    prob, sol = solver._solve_subproblem(s, tpl)
+    cand = solver._candidate(s, tpl, prob, sol)
+    assert not isinstance(cand, str)
+    h = np.full((N, NC), -1.0)
+    h[:, tmin] = 1.0  # T_min violated everywhere
+    h[9, glide] = 1.0  # the constraint already back in the subproblem
+    record, _ = solver._judge(s, tpl, replace(cand, h=h), sol, mask, pred.reshape(-1), True)
+    assert record.restored == 0
+    h[5, glide] = 1.0  # the one the subproblem dropped
+    record, eta = solver._judge(s, tpl, replace(cand, h=h), sol, mask, pred.reshape(-1), True)
+    assert (record.restored, record.accepted, eta) == (1, False, s.eta)
+    assert s.forced[5 * NC + glide]

@@ -149,6 +149,10 @@ def test_mass_floor_is_named_only_at_the_floor(
     status, reason = _diagnose_with_final_mass(solver, ref, m_dry)
     assert status == "infeasible"
     assert "mass at the floor" in reason
+    # the margin's edges: 1e-6 of the mass scale (review of 26 Nov: 1e-2 passed the above)
+    for m_f, named in ((m_dry + 2e-6, False), (m_dry + 0.5e-6, True)):
+        _, reason = _diagnose_with_final_mass(solver, ref, m_f)
+        assert ("mass at the floor" in reason) == named, m_f
 
 
 # ---- a model that cannot be evaluated -------------------------------------------------------

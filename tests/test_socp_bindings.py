@@ -191,6 +191,35 @@ def test_a_session_given_another_pattern_solves_that_problem(backend: str) -> No
         assert np.allclose(sol.x, solve_clarabel(prob).x, atol=1e-7)
 
 
+@pytest.mark.parametrize("backend", ["clarabel", "c"])
+def test_a_session_given_another_p_pattern_solves_that_problem(backend: str) -> None:
+    """The same for P: a box QP whose P = 4 I sits on columns 0..2, then on columns 3..5
+    (same size, same number of entries, same A). Matching patterns on A alone would write
+    the second P's numbers into the first's pattern and solve another problem (review of
+    26 Nov: a Pattern.matches that ignored P failed no test)."""
+    n = 6
+    q = -np.array([1.0, 2.0, 3.0, 5.0, 6.0, 7.0])  # no x_j on its bound with a zero dual
+    A = sp.csc_matrix(np.vstack([np.eye(n), -np.eye(n)]))  # -1 <= x <= 1
+    b = np.ones(2 * n)
+
+    def box_qp(cols: list[int]) -> ConicProblem:
+        P = sp.csc_matrix((4.0 * np.ones(3), (cols, cols)), shape=(n, n))
+        return ConicProblem(P=P, q=q, A=A, b=b, cones=[("nonneg", 2 * n)])
+
+    first, second = box_qp([0, 1, 2]), box_qp([3, 4, 5])
+    assert not same_pattern(first, second)
+    session = conic_session(backend)
+    for prob in (first, second, first):
+        # x_j = min(1, -q_j / 4) where P has the column, else the bound 1
+        x = np.ones(n)
+        cols = prob.P.indices
+        x[cols] = np.minimum(1.0, -q[cols] / 4.0)
+        sol = session.solve(prob)
+        assert sol.status == "solved"
+        np.testing.assert_allclose(sol.x, x, atol=1e-7)
+        assert abs(sol.obj - solve_clarabel(prob).obj) <= 1e-7
+
+
 def test_threads_sharing_a_solver_or_a_session_take_turns() -> None:
     """One workspace, two threads solving at once: each call is served whole, every answer
     is the lone solve's to the bit (unguarded, the C workspace was corrupted: a crash)."""
