@@ -15,6 +15,7 @@ import json
 import math
 import os
 import sys
+from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -57,6 +58,15 @@ DEFAULT_MODELS_DIR = "models"
 # Choices of --backend of the commands that solve sampled landings (dataset, mask-ceiling);
 # without it, dataset.default_backend().
 _SAMPLE_BACKENDS = ["c", "clarabel", "c-socp"]
+# Largest --threads: torch takes any positive count, but crashes (segmentation fault) on the
+# first matrix product with 100,000; 1,024 runs.
+MAX_THREADS = 1024
+# Largest seed: torch.manual_seed takes an unsigned 64-bit integer (the split seed seeds torch).
+MAX_SEED = 2**64 - 1
+# Largest --eps of mask-ceiling, in standard deviations of theta's components: the sampling box
+# is sqrt(12) = 3.5 of them wide per component, sqrt(11) times that (11.5) across the
+# perturbed ones; much farther, every neighbour is redrawn as not a landing.
+MAX_EPS = 10.0
 
 
 def add_commands(sub: argparse._SubParsersAction) -> None:
@@ -97,7 +107,7 @@ def _add_dataset(sub: argparse._SubParsersAction) -> None:
 
 
 def _add_train(sub: argparse._SubParsersAction) -> None:
-    from guidance.cli import at_least
+    from guidance.cli import at_least, positive_float
 
     t = sub.add_parser("train", help="train the constraint and solution transformers (resumable)")
     t.add_argument("--dataset", default=DEFAULT_DATASET)
@@ -105,6 +115,7 @@ def _add_train(sub: argparse._SubParsersAction) -> None:
     t.add_argument("--kind", choices=["constraint", "solution", "both"], default="both")
     t.add_argument(
         "--sizes",
+        type=_sizes,
         default="all",
         help="comma list of flight-s, flight-m, flight-mlp, reference; or 'flight' / 'all'",
     )
@@ -126,10 +137,17 @@ def _add_train(sub: argparse._SubParsersAction) -> None:
         default=TRAIN_DEFAULTS["reference_epochs"],
         help="per fold, for the paper-size reference (the paper: 2)",
     )
-    t.add_argument("--lr", type=float, default=TRAIN_DEFAULTS["lr"])
-    t.add_argument("--max-minutes", type=float, default=0.0, help="cap per model (0: none)")
-    t.add_argument("--threads", type=int, default=0, help="torch threads (0: default)")
-    t.add_argument("--seed", type=int, default=0, help="split and initialization seed")
+    t.add_argument("--lr", type=positive_float, default=TRAIN_DEFAULTS["lr"])
+    t.add_argument(
+        "--max-minutes", type=_non_negative_float, default=0.0, help="cap per model (0: none)"
+    )
+    t.add_argument(
+        "--threads",
+        type=_int_in(0, MAX_THREADS),
+        default=0,
+        help=f"torch threads (0: default; at most {MAX_THREADS})",
+    )
+    t.add_argument("--seed", type=_seed, default=0, help="split and initialization seed")
     t.add_argument(
         "--restart",
         action="store_true",
@@ -155,13 +173,20 @@ def _add_export(sub: argparse._SubParsersAction) -> None:
 
 
 def _add_baselines(sub: argparse._SubParsersAction) -> None:
+    from guidance.cli import at_least
+
     b = sub.add_parser("baselines", help="lookup-table baselines against the networks")
     b.add_argument("--dataset", default=DEFAULT_DATASET)
     b.add_argument("--models-dir", default=DEFAULT_MODELS_DIR)
-    b.add_argument("--interp-train", type=int, default=1000, help="subset (paper: 100)")
-    b.add_argument("--interp-test", type=int, default=100, help="subset (paper: 10)")
-    b.add_argument("--max-queries", type=int, default=2000, help="test rows for KD-tree / NN")
-    b.add_argument("--seed", type=int, default=0, help="the split seed used in training")
+    # the interpolation's PCA needs n - 1 >= 1 components: two rows span a line
+    b.add_argument(
+        "--interp-train", type=at_least(2), default=1000, help="subset (paper: 100; >= 2)"
+    )
+    b.add_argument("--interp-test", type=at_least(1), default=100, help="subset (paper: 10)")
+    b.add_argument(
+        "--max-queries", type=at_least(1), default=2000, help="test rows for KD-tree / NN"
+    )
+    b.add_argument("--seed", type=_seed, default=0, help="the split seed used in training")
     b.add_argument("--json", help="write the results here (default: MODELS_DIR/baselines.json)")
     b.set_defaults(func=cmd_baselines)
 
@@ -181,7 +206,10 @@ def _add_mask_ceiling(sub: argparse._SubParsersAction) -> None:
         help="solved landings per eps (>= 3)",
     )
     c.add_argument(
-        "--eps", type=_radii, default="0.005,0.02,0.1", help="neighbourhood radii, in std units"
+        "--eps",
+        type=_radii,
+        default="0.005,0.02,0.1",
+        help=f"neighbourhood radii, in std units (0 to {MAX_EPS:g})",
     )
     c.add_argument("--backend", choices=_SAMPLE_BACKENDS, help="default: as dataset")
     c.add_argument(
@@ -205,11 +233,9 @@ def _add_mask_ceiling(sub: argparse._SubParsersAction) -> None:
 def cmd_dataset(args: argparse.Namespace) -> int:
     from guidance.atomic import check_outputs
     from guidance.dataset import WorkerDiedError, generate, pack, summary
-    from guidance.errors import InputError
     from guidance.params import SCvxSettings
 
-    if Path(args.run_dir).exists() and not Path(args.run_dir).is_dir():
-        raise InputError(f"--run-dir {args.run_dir}: is a file, not a folder")
+    _check_folder("--run-dir", args.run_dir)
     # before the solving, not after (the output cannot be the run's folder, made by the solve)
     check_outputs(("--output", args.output), inputs=(("--run-dir folder", args.run_dir),))
     if not args.pack_only:
@@ -234,23 +260,74 @@ def cmd_dataset(args: argparse.Namespace) -> int:
         except WorkerDiedError as exc:
             print(f"error: {exc}", file=sys.stderr)
             return 1
-        print(f"solved this run: {counts}")
+        done = ", ".join(f"{n} {status}" for status, n in sorted(counts.items())) or "none"
+        print(f"solved this run: {done}")
     header = pack(args.run_dir, args.output, n_base=args.n_base)
     print(summary(header))
     print(f"wrote {args.output}")
     return 0
 
 
+# ---- checks of the options ------------------------------------------------------------------
+def _non_negative_float(text: str) -> float:
+    """argparse type of a finite number >= 0 (--max-minutes, 0: none)."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not (math.isfinite(value) and value >= 0.0):
+        raise argparse.ArgumentTypeError(f"expected a finite number >= 0, got {text!r}")
+    return value
+
+
+def _int_in(minimum: int, maximum: int) -> Callable[[str], int]:
+    """argparse type of an integer in [minimum, maximum]."""
+    from guidance.cli import at_least
+
+    at_least_minimum = at_least(minimum)
+
+    def parse(text: str) -> int:
+        value = at_least_minimum(text)
+        if value > maximum:
+            raise argparse.ArgumentTypeError(f"must be <= {maximum}, got {value}")
+        return value
+
+    return parse
+
+
+def _seed(text: str) -> int:
+    """argparse type of a split seed: 0 to MAX_SEED (numpy refuses negative seeds, torch
+    larger ones)."""
+    return _int_in(0, MAX_SEED)(text)
+
+
+def _check_folder(flag: str, path: str | Path) -> None:
+    """Refuses, before the work, a folder to be written that is a file or cannot be made (a
+    file where one of its parents should be)."""
+    folder = Path(path)
+    if folder.exists() and not folder.is_dir():
+        raise InputError(f"{flag} {path}: is a file, not a folder")
+    parent = folder.parent
+    while not os.path.lexists(parent):
+        parent = parent.parent
+    if not parent.is_dir():
+        raise InputError(f"{flag} {path}: cannot create it ({parent} is not a folder)")
+
+
 # ---- train --------------------------------------------------------------------------------
 def _sizes(spec: str) -> list[str]:
+    """argparse type of --sizes: the sizes named, in order, each once."""
     if spec == "all":
         return [*FLIGHT_SIZES, "reference"]
     if spec == "flight":
         return list(FLIGHT_SIZES)
-    names = [s.strip() for s in spec.split(",") if s.strip()]
+    names = list(dict.fromkeys(s.strip() for s in spec.split(",") if s.strip()))
+    known = f"known: {', '.join(FLIGHT_SIZES)}, reference; or 'flight' / 'all'"
     for n in names:
         if n not in FLIGHT_SIZES and n != "reference":
-            raise SystemExit(f"unknown size {n!r} (known: {', '.join(FLIGHT_SIZES)}, reference)")
+            raise argparse.ArgumentTypeError(f"unknown size {n!r} ({known})")
+    if not names:
+        raise argparse.ArgumentTypeError(f"no size named in {spec!r} ({known})")
     return names
 
 
@@ -258,6 +335,7 @@ def cmd_train(args: argparse.Namespace) -> int:
     from guidance.dataset import load_dataset
     from guidance.nn.train import dataset_digest
 
+    _check_folder("--train-dir", args.train_dir)
     ds = load_dataset(args.dataset)
     out = Path(args.train_dir)
     if args.restart:
@@ -265,7 +343,7 @@ def cmd_train(args: argparse.Namespace) -> int:
     digest = dataset_digest(ds)
     _claim_train_dir(out, args.dataset, digest)
     kinds = ["constraint", "solution"] if args.kind == "both" else [args.kind]
-    jobs = [(kind, size) for kind in kinds for size in _sizes(args.sizes)]
+    jobs = [(kind, size) for kind in kinds for size in args.sizes]
     for n_done, (kind, size) in enumerate(jobs):
         try:
             _train_one(ds, kind, size, args, out, digest)
@@ -430,10 +508,12 @@ def cmd_export(args: argparse.Namespace) -> int:
     from guidance.provenance import provenance
 
     train_dir, models = Path(args.train_dir), Path(args.models_dir)
+    if not train_dir.is_dir():
+        raise InputError(f"--train-dir {train_dir}: no such folder (run `guidance train`)")
     best = best_checkpoints(train_dir)
     if not best:
-        print(f"no flight-size checkpoint in {train_dir}: run `guidance train`", file=sys.stderr)
-        return 1
+        raise InputError(f"no flight-size checkpoint in {train_dir}: run `guidance train`")
+    _check_folder("--models-dir", models)
     ds = load_dataset(args.dataset)
     if "params" not in ds.header:
         raise InputError(f"{args.dataset} records no problem parameters (header 'params')")
@@ -551,15 +631,19 @@ def cmd_baselines(args: argparse.Namespace) -> int:
 
 # ---- mask ceiling -------------------------------------------------------------------------
 def _radii(text: str) -> list[float]:
-    """argparse type of --eps: a comma list of radii >= 0."""
+    """argparse type of --eps: a comma list of distinct radii in [0, MAX_EPS]."""
     try:
         eps = [float(e) for e in text.split(",") if e.strip()]
     except ValueError:
         raise argparse.ArgumentTypeError(
             f"expected numbers separated by commas, got {text!r}"
         ) from None
-    if not eps or min(eps) < 0 or not all(map(math.isfinite, eps)):
-        raise argparse.ArgumentTypeError(f"expected radii >= 0, got {text!r}")
+    if not eps or not all(math.isfinite(e) and 0 <= e <= MAX_EPS for e in eps):
+        raise argparse.ArgumentTypeError(f"expected radii in [0, {MAX_EPS:g}], got {text!r}")
+    # a radius names its neighbours' files in --run-dir by its 6 significant digits
+    names = [f"{e:g}" for e in eps]
+    if len(set(names)) < len(names):
+        raise argparse.ArgumentTypeError(f"expected distinct radii, got {text!r}")
     return eps
 
 
@@ -579,6 +663,8 @@ def cmd_mask_ceiling(args: argparse.Namespace) -> int:
     out = Path(args.json) if args.json else models / "mask_ceiling.json"
     # before the solves, not after; nor the run's folder, which the solves fill
     check_outputs(("--json", out), inputs=(("--run-dir folder", args.run_dir),))
+    if args.run_dir:
+        _check_folder("--run-dir", args.run_dir)
     eps = args.eps
     n_train = args.train_landings
     metrics = models / "metrics.json"
