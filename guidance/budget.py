@@ -438,7 +438,8 @@ def run(args: argparse.Namespace) -> int:
     """The budget job for parsed options (add_arguments)."""
     if not args.no_build:
         build()
-    missing = [str(d) for d in (DRIVER, NN_DRIVER) if not d.is_file()]
+    needed = (DRIVER,) if args.check_noalloc else (DRIVER, NN_DRIVER)
+    missing = [str(d) for d in needed if not d.is_file()]
     if missing:
         raise LibraryNotBuiltError(
             f"{', '.join(missing)} not found: run `make budget` (or drop --no-build)"

@@ -174,7 +174,7 @@ def _check_output_files(out: str | None, plot: str | None, scenario: str | None)
     if plot:
         _check_plot_format(plot)
     check_outputs(("--out", out), ("--plot", plot), inputs=(("scenario file", scenario),))
-    if out and not out.endswith(".npz"):  # README.md would be replaced by a zip archive
+    if out and not out.lower().endswith(".npz"):  # README.md would become a zip archive
         raise InputError(f"--out {out}: a trajectory file's name ends in .npz")
 
 
@@ -545,7 +545,9 @@ def _add_verify(sub: argparse._SubParsersAction) -> None:
 def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     try:
-        return int(args.func(args))
+        code = int(args.func(args))
+        sys.stdout.flush()  # here, not at exit: a reader that left is then caught below
+        return code
     except (InputError, LibraryNotBuiltError) as exc:  # input that cannot be used, or a C
         print(f"error: {exc}", file=sys.stderr)  # library the command needs is not built
         return EXIT_BAD_INPUT

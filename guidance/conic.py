@@ -107,6 +107,22 @@ def _clarabel_settings(tol: float, max_iter: int, verbose: bool) -> object:
     return settings
 
 
+def invalid_solution(n: int, m: int, message: str) -> ConicSolution:
+    """The answer to a problem (or call) refused as invalid input: NaN point, the reason in
+    ``info["message"]``."""
+    nan = float("nan")
+    return ConicSolution(
+        status="invalid_input",
+        x=np.full(n, nan),
+        s=np.full(m, nan),
+        z=np.full(m, nan),
+        obj=nan,
+        iterations=0,
+        solve_time_s=0.0,
+        info={"message": message},  # type: ignore[dict-item]
+    )
+
+
 def _clarabel_solution(sol: object, elapsed: float) -> ConicSolution:
     status = _CLARABEL_STATUS.get(str(sol.status), "numerical_error")  # type: ignore[attr-defined]
     return ConicSolution(
@@ -224,8 +240,8 @@ class ClarabelSession:
     def solve(
         self, prob: ConicProblem, warm: ConicSolution | None = None, max_iter: int | None = None
     ) -> ConicSolution:
-        """``warm`` is ignored (``warm_starts``); ``max_iter``, at most the session's, limits
-        this solve's iterations (None: the session's)."""
+        """``warm`` is ignored (``warm_starts``); ``max_iter``, 1 to the session's, limits this
+        solve's iterations (None: the session's; another: invalid_input)."""
         del warm
         A = canonical_csc(prob.A)
         P = None if prob.P is None else canonical_csc(prob.P)
@@ -241,7 +257,11 @@ class ClarabelSession:
             if P is not None:
                 new["P"] = P.data
             self._solver.update(**new)  # type: ignore[attr-defined]
-        limit = self.max_iter if max_iter is None else min(max_iter, self.max_iter)
+        limit = self.max_iter if max_iter is None else max_iter
+        if not 1 <= limit <= self.max_iter:  # as the C session answers it
+            return invalid_solution(
+                prob.n, prob.m, f"max_iter {limit}: 1 to the session's {self.max_iter}"
+            )
         if limit != self._limit:
             settings = _clarabel_settings(self.tol, limit, False)
             self._solver.update(settings=settings)  # type: ignore[attr-defined]

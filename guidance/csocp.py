@@ -46,7 +46,15 @@ from typing import TypeVar
 import numpy as np
 import scipy.sparse as sp
 
-from guidance.conic import ConeKind, ConicProblem, ConicSolution, Pattern, Status, csc_key
+from guidance.conic import (
+    ConeKind,
+    ConicProblem,
+    ConicSolution,
+    Pattern,
+    Status,
+    csc_key,
+    invalid_solution,
+)
 from guidance.errors import LibraryNotBuiltError
 
 _LIB_ENV = "TSCVX_LIB"
@@ -682,13 +690,13 @@ class Solver:
     def solve(self, log: bool = False) -> ConicSolution:
         n, m = self.n, self.m
         if not self.ready:
-            return _invalid(n, m, self.message)
+            return invalid_solution(n, m, self.message)
         t0 = time.perf_counter()
         st = int(self.lib.tscvx_solve(self.ws))
         elapsed = time.perf_counter() - t0
         status = SOLVE_STATUS[st] if 0 <= st < len(SOLVE_STATUS) else "numerical_error"
         if status == "invalid_input":
-            return _invalid(n, m, self.message)
+            return invalid_solution(n, m, self.message)
         p, mg = self._Aeq.shape[0], self._G.shape[0]
         # NaN where the runtime keeps no point (TSCVX_SETUP_NO_SOLUTION after a numerical error)
         x, y = np.full(n, np.nan), np.full(p, np.nan)
@@ -750,12 +758,12 @@ class Session:
         try:
             refused = self._load(prob)
         except InvalidProblemError as err:
-            return _invalid(prob.n, prob.m, str(err))
+            return invalid_solution(prob.n, prob.m, str(err))
         if refused is not None:
             return refused
         assert self.solver is not None
         if self.solver.limit_iterations(max_iter) != 0:
-            return _invalid(prob.n, prob.m, self.solver.message)
+            return invalid_solution(prob.n, prob.m, self.solver.message)
         if warm is not None and warm.ok:
             self.solver.warm_start(warm)
         return self.solver.solve()
@@ -791,7 +799,7 @@ class Session:
             b=_flat(prob.b),
             P_values=P_values,
         )
-        return None if st == 0 else _invalid(prob.n, prob.m, solver.message)
+        return None if st == 0 else invalid_solution(prob.n, prob.m, solver.message)
 
 
 def _reordered(values: np.ndarray, now: _Numbered, setup: _Numbered) -> np.ndarray:
@@ -802,20 +810,6 @@ def _reordered(values: np.ndarray, now: _Numbered, setup: _Numbered) -> np.ndarr
     return out
 
 
-def _invalid(n: int, m: int, message: str) -> ConicSolution:
-    nan = float("nan")
-    return ConicSolution(
-        status="invalid_input",
-        x=np.full(n, nan),
-        s=np.full(m, nan),
-        z=np.full(m, nan),
-        obj=nan,
-        iterations=0,
-        solve_time_s=0.0,
-        info={"message": message},  # type: ignore[dict-item]
-    )
-
-
 def solve(prob: ConicProblem, log: bool = False, **settings: float | int) -> ConicSolution:
     """Solve ``prob`` with the flight runtime. Invalid data give status ``invalid_input`` with
     ``info["message"]``; a missing library raises :class:`LibraryNotBuiltError`."""
@@ -823,5 +817,5 @@ def solve(prob: ConicProblem, log: bool = False, **settings: float | int) -> Con
     try:
         solver = Solver(prob, **settings)
     except InvalidProblemError as err:
-        return _invalid(prob.n, prob.m, str(err))
+        return invalid_solution(prob.n, prob.m, str(err))
     return solver.solve(log=log)

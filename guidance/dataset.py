@@ -419,12 +419,20 @@ def _read_run_config(out_dir: Path) -> dict:
 RUN_KEYS = ("seed", "ranges", "params", "scvx_settings", "backend")
 
 
+# Settings added to SCvxSettings whose default keeps what the code before them did: a run
+# (or sample) recorded without one is taken as recorded with its default. Not prox_u (22 Nov:
+# runs before it solved the paper's objective) nor socp_warm_start (25 Nov: a cold IPM).
+SETTINGS_ADDED_AS_BEFORE = ("socp_max_iter_total",)
+
+
 def _same_run_value(key: str, recorded: object, wanted: object) -> bool:
-    """Whether a run's recorded RUN_KEYS value is ``wanted``. A setting added to SCvxSettings
-    after the run was recorded takes its default, which keeps the behaviour of the code that
-    made the run (e.g. socp_max_iter_total): such a run resumes."""
-    if key == "scvx_settings" and isinstance(recorded, dict):
-        recorded = {**dataclasses.asdict(SCvxSettings()), **recorded}
+    """Whether a run's recorded RUN_KEYS value is ``wanted``, a setting of
+    SETTINGS_ADDED_AS_BEFORE missing on either side taken at its default: a run recorded
+    before it resumes, and its samples solved before and after the resume pack together."""
+    if key == "scvx_settings" and isinstance(recorded, dict) and isinstance(wanted, dict):
+        defaults = dataclasses.asdict(SCvxSettings())
+        added = {k: defaults[k] for k in SETTINGS_ADDED_AS_BEFORE}
+        recorded, wanted = {**added, **recorded}, {**added, **wanted}
     return recorded == wanted
 
 

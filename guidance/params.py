@@ -123,7 +123,7 @@ INT_SETTING_RANGES = {
     "max_subproblems": (1, 500),
     "rk4_substeps": (1, 64),
     "socp_max_iter": (1, 500),
-    "socp_max_iter_total": (1, 250_000),  # PDG_MAX_ITER_TOTAL
+    "socp_max_iter_total": (1, 500_000),  # PDG_MAX_ITER_TOTAL
 }
 
 

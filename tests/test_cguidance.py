@@ -17,6 +17,7 @@
 
 from __future__ import annotations
 
+import ctypes
 import dataclasses
 import functools
 import gc
@@ -1126,6 +1127,8 @@ def test_an_ipm_iteration_budget_ends_both_loops_alike(budget: int) -> None:
     clarabel = solve_scvx(Scenario(), st)
     assert clarabel.status == "max_iterations"
     assert sum(h.solver_iterations for h in clarabel.history) <= budget
+    if budget == 37:
+        assert [(h.solver_status, h.accepted) for h in c.history][1] == ("solved_inaccurate", True)
 
 
 def test_a_budget_stop_returns_the_last_accepted_iterate() -> None:
@@ -1151,6 +1154,19 @@ def test_the_c_settings_are_the_references_with_its_defaults() -> None:
     assert {name: getattr(c, name) for name in shared} == {
         name: getattr(py, name) for name in shared
     }
+
+
+def test_each_ctypes_setting_is_the_c_field_of_its_name() -> None:
+    """Every field written through the ctypes layout alone out of range (an integer) or NaN
+    (a real): the C library's own check names that field. Two fields swapped in the layout,
+    even two with one default (socp_warm_start and tau_r_update), would name the other."""
+    lib = cguidance.library()
+    for name in cguidance.SETTING_FIELDS:
+        st = cguidance.c_settings()
+        setattr(st, name, -7 if name in cguidance._INT_SETTINGS else float("nan"))
+        msg = ctypes.create_string_buffer(cguidance.MESSAGE_LEN)
+        assert lib.pdg_check_settings(ctypes.byref(st), msg) != 0, name
+        assert msg.value.decode().startswith(f"settings.{name}: "), (name, msg.value)
 
 
 def test_a_budget_spent_exactly_starts_no_further_subproblem() -> None:

@@ -304,13 +304,25 @@ def test_a_run_recorded_before_a_setting_existed_resumes_with_its_default(
     recorded = json.loads(str(rec["run"]))
     del recorded["scvx_settings"]["socp_max_iter_total"]
     write_sample(run, {**rec, "run": json.dumps(recorded, sort_keys=True)})
+    sample_path(run, 1).unlink()  # solved again by this code, recording the new setting
     solved = generate(run, 2, seed=11, ranges=EASY, workers=1, progress=False, backend="clarabel")
-    assert sum(solved.values()) == 0  # both samples kept, none solved again
+    assert sum(solved.values()) == 1  # sample 0 kept, sample 1 solved
     assert done_ids(run) == {0, 1}
-    config["scvx_settings"]["socp_max_iter"] = 199
-    (run / "run.json").write_text(json.dumps(config))
-    with pytest.raises(InputError, match="different scvx_settings"):
-        generate(run, 2, seed=11, ranges=EASY, workers=1, progress=False, backend="clarabel")
+    assert (
+        "socp_max_iter_total"
+        in json.loads(str(read_sample(sample_path(run, 1))["run"]))["scvx_settings"]
+    )
+    assert pack(run, tmp_path / "d.npz")["n_base"] == 2  # the old and the new sample pack
+    # a setting whose default is not what the older code did is still a different run
+    for key, value in (("socp_max_iter", 199), ("prox_u", None)):
+        changed = json.loads(json.dumps(config))
+        if value is None:
+            del changed["scvx_settings"][key]  # prox_u's default is not the paper's 0
+        else:
+            changed["scvx_settings"][key] = value
+        (run / "run.json").write_text(json.dumps(changed))
+        with pytest.raises(InputError, match="different scvx_settings"):
+            generate(run, 2, seed=11, ranges=EASY, workers=1, progress=False, backend="clarabel")
 
 
 def test_cli_prox_u_reaches_the_solves(tmp_path, monkeypatch) -> None:

@@ -818,6 +818,8 @@ def test_a_limit_above_the_setup_one_is_refused_by_name() -> None:
     assert "max_iter 51: 1 to the set-up's 50" in solver.message
     assert solver.limit_iterations(0) != 0
     assert solver.solve().status == "solved"
-    session = csocp.Session(max_iter=50)
-    sol = session.solve(random_feasible(7, n=30), max_iter=51)
-    assert sol.status == "invalid_input" and "max_iter 51" in sol.info["message"]
+    for session in (csocp.Session(max_iter=50), conic_session("clarabel", 1e-9, 50)):
+        for limit in (51, 0):  # both sessions answer it alike
+            sol = session.solve(random_feasible(7, n=30), max_iter=limit)
+            assert sol.status == "invalid_input" and f"max_iter {limit}" in sol.info["message"]
+        assert session.solve(random_feasible(7, n=30), max_iter=50).status == "solved"

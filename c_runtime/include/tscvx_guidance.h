@@ -65,7 +65,9 @@ extern "C" {
 #define PDG_N_MIN 3
 #define PDG_N_MAX 400
 #define PDG_MESSAGE_LEN 256
-#define PDG_MAX_ITER_TOTAL 250000 /* pdg_settings.socp_max_iter_total at most (500 x 500) */
+/* pdg_settings.socp_max_iter_total at most: 500 subproblems x 500 iterations x 2 (a failed
+ * warm run and its cold rerun), the most the other limits allow */
+#define PDG_MAX_ITER_TOTAL 500000
 /* Largest magnitude of any real number in a scenario (guidance/scenario.py MAGNITUDE_MAX):
  * Table 1's landing is O(1) in these nondimensional units; beyond this input is refused. */
 #define PDG_MAGNITUDE_MAX 1e4
@@ -157,7 +159,7 @@ typedef struct {
     /* conic subproblem solver (tscvx_socp.h) */
     double socp_tol;        /* gap and feasibility tolerances (the reference uses 1e-9) */
     int socp_max_iter;      /* IPM iteration limit, 1..500 */
-    int socp_max_iter_total;/* IPM iterations of the whole call at most, 1..250000: a
+    int socp_max_iter_total;/* IPM iterations of the whole call at most, 1..500000: a
                                subproblem is given at most what is left of it (half of it
                                when warm-started: a failed warm run is run again cold), and
                                none once it is spent, which ends the call with

@@ -142,8 +142,9 @@ static int sizes_fit_kind(const nn_header *hd)
 
 /* Non-finite binary64 bit pattern: exponent all ones. Positive: sign clear, not zero. */
 static int f64_bits_finite(uint64_t u) { return ((u >> 52) & 0x7FFu) != 0x7FFu; }
-/* |x| < 2^128 (biased exponent <= 1023 + 127): every float32 value is, and a network whose
- * sums cannot reach inf from its weights alone keeps the NaN checks meaningful */
+/* |x| < 2^128 (biased exponent <= 1023 + 127): every float32 value the exporter writes is;
+ * a larger one is a damaged or crafted blob. (Sums may still overflow: tscvx_nn_run reports
+ * a non-finite output.) */
 static int f64_bits_float32_range(uint64_t u) { return ((u >> 52) & 0x7FFu) <= 1150u; }
 static int f64_bits_positive(uint64_t u)
 {

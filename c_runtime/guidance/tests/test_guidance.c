@@ -179,7 +179,7 @@ static void test_settings_and_sizes(void)
         pdg_default_settings(&st);
         st.socp_max_iter_total = 0;
         CHECK(pdg_check_settings(&st, msg) == PDG_SETUP_BAD_SETTINGS);
-        CHECK(strcmp(msg, "settings.socp_max_iter_total: must lie within 1..250000, got 0") == 0);
+        CHECK(strcmp(msg, "settings.socp_max_iter_total: must lie within 1..500000, got 0") == 0);
         pdg_default_settings(&st);
         st.defect_tol = INFINITY;
         CHECK(pdg_check_settings(&st, msg) == PDG_SETUP_BAD_SETTINGS);
