@@ -132,6 +132,24 @@ def _check_distinct(outputs: list[tuple[str, str | Path]]) -> None:
                 )
 
 
+def _first_existing(folder: Path) -> Path:
+    """The folder itself or, when missing, the ancestor the first missing one is made in."""
+    while not os.path.lexists(folder):
+        folder = folder.parent
+    return folder
+
+
+def check_folder(flag: str, path: str | Path) -> None:
+    """Refuse, before the work, a folder the work makes or fills (a run or train folder) that
+    is a file or cannot be made (a file where one of its parents should be)."""
+    folder = Path(path)
+    if folder.exists() and not folder.is_dir():
+        raise InputError(f"{flag} {path}: is a file, not a folder")
+    parent = _first_existing(folder.parent)
+    if not parent.is_dir():
+        raise InputError(f"{flag} {path}: cannot create it ({parent} is not a folder)")
+
+
 def _check_writable(flag: str, path: str | Path) -> None:
     """The file can be written, its missing folders made: checked without making them."""
     target = Path(os.path.realpath(path))  # where the writers write: a link's target
@@ -139,9 +157,7 @@ def _check_writable(flag: str, path: str | Path) -> None:
         raise InputError(f"{flag} {path}: is a folder, not a file")
     if target.exists() and not target.is_file():  # the writers replace what is there
         raise InputError(f"{flag} {path}: is a device, pipe or socket, not a regular file")
-    folder = target.parent
-    while not os.path.lexists(folder):  # the folder the first missing one would be made in
-        folder = folder.parent
+    folder = _first_existing(target.parent)
     what = "write there" if folder == target.parent else "create its folder"
     if not folder.is_dir():
         raise InputError(f"{flag} {path}: cannot {what} ({folder} is not a folder)")

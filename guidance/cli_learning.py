@@ -19,7 +19,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from guidance.atomic import write_text_atomic
+from guidance.atomic import check_folder, write_text_atomic
 from guidance.errors import InputError
 
 if TYPE_CHECKING:
@@ -235,7 +235,7 @@ def cmd_dataset(args: argparse.Namespace) -> int:
     from guidance.dataset import WorkerDiedError, generate, pack, summary
     from guidance.params import SCvxSettings
 
-    _check_folder("--run-dir", args.run_dir)
+    check_folder("--run-dir", args.run_dir)
     # before the solving, not after (the output cannot be the run's folder, made by the solve)
     check_outputs(("--output", args.output), inputs=(("--run-dir folder", args.run_dir),))
     if not args.pack_only:
@@ -301,19 +301,6 @@ def _seed(text: str) -> int:
     return _int_in(0, MAX_SEED)(text)
 
 
-def _check_folder(flag: str, path: str | Path) -> None:
-    """Refuses, before the work, a folder to be written that is a file or cannot be made (a
-    file where one of its parents should be)."""
-    folder = Path(path)
-    if folder.exists() and not folder.is_dir():
-        raise InputError(f"{flag} {path}: is a file, not a folder")
-    parent = folder.parent
-    while not os.path.lexists(parent):
-        parent = parent.parent
-    if not parent.is_dir():
-        raise InputError(f"{flag} {path}: cannot create it ({parent} is not a folder)")
-
-
 # ---- train --------------------------------------------------------------------------------
 def _sizes(spec: str) -> list[str]:
     """argparse type of --sizes: the sizes named, in order, each once."""
@@ -335,7 +322,7 @@ def cmd_train(args: argparse.Namespace) -> int:
     from guidance.dataset import load_dataset
     from guidance.nn.train import dataset_digest
 
-    _check_folder("--train-dir", args.train_dir)
+    check_folder("--train-dir", args.train_dir)
     ds = load_dataset(args.dataset)
     out = Path(args.train_dir)
     if args.restart:
@@ -513,7 +500,7 @@ def cmd_export(args: argparse.Namespace) -> int:
     best = best_checkpoints(train_dir)
     if not best:
         raise InputError(f"no flight-size checkpoint in {train_dir}: run `guidance train`")
-    _check_folder("--models-dir", models)
+    check_folder("--models-dir", models)
     ds = load_dataset(args.dataset)
     if "params" not in ds.header:
         raise InputError(f"{args.dataset} records no problem parameters (header 'params')")
@@ -664,7 +651,7 @@ def cmd_mask_ceiling(args: argparse.Namespace) -> int:
     # before the solves, not after; nor the run's folder, which the solves fill
     check_outputs(("--json", out), inputs=(("--run-dir folder", args.run_dir),))
     if args.run_dir:
-        _check_folder("--run-dir", args.run_dir)
+        check_folder("--run-dir", args.run_dir)
     eps = args.eps
     n_train = args.train_landings
     metrics = models / "metrics.json"

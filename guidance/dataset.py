@@ -430,8 +430,7 @@ def _same_run_value(key: str, recorded: object, wanted: object) -> bool:
     SETTINGS_ADDED_AS_BEFORE missing on either side taken at its default: a run recorded
     before it resumes, and its samples solved before and after the resume pack together."""
     if key == "scvx_settings" and isinstance(recorded, dict) and isinstance(wanted, dict):
-        defaults = dataclasses.asdict(SCvxSettings())
-        added = {k: defaults[k] for k in SETTINGS_ADDED_AS_BEFORE}
+        added = {k: getattr(SCvxSettings, k) for k in SETTINGS_ADDED_AS_BEFORE}  # defaults
         recorded, wanted = {**added, **recorded}, {**added, **wanted}
     return recorded == wanted
 
