@@ -5,6 +5,7 @@ tscvx_nn_run."""
 
 from __future__ import annotations
 
+import ctypes
 import json
 import re
 import struct
@@ -242,6 +243,47 @@ def test_bad_inputs_are_refused(blobs: dict[str, bytes]) -> None:
         net.tight_mask(np.zeros(851))  # a solution network has no mask
 
 
+@needs_lib
+def test_a_cut_off_magic_is_truncated_not_bad_magic() -> None:
+    """Review of 27 Nov: the first 1 to 7 bytes of a blob were `bad_magic` ("the first 8 bytes
+    are not ..."), a cut-off file taken for a foreign one. Bytes that begin the magic (none
+    too) are `truncated` now, with their length; other short bytes are still `bad_magic`."""
+    for n in range(8):
+        with pytest.raises(FlightNetError, match="length does not match") as info:
+            FlightNet(flight.MAGIC[:n])
+        assert info.value.status == "truncated"
+        assert f"({n} bytes, shorter than the 8-byte magic and the 128-byte header)" in str(
+            info.value
+        )
+    with pytest.raises(FlightNetError, match="bad magic") as info:
+        FlightNet(b"TSCVYNN")
+    assert info.value.status == "bad_magic"
+    assert "the first 7 bytes are not those of" in str(info.value)
+
+
+@needs_shipped
+@needs_lib
+def test_an_output_in_the_networks_arena_is_refused_by_name(blobs: dict[str, bytes]) -> None:
+    """Review of 27 Nov: tscvx_nn_run wrote an output that overlaps the net's arena (its
+    activations, the net itself) without a word. It is `bad_buffer` now (the C cases, input,
+    output over the input or over the blob, init: c_runtime/nn/tests/test_nn.c), a status the
+    wrapper names: STATUS_NAMES is in step with the C enum."""
+    n = len(flight.STATUS_NAMES)
+    assert flight.status_message(n - 1) != "unknown tscvx_nn_status"
+    assert flight.status_message(n) == "unknown tscvx_nn_status"
+    net = FlightNet(blobs["constraint"])
+    x = np.zeros(net.d_in)
+    want = net.run(x)
+    end = ctypes.addressof(net._arena) + net.arena_bytes
+    inside = ctypes.cast((end - 8 * net.d_out) // 8 * 8, flight._dp)  # the arena's last bytes
+    st = flight.library().tscvx_nn_run(
+        net._net, x.ctypes.data_as(flight._dp), net.d_in, inside, net.d_out
+    )
+    error = FlightNetError(st, flight.status_message(st), "tscvx_nn_run")
+    assert error.status == "bad_buffer" and "overlapping buffers" in str(error)
+    np.testing.assert_array_equal(net.run(x), want)  # the net untouched
+
+
 def test_onnx_that_is_not_a_tscvx_export_is_refused(tmp_path: Path) -> None:
     onnx = pytest.importorskip("onnx")
     from onnx import TensorProto, helper, numpy_helper
@@ -266,6 +308,7 @@ ARCHS = [
     dict(tokens="scalar", d_model=16, n_heads=2, n_layers=2, d_ff=24),
     dict(tokens="scalar", d_model=12, n_heads=3, n_layers=1, d_ff=20),
     dict(tokens="single", d_model=24, n_heads=4, n_layers=3, d_ff=40),
+    dict(tokens="single", d_model=8, n_heads=2, n_layers=0, d_ff=16),
 ]
 
 
@@ -303,6 +346,9 @@ def test_other_architectures_equal_onnxruntime(arch: dict, tmp_path: Path) -> No
     print(f"\n{cfg.label()}: max relative |C - onnxruntime| = {rel:.3e}")
     assert rel <= TOL
     assert c.self_test() < 1e-5
+    if cfg.n_layers == 0:  # the exporter writes d_ff without layers too: checked all the same
+        with pytest.raises(FlightNetError, match=r"d_ff = 0 is outside 1\.\.65536"):
+            FlightNet(_edit(flight.tnn_bytes(path), 44, "<I", 0))
 
 
 # ---- no heap allocation inside tscvx_nn_run -----------------------------------------------------

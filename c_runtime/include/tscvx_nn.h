@@ -42,7 +42,8 @@
  *   3. tscvx_nn_self_test(net, &max_err)   optional built-in test: runs the recorded probes
  *   4. tscvx_nn_run(net, input, n_in, output, n_out)   any number of times: no allocation, no
  *        recursion, every loop bounded by the dimensions checked at init. Inputs are checked
- *        (sizes, finite values); a non-finite result is reported, not returned as an answer.
+ *        (sizes, overlapping buffers, finite values); a non-finite result is reported, not
+ *        returned as an answer.
  *   5. cleanup is trivial: the caller owns the arena (and the blob).
  *
  * Every function returns a tscvx_nn_status; tscvx_nn_status_message() says what it means.
@@ -73,7 +74,8 @@ typedef enum {
     TSCVX_NN_NULL_ARGUMENT,    /* a required pointer is NULL */
     TSCVX_NN_BAD_MAGIC,        /* the blob is not a T-SCvx network (magic) */
     TSCVX_NN_BAD_VERSION,      /* unsupported format version or header size */
-    TSCVX_NN_TRUNCATED,        /* the blob is shorter (or longer) than its header says */
+    TSCVX_NN_TRUNCATED,        /* the blob is shorter (or longer) than its header says, or
+                                  shorter than the header (its bytes begin the magic) */
     TSCVX_NN_BAD_CHECKSUM,     /* CRC-32 mismatch: the blob is corrupt */
     TSCVX_NN_BAD_DIMENSIONS,   /* dimensions out of range or inconsistent with each other (the
                                   input and output sizes with the kind and N) */
@@ -92,6 +94,9 @@ typedef enum {
     TSCVX_NN_NUMERICAL_ERROR,  /* the output is not finite (overflow inside the network) */
     TSCVX_NN_SELF_TEST_FAILED, /* the recorded probe outputs are not reproduced */
     TSCVX_NN_BAD_FLAGS,        /* unknown flag bits */
+    TSCVX_NN_BAD_BUFFER,       /* buffers overlap: an input or output (of tscvx_nn_run,
+                                  tscvx_nn_tight_mask) with the net's arena, an output with the
+                                  input or the in-place blob, or (init) the blob with the arena */
     TSCVX_NN_NSTATUS
 } tscvx_nn_status;
 
@@ -143,18 +148,24 @@ tscvx_nn_status tscvx_nn_check_blob(const void *blob, size_t len, char *message)
 tscvx_nn_status tscvx_nn_arena_size(const void *blob, size_t len, unsigned flags, size_t *bytes);
 
 /* Validates `blob` and builds the net in `arena` (any alignment; `arena_bytes` at least
- * tscvx_nn_arena_size()). On success *net points into the arena. */
+ * tscvx_nn_arena_size()). On success *net points into the arena. The arena, all
+ * `arena_bytes` of it, is the net's until the caller drops the net: a blob within it is
+ * TSCVX_NN_BAD_BUFFER (init would write over the weights it reads). */
 tscvx_nn_status tscvx_nn_init(tscvx_nn **net, void *arena, size_t arena_bytes, const void *blob,
                               size_t len, unsigned flags);
 
 /* One inference: raw inputs (n_in = d_in values; theta (16) [+ k]) -> raw outputs (n_out =
- * d_out values: logits, or the physical warm start). `output` must not overlap the arena. */
+ * d_out values: logits, or the physical warm start). TSCVX_NN_BAD_BUFFER when `input` or
+ * `output` overlaps the arena given to tscvx_nn_init, `output` overlaps `input`, or `output`
+ * overlaps the blob whose weights are read in place (writing there would change the
+ * activations, the net or its weights; the input may lie in the blob, e.g. its probes). */
 tscvx_nn_status tscvx_nn_run(tscvx_nn *net, const double *input, int n_in, double *output,
                              int n_out);
 
 /* Mask of the tight bits from constraint-network logits: mask[i] = 1 when the probability
  * 1 / (1 + exp(-logit[i])) >= threshold, else 0 (the tscvx_guidance.h mask convention:
- * nonzero = keep). n = d_out. Rejects a solution network (TSCVX_NN_BAD_SIZE) and NaN logits. */
+ * nonzero = keep). n = d_out. Rejects a solution network (TSCVX_NN_BAD_SIZE), NaN logits, and
+ * buffers as tscvx_nn_run does (logits its input, mask its output: TSCVX_NN_BAD_BUFFER). */
 tscvx_nn_status tscvx_nn_tight_mask(const tscvx_nn *net, const double *logits, int n,
                                     unsigned char *mask);
 

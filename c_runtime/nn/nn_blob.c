@@ -35,6 +35,8 @@ static const char *const status_messages[TSCVX_NN_NSTATUS] = {
     "the network output is not finite (overflow inside the network)",
     "self-test failed: the recorded probe outputs are not reproduced",
     "unknown flag bits",
+    "overlapping buffers: an input or output in the network's arena, the output over the "
+    "input or the blob read in place, or the blob in the arena",
 };
 
 const char *tscvx_nn_status_message(tscvx_nn_status status)
@@ -220,12 +222,15 @@ static tscvx_nn_status check_dimensions(const nn_header *hd, char *why)
  * zeroed but for version and header_bytes. */
 static tscvx_nn_status check_format(const unsigned char *p, size_t len, nn_header *hd, char *why)
 {
-    if (len < 8 || memcmp(p, NN_MAGIC, 8) != 0) {
-        return refuse(why, TSCVX_NN_BAD_MAGIC, "the first 8 bytes are not \"TSCVXNN\\0\"");
+    /* fewer than 8 bytes that begin the magic are a cut-off blob, not a foreign one */
+    if (memcmp(p, NN_MAGIC, len < 8 ? len : 8) != 0) {
+        return refuse(why, TSCVX_NN_BAD_MAGIC,
+                      "the first %zu bytes are not those of \"TSCVXNN\\0\"",
+                      len < 8 ? len : (size_t)8);
     }
     if (len < TSCVX_NN_HEADER_BYTES) {
-        return refuse(why, TSCVX_NN_TRUNCATED, "%zu bytes, shorter than the %u-byte header", len,
-                      TSCVX_NN_HEADER_BYTES);
+        return refuse(why, TSCVX_NN_TRUNCATED, "%zu bytes, shorter than the %s%u-byte header",
+                      len, len < 8 ? "8-byte magic and the " : "", TSCVX_NN_HEADER_BYTES);
     }
     memset(hd, 0, sizeof *hd);
     hd->version = rd_u32(p + 8);
@@ -615,7 +620,12 @@ tscvx_nn_status tscvx_nn_init(tscvx_nn **out, void *arena, size_t arena_bytes, c
     if (st != TSCVX_NN_OK) {
         return st;
     }
+    if (nn_overlap((uintptr_t)blob, len, (uintptr_t)arena, arena_bytes)) {
+        return TSCVX_NN_BAD_BUFFER; /* the net would be laid out over the values it reads */
+    }
     net = place_net(&cur, &hd, need);
+    net->arena_at = (uintptr_t)arena; /* tscvx_nn_run keeps its buffers out of it */
+    net->arena_len = arena_bytes;
     place_buffers(net, &cur);
     carve_values(net, place_values(net, &cur, blob, copy));
     net->cookie = NN_COOKIE; /* cookie and checksum last: nn_live only for a complete net */
@@ -690,6 +700,9 @@ tscvx_nn_status tscvx_nn_tight_mask(const tscvx_nn *net, const double *logits, i
     if (net->hdr.kind != TSCVX_NN_KIND_CONSTRAINT || n != net->d_out) {
         return TSCVX_NN_BAD_SIZE;
     }
+    if (!nn_buffers_apart(net, logits, sizeof(double) * (size_t)n, mask, (size_t)n)) {
+        return TSCVX_NN_BAD_BUFFER; /* mask bytes over the logits or the net's memory */
+    }
     for (i = 0; i < n; ++i) {
         if (isnan(logits[i])) {
             return TSCVX_NN_BAD_INPUT;
@@ -719,7 +732,7 @@ tscvx_nn_status tscvx_nn_self_test(tscvx_nn *net, double *max_rel_err)
         for (i = 0; i < net->d_in; ++i) {
             net->xb[i] = xin[i];
         }
-        st = tscvx_nn_run(net, net->xb, net->d_in, net->yb, net->d_out);
+        st = nn_run(net, net->xb, net->yb); /* its own buffers, in the arena */
         if (st != TSCVX_NN_OK) {
             return st;
         }

@@ -147,7 +147,7 @@ static void encoder_layer(tscvx_nn *net, const nn_layer *ly)
     }
 }
 
-void nn_forward(tscvx_nn *net, const double *input, double *output)
+static void nn_forward(tscvx_nn *net, const double *input, double *output)
 {
     const int L = net->L, d = net->d;
     int i, c, l;
@@ -176,10 +176,45 @@ void nn_forward(tscvx_nn *net, const double *input, double *output)
     }
 }
 
+tscvx_nn_status nn_run(tscvx_nn *net, const double *input, double *output)
+{
+    int i;
+    for (i = 0; i < net->d_in; ++i) {
+        if (!isfinite(input[i])) {
+            return TSCVX_NN_BAD_INPUT;
+        }
+    }
+    nn_forward(net, input, output);
+    for (i = 0; i < net->d_out; ++i) {
+        if (!isfinite(output[i])) {
+            return TSCVX_NN_NUMERICAL_ERROR;
+        }
+    }
+    return TSCVX_NN_OK;
+}
+
+int nn_overlap(uintptr_t a, size_t na, uintptr_t b, size_t nb)
+{
+    return a <= b ? b - a < na : a - b < nb;
+}
+
+int nn_buffers_apart(const tscvx_nn *net, const void *input, size_t n_in, const void *output,
+                     size_t n_out)
+{
+    const uintptr_t in = (uintptr_t)input, out = (uintptr_t)output;
+    const uintptr_t blob = (uintptr_t)net->in_mean - TSCVX_NN_HEADER_BYTES;
+    const size_t blob_len = TSCVX_NN_HEADER_BYTES + sizeof(double) * (size_t)net->hdr.n_values;
+    if (nn_overlap(in, n_in, net->arena_at, net->arena_len) ||
+        nn_overlap(out, n_out, net->arena_at, net->arena_len) ||
+        nn_overlap(out, n_out, in, n_in)) {
+        return 0;
+    }
+    return net->weights_in_arena || !nn_overlap(out, n_out, blob, blob_len);
+}
+
 tscvx_nn_status tscvx_nn_run(tscvx_nn *net, const double *input, int n_in, double *output,
                              int n_out)
 {
-    int i;
     if (!net || !input || !output) {
         return TSCVX_NN_NULL_ARGUMENT;
     }
@@ -189,16 +224,9 @@ tscvx_nn_status tscvx_nn_run(tscvx_nn *net, const double *input, int n_in, doubl
     if (n_in != net->d_in || n_out != net->d_out) {
         return TSCVX_NN_BAD_SIZE;
     }
-    for (i = 0; i < n_in; ++i) {
-        if (!isfinite(input[i])) {
-            return TSCVX_NN_BAD_INPUT;
-        }
+    if (!nn_buffers_apart(net, input, sizeof(double) * (size_t)n_in, output,
+                          sizeof(double) * (size_t)n_out)) {
+        return TSCVX_NN_BAD_BUFFER;
     }
-    nn_forward(net, input, output);
-    for (i = 0; i < n_out; ++i) {
-        if (!isfinite(output[i])) {
-            return TSCVX_NN_NUMERICAL_ERROR;
-        }
-    }
-    return TSCVX_NN_OK;
+    return nn_run(net, input, output);
 }

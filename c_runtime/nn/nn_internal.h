@@ -74,6 +74,8 @@ struct tscvx_nn {
     nn_header hdr;
     int d_in, d_out, d, heads, n_layers, ff, L;
     size_t arena_bytes;
+    uintptr_t arena_at; /* the caller's arena [arena_at, arena_at + arena_len): the buffers of */
+    size_t arena_len;   /* tscvx_nn_run must lie outside it (integers: no pointer comparison) */
     int weights_in_arena;
     /* weights (in the blob or in the arena) */
     const double *in_mean, *in_scale, *out_mean, *out_std; /* d_in, d_in, d_out, d_out */
@@ -115,7 +117,17 @@ size_t nn_count_weights(const nn_header *hdr);
 int nn_host_is_little_endian(void);
 uint32_t nn_crc32(const unsigned char *p, size_t n, uint32_t crc);
 
-/* nn_infer.c */
-void nn_forward(tscvx_nn *net, const double *input, double *output);
+/* nn_infer.c: one inference of a live net whose sizes and buffers were checked (by
+ * tscvx_nn_run, or the self-test's own buffers in the arena): the input's and the output's
+ * values checked, BAD_INPUT or NUMERICAL_ERROR. */
+tscvx_nn_status nn_run(tscvx_nn *net, const double *input, double *output);
+/* [a, a + na) and [b, b + nb) share a byte (no sum formed: none can wrap). */
+int nn_overlap(uintptr_t a, size_t na, uintptr_t b, size_t nb);
+/* The caller's buffers of one call (n_in, n_out bytes) lie apart: input and output outside the
+ * arena (the net, its activations, copied weights: written while the input is read), the
+ * output apart from the input and from a blob whose weights are read in place (it must stay
+ * unchanged while the net is used). The input may lie in the blob: both are only read. */
+int nn_buffers_apart(const tscvx_nn *net, const void *input, size_t n_in, const void *output,
+                     size_t n_out);
 
 #endif /* TSCVX_NN_INTERNAL_H */

@@ -61,7 +61,7 @@ MESSAGE_LEN = 160  # TSCVX_NN_MESSAGE_LEN (tscvx_nn.h)
 STATUS_NAMES = (
     "ok", "null_argument", "bad_magic", "bad_version", "truncated", "bad_checksum",
     "bad_dimensions", "bad_weights", "bad_alignment", "arena_too_small", "not_ready",
-    "bad_size", "bad_input", "numerical_error", "self_test_failed", "bad_flags",
+    "bad_size", "bad_input", "numerical_error", "self_test_failed", "bad_flags", "bad_buffer",
 )  # fmt: skip
 
 

@@ -11,7 +11,7 @@
  * - every refusal: NULL pointers, bad magic, version, truncated / trailing bytes, CRC, bad
  *   dimensions (sizes that do not fit the kind and N included), NaN / inf weights,
  *   non-positive scales, misalignment, small arena, unknown flags, wrong sizes, NaN / inf
- *   inputs, an uninitialized net, a failing self-test.
+ *   inputs, an uninitialized net, a failing self-test, overlapping buffers.
  */
 #include <math.h>
 #include <stdint.h>
@@ -525,7 +525,22 @@ static void test_bad_blobs(void)
     b = dup_blob(good, len);
     b[0] = 'X';
     CHECK_ST(try_init(b, len, 0), TSCVX_NN_BAD_MAGIC);
-    CHECK_ST(try_init(good, 7, 0), TSCVX_NN_BAD_MAGIC);
+    CHECK_ST(try_init(b, 7, 0), TSCVX_NN_BAD_MAGIC);
+    CHECK(strstr(last_why, "the first 7 bytes are not those of") != NULL);
+    { /* 0..7 bytes that begin the magic: a cut-off blob, not a foreign one (it was BAD_MAGIC,
+       * "the first 8 bytes are not ..."); init says the same as arena_size and check_blob */
+        size_t n;
+        tscvx_nn *none = NULL;
+        double small[8];
+        for (n = 0; n < 8; ++n) {
+            CHECK_ST(try_init(good, n, 0), TSCVX_NN_TRUNCATED);
+            CHECK(strstr(last_why, "shorter than the 8-byte magic and the 128-byte header"));
+            CHECK(strtoul(last_why, NULL, 10) == n);
+            CHECK_ST(tscvx_nn_init(&none, small, sizeof small, good, n, 0), TSCVX_NN_TRUNCATED);
+        }
+        CHECK_ST(try_init(good, 8, 0), TSCVX_NN_TRUNCATED);
+        CHECK(strcmp(last_why, "8 bytes, shorter than the 128-byte header") == 0);
+    }
     memcpy(b, good, len);
     wr_u32(b + 8, 1); /* format 1: no trained-for parameters */
     reseal(b, len);
@@ -585,6 +600,7 @@ static void test_bad_blobs(void)
     BAD_DIM(52, 2);         /* N: 7N outputs */
     BAD_DIM(56, 3);         /* probes */
     BAD_DIM(44, 0x7FFFFFFF);/* d_ff beyond the limit */
+    BAD_DIM(44, 0);         /* d_ff = 0 */
     memcpy(b, good, len);
     wr_u64(b + 88, n_weights_of(&a) - 1);
     reseal(b, len);
@@ -782,7 +798,144 @@ static void test_hardening(void)
     wr_f64(blob + TSCVX_NN_HEADER_BYTES + 8 * 40, 3.0e38); /* FLT_MAX's size: accepted */
     reseal(blob, len);
     CHECK_ST(tscvx_nn_check_blob(blob, len, why), TSCVX_NN_OK);
+    { /* review of 27 Nov: d_ff without a layer, where no weight depends on it, is still in
+       * 1..TSCVX_NN_MAX_DIM like every dimension (the exporter writes the configured width
+       * whatever the depth; the arena holds its activation buffer) */
+        static const uint32_t ff[] = {0u, 1u, TSCVX_NN_MAX_DIM, TSCVX_NN_MAX_DIM + 1u};
+        static const tscvx_nn_status want[] = {TSCVX_NN_BAD_DIMENSIONS, TSCVX_NN_OK, TSCVX_NN_OK,
+                                               TSCVX_NN_BAD_DIMENSIONS};
+        unsigned char *b = dup_blob(blob, len);
+        size_t k;
+        for (k = 0; b && k < sizeof ff / sizeof ff[0]; ++k) {
+            wr_u32(b + 44, ff[k]);
+            reseal(b, len);
+            CHECK_ST(try_init(b, len, 0), want[k]);
+            CHECK(want[k] == TSCVX_NN_OK || strstr(last_why, "d_ff = ") == last_why);
+        }
+        free(b);
+    }
     free(arena);
+    free(blob);
+}
+
+/* Review of 27 Nov: tscvx_nn_run (and tscvx_nn_tight_mask) took an input or an output in the
+ * net's arena, an output over its input or over the blob read in place, and tscvx_nn_init a
+ * blob in its arena: each wrote over what the net reads, without a word (a blob at the arena's
+ * start gave 350 wrong logits of 350, status OK). All are TSCVX_NN_BAD_BUFFER now; a buffer right
+ * beside one is still taken (the bounds are exact). One block per case holds both buffers, so
+ * that their distance is defined; every case runs on a freshly initialized net and blob (a
+ * write into the arena or the blob by one case must not decide the next), and the blob read
+ * in place is unchanged after it. */
+static void test_buffers(void)
+{
+    static const arch a = {TSCVX_NN_KIND_CONSTRAINT, TSCVX_NN_TOKENS_SCALAR, 17, 7, 8, 2, 1, 10, 2,
+                           1};
+    const tscvx_nn_status BUF = TSCVX_NN_BAD_BUFFER, OK = TSCVX_NN_OK;
+    size_t len = 0, need = 0, nd, nb, i;
+    unsigned flags = 0;
+    unsigned char *blob = make_blob(&a, &len);
+    double *mem = NULL, *arena, *bl, *blk = NULL, x[17], y[7], io[24], y0[7], err = 0.0;
+    tscvx_nn *net = NULL;
+#define RUN(in, out, want)                                                  \
+    do {                                                                    \
+        memcpy(bl, blob, len);                                              \
+        net = NULL;                                                         \
+        CHECK_ST(tscvx_nn_init(&net, arena, 8 * nd, bl, len, flags), OK);   \
+        if (net) CHECK_ST(tscvx_nn_run(net, (in), 17, (out), 7), (want));   \
+        CHECK(flags || memcmp(bl, blob, len) == 0);                         \
+    } while (0)
+    CHECK(blob != NULL);
+    if (!blob) return;
+    CHECK_ST(tscvx_nn_arena_size(blob, len, 0, &need), OK);
+    nd = (need + 7) / 8; /* the arena in doubles */
+    nb = len / 8;        /* the blob in doubles */
+    mem = calloc(nd + 48, sizeof(double)); /* 24 doubles | the arena | 24 doubles */
+    blk = calloc(nb + 14, sizeof(double)); /* 7 doubles | the blob | 7 doubles */
+    CHECK(mem != NULL && blk != NULL);
+    if (!mem || !blk) goto done;
+    arena = mem + 24;
+    bl = blk + 7;
+    memcpy(bl, blob, len);
+    for (i = 0; i < 17; ++i) x[i] = 0.1 * (double)i - 0.5;
+    RUN(x, y0, OK);
+
+    /* the output: beside the arena, then one double in it, or in its middle */
+    RUN(x, arena - 7, OK);
+    CHECK(memcmp(arena - 7, y0, sizeof y0) == 0);
+    RUN(x, arena - 6, BUF);
+    RUN(x, arena + nd, OK);
+    RUN(x, arena + nd - 1, BUF);
+    RUN(x, arena + nd / 2, BUF);
+    /* the input: the same bounds */
+    memcpy(mem + 7, x, sizeof x);
+    RUN(mem + 7, y, OK);
+    CHECK(memcmp(y, y0, sizeof y0) == 0);
+    RUN(mem + 8, y, BUF);
+    memcpy(arena + nd, x, sizeof x);
+    RUN(arena + nd, y, OK);
+    RUN(arena + nd - 1, y, BUF);
+    /* the output over the input, from either side */
+    memcpy(io, x, sizeof x);
+    RUN(io, io + 16, BUF);
+    RUN(io, io + 17, OK);
+    memcpy(io + 7, x, sizeof x);
+    RUN(io + 7, io + 1, BUF);
+    RUN(io + 7, io, OK);
+    CHECK(memcmp(io, y0, sizeof y0) == 0);
+    /* the blob read in place: an output in its header or values is refused, beside it taken;
+     * an input in it (a probe's) is only read */
+    RUN(x, blk, OK);
+    RUN(x, blk + 1, BUF);
+    RUN(x, bl + 20, BUF);
+    RUN(x, bl + nb - 1, BUF);
+    RUN(x, bl + nb, OK);
+    RUN(bl + 16 + n_weights_of(&a), y, OK);
+    /* tscvx_nn_tight_mask alike, the logits its input and the mask its output */
+    RUN(x, y, OK);
+    if (net) {
+        unsigned char *m = (unsigned char *)(arena + nd); /* right after the arena */
+        CHECK_ST(tscvx_nn_tight_mask(net, y, 7, m), OK);
+        CHECK_ST(tscvx_nn_tight_mask(net, y, 7, m - 1), BUF);
+        CHECK_ST(tscvx_nn_tight_mask(net, y, 7, (unsigned char *)(arena + nd / 2)), BUF);
+        memcpy(io, y, sizeof y);
+        CHECK_ST(tscvx_nn_tight_mask(net, io, 7, (unsigned char *)(io + 7)), OK);
+        CHECK_ST(tscvx_nn_tight_mask(net, io, 7, (unsigned char *)(io + 6) + 7), BUF);
+        CHECK_ST(tscvx_nn_tight_mask(net, y, 7, (unsigned char *)bl + 200), BUF);
+        CHECK(memcmp(bl, blob, len) == 0);
+        CHECK_ST(tscvx_nn_tight_mask(net, bl + 16 + n_weights_of(&a) + 17, 7, m), OK);
+    }
+    /* the self-test runs on buffers of its own in the arena: still runs (and fails, the
+     * synthetic probes recording zeros) */
+    if (net) {
+        CHECK_ST(tscvx_nn_self_test(net, &err), TSCVX_NN_SELF_TEST_FAILED);
+        CHECK(err > 1e-4 && isfinite(err));
+    }
+    RUN(x, y, OK);
+    CHECK(memcmp(y, y0, sizeof y0) == 0);
+    /* weights copied: the blob may be released, so an output there is taken */
+    free(mem);
+    flags = TSCVX_NN_COPY_WEIGHTS;
+    CHECK_ST(tscvx_nn_arena_size(bl, len, flags, &need), OK);
+    nd = (need + 7) / 8;
+    mem = calloc(nd + nb + 1, sizeof(double)); /* the arena, then room for the blob */
+    if (!mem) goto done;
+    arena = mem;
+    RUN(x, bl + 20, OK);
+    CHECK(memcmp(bl + 20, y0, sizeof y0) == 0);
+    memcpy(bl, blob, len);
+    /* init: a blob in the arena (it would lay the net out over the values it reads) */
+    memcpy(arena + nd, blob, len);
+    CHECK_ST(tscvx_nn_init(&net, arena, 8 * nd, arena + nd, len, 0), OK); /* beside it */
+    CHECK_ST(tscvx_nn_init(&net, arena, 8 * nd + 1, arena + nd, len, 0), BUF);
+    CHECK_ST(tscvx_nn_init(&net, arena, 8 * (nd + nb), arena + nd, len, flags), BUF);
+    memcpy(arena, blob, len);
+    CHECK_ST(tscvx_nn_init(&net, arena, 8 * (nd + nb + 1), arena, len, 0), BUF);
+    CHECK(net == NULL);
+    CHECK(strstr(tscvx_nn_status_message(BUF), "overlapping buffers") != NULL);
+#undef RUN
+done:
+    free(mem);
+    free(blk);
     free(blob);
 }
 
@@ -795,6 +948,7 @@ int main(int argc, char **argv)
     test_bad_blobs();
     test_fuzz_header();
     test_hardening();
+    test_buffers();
     for (i = 1; i < argc; ++i) {
         test_model(argv[i]);
     }
