@@ -1,6 +1,6 @@
 """RAD750 budget check of one complete guidance call (DESIGN.md, "The RAD750 budget model").
 
-    python -m guidance.budget [--no-build] [--json] [--check-noalloc]
+    python -m guidance.budget [--no-build] [--json] [--check-noalloc] [--nodes N [N ...]]
 
 Builds ``build/pdg_budget_driver`` (c_runtime/examples/pdg_budget_driver.c: the default
 scenario, workspace set up before the measured call, then one ``pdg_solve``), and measures:
@@ -17,6 +17,10 @@ scenario, workspace set up before the measured call, then one ``pdg_solve``), an
   figure printed in MiB.
 
 The driver also counts heap allocations inside the call (malloc interposition): it must be 0.
+
+Grids: ``--nodes N [N ...]`` measures the SCvx call of the same landing on N nodes instead,
+one row per grid (the trade of RAD750 time and memory against the grid's resolution); the
+T-SCvx and network rows need the networks' N = 50 and are not measured then.
 
 T-SCvx rows: the same driver with ``--tscvx build/models/solution.tnn [--masks
 build/models/constraint.tnn]`` measures one complete on-board T-SCvx call (``pdg_solve_tscvx``:
@@ -44,6 +48,7 @@ from pathlib import Path
 
 from guidance import callgrind
 from guidance.errors import LibraryNotBuiltError
+from guidance.params import N_MAX, N_MIN
 
 ROOT = Path(__file__).resolve().parent.parent
 BUILD = ROOT / "build"
@@ -70,9 +75,9 @@ NN_CONSTRAINT_CALLS = 20  # T-SCvx: one mask per SCvx iteration, iter_max = 20 (
 # the report); 1 is a failure before the call.
 DRIVER_OK = (0, 3)
 # The figures every driver run prints (``key value`` lines)
-DRIVER_KEYS = ("status", "iterations", "subproblems", "socp_iterations", "m_f", "arena_bytes",
-               "arena_high_water", "stack_high_water", "heap_allocations_in_solve",
-               "wall_s_min", "result_bytes")  # fmt: skip
+DRIVER_KEYS = ("nodes", "status", "iterations", "subproblems", "socp_iterations", "m_f",
+               "arena_bytes", "arena_high_water", "stack_high_water",
+               "heap_allocations_in_solve", "wall_s_min", "result_bytes")  # fmt: skip
 # The parts of a guidance call: function (inclusive cost) -> key in the report. The SOCP
 # runtime's work outside its solves is its own parts: each subproblem's new numbers
 # (tscvx_update_data, with their Ruiz equilibration) and the warm start's point.
@@ -111,6 +116,7 @@ class Budget:
     nn_weights_bytes: int = 0  # weight blobs of the networks the call runs (read in place)
     nn_arena_bytes: int = 0  # their arenas
     result_bytes: int = 0  # the caller's answer arrays x (N x 14) and u (N x 3)
+    nodes: int = 50  # the grid's N
 
     @property
     def memory_bytes(self) -> int:
@@ -175,14 +181,16 @@ def _variant_args(variant: str) -> tuple[list[str], str]:
     return [a.format(**paths) for a in args], function
 
 
-def _driver_cmd(variant: str, repeat: int) -> list[str]:
+def _driver_cmd(variant: str, repeat: int, nodes: int | None = None) -> list[str]:
     args, _ = _variant_args(variant)
-    return [str(DRIVER), "--repeat", str(repeat), *args]
+    grid = [] if nodes is None else ["--nodes", str(nodes)]
+    return [str(DRIVER), "--repeat", str(repeat), *grid, *args]
 
 
-def _run_driver(variant: str = "SCvx") -> dict[str, str]:
+def _run_driver(variant: str = "SCvx", nodes: int | None = None) -> dict[str, str]:
     """Three native guidance calls: the driver's ``key value`` lines."""
-    out = subprocess.run(_driver_cmd(variant, 3), capture_output=True, text=True, check=False)
+    cmd = _driver_cmd(variant, 3, nodes)
+    out = subprocess.run(cmd, capture_output=True, text=True, check=False)
     if out.returncode not in DRIVER_OK:
         raise RuntimeError(f"budget driver failed ({out.returncode}): {out.stderr[-2000:]}")
     kv = {}
@@ -198,11 +206,14 @@ def _run_driver(variant: str = "SCvx") -> dict[str, str]:
     return kv
 
 
-def count_instructions(variant: str = "SCvx") -> tuple[int, dict[str, int]]:
+def count_instructions(
+    variant: str = "SCvx", nodes: int | None = None
+) -> tuple[int, dict[str, int]]:
     """Instructions inside the guidance call (callgrind): pdg_solve, or pdg_solve_tscvx for
     the T-SCvx variants, with the SOCP / discretization / network-inference split."""
     _, function = _variant_args(variant)
-    with callgrind.collect(_driver_cmd(variant, 1), function, ok_codes=DRIVER_OK) as run:
+    cmd = _driver_cmd(variant, 1, nodes)
+    with callgrind.collect(cmd, function, ok_codes=DRIVER_OK) as run:
         parts = callgrind.inclusive_costs(run.out_file, PARTS)
     if parts:
         parts["rest"] = run.instructions - sum(parts.values())
@@ -257,12 +268,13 @@ def code_size() -> tuple[int, int]:
     return text, data
 
 
-def measure(do_build: bool = True, variant: str = "SCvx") -> Budget:
-    """One complete guidance call of ``variant`` (a key of VARIANTS)."""
+def measure(do_build: bool = True, variant: str = "SCvx", nodes: int | None = None) -> Budget:
+    """One complete guidance call of ``variant`` (a key of VARIANTS), on ``nodes`` nodes
+    (None: the default scenario's N)."""
     if do_build:
         build()
-    native = _run_driver(variant=variant)
-    instr, parts = count_instructions(variant)
+    native = _run_driver(variant=variant, nodes=nodes)
+    instr, parts = count_instructions(variant, nodes)
     text, data = code_size()
     return Budget(
         status=native["status"],
@@ -284,6 +296,7 @@ def measure(do_build: bool = True, variant: str = "SCvx") -> Budget:
         nn_weights_bytes=int(native.get("nn_weights_bytes", 0)),
         nn_arena_bytes=int(native.get("nn_arena_bytes", 0)),
         result_bytes=int(native["result_bytes"]),
+        nodes=int(native["nodes"]),
     )
 
 
@@ -325,6 +338,40 @@ def report_variants(rows: list[Budget]) -> str:
         "+ network weights (read in place) + network arenas; budget "
         f"{_mb(MEMORY_BUDGET_B).strip()} and {TIME_BUDGET_S:.0f} s RAD750"
     )
+    return "\n".join(lines)
+
+
+def measure_grids(nodes: list[int], do_build: bool = True) -> list[Budget]:
+    """The SCvx call of the default landing on each grid of ``nodes``."""
+    if do_build:
+        build()
+    return [measure(do_build=False, nodes=n) for n in nodes]
+
+
+def report_grids(rows: list[Budget]) -> str:
+    """The SCvx call on several grids: what a coarser grid saves in time and memory."""
+    lines = [
+        "One complete guidance call (pdg_solve), the default landing on N nodes: RAD750 time "
+        "and memory against the grid",
+        f"  {'N':>4s} {'status':>7s} {'iter.':>5s} {'subpr.':>6s} {'IPM':>5s} "
+        f"{'host instr.':>12s} {'per IPM it.':>11s} {'discretiz.':>11s} {'RAD750 s':>9s} "
+        f"{'memory':>10s} {'heap':>5s} {'m_f':>9s}",
+    ]
+    for b in rows:
+        disc = b.instructions_by_part.get("discretization", 0)
+        per_ipm = b.instructions / b.socp_iterations if b.socp_iterations else float("nan")
+        lines.append(
+            f"  {b.nodes:4d} {b.status:>7s} {b.iterations:5d} {b.subproblems:6d} "
+            f"{b.socp_iterations:5d} {b.instructions / 1e6:10.1f} M {per_ipm / 1e6:9.2f} M "
+            f"{disc / 1e6:9.1f} M {b.rad750_s:9.2f} {b.memory_bytes / 2**20:6.2f} MiB "
+            f"{b.heap_allocations_in_solve:5d} {b.m_f:9.6f}"
+        )
+    lines += [
+        "  per IPM it.: the call's instructions over its IPM iterations (discretization and "
+        "assembly included); memory as in the budget table",
+        "  T-SCvx and the networks: not measured on other grids (the shipped networks are "
+        "trained for N = 50)",
+    ]
     return "\n".join(lines)
 
 
@@ -426,12 +473,32 @@ def add_arguments(ap: argparse.ArgumentParser) -> None:
         "--check-noalloc", action="store_true",
         help="only run the driver natively and fail unless pdg_solve made no heap allocation",
     )  # fmt: skip
+    ap.add_argument(
+        "--nodes", type=_grid, nargs="+", metavar="N",
+        help=f"measure the SCvx call of the default landing on each of these grids instead, N "
+        f"in [{N_MIN}, {N_MAX}] (the T-SCvx and network rows need the networks' N = 50)",
+    )  # fmt: skip
+
+
+def _grid(text: str) -> int:
+    try:
+        n = int(text)
+    except ValueError:
+        n = None
+    if n is None or not N_MIN <= n <= N_MAX:
+        raise argparse.ArgumentTypeError(f"must be an integer in [{N_MIN}, {N_MAX}], got {text!r}")
+    return n
 
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="guidance budget", description=__doc__.splitlines()[0])
     add_arguments(ap)
     return run(ap.parse_args(argv))
+
+
+def _json_row(b: Budget) -> dict[str, object]:
+    return {**asdict(b), "memory_bytes": b.memory_bytes, "within_time": b.within_time(),
+            "within_memory": b.within_memory()}  # fmt: skip
 
 
 def run(args: argparse.Namespace) -> int:
@@ -445,10 +512,22 @@ def run(args: argparse.Namespace) -> int:
             f"{', '.join(missing)} not found: run `make budget` (or drop --no-build)"
         )
     if args.check_noalloc:
-        kv = _run_driver()
-        n = int(kv["heap_allocations_in_solve"])
-        print(f"heap allocations inside pdg_solve: {n} (status {kv['status']})")
-        return 0 if n == 0 else 1
+        allocations = 0
+        for nodes in args.nodes or [None]:
+            kv = _run_driver(nodes=nodes)
+            n = int(kv["heap_allocations_in_solve"])
+            allocations += n
+            print(
+                f"heap allocations inside pdg_solve: {n} (N = {kv['nodes']}, status {kv['status']})"
+            )
+        return 0 if allocations == 0 else 1
+    if args.nodes:
+        grids = measure_grids(args.nodes, do_build=False)
+        if args.json:
+            print(json.dumps({"grids": [_json_row(b) for b in grids]}, indent=2))
+        else:
+            print(report_grids(grids))
+        return 0
     calls = measure_variants(do_build=False)
     b = calls[0]
     nets = measure_networks(do_build=False)
@@ -460,11 +539,7 @@ def run(args: argparse.Namespace) -> int:
             {**asdict(n), "memory_bytes": n.memory_bytes, "within_budget": n.within_budget()}
             for n in nets
         ]
-        d["calls"] = [
-            {**asdict(c), "memory_bytes": c.memory_bytes, "within_time": c.within_time(),
-             "within_memory": c.within_memory()}
-            for c in calls
-        ]  # fmt: skip
+        d["calls"] = [_json_row(c) for c in calls]
         print(json.dumps(d, indent=2))
     else:
         print(report(b))

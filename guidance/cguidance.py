@@ -39,7 +39,7 @@ from guidance.csocp import SOLVE_STATUS
 from guidance.errors import InputError, describe
 from guidance.guess import checked_guess
 from guidance.model import param_vector, pattern_index
-from guidance.params import NC, NU, NX, Params, Scenario, SCvxSettings
+from guidance.params import N_MAX, N_MIN, NC, NU, NX, Params, Scenario, SCvxSettings
 from guidance.scenario import ScenarioError
 from guidance.scvx import (
     IterationRecord,
@@ -330,8 +330,8 @@ def solve_c(
     only (guidance.scvx.mask_bits: probabilities are refused, not read nonzero = keep)."""
     lib = library()
     N = scenario.params.N
-    if not 3 <= N <= 400:
-        raise ScenarioError("N", f"must lie in [3, 400], got {N}")
+    if not N_MIN <= N <= N_MAX:
+        raise ScenarioError("N", f"must lie in [{N_MIN}, {N_MAX}], got {N}")
     check_masks_argument(masks)  # True or a number: refused by name, before the solve
     ran_with = _ran_with(settings, socp)  # a bad setting refused before the solve
     ws = workspace(scenario, settings, **socp)
@@ -595,8 +595,8 @@ def solve_tscvx_c(
     FlightNetsError with the C library's message; bad scenarios raise ScenarioError."""
     lib = library()
     N = scenario.params.N
-    if not 3 <= N <= 400:
-        raise ScenarioError("N", f"must lie in [3, 400], got {N}")
+    if not N_MIN <= N <= N_MAX:
+        raise ScenarioError("N", f"must lie in [{N_MIN}, {N_MAX}], got {N}")
     _check_tscvx_arguments(masks, nets)
     ran_with = _ran_with(settings, socp)  # a bad setting refused before the solve
     sol, con = nets if nets is not None else _nets(models_dir, masks, scenario.params)

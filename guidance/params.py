@@ -108,6 +108,9 @@ def _plain(value: object) -> object:
     return value
 
 
+# The grids the solvers take: N nodes in [N_MIN, N_MAX] (the C library's PDG_N_MIN, PDG_N_MAX).
+N_MIN, N_MAX = 3, 400
+
 PARAM_NAMES = tuple(f.name for f in dataclasses.fields(Params))
 VECTOR_PARAM_SIZES = {
     f.name: len(f.default)  # type: ignore[arg-type]
@@ -125,6 +128,21 @@ INT_SETTING_RANGES = {
     "socp_max_iter": (1, 500),
     "socp_max_iter_total": (1, 500_000),  # PDG_MAX_ITER_TOTAL
 }
+
+
+# RK4 steps over the whole normalized time [0, 1] at least: 2 per interval at N = 50, the grid
+# whose discretization error rk4_substeps = 2 was chosen for. With a fixed count per interval
+# the error grew with the interval (a step's error like its length^5): at N = 10 the default
+# landing, reported solved, missed its landing point open loop by 9.8e-3 (the tolerance is
+# 1e-3); with 11 steps per interval by 9.8e-5.
+RK4_MIN_STEPS_TOTAL = 98
+
+
+def rk4_steps_per_interval(substeps: int, N: int) -> int:
+    """RK4 steps of each of the N - 1 FOH intervals: ``substeps`` (SCvxSettings.rk4_substeps)
+    at least, and enough that the N - 1 intervals take RK4_MIN_STEPS_TOTAL steps together
+    (at most 49, at N = 3). The C library's rule is the same (pdg_rk4_steps)."""
+    return max(substeps, -(-RK4_MIN_STEPS_TOTAL // (N - 1)))
 
 
 @dataclass(frozen=True)
@@ -148,8 +166,9 @@ class SCvxSettings:
     step_tol: float = 5e-3
     vc_tol: float = 1e-6
     defect_tol: float = 1e-5  # physical units; path constraints must hold to 1e-6 anyway
-    # RK4 steps per FOH interval: 2 keeps the discretization within 1e-7 of scipy's integration
-    # (tests/test_model.py) at a quarter of the cost of 8.
+    # RK4 steps per FOH interval, at least: 2 keeps the discretization within 1e-7 of scipy's
+    # integration at N = 50 (tests/test_model.py) at a quarter of the cost of 8. A coarser grid
+    # takes more (rk4_steps_per_interval), so that no step is longer than at N = 50.
     rk4_substeps: int = 2
     # "c": the generated C of the model (build/libtscvx_gnc.so); "casadi": CasADi's VM;
     # "auto": C when the library is built. Both evaluate the same expressions (equal to 1e-10).

@@ -17,6 +17,8 @@ import numpy as np
 
 from guidance.errors import DuplicateKeyError, InputError, unique_keys
 from guidance.params import (
+    N_MAX,
+    N_MIN,
     PARAM_NAMES,
     VECTOR_PARAM_SIZES,
     InitialState,
@@ -315,7 +317,7 @@ def _param_rules(p: Params) -> Iterator[tuple[str, bool, str]]:
         p.g_I[0] >= 0.0 or p.g_I[1] != 0.0 or p.g_I[2] != 0.0,
         "gravity must point along -e1 (e1 is up)",
     )
-    yield "N", not 3 <= p.N <= 400, "must lie in [3, 400], got {N}"
+    yield "N", not N_MIN <= p.N <= N_MAX, f"must lie in [{N_MIN}, {N_MAX}], got {{N}}"
     yield "r_f", p.r_f[0] < 0.0, "landing point must not be below the surface"
 
 

@@ -24,7 +24,7 @@ from guidance.constraints import constraint_scales, path_constraint_values, tigh
 from guidance.errors import InputError, ModelEvaluationError, describe
 from guidance.guess import checked_guess, initial_guess
 from guidance.model import discretize, vehicle_pattern
-from guidance.params import IM, NC, NU, NX, Scenario, SCvxSettings
+from guidance.params import IM, NC, NU, NX, Scenario, SCvxSettings, rk4_steps_per_interval
 from guidance.scenario import checked
 from guidance.subproblem import (
     TR_PAIRS,
@@ -175,7 +175,8 @@ class SCvxSolver:
 
     def _discretize(self, z: np.ndarray) -> dict[str, np.ndarray]:
         x, u, t_f = physical(z, self.lay, self.sc)
-        return discretize(x, u, t_f, self.p, self.st.rk4_substeps, self.engine)
+        steps = rk4_steps_per_interval(self.st.rk4_substeps, self.p.N)
+        return discretize(x, u, t_f, self.p, steps, self.engine)
 
     def penalty(self, z: np.ndarray, disc: dict[str, np.ndarray]) -> tuple[float, float, float]:
         """J(z) on the full constraint set; also the max defect and max violation."""

@@ -141,6 +141,45 @@ def test_guidance_budget_takes_the_tool_s_options() -> None:
     assert args.func is cmd_budget and args.no_build and args.json and not args.check_noalloc
 
 
+@needs_tscvx
+def test_another_grid_is_measured_as_asked(figures: budget.Budget) -> None:
+    """`--nodes 5`: the driver solves the default landing on 5 nodes (the C library through
+    Python finds the same final mass on that grid), for less time and memory than at 50."""
+    from guidance.cguidance import solve_c
+    from guidance.params import Params, Scenario
+
+    (row,) = budget.measure_grids([5], do_build=False)
+    assert (row.nodes, row.status, row.heap_allocations_in_solve) == (5, "solved", 0)
+    assert row.result_bytes == 8 * 5 * (14 + 3)
+    assert row.m_f == pytest.approx(solve_c(Scenario(params=Params(N=5))).m_f, rel=1e-11)
+    assert figures.nodes == 50
+    assert row.instructions < figures.instructions / 3
+    assert row.arena_bytes < figures.arena_bytes / 3
+    text = budget.report_grids([row, figures])
+    assert "\n     5  solved" in text and "\n    50  solved" in text
+
+
+def test_a_grid_outside_the_solvers_range_is_refused() -> None:
+    from guidance.cli import build_parser
+
+    ap = build_parser()
+    assert ap.parse_args(["budget", "--nodes", "3", "400"]).nodes == [3, 400]
+    for bad in ("2", "401", "x", "5.0"):
+        with pytest.raises(SystemExit) as exc:
+            ap.parse_args(["budget", "--nodes", bad])
+        assert exc.value.code == 2
+
+
+@pytest.mark.skipif(not budget.DRIVER.exists(), reason="make budget builds the driver")
+def test_the_driver_refuses_a_grid_outside_the_range() -> None:
+    import subprocess
+
+    for bad in ("2", "401", "12x"):
+        out = subprocess.run([str(budget.DRIVER), "--nodes", bad], capture_output=True, text=True)
+        assert out.returncode == 1
+        assert f"--nodes {bad}: N must be an integer in [3, 400]" in out.stderr
+
+
 # ---- network inference (tscvx_nn_run), issue 5's 5 M instructions per inference -------------
 
 needs_nets = pytest.mark.skipif(

@@ -1,9 +1,10 @@
 /*
  * pdg_budget_driver.c -- one complete guidance call, for the RAD750 budget (guidance/budget.py).
  *
- *   pdg_budget_driver [--repeat R] [--tscvx SOLUTION.tnn [--masks CONSTRAINT.tnn]]
+ *   pdg_budget_driver [--repeat R] [--nodes N] [--tscvx SOLUTION.tnn [--masks CONSTRAINT.tnn]]
  *
- * Sets up the workspace for the default scenario (outside the measured call), then calls
+ * Sets up the workspace for the default scenario (on N nodes with --nodes: the same landing on
+ * another grid), outside the measured call, then calls
  * pdg_solve once (R times for wall-clock timing); with --tscvx the measured call is the
  * complete on-board T-SCvx call pdg_solve_tscvx (solution-network inference, projection, SCvx
  * from the reduced radius, and with --masks a constraint-network inference per subproblem
@@ -64,14 +65,24 @@ typedef struct {
     tscvx_nn *net[2];
 } networks;
 
-/* --repeat R, --tscvx FILE, --masks FILE; 0, or 1 when --masks comes without --tscvx. */
-static int parse_args(int argc, char **argv, int *repeat, networks *nn)
+/* --repeat R, --nodes N, --tscvx FILE, --masks FILE; 0, or 1 (with the reason on stderr) for
+ * N outside [PDG_N_MIN, PDG_N_MAX] or --masks without --tscvx. */
+static int parse_args(int argc, char **argv, int *repeat, int *nodes, networks *nn)
 {
     int i;
     for (i = 1; i + 1 < argc; ++i) {
         if (strcmp(argv[i], "--repeat") == 0) {
             *repeat = atoi(argv[i + 1]);
             *repeat = *repeat < 1 ? 1 : (*repeat > 1000 ? 1000 : *repeat);
+        } else if (strcmp(argv[i], "--nodes") == 0) {
+            char *end;
+            const long n = strtol(argv[i + 1], &end, 10);
+            if (*end != '\0' || n < PDG_N_MIN || n > PDG_N_MAX) {
+                fprintf(stderr, "--nodes %s: N must be an integer in [%d, %d]\n", argv[i + 1],
+                        PDG_N_MIN, PDG_N_MAX);
+                return 1;
+            }
+            *nodes = (int)n;
         } else if (strcmp(argv[i], "--tscvx") == 0) {
             nn->path[0] = argv[i + 1];
         } else if (strcmp(argv[i], "--masks") == 0) {
@@ -144,6 +155,7 @@ static void print_report(pdg_status status, const pdg_result *res, const pdg_sce
                          const networks *nn)
 {
     printf("mode %s\n", !use_tscvx ? "scvx" : (nn->net[1] ? "tscvx_masks" : "tscvx"));
+    printf("nodes %d\n", scn->params.N);
     print_result(status, res, scn->params.N);
     printf("arena_bytes %zu\n", need);
     printf("arena_high_water %zu\n", pdg_arena_high_water(ws));
@@ -182,11 +194,11 @@ int main(int argc, char **argv)
     pdg_workspace *ws;
     void *arena = NULL;
     size_t need = 0, stack = 0;
-    int repeat = 1, i;
+    int repeat = 1, nodes = 0, i;
     double wall = 0.0;
     pdg_status status;
 
-    if (parse_args(argc, argv, &repeat, &nn)) {
+    if (parse_args(argc, argv, &repeat, &nodes, &nn)) {
         return 1;
     }
     for (i = 0; i < 2; ++i) {
@@ -201,6 +213,9 @@ int main(int argc, char **argv)
     tscvx_opt.constraint = nn.net[1];
     pdg_default_settings(&st);
     pdg_default_scenario(&scn);
+    if (nodes) {
+        scn.params.N = nodes;
+    }
     ws = set_up(&scn, &st, &arena, &need);
     if (!ws) {
         release(arena, &nn);

@@ -114,6 +114,12 @@ static int check_result(const double *aug, const double *p)
     return 0;
 }
 
+int pdg_rk4_steps(int substeps, int N)
+{
+    const int need = (PDG_RK4_MIN_STEPS_TOTAL + N - 2) / (N - 1); /* ceil(total / (N - 1)) */
+    return substeps > need ? substeps : need;
+}
+
 int pdg_foh_interval(const double *x_k, const double *u_k, const double *u_k1, double sigma,
                      double dtau, const double *p, int substeps, double *aug, double *z,
                      double *work)

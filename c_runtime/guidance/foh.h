@@ -16,6 +16,9 @@
 #define PDG_NAUG (PDG_NX + PDG_NX * PDG_NX + 2 * PDG_NX * PDG_NU + PDG_NX)
 #define PDG_MAX_SUBSTEPS 64
 #define PDG_MAX_NODES 400
+/* RK4 steps over the whole normalized time [0, 1] at least: 2 per interval at N = 50, the grid
+ * the default rk4_substeps = 2 was chosen for (guidance/params.py RK4_MIN_STEPS_TOTAL). */
+#define PDG_RK4_MIN_STEPS_TOTAL 98
 
 /* Offsets of the blocks inside the augmented state. */
 #define PDG_AUG_X 0
@@ -29,6 +32,11 @@
  * entry is 0.0 for finite numbers, and the subproblem leaves it out. Parameter vectors of one
  * pattern get the same pointer. */
 const unsigned char *pdg_phi_a_pattern(const double *p, int *nnz);
+
+/* RK4 steps of each of the N - 1 intervals (2 <= N <= PDG_MAX_NODES): `substeps` at least,
+ * and enough for PDG_RK4_MIN_STEPS_TOTAL over all of them, so that a coarse grid's steps are
+ * no longer than N = 50's (at most 49, at N = 3): a step's error grows like its length^5. */
+int pdg_rk4_steps(int substeps, int N);
 
 /* Discretizes one interval. `aug` (PDG_NAUG) receives x(dtau), A_k, B-_k, B+_k, Sigma_k;
  * `z` (PDG_NX) the defect term; `work` must hold PDG_NAUG doubles. Returns 0, or -1 for a bad

@@ -735,12 +735,13 @@ static int discretize(pdg_workspace *ws, const double *x, const double *u, doubl
 {
     const int N = ws->N;
     const double dtau = 1.0 / (N - 1);
+    const int steps = pdg_rk4_steps(ws->st.rk4_substeps, N);
     int k, i, j;
     for (k = 0; k < N - 1; ++k) {
         double *D = disc + (size_t)k * N_DISC;
         const double *aug = ws->aug;
         if (pdg_foh_interval(x + NX * k, u + NU * k, u + NU * (k + 1), t_f, dtau, ws->pvec,
-                             ws->st.rk4_substeps, ws->aug, D + D_Z, ws->augw) != 0) {
+                             steps, ws->aug, D + D_Z, ws->augw) != 0) {
             return -1;
         }
         for (i = 0; i < NX; ++i) {

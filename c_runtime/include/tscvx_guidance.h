@@ -154,7 +154,8 @@ typedef struct {
     double step_tol;        /* convergence: scaled inf-norm of an accepted step */
     double vc_tol;          /* convergence: virtual control + buffers (scaled) */
     double defect_tol;      /* convergence: nonlinear defects and path constraints */
-    int rk4_substeps;       /* RK4 steps per FOH interval, 1..64 */
+    int rk4_substeps;       /* RK4 steps per FOH interval at least, 1..64; a grid coarser
+                               than N = 50 takes more: none longer than N = 50's */
     double tight_tol;       /* slack threshold of the tight-constraint labelling */
     /* conic subproblem solver (tscvx_socp.h) */
     double socp_tol;        /* gap and feasibility tolerances (the reference uses 1e-9) */
