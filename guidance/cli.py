@@ -34,6 +34,9 @@ EXIT_BROKEN_PIPE = 141  # as a shell reports a command killed by SIGPIPE (128 + 
 def _load(path: str | None, pin_final_attitude: bool) -> Scenario:
     scenario = load_scenario(path) if path else Scenario()
     if pin_final_attitude:
+        if path and json.loads(Path(path).read_text(encoding="utf-8")).get("final_roll_free"):
+            print(f'note: --pin-final-attitude overrides {path}\'s "final_roll_free": true',
+                  file=sys.stderr)  # fmt: skip
         scenario = Scenario(scenario.initial, scenario.params.replace(final_roll_free=False))
     return scenario
 

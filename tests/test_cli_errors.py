@@ -99,3 +99,26 @@ def test_a_models_folder_that_does_not_exist_is_refused_before_anything_is_print
     captured = capsys.readouterr()
     assert captured.out == ""
     assert f"error: --models {tmp_path / 'none'}: no such folder" in captured.err
+
+
+@pytest.mark.parametrize("roll_free", [True, False, None])
+def test_pinning_the_attitude_over_a_roll_free_file_is_said(
+    roll_free: bool | None, tmp_path: Path, capsys
+) -> None:
+    """--pin-final-attitude overrides a file's explicit "final_roll_free": true, and says so
+    (it did so silently); a file that says false or nothing needs no note."""
+    import json
+
+    from guidance.scenario import scenario_to_dict
+
+    data = scenario_to_dict(cli.Scenario())
+    data.pop("final_roll_free", None)
+    if roll_free is not None:
+        data["final_roll_free"] = roll_free
+    path = tmp_path / "landing.json"
+    path.write_text(json.dumps(data))
+    scenario = cli._load(str(path), pin_final_attitude=True)
+    assert scenario.params.final_roll_free is False
+    err = capsys.readouterr().err
+    said = f'note: --pin-final-attitude overrides {path}\'s "final_roll_free": true'
+    assert (said in err) == (roll_free is True), err
