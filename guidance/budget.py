@@ -467,6 +467,8 @@ def report_networks(nets: list[NetBudget], call: Budget | None = None) -> str:
 
 def add_arguments(ap: argparse.ArgumentParser) -> None:
     """The options, shared by ``python -m guidance.budget`` and ``guidance budget``."""
+    from guidance.cli import at_least
+
     ap.add_argument("--no-build", action="store_true", help="use the built driver as is")
     ap.add_argument("--json", action="store_true", help="print the figures as JSON")
     ap.add_argument(
@@ -474,20 +476,10 @@ def add_arguments(ap: argparse.ArgumentParser) -> None:
         help="only run the driver natively and fail unless pdg_solve made no heap allocation",
     )  # fmt: skip
     ap.add_argument(
-        "--nodes", type=_grid, nargs="+", metavar="N",
+        "--nodes", type=at_least(N_MIN, N_MAX), nargs="+", metavar="N",
         help=f"measure the SCvx call of the default landing on each of these grids instead, N "
         f"in [{N_MIN}, {N_MAX}] (the T-SCvx and network rows need the networks' N = 50)",
     )  # fmt: skip
-
-
-def _grid(text: str) -> int:
-    try:
-        n = int(text)
-    except ValueError:
-        n = None
-    if n is None or not N_MIN <= n <= N_MAX:
-        raise argparse.ArgumentTypeError(f"must be an integer in [{N_MIN}, {N_MAX}], got {text!r}")
-    return n
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -1,5 +1,5 @@
-"""Command line: ``guidance solve | scenario | verify | bench | agreement | budget`` (the
-learning tools register theirs from ``guidance.cli_learning``)."""
+"""Command line: ``guidance solve | scenario | verify | bench | agreement | dispersion |
+budget`` (the learning tools register theirs from ``guidance.cli_learning``)."""
 
 from __future__ import annotations
 
@@ -76,14 +76,16 @@ def positive_float(text: str) -> float:
     return value
 
 
-def at_least(minimum: int) -> Callable[[str], int]:
-    """argparse type of an integer count >= minimum."""
+def at_least(minimum: int, maximum: int | None = None) -> Callable[[str], int]:
+    """argparse type of an integer count >= minimum (and <= maximum when given)."""
 
     def parse(text: str) -> int:
         try:
             value = int(text)
         except ValueError:
             raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
+        if maximum is not None and not minimum <= value <= maximum:
+            raise argparse.ArgumentTypeError(f"must lie in [{minimum}, {maximum}], got {value}")
         if value < minimum:
             raise argparse.ArgumentTypeError(f"must be >= {minimum}, got {value}")
         return value
@@ -310,6 +312,12 @@ def cmd_budget(args: argparse.Namespace) -> int:
     return int(budget.run(args) or 0)
 
 
+def cmd_dispersion(args: argparse.Namespace) -> int:
+    from guidance import dispersion
+
+    return dispersion.run(args)
+
+
 def cmd_verify(args: argparse.Namespace) -> int:
     tol = file_check.Tolerances(
         landing=args.tol_landing, path=args.tol_path, node_deviation=args.tol_nodes
@@ -344,6 +352,15 @@ def build_parser() -> argparse.ArgumentParser:
     _add_bench(sub)
     _add_agreement(sub)
     _add_verify(sub)
+    from guidance import dispersion
+
+    d = sub.add_parser(
+        "dispersion",
+        help="many sampled landings in the C library, each checked open loop: statuses and "
+        "the spread of iterations per call",
+    )
+    dispersion.add_arguments(d)
+    d.set_defaults(func=cmd_dispersion)
     g = sub.add_parser("budget", help="RAD750 time and memory budget of one C guidance call")
     g.set_defaults(func=cmd_budget)
     try:

@@ -104,15 +104,11 @@ def _arrays(data: dict[str, object], p: Params, path: Path) -> tuple[np.ndarray,
         raise InputError(f"{path}: {exc}") from None
 
 
-def verify_file(path: str | Path, tol: Tolerances = Tolerances()) -> FileVerdict:
-    """Read and check one trajectory file; a file that cannot be checked raises InputError."""
-    path = Path(path)
-    data = read_trajectory(path)
-    p, x0 = _problem(data, path)
-    x, u, t_f = _arrays(data, p, path)
-    a = audit(x, u, t_f, p, between=SAMPLES_BETWEEN_NODES)
+def trajectory_checks(a: Audit, p: Params, tol: Tolerances = Tolerances()) -> list[Check]:
+    """The open-loop checks of a trajectory's audit (a propagation that stopped gives NaN
+    figures, which fail)."""
     attitude = "|(q2, q3)|" if p.final_roll_free else "|q - q_f|"
-    checks = [
+    return [
         Check("landing position |r(t_f) - r_f|", a.landing_position_error, tol.landing),
         Check("landing velocity |v(t_f) - v_f|", a.landing_velocity_error, tol.landing),
         Check(f"final attitude {attitude}", a.final_attitude_error, tol.attitude),
@@ -120,6 +116,16 @@ def verify_file(path: str | Path, tol: Tolerances = Tolerances()) -> FileVerdict
         Check("node states vs propagation", a.max_node_deviation, tol.node_deviation),
         Check("path constraints at the nodes", a.max_path_violation, tol.path),
     ]
+
+
+def verify_file(path: str | Path, tol: Tolerances = Tolerances()) -> FileVerdict:
+    """Read and check one trajectory file; a file that cannot be checked raises InputError."""
+    path = Path(path)
+    data = read_trajectory(path)
+    p, x0 = _problem(data, path)
+    x, u, t_f = _arrays(data, p, path)
+    a = audit(x, u, t_f, p, between=SAMPLES_BETWEEN_NODES)
+    checks = trajectory_checks(a, p, tol)
     if x0 is not None:
         start = float(np.abs(x[0] - x0).max())
         checks.insert(0, Check("initial state vs scenario", start, tol.initial))

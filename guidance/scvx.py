@@ -39,6 +39,10 @@ from guidance.subproblem import (
 STATE_NAMES = ("r1", "r2", "r3", "v1", "v2", "v3", "q0", "q1", "q2", "q3", "w1", "w2", "w3", "m")
 
 
+# How the reason of a call stopped by socp_max_iter_total starts (C: pdg_scvx.c budget_spent)
+BUDGET_SPENT = "IPM iteration budget spent"
+
+
 @dataclass
 class IterationRecord:
     k: int
@@ -427,7 +431,7 @@ class SCvxSolver:
         (the C library's message, pdg_scvx.c budget_spent)."""
         s.spent, s.status = True, "max_iterations"
         s.reason = (
-            f"IPM iteration budget spent ({s.ipm_used} of socp_max_iter_total = "
+            f"{BUDGET_SPENT} ({s.ipm_used} of socp_max_iter_total = "
             f"{self.st.socp_max_iter_total}) after {s.k} iterations; the last accepted iterate "
             f"has largest nonlinear defect {s.defect:.2e}, largest path-constraint value "
             f"{s.viol:.2e}"
