@@ -47,6 +47,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 
 from guidance import callgrind
+from guidance.argtypes import at_least
 from guidance.errors import LibraryNotBuiltError
 from guidance.params import N_MAX, N_MIN
 
@@ -353,7 +354,7 @@ def report_grids(rows: list[Budget]) -> str:
     lines = [
         "One complete guidance call (pdg_solve), the default landing on N nodes: RAD750 time "
         "and memory against the grid",
-        f"  {'N':>4s} {'status':>7s} {'iter.':>5s} {'subpr.':>6s} {'IPM':>5s} "
+        f"  {'N':>4s} {'status':>14s} {'iter.':>5s} {'subpr.':>6s} {'IPM':>5s} "
         f"{'host instr.':>12s} {'per IPM it.':>11s} {'discretiz.':>11s} {'RAD750 s':>9s} "
         f"{'memory':>10s} {'heap':>5s} {'m_f':>9s}",
     ]
@@ -361,7 +362,7 @@ def report_grids(rows: list[Budget]) -> str:
         disc = b.instructions_by_part.get("discretization", 0)
         per_ipm = b.instructions / b.socp_iterations if b.socp_iterations else float("nan")
         lines.append(
-            f"  {b.nodes:4d} {b.status:>7s} {b.iterations:5d} {b.subproblems:6d} "
+            f"  {b.nodes:4d} {b.status:>14s} {b.iterations:5d} {b.subproblems:6d} "
             f"{b.socp_iterations:5d} {b.instructions / 1e6:10.1f} M {per_ipm / 1e6:9.2f} M "
             f"{disc / 1e6:9.1f} M {b.rad750_s:9.2f} {b.memory_bytes / 2**20:6.2f} MiB "
             f"{b.heap_allocations_in_solve:5d} {b.m_f:9.6f}"
@@ -467,8 +468,6 @@ def report_networks(nets: list[NetBudget], call: Budget | None = None) -> str:
 
 def add_arguments(ap: argparse.ArgumentParser) -> None:
     """The options, shared by ``python -m guidance.budget`` and ``guidance budget``."""
-    from guidance.cli import at_least
-
     ap.add_argument("--no-build", action="store_true", help="use the built driver as is")
     ap.add_argument("--json", action="store_true", help="print the figures as JSON")
     ap.add_argument(

@@ -15,10 +15,11 @@ import numpy as np
 
 from guidance import file_check
 from guidance.api import BACKENDS, CONSTRAINT_MODEL, METHODS, MODELS_DIR, SOLUTION_MODEL, solve
+from guidance.argtypes import at_least
 from guidance.atomic import check_outputs
 from guidance.errors import InputError, LibraryNotBuiltError
 from guidance.params import IM, Params, Scenario, SCvxSettings
-from guidance.scenario import load_scenario, scenario_to_dict
+from guidance.scenario import read_scenario_data, scenario_from_dict, scenario_to_dict
 from guidance.tscvx import REDUCED_ETA_INIT
 
 if TYPE_CHECKING:
@@ -32,9 +33,10 @@ EXIT_BROKEN_PIPE = 141  # as a shell reports a command killed by SIGPIPE (128 + 
 
 
 def _load(path: str | None, pin_final_attitude: bool) -> Scenario:
-    scenario = load_scenario(path) if path else Scenario()
+    data = read_scenario_data(path) if path else None
+    scenario = scenario_from_dict(data) if data is not None else Scenario()
     if pin_final_attitude:
-        if path and json.loads(Path(path).read_text(encoding="utf-8")).get("final_roll_free"):
+        if data is not None and data.get("final_roll_free") is True:
             print(f'note: --pin-final-attitude overrides {path}\'s "final_roll_free": true',
                   file=sys.stderr)  # fmt: skip
         scenario = Scenario(scenario.initial, scenario.params.replace(final_roll_free=False))
@@ -74,23 +76,6 @@ def positive_float(text: str) -> float:
     if not (np.isfinite(value) and value > 0.0):
         raise argparse.ArgumentTypeError(f"expected a finite number > 0, got {text!r}")
     return value
-
-
-def at_least(minimum: int, maximum: int | None = None) -> Callable[[str], int]:
-    """argparse type of an integer count >= minimum (and <= maximum when given)."""
-
-    def parse(text: str) -> int:
-        try:
-            value = int(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
-        if maximum is not None and not minimum <= value <= maximum:
-            raise argparse.ArgumentTypeError(f"must lie in [{minimum}, {maximum}], got {value}")
-        if value < minimum:
-            raise argparse.ArgumentTypeError(f"must be >= {minimum}, got {value}")
-        return value
-
-    return parse
 
 
 def _check_plot_format(path: str) -> None:
@@ -352,15 +337,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_bench(sub)
     _add_agreement(sub)
     _add_verify(sub)
-    from guidance import dispersion
-
-    d = sub.add_parser(
-        "dispersion",
-        help="many sampled landings in the C library, each checked open loop: statuses and "
-        "the spread of iterations per call",
-    )
-    dispersion.add_arguments(d)
-    d.set_defaults(func=cmd_dispersion)
+    _add_dispersion(sub)
     g = sub.add_parser("budget", help="RAD750 time and memory budget of one C guidance call")
     g.set_defaults(func=cmd_budget)
     try:
@@ -560,6 +537,19 @@ def _add_verify(sub: argparse._SubParsersAction) -> None:
         help=f"node states against the propagation (default {tol.node_deviation:g})",
     )
     v.set_defaults(func=cmd_verify)
+
+
+def _add_dispersion(sub: argparse._SubParsersAction) -> None:
+    from guidance import dispersion
+
+    d = sub.add_parser(
+        "dispersion",
+        help="many sampled landings in the C library, each checked open loop: statuses and "
+        "the spread of iterations per call",
+        description=dispersion.__doc__.split("\n\n")[0].replace("\n", " "),
+    )
+    dispersion.add_arguments(d)
+    d.set_defaults(func=cmd_dispersion)
 
 
 def main(argv: Sequence[str] | None = None) -> int:

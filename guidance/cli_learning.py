@@ -81,7 +81,8 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
 # The helpers import guidance.cli when called, not at this module's import: guidance.cli
 # imports the solvers, and guidance.nn.card imports this module.
 def _add_dataset(sub: argparse._SubParsersAction) -> None:
-    from guidance.cli import add_prox_u, at_least
+    from guidance.argtypes import at_least
+    from guidance.cli import add_prox_u
     from guidance.dataset import SamplingRanges
 
     d = sub.add_parser(
@@ -107,7 +108,8 @@ def _add_dataset(sub: argparse._SubParsersAction) -> None:
 
 
 def _add_train(sub: argparse._SubParsersAction) -> None:
-    from guidance.cli import at_least, positive_float
+    from guidance.argtypes import at_least
+    from guidance.cli import positive_float
 
     t = sub.add_parser("train", help="train the constraint and solution transformers (resumable)")
     t.add_argument("--dataset", default=DEFAULT_DATASET)
@@ -173,7 +175,7 @@ def _add_export(sub: argparse._SubParsersAction) -> None:
 
 
 def _add_baselines(sub: argparse._SubParsersAction) -> None:
-    from guidance.cli import at_least
+    from guidance.argtypes import at_least
 
     b = sub.add_parser("baselines", help="lookup-table baselines against the networks")
     b.add_argument("--dataset", default=DEFAULT_DATASET)
@@ -192,7 +194,7 @@ def _add_baselines(sub: argparse._SubParsersAction) -> None:
 
 
 def _add_mask_ceiling(sub: argparse._SubParsersAction) -> None:
-    from guidance.cli import at_least
+    from guidance.argtypes import at_least
 
     c = sub.add_parser(
         "mask-ceiling",
@@ -282,7 +284,7 @@ def _non_negative_float(text: str) -> float:
 
 def _int_in(minimum: int, maximum: int) -> Callable[[str], int]:
     """argparse type of an integer in [minimum, maximum]."""
-    from guidance.cli import at_least
+    from guidance.argtypes import at_least
 
     at_least_minimum = at_least(minimum)
 

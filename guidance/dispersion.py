@@ -4,14 +4,15 @@ library, each trajectory flown open loop, and the spread of the work a guidance 
 The landings are fresh draws from the networks' training distribution (the T-SCvx benchmark's
 sampler: dataset.SamplingRanges, each turned about the up axis), on N nodes. Each is solved by
 the C library (SCvx, or with ``--method tscvx`` the on-board T-SCvx call with the shipped
-networks), and each solved trajectory is checked as ``guidance verify`` checks a file: scipy
-integration of independent dynamics from x[0] under its thrust, the landing, the node states
-and the path constraints against file_check.Tolerances. The report gives the statuses, the
-open-loop figures, and the median, 95th percentile and largest of the iterations, subproblems
-and IPM iterations per call: the largest IPM count is the smallest ``socp_max_iter_total``
-(``--ipm-budget``) that leaves every landing of the campaign as it is. ``--failures DIR``
-writes each landing that was not solved, or failed the check, as a scenario file that
-``guidance solve`` takes.
+networks), and each solved trajectory is checked as ``guidance verify`` checks a file
+(file_check.trajectory_checks: scipy integration of independent dynamics from x[0] under its
+thrust; the landing, the node states and the path constraints against its tolerances). The
+report gives the statuses, the open-loop figures, the median, 95th percentile (nearest rank)
+and largest of the iterations, subproblems and IPM iterations per solved call, and the
+smallest ``socp_max_iter_total`` (``--ipm-budget``) that leaves every landing of the campaign
+as it is (``untouched_budget``). ``--failures DIR`` writes each landing that was not solved,
+or failed the check, as a scenario file, with ``campaign.json`` saying how to solve it again.
+Exit 1 when a solved landing fails the open-loop check (as ``guidance verify`` does).
 """
 
 from __future__ import annotations
@@ -23,15 +24,18 @@ import os
 import sys
 from collections import Counter
 from collections.abc import Sequence
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
-from guidance.params import Scenario, SCvxSettings
+from guidance.argtypes import at_least
+from guidance.errors import InputError
+from guidance.params import INT_SETTING_RANGES, N_MAX, N_MIN, Scenario, SCvxSettings
 from guidance.scvx import BUDGET_SPENT
 
 METHODS = ("scvx", "tscvx")
+NETWORK_N = Scenario().params.N  # the grid the shipped networks are trained for
 
 
 @dataclass(frozen=True)
@@ -41,9 +45,11 @@ class Landing:
     index: int
     status: str
     reason: str
+    m_f: float
     iterations: int
     subproblems: int
     ipm_iterations: int  # the call's, failed warm-started runs included
+    untouched_budget: int  # the least socp_max_iter_total that changes nothing of this call
     wall_s: float
     landing_error: float = math.nan  # |r(t_f) - r_f| propagated (NaN when not solved)
     velocity_error: float = math.nan
@@ -57,6 +63,18 @@ class Landing:
         return not self.verified
 
 
+def untouched_budget(ipm_per_subproblem: Sequence[int]) -> int:
+    """The least socp_max_iter_total under which no subproblem of a call that took these IPM
+    iterations would have been cut short (scvx.iteration_cap): the first subproblem starts cold
+    and may use all that is left; each later one may be warm-started and then gets half of it.
+    A failed warm start run again cold counts both runs: an upper bound there."""
+    need = used = 0
+    for j, n in enumerate(ipm_per_subproblem):
+        need = max(need, used + (n if j == 0 else 2 * n))
+        used += n
+    return need
+
+
 def solve_landing(job: tuple[int, Scenario, SCvxSettings, str]) -> Landing:
     """Solve one landing in the C library and check it open loop (a worker's job)."""
     from guidance.cguidance import solve_c, solve_tscvx_c
@@ -65,21 +83,24 @@ def solve_landing(job: tuple[int, Scenario, SCvxSettings, str]) -> Landing:
 
     index, scenario, settings, method = job
     r = solve_tscvx_c(scenario, settings) if method == "tscvx" else solve_c(scenario, settings)
-    common = dict(
+    per_subproblem = [h.solver_iterations for h in r.history]
+    row = Landing(
         index=index,
         status=r.status,
         reason=r.reason,
+        m_f=r.m_f if r.x.size else math.nan,
         iterations=r.iterations,
         subproblems=r.subproblems_solved,
-        ipm_iterations=sum(h.solver_iterations for h in r.history),
+        ipm_iterations=sum(per_subproblem),
+        untouched_budget=untouched_budget(per_subproblem),
         wall_s=r.solve_time_s,
     )
     if r.status != "solved":
-        return Landing(**common)  # type: ignore[arg-type]
+        return row
     a = audit(r.x, r.u, r.t_f, scenario.params)
     failed = [c.name for c in trajectory_checks(a, scenario.params) if not c.ok]
-    return Landing(
-        **common,  # type: ignore[arg-type]
+    return replace(
+        row,
         landing_error=a.landing_position_error,
         velocity_error=a.landing_velocity_error,
         node_deviation=a.max_node_deviation,
@@ -90,11 +111,22 @@ def solve_landing(job: tuple[int, Scenario, SCvxSettings, str]) -> Landing:
 
 
 def spread(values: Sequence[float]) -> tuple[float, float, float]:
-    """(median, 95th percentile, largest); NaN for none."""
+    """(median, 95th percentile by nearest rank: a value that occurred, largest); NaN for
+    none."""
     if not values:
         return (math.nan, math.nan, math.nan)
     v = np.asarray(values, float)
-    return (float(np.median(v)), float(np.percentile(v, 95)), float(v.max()))
+    p95 = np.percentile(v, 95, method="inverted_cdf")
+    return (float(np.median(v)), float(p95), float(v.max()))
+
+
+def _figures(values: tuple[float, float, float], fmt: str) -> str:
+    return " ".join(f"{'-':>8s}" if math.isnan(x) else f"{x:8{fmt}}" for x in values)
+
+
+def _largest(rows: Sequence[Landing], key: str, fmt: str) -> str:
+    worst = max(rows, key=lambda r: getattr(r, key))
+    return f"{getattr(worst, key):{fmt}} (landing {worst.index})"
 
 
 def report(rows: Sequence[Landing], method: str, nodes: int, seed: int, ipm_budget: int) -> str:
@@ -108,35 +140,34 @@ def report(rows: Sequence[Landing], method: str, nodes: int, seed: int, ipm_budg
     ]
     for status, n in sorted(Counter(r.status for r in rows).items()):
         lines.append(f"    {status:16s} {n:5d}")
-    lines.append(f"  per call, solved landings   {'median':>8s} {'95 %':>8s} {'largest':>8s}")
+    lines.append(f"  per solved call             {'median':>8s} {'95 %':>8s} {'largest':>8s}")
     for label, key in (
         ("SCvx iterations", "iterations"),
         ("subproblems", "subproblems"),
         ("IPM iterations", "ipm_iterations"),
     ):
-        med, p95, top = spread([getattr(r, key) for r in solved])
-        lines.append(f"    {label:25s} {med:8.1f} {p95:8.1f} {top:8.0f}")
-    med, p95, top = spread([1e3 * r.wall_s for r in solved])
-    lines.append(f"    {'host wall time (ms)':25s} {med:8.1f} {p95:8.1f} {top:8.1f}")
+        figures = spread([getattr(r, key) for r in solved])
+        lines.append(f"    {label:25s} {_figures(figures, '.0f')}")
+    figures = spread([1e3 * r.wall_s for r in solved])
+    lines.append(f"    {'host wall time (ms)':25s} {_figures(figures, '.1f')}")
     if solved:
-        worst = max(solved, key=lambda r: r.landing_error)
-        lines += [
-            f"  open loop, largest: landing error {worst.landing_error:.2e} (landing "
-            f"{worst.index}), velocity {max(r.velocity_error for r in solved):.2e}, node "
-            f"deviation {max(r.node_deviation for r in solved):.2e}, path-constraint value "
-            f"{max(r.path_value for r in solved):.1e}",
-        ]
-    top = max((r.ipm_iterations for r in rows), default=0)
-    bound = sum(r.reason.startswith(BUDGET_SPENT) for r in rows)
-    lines.append(
-        f"  IPM iterations in a call, largest: {top}"
-        + (
-            f"; the budget (--ipm-budget {ipm_budget}) stopped {bound} landing(s)"
-            if bound
-            else f": an --ipm-budget (socp_max_iter_total) of {top} or more leaves every "
-            "landing here as it is"
+        lines.append(
+            f"  open loop, largest over the solved landings: landing error "
+            f"{_largest(solved, 'landing_error', '.2e')}, velocity "
+            f"{_largest(solved, 'velocity_error', '.2e')}, node deviation "
+            f"{_largest(solved, 'node_deviation', '.2e')}, path-constraint value "
+            f"{_largest(solved, 'path_value', '.1e')}"
         )
-    )
+    if rows:
+        most = max(rows, key=lambda r: r.ipm_iterations)
+        need = max(r.untouched_budget for r in rows)
+        stopped = sum(r.reason.startswith(BUDGET_SPENT) for r in rows)
+        lines.append(
+            f"  IPM iterations of a call, every landing: largest {most.ipm_iterations} (landing "
+            f"{most.index}); an --ipm-budget (socp_max_iter_total) of {need} or more leaves "
+            "every landing as it is (a warm-started subproblem is given half of what is left)"
+            + (f"; --ipm-budget {ipm_budget} stopped {stopped}" if stopped else "")
+        )
     failed = [r for r in rows if r.failed]
     if failed:
         lines.append(f"  not solved, or failing the open-loop check ({len(failed)}):")
@@ -146,63 +177,116 @@ def report(rows: Sequence[Landing], method: str, nodes: int, seed: int, ipm_budg
     return "\n".join(lines)
 
 
-def write_failures(folder: Path, rows: Sequence[Landing], scenarios: Sequence[Scenario]) -> None:
-    """Each failed landing as ``landing_<index>.json`` (a scenario file)."""
+def campaign_record(args: argparse.Namespace) -> dict[str, object]:
+    """What a campaign ran with, and the command that solves one of its landings again."""
+    solve = ["guidance", "solve", "--backend", "c", "--method", args.method]
+    if args.ipm_budget != SCvxSettings().socp_max_iter_total:
+        solve += ["--ipm-budget", str(args.ipm_budget)]
+    return {
+        "count": args.landings,
+        "seed": args.seed,
+        "nodes": args.nodes,
+        "method": args.method,
+        "ipm_budget": args.ipm_budget,
+        "solve_again": " ".join(solve) + " landing_<i>.json",
+    }
+
+
+def _plain(row: Landing) -> dict[str, object]:
+    """A landing as strict JSON: NaN (no figure) as null."""
+    plain = asdict(row)
+    return {k: None if isinstance(v, float) and math.isnan(v) else v for k, v in plain.items()}
+
+
+def _failures_folder(folder: Path) -> None:
+    """Make the --failures folder before the campaign; refuse one holding an earlier one's
+    files (they would mix) or that cannot be made."""
+    from guidance.atomic import check_folder
+
+    check_folder("--failures", folder)
+    if folder.is_dir() and any(folder.glob("landing_*.json")):
+        raise InputError(f"--failures {folder}: holds an earlier campaign's landings")
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InputError(f"--failures {folder}: cannot create it ({exc.strerror})") from None
+
+
+def write_failures(
+    folder: Path, rows: Sequence[Landing], scenarios: Sequence[Scenario], args: argparse.Namespace
+) -> None:
+    """Each failed landing as ``landing_<index>.json`` (a scenario file), and
+    ``campaign.json``: the campaign's options, each failure's status and reason, and the
+    command that solves a landing again."""
     from guidance.atomic import write_text_atomic
     from guidance.scenario import scenario_to_dict
 
-    folder.mkdir(parents=True, exist_ok=True)
-    for r in rows:
-        if r.failed:
+    failed = [r for r in rows if r.failed]
+    try:
+        for r in failed:
             text = json.dumps(scenario_to_dict(scenarios[r.index]), indent=1) + "\n"
             write_text_atomic(folder / f"landing_{r.index}.json", text)
+        record = {
+            **campaign_record(args),
+            "failures": {
+                f"landing_{r.index}.json": {"status": r.status, "reason": r.reason}
+                | ({"open_loop_failed": r.failed_checks} if r.failed_checks else {})
+                for r in failed
+            },
+        }
+        write_text_atomic(folder / "campaign.json", json.dumps(record, indent=1) + "\n")
+    except OSError as exc:
+        raise InputError(f"--failures {folder}: {exc.strerror}") from None
 
 
 def add_arguments(ap: argparse.ArgumentParser) -> None:
     from guidance.bench_tscvx import BENCH_SEED
-    from guidance.cli import at_least
-    from guidance.params import N_MAX, N_MIN
 
+    budget_min, budget_max = INT_SETTING_RANGES["socp_max_iter_total"]
     ap.add_argument("--landings", type=at_least(1), default=100, help="landings (default 100)")
     ap.add_argument(
         "--seed", type=at_least(0), default=BENCH_SEED,
         help="draw seed (default %(default)s, the T-SCvx benchmark's: never trained on)",
     )  # fmt: skip
     ap.add_argument(
-        "--nodes", type=at_least(N_MIN, N_MAX), default=Scenario().params.N,
-        help=f"N, in [{N_MIN}, {N_MAX}] (default %(default)s; tscvx: the networks' 50)",
+        "--nodes", type=at_least(N_MIN, N_MAX), default=NETWORK_N,
+        help=f"N, in [{N_MIN}, {N_MAX}] (default %(default)s; tscvx: the networks' {NETWORK_N})",
     )  # fmt: skip
     ap.add_argument("--method", choices=METHODS, default="scvx", help="default scvx")
     ap.add_argument(
-        "--ipm-budget", type=at_least(1), default=SCvxSettings().socp_max_iter_total,
+        "--ipm-budget", type=at_least(budget_min, budget_max),
+        default=SCvxSettings().socp_max_iter_total,
         help="socp_max_iter_total of every call (default %(default)s: never binds)",
     )  # fmt: skip
     ap.add_argument(
         "--workers", type=at_least(1), default=os.cpu_count() or 1,
         help="landings solved at once, one process each (default: the cores, %(default)s)",
     )  # fmt: skip
-    ap.add_argument("--failures", type=Path, help="folder for the failed landings' scenarios")
-    ap.add_argument("--json", action="store_true", help="print every landing as JSON")
+    ap.add_argument(
+        "--failures", type=Path,
+        help="new folder for each landing not solved or failing the open-loop check "
+        "(landing_<i>.json, a scenario file) and campaign.json (how to solve one again)",
+    )  # fmt: skip
+    ap.add_argument("--json", action="store_true", help="print the campaign and every landing")
 
 
 def run(args: argparse.Namespace, progress: bool = True) -> int:
-    """The campaign for parsed options (add_arguments). Exit 0 when it ran, whatever it found."""
+    """The campaign for parsed options (add_arguments): 0, or 1 when a solved landing fails the
+    open-loop check."""
     from guidance.bench_tscvx import sample_landings
     from guidance.cguidance import LIB_PATH
     from guidance.dataset import imap_pool
-    from guidance.errors import InputError, LibraryNotBuiltError
+    from guidance.errors import LibraryNotBuiltError
 
     if not LIB_PATH.exists():
         raise LibraryNotBuiltError(f"{LIB_PATH} not found: run `make lib`")
-    if args.method == "tscvx" and args.nodes != Scenario().params.N:
+    if args.method == "tscvx" and args.nodes != NETWORK_N:
         raise InputError(
-            f"--method tscvx: the shipped networks are for N = {Scenario().params.N}, "
+            f"--method tscvx: the shipped networks are for N = {NETWORK_N}, "
             f"not --nodes {args.nodes}"
         )
     if args.failures is not None:
-        from guidance.atomic import check_folder
-
-        check_folder("--failures", args.failures)
+        _failures_folder(args.failures)
     settings = SCvxSettings(socp_max_iter_total=args.ipm_budget)
     scenarios = [
         Scenario(s.initial, s.params.replace(N=args.nodes))
@@ -222,10 +306,12 @@ def run(args: argparse.Namespace, progress: bool = True) -> int:
     if bar is not None:
         bar.close()
     rows.sort(key=lambda r: r.index)
-    if args.failures is not None:
-        write_failures(args.failures, rows, scenarios)
     if args.json:
-        print(json.dumps([asdict(r) for r in rows], indent=1))
+        record = {**campaign_record(args), "landings": [_plain(r) for r in rows]}
+        print(json.dumps(record, indent=1, allow_nan=False))
     else:
         print(report(rows, args.method, args.nodes, args.seed, args.ipm_budget))
-    return 0
+    sys.stdout.flush()  # the report stands even if the failures cannot be written
+    if args.failures is not None:
+        write_failures(args.failures, rows, scenarios, args)
+    return 1 if any(r.status == "solved" and not r.verified for r in rows) else 0

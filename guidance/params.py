@@ -134,14 +134,17 @@ INT_SETTING_RANGES = {
 # whose discretization error rk4_substeps = 2 was chosen for. With a fixed count per interval
 # the error grew with the interval (a step's error like its length^5): at N = 10 the default
 # landing, reported solved, missed its landing point open loop by 9.8e-3 (the tolerance is
-# 1e-3); with 11 steps per interval by 9.8e-5.
+# 1e-3); with 11 steps per interval by 2.7e-5 (the C library; 7.6e-5 the Python reference).
 RK4_MIN_STEPS_TOTAL = 98
 
 
 def rk4_steps_per_interval(substeps: int, N: int) -> int:
     """RK4 steps of each of the N - 1 FOH intervals: ``substeps`` (SCvxSettings.rk4_substeps)
     at least, and enough that the N - 1 intervals take RK4_MIN_STEPS_TOTAL steps together
-    (at most 49, at N = 3). The C library's rule is the same (pdg_rk4_steps)."""
+    (at most 49, at N = 3). N < 3 (no grid the solvers take) gives ``substeps``. The C
+    library's rule is the same (pdg_rk4_steps)."""
+    if N < N_MIN:
+        return substeps
     return max(substeps, -(-RK4_MIN_STEPS_TOTAL // (N - 1)))
 
 

@@ -162,6 +162,12 @@ def params_from_dict(data: dict[str, Any]) -> Params:
 
 
 def load_scenario(path: str | Path) -> Scenario:
+    return scenario_from_dict(read_scenario_data(path))
+
+
+def read_scenario_data(path: str | Path) -> dict[str, Any]:
+    """A scenario file's JSON object, read once (a pipe can be read only once), not yet
+    checked as a scenario (scenario_from_dict does that)."""
     path = Path(path)
     try:
         text = path.read_text(encoding="utf-8")
@@ -175,7 +181,7 @@ def load_scenario(path: str | Path) -> Scenario:
         raise ScenarioError(exc.key, "given twice") from None
     except (ValueError, RecursionError) as exc:  # JSONDecodeError, a 4,300-digit integer, nesting
         raise ScenarioError("<file>", f"{path} is not valid JSON: {exc}") from None
-    return scenario_from_dict(data)
+    return data
 
 
 def _reject_constant(name: str) -> float:

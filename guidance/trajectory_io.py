@@ -18,7 +18,7 @@ import numpy as np
 
 from guidance.atomic import atomic_write
 from guidance.errors import UNREADABLE_NPZ, DuplicateKeyError, InputError, unique_keys
-from guidance.params import Params
+from guidance.params import Params, SCvxSettings, rk4_steps_per_interval
 from guidance.provenance import provenance
 from guidance.scenario import scenario_to_dict
 from guidance.scvx import SCvxResult
@@ -60,12 +60,18 @@ def write_trajectory(
             method=np.str_(method),
             backend=np.str_(backend),
             provenance=np.str_(json.dumps(provenance(inputs))),
-            **(
-                {}
-                if result.settings is None
-                else {"settings": np.str_(json.dumps(dataclasses.asdict(result.settings)))}
-            ),
+            **({} if result.settings is None else _settings_entries(result.settings, params.N)),
         )
+
+
+def _settings_entries(settings: SCvxSettings, N: int) -> dict[str, np.ndarray]:
+    """The settings the solve ran with, and the RK4 steps its intervals took (rk4_substeps is
+    the least; a grid coarser than N = 50 takes more)."""
+    steps = rk4_steps_per_interval(settings.rk4_substeps, N)
+    return {
+        "settings": np.str_(json.dumps(dataclasses.asdict(settings))),
+        "rk4_steps_per_interval": np.int64(steps),
+    }
 
 
 def read_trajectory(path: str | Path) -> dict[str, object]:

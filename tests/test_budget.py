@@ -156,7 +156,7 @@ def test_another_grid_is_measured_as_asked(figures: budget.Budget) -> None:
     assert row.instructions < figures.instructions / 3
     assert row.arena_bytes < figures.arena_bytes / 3
     text = budget.report_grids([row, figures])
-    assert "\n     5  solved" in text and "\n    50  solved" in text
+    assert "\n     5         solved" in text and "\n    50         solved" in text
 
 
 def test_a_grid_outside_the_solvers_range_is_refused() -> None:
@@ -178,6 +178,11 @@ def test_the_driver_refuses_a_grid_outside_the_range() -> None:
         out = subprocess.run([str(budget.DRIVER), "--nodes", bad], capture_output=True, text=True)
         assert out.returncode == 1
         assert f"--nodes {bad}: N must be an integer in [3, 400]" in out.stderr
+    # an option without its value, or unknown, is refused too (it ran N = 50 without a word)
+    for argv, said in ((["--nodes"], "--nodes: needs a value"),
+                       (["--node", "20"], "--node: unknown option")):  # fmt: skip
+        out = subprocess.run([str(budget.DRIVER), *argv], capture_output=True, text=True)
+        assert out.returncode == 1 and said in out.stderr
 
 
 # ---- network inference (tscvx_nn_run), issue 5's 5 M instructions per inference -------------

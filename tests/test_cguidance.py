@@ -40,7 +40,7 @@ from guidance.constraints import constraint_scales, path_constraint_values
 from guidance.errors import InputError
 from guidance.guess import initial_guess
 from guidance.model import discretize
-from guidance.params import NC, InitialState, Params, Scenario, SCvxSettings
+from guidance.params import NC, InitialState, Params, Scenario, SCvxSettings, rk4_steps_per_interval
 from guidance.scenario import (
     MAGNITUDE_MAX,
     ScenarioError,
@@ -140,7 +140,7 @@ def _python_split(scn: Scenario, eta: float) -> tuple[dict, dict]:
     z = scaled(x, u, tf, tpl.lay, sc)
     xp, up, tp = physical(z, tpl.lay, sc)
     st = SCvxSettings()
-    disc = discretize(xp, up, tp, scn.params, st.rk4_substeps)
+    disc = discretize(xp, up, tp, scn.params, rk4_steps_per_interval(st.rk4_substeps, scn.params.N))
     prob = tpl.assemble(disc, z, eta, st.lam, scn, sc, st.prox_u)
     p = sum(d for kind, d in prob.cones if kind == "zero")
     A = prob.A.tocsr()
@@ -148,9 +148,14 @@ def _python_split(scn: Scenario, eta: float) -> tuple[dict, dict]:
     return py, cguidance.c_assemble(scn, x, u, tf, eta)
 
 
-@pytest.mark.parametrize("name", ["default", "tilted", "steep_cone", "pinned", "no propellant"])
+@pytest.mark.parametrize(
+    "name", ["default", "tilted", "steep_cone", "pinned", "no propellant", "ten nodes"]
+)
 def test_c_subproblem_equals_python_subproblem(name: str) -> None:
-    if name == "pinned":
+    if name == "ten nodes":  # a coarse grid: 11 RK4 steps per interval on both sides
+        base = SCENARIOS["default"]
+        scn = Scenario(base.initial, base.params.replace(N=10))
+    elif name == "pinned":
         base = SCENARIOS["north"]
         scn = Scenario(base.initial, base.params.replace(final_roll_free=False))
     elif name == "no propellant":  # the mass scale at its floor (subproblem.MASS_SCALE_FLOOR)

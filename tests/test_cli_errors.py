@@ -122,3 +122,25 @@ def test_pinning_the_attitude_over_a_roll_free_file_is_said(
     err = capsys.readouterr().err
     said = f'note: --pin-final-attitude overrides {path}\'s "final_roll_free": true'
     assert (said in err) == (roll_free is True), err
+
+
+def test_pinning_the_attitude_reads_the_scenario_file_once(tmp_path: Path, monkeypatch) -> None:
+    """A scenario given as a pipe (`<(cat s.json)`) can be read once: a second read for the
+    note found it empty and ended in a JSONDecodeError traceback."""
+    import json
+    import pathlib
+
+    from guidance.scenario import scenario_to_dict
+
+    path = tmp_path / "landing.json"
+    path.write_text(json.dumps({**scenario_to_dict(cli.Scenario()), "final_roll_free": True}))
+    reads = []
+    real = pathlib.Path.read_text
+
+    def counted(self: pathlib.Path, *args: object, **kwargs: object) -> str:
+        reads.append(self)
+        return real(self, *args, **kwargs)
+
+    monkeypatch.setattr(pathlib.Path, "read_text", counted)
+    assert cli._load(str(path), pin_final_attitude=True).params.final_roll_free is False
+    assert reads == [path]

@@ -13,7 +13,7 @@ from guidance.model import (
     dynamics_functions,
     param_vector,
 )
-from guidance.params import Params, SCvxSettings
+from guidance.params import Params, SCvxSettings, rk4_steps_per_interval
 from guidance.verify import dynamics_numpy, integrate_interval
 
 P = Params()
@@ -116,7 +116,7 @@ def _integrate(x0: np.ndarray, uk: np.ndarray, uk1: np.ndarray, t1: float) -> np
 
 def test_discretization_matches_solve_ivp(samples) -> None:
     """x_next and the sensitivities of the FOH map agree with scipy integration (1e-6)."""
-    F = discretization_function(SCvxSettings().rk4_substeps)  # what SCvx uses
+    F = discretization_function(rk4_steps_per_interval(SCvxSettings().rk4_substeps, 50))  # SCvx's
     p = param_vector(P)
     sigma, dtau = 6.0, 1.0 / 49
     t1 = sigma * dtau

@@ -163,6 +163,7 @@ def test_a_rejection_skips_the_radii_that_hold_the_step() -> None:
     from guidance.conic import solve
     from guidance.guess import initial_guess
     from guidance.model import discretize
+    from guidance.params import rk4_steps_per_interval
     from guidance.scvx import RETRY_MARGIN, _retry_radius
     from guidance.subproblem import Scaling, SubproblemTemplate, physical, scaled
 
@@ -171,7 +172,8 @@ def test_a_rejection_skips_the_radii_that_hold_the_step() -> None:
     sc = Scaling.for_scenario(scn, tf)
     tpl = SubproblemTemplate(scn.params.N, scn.params.final_roll_free)
     z = scaled(x, u, tf, tpl.lay, sc)
-    disc = discretize(*physical(z, tpl.lay, sc), scn.params, st.rk4_substeps)
+    steps = rk4_steps_per_interval(st.rk4_substeps, scn.params.N)  # what SCvx uses
+    disc = discretize(*physical(z, tpl.lay, sc), scn.params, steps)
 
     def step(eta: float) -> tuple[np.ndarray, float]:
         sol = solve(tpl.assemble(disc, z, eta, st.lam, scn, sc, st.prox_u), backend="c")

@@ -43,6 +43,7 @@ def test_status_and_fields_are_read_back(tmp_path: Path, status: str, reason: st
     assert d["masks"].shape == (2, NC * N) and d["masks"].sum() == 1
     assert d["params"]["N"] == N  # type: ignore[index]
     assert d["settings"]["iter_max"] == 7  # type: ignore[index]
+    assert int(d["rk4_steps_per_interval"]) == 25  # 98 steps over N - 1 = 4 intervals
     assert str(d["method"]) == "scvx" and str(d["backend"]) == "clarabel"
 
 

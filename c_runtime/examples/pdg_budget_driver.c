@@ -66,11 +66,16 @@ typedef struct {
 } networks;
 
 /* --repeat R, --nodes N, --tscvx FILE, --masks FILE; 0, or 1 (with the reason on stderr) for
- * N outside [PDG_N_MIN, PDG_N_MAX] or --masks without --tscvx. */
+ * an unknown option or one without its value, N outside [PDG_N_MIN, PDG_N_MAX] or --masks
+ * without --tscvx. */
 static int parse_args(int argc, char **argv, int *repeat, int *nodes, networks *nn)
 {
     int i;
-    for (i = 1; i + 1 < argc; ++i) {
+    for (i = 1; i < argc; i += 2) {
+        if (i + 1 >= argc) {
+            fprintf(stderr, "%s: needs a value\n", argv[i]);
+            return 1;
+        }
         if (strcmp(argv[i], "--repeat") == 0) {
             *repeat = atoi(argv[i + 1]);
             *repeat = *repeat < 1 ? 1 : (*repeat > 1000 ? 1000 : *repeat);
@@ -87,6 +92,10 @@ static int parse_args(int argc, char **argv, int *repeat, int *nodes, networks *
             nn->path[0] = argv[i + 1];
         } else if (strcmp(argv[i], "--masks") == 0) {
             nn->path[1] = argv[i + 1];
+        } else {
+            fprintf(stderr, "%s: unknown option (--repeat, --nodes, --tscvx, --masks)\n",
+                    argv[i]);
+            return 1;
         }
     }
     if (nn->path[1] && !nn->path[0]) {

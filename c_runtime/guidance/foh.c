@@ -114,9 +114,16 @@ static int check_result(const double *aug, const double *p)
     return 0;
 }
 
+/* The coarsest grid (N = 3) needs no more steps per interval than pdg_foh_interval takes. */
+typedef char pdg_rk4_steps_fit[(PDG_RK4_MIN_STEPS_TOTAL + 1) / 2 <= PDG_MAX_SUBSTEPS ? 1 : -1];
+
 int pdg_rk4_steps(int substeps, int N)
 {
-    const int need = (PDG_RK4_MIN_STEPS_TOTAL + N - 2) / (N - 1); /* ceil(total / (N - 1)) */
+    int need;
+    if (N < 3) {
+        return substeps;
+    }
+    need = (PDG_RK4_MIN_STEPS_TOTAL + N - 2) / (N - 1); /* ceil(total / (N - 1)) */
     return substeps > need ? substeps : need;
 }
 

@@ -33,9 +33,10 @@
  * pattern get the same pointer. */
 const unsigned char *pdg_phi_a_pattern(const double *p, int *nnz);
 
-/* RK4 steps of each of the N - 1 intervals (2 <= N <= PDG_MAX_NODES): `substeps` at least,
- * and enough for PDG_RK4_MIN_STEPS_TOTAL over all of them, so that a coarse grid's steps are
- * no longer than N = 50's (at most 49, at N = 3): a step's error grows like its length^5. */
+/* RK4 steps of each of the N - 1 intervals (3 <= N <= PDG_MAX_NODES, the workspace's grids):
+ * `substeps` at least, and enough for PDG_RK4_MIN_STEPS_TOTAL over all of them, so that a
+ * coarse grid's steps are no longer than N = 50's (at most 49, at N = 3, within
+ * PDG_MAX_SUBSTEPS): a step's error grows like its length^5. N < 3 gives `substeps`. */
 int pdg_rk4_steps(int substeps, int N);
 
 /* Discretizes one interval. `aug` (PDG_NAUG) receives x(dtau), A_k, B-_k, B+_k, Sigma_k;

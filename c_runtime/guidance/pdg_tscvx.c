@@ -188,23 +188,37 @@ typedef struct {
     double *logits; /* 7N, in the guidance arena */
     int last_k;     /* k of the logits (0: none) */
     int predicted, failures;
+    tscvx_nn_status refused; /* TSCVX_NN_BAD_BUFFER: the buffers overlap, the call stops */
 } mask_ctx;
+
+/* A failed inference falls back to the full subproblem (always safe); overlapping buffers
+ * are a configuration error that would recur at every k: the call stops (-1). */
+static int mask_failed(mask_ctx *c, tscvx_nn_status st)
+{
+    if (st == TSCVX_NN_BAD_BUFFER) {
+        c->refused = st;
+        return -1;
+    }
+    c->failures++;
+    return 0;
+}
 
 static int network_mask(void *ctx, int k, unsigned char *mask, int n)
 {
     mask_ctx *c = (mask_ctx *)ctx;
+    tscvx_nn_status st;
     if (k != c->last_k) {
         c->input[THETA] = (double)k;
         c->last_k = 0;
-        if (tscvx_nn_run(c->net, c->input, THETA + 1, c->logits, n) != TSCVX_NN_OK) {
-            c->failures++;
-            return 0; /* the full subproblem: always safe */
+        st = tscvx_nn_run(c->net, c->input, THETA + 1, c->logits, n);
+        if (st != TSCVX_NN_OK) {
+            return mask_failed(c, st);
         }
         c->last_k = k;
     }
-    if (tscvx_nn_tight_mask(c->net, c->logits, n, mask) != TSCVX_NN_OK) {
-        c->failures++;
-        return 0;
+    st = tscvx_nn_tight_mask(c->net, c->logits, n, mask);
+    if (st != TSCVX_NN_OK) {
+        return mask_failed(c, st);
     }
     c->predicted++;
     return 1;
@@ -287,6 +301,12 @@ pdg_status pdg_solve_tscvx(pdg_workspace *ws, const pdg_scenario *s,
         opt.mask_ctx = &mc;
     }
     status = pdg_solve_from(ws, s, &opt, res, eta);
+    if (mc.refused) { /* the loop's "mask callback answered -1", said as what it is */
+        snprintf(res->message, PDG_MESSAGE_LEN,
+                 "nets: the constraint network: %s (its arena as given to tscvx_nn_init must "
+                 "not hold the guidance workspace)",
+                 tscvx_nn_status_message(mc.refused));
+    }
     if (rep) {
         rep->warm_started = o->solution != NULL;
         rep->masks_predicted = mc.predicted;

@@ -75,6 +75,44 @@ static int guess_inside(void *ctx, int k, unsigned char *mask, int n)
     return 0;
 }
 
+/* One buffer for both (a caller sharing its memory): the constraint network's arena, as given
+ * to tscvx_nn_init, spans the guidance workspace set up in its unused tail. The logits the
+ * workspace holds would land in the network's arena: the call stops before any subproblem,
+ * naming the network and the overlap (it used to fall back to the full problem at every k,
+ * counted as mask failures only). */
+static void shared_buffer_refused(const pdg_scenario *s, const unsigned char *blob, size_t len)
+{
+    pdg_tscvx_options o = {0};
+    pdg_tscvx_report rep;
+    pdg_result r;
+    pdg_settings st;
+    pdg_workspace *ws = NULL;
+    tscvx_nn *net = NULL;
+    size_t net_need = 0, gnc_need = 0, offset;
+    int tries;
+    unsigned char *shared;
+    pdg_default_settings(&st);
+    CHECK(tscvx_nn_arena_size(blob, len, 0u, &net_need) == TSCVX_NN_OK);
+    CHECK(arena_size(s->params.N, 1, &st, &gnc_need, &tries) == PDG_SETUP_OK);
+    offset = (net_need + 63u) / 64u * 64u;
+    shared = malloc(offset + gnc_need);
+    CHECK(shared != NULL);
+    if (!shared) return;
+    CHECK(tscvx_nn_init(&net, shared, offset + gnc_need, blob, len, 0u) == TSCVX_NN_OK);
+    CHECK(pdg_setup(&ws, shared + offset, gnc_need, vehicle(s->params.N, 1), &st) ==
+          PDG_SETUP_OK);
+    r.x = x;
+    r.u = u;
+    o.constraint = net;
+    CHECK(pdg_solve_tscvx(ws, s, &o, &r, &rep) == PDG_INVALID_INPUT);
+    CHECK(r.subproblems_solved == 0 && rep.mask_failures == 0);
+    if (!strstr(r.message, "constraint network: overlapping buffers")) {
+        fprintf(stderr, "message '%s' does not name the overlap\n", r.message);
+        failures++;
+    }
+    free(shared);
+}
+
 int main(int argc, char **argv)
 {
     const char *paths[2] = {"build/models/solution.tnn", "build/models/constraint.tnn"};
@@ -127,6 +165,7 @@ int main(int argc, char **argv)
     CHECK(strstr(r.message, "options") != NULL);
     expect_refused(ws, &s, con, NULL, "solution network given is a constraint network");
     expect_refused(ws, &s, sol, sol, "constraint network given is a solution network");
+    shared_buffer_refused(&s, blob[1], len[1]);
     bad = s;
     bad.m0 = 1.0;
     expect_refused(ws, &bad, sol, con, "scenario field 'm0'");
