@@ -430,11 +430,13 @@ class SCvxSolver:
         """The solve's IPM iteration budget is spent: the result is the last accepted iterate
         (the C library's message, pdg_scvx.c budget_spent)."""
         s.spent, s.status = True, "max_iterations"
+        total = self.st.socp_max_iter_total
+        # fewer used than the budget: the last subproblem ran out of its share
+        share = "; the last subproblem stopped at its share" if s.ipm_used < total else ""
         s.reason = (
-            f"{BUDGET_SPENT} ({s.ipm_used} of socp_max_iter_total = "
-            f"{self.st.socp_max_iter_total}) after {s.k} iterations; the last accepted iterate "
-            f"has largest nonlinear defect {s.defect:.2e}, largest path-constraint value "
-            f"{s.viol:.2e}"
+            f"{BUDGET_SPENT} ({s.ipm_used} of socp_max_iter_total = {total}{share}) after "
+            f"{s.k} iterations; the last accepted iterate has largest nonlinear defect "
+            f"{s.defect:.2e}, largest path-constraint value {s.viol:.2e}"
         )
 
     def _result(self, s: _LoopState, t_start: float) -> SCvxResult:

@@ -1126,6 +1126,8 @@ def test_an_ipm_iteration_budget_ends_both_loops_alike(budget: int) -> None:
         assert r.status == "max_iterations", r.reason
         assert r.reason.startswith(f"IPM iteration budget spent ({used} of ")
         assert used <= budget
+        # short of the budget only when the last subproblem ran out of its share
+        assert ("the last subproblem stopped at its share" in r.reason) == (used < budget)
     assert (c.iterations, c.subproblems_solved) == (ref.iterations, ref.subproblems_solved)
     assert c.iterations >= 1
     assert abs(c.m_f - ref.m_f) <= STRICT_REL_MF * ref.m_f

@@ -1387,11 +1387,17 @@ static void budget_spent(const pdg_workspace *ws, scvx_state *s, pdg_result *res
 {
     *status = PDG_MAX_ITERATIONS;
     s->spent = 1;
+    /* fewer used than the budget: the last subproblem ran out of its share (half of what
+     * was left when warm-started), and what is left would not solve one */
     snprintf(res->message, PDG_MESSAGE_LEN,
-             "IPM iteration budget spent (%d of socp_max_iter_total = %d) after %d "
+             "IPM iteration budget spent (%d of socp_max_iter_total = %d%s) after %d "
              "iterations; the last accepted iterate has largest nonlinear defect %.2e, largest "
              "path-constraint value %.2e",
-             res->socp_iterations, ws->st.socp_max_iter_total, s->k, s->defect, s->viol);
+             res->socp_iterations, ws->st.socp_max_iter_total,
+             res->socp_iterations < ws->st.socp_max_iter_total
+                 ? "; the last subproblem stopped at its share"
+                 : "",
+             s->k, s->defect, s->viol);
 }
 
 /* One subproblem of Algorithm 1 (Algorithm 2 with masks). Returns 1 to go on; 0 to stop,
