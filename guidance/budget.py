@@ -308,21 +308,29 @@ def measure_variants(do_build: bool = True) -> list[Budget]:
     return [measure(do_build=False, variant=v) for v in VARIANTS]
 
 
+def _solve_head() -> str:
+    """The columns of a call's solve, shared by the comparison tables."""
+    return f"{'status':>14s} {'iter.':>5s} {'subpr.':>6s} {'IPM':>5s}"
+
+
+def _solve_cells(b: Budget) -> str:
+    return f"{b.status:>14s} {b.iterations:5d} {b.subproblems:6d} {b.socp_iterations:5d}"
+
+
 def report_variants(rows: list[Budget]) -> str:
     """The complete guidance calls side by side, network inference included."""
     lines = [
         "One complete guidance call, default scenario: SCvx against T-SCvx on board "
         "(pdg_solve_tscvx, network inference included)",
-        f"  {'call':22s} {'status':>7s} {'iter.':>5s} {'subpr.':>6s} {'IPM':>5s} "
-        f"{'host instr.':>12s} {'of which NN':>11s} {'RAD750 s':>9s} {'memory':>10s} "
-        f"{'of which NN':>11s} {'heap':>5s} {'m_f':>9s}",
+        f"  {'call':22s} {_solve_head()} {'host instr.':>12s} {'of which NN':>11s} "
+        f"{'RAD750 s':>9s} {'memory':>10s} {'of which NN':>11s} {'heap':>5s} {'m_f':>9s}",
     ]
     for b in rows:
         nn = b.instructions_by_part.get("network_inference", 0)
         nn_mem = b.nn_weights_bytes + b.nn_arena_bytes
         lines.append(
-            f"  {b.variant:22s} {b.status:>7s} {b.iterations:5d} {b.subproblems:6d} "
-            f"{b.socp_iterations:5d} {b.instructions / 1e6:10.1f} M {nn / 1e6:9.2f} M "
+            f"  {b.variant:22s} {_solve_cells(b)} "
+            f"{b.instructions / 1e6:10.1f} M {nn / 1e6:9.2f} M "
             f"{b.rad750_s:9.2f} {b.memory_bytes / 2**20:6.2f} MiB {nn_mem / 2**20:7.2f} MiB "
             f"{b.heap_allocations_in_solve:5d} {b.m_f:9.6f}"
         )
@@ -342,28 +350,20 @@ def report_variants(rows: list[Budget]) -> str:
     return "\n".join(lines)
 
 
-def measure_grids(nodes: list[int], do_build: bool = True) -> list[Budget]:
-    """The SCvx call of the default landing on each grid of ``nodes``."""
-    if do_build:
-        build()
-    return [measure(do_build=False, nodes=n) for n in nodes]
-
-
 def report_grids(rows: list[Budget]) -> str:
     """The SCvx call on several grids: what a coarser grid saves in time and memory."""
     lines = [
         "One complete guidance call (pdg_solve), the default landing on N nodes: RAD750 time "
         "and memory against the grid",
-        f"  {'N':>4s} {'status':>14s} {'iter.':>5s} {'subpr.':>6s} {'IPM':>5s} "
-        f"{'host instr.':>12s} {'per IPM it.':>11s} {'discretiz.':>11s} {'RAD750 s':>9s} "
-        f"{'memory':>10s} {'heap':>5s} {'m_f':>9s}",
+        f"  {'N':>4s} {_solve_head()} {'host instr.':>12s} {'per IPM it.':>11s} "
+        f"{'discretiz.':>11s} {'RAD750 s':>9s} {'memory':>10s} {'heap':>5s} {'m_f':>9s}",
     ]
     for b in rows:
         disc = b.instructions_by_part.get("discretization", 0)
         per_ipm = b.instructions / b.socp_iterations if b.socp_iterations else float("nan")
         lines.append(
-            f"  {b.nodes:4d} {b.status:>14s} {b.iterations:5d} {b.subproblems:6d} "
-            f"{b.socp_iterations:5d} {b.instructions / 1e6:10.1f} M {per_ipm / 1e6:9.2f} M "
+            f"  {b.nodes:4d} {_solve_cells(b)} "
+            f"{b.instructions / 1e6:10.1f} M {per_ipm / 1e6:9.2f} M "
             f"{disc / 1e6:9.1f} M {b.rad750_s:9.2f} {b.memory_bytes / 2**20:6.2f} MiB "
             f"{b.heap_allocations_in_solve:5d} {b.m_f:9.6f}"
         )
@@ -513,7 +513,7 @@ def run(args: argparse.Namespace) -> int:
             )
         return 0 if allocations == 0 else 1
     if args.nodes:
-        grids = measure_grids(args.nodes, do_build=False)
+        grids = [measure(do_build=False, nodes=n) for n in args.nodes]
         if args.json:
             print(json.dumps({"grids": [_json_row(b) for b in grids]}, indent=2))
         else:

@@ -148,7 +148,7 @@ def test_another_grid_is_measured_as_asked(figures: budget.Budget) -> None:
     from guidance.cguidance import solve_c
     from guidance.params import Params, Scenario
 
-    (row,) = budget.measure_grids([5], do_build=False)
+    row = budget.measure(do_build=False, nodes=5)
     assert (row.nodes, row.status, row.heap_allocations_in_solve) == (5, "solved", 0)
     assert row.result_bytes == 8 * 5 * (14 + 3)
     assert row.m_f == pytest.approx(solve_c(Scenario(params=Params(N=5))).m_f, rel=1e-11)
