@@ -262,14 +262,24 @@ def test_twenty_more_scenarios(index: int) -> None:
 
 def test_first_subproblem_matches_reference(pairs, catalog_solved) -> None:
     """Lockstep check of one SCvx step: same guess, same subproblem, same penalty (against
-    the reference on Clarabel: the first candidate does not yet depend on earlier stops)."""
-    for name, (c, _) in pairs.items():
+    the reference on Clarabel: the first candidate does not yet depend on earlier stops).
+    The penalty J of the candidate depends on where within its tolerances the IPM stopped;
+    it is compared where Clarabel solved the subproblem to them. Where Clarabel stopped at
+    its reduced tolerances ("solved_inaccurate", as on the default landing's first
+    subproblem on an AMD EPYC, 27 Nov) its J was 8e-6 from the C library's, whose own is
+    within 3.4e-10 of the Python loop's on the C SOCP."""
+    compared = 0
+    for name, (c, py) in pairs.items():
         ref = catalog_solved[name]
         h0, r0 = c.history[0], ref.history[0]
         assert h0.eta == r0.eta
-        assert pytest.approx(r0.J, rel=1e-6) == h0.J, name
+        assert pytest.approx(py.history[0].J, rel=1e-6) == h0.J, name
+        if r0.solver_status == "solved":
+            assert pytest.approx(r0.J, rel=1e-6) == h0.J, name
+            compared += 1
         assert h0.dL == pytest.approx(r0.dL, rel=1e-6), name
         assert h0.accepted == r0.accepted, name
+    assert compared >= len(pairs) // 2
 
 
 @pytest.mark.parametrize("name", ["default", "overhead", "spinning"])
@@ -492,9 +502,11 @@ def test_a_bad_setting_is_named_alike_in_python_and_c(field: str, value: float) 
 
 
 def test_the_unit_quaternion_limit_is_judged_alike_to_the_last_bit() -> None:
-    """|q0| within 1e-6 of 1: numpy's norm and a sum of squares in order differ in the last
-    bit, which near the limit gave C and Python opposite verdicts (73 of 3,000 quaternions in
-    an adversarial review). Python now sums as C does."""
+    """|q0| within 1e-6 of 1: two orders of summing its squares differ in the last bit, which
+    near the limit gave C and Python opposite verdicts (numpy's norm against C's sum in order:
+    73 of 3,000 quaternions in an adversarial review). Python now sums as C does. The cases
+    are those where the sum in order and in reverse order disagree: numpy's norm, whose order
+    depends on the machine's SIMD, split none of them on an AMD EPYC (27 Nov)."""
     rng = np.random.default_rng(3)
     split = []
     for _ in range(20000):
@@ -503,7 +515,8 @@ def test_the_unit_quaternion_limit_is_judged_alike_to_the_last_bit() -> None:
             np.sum(q * q)
         )
         in_order = np.sqrt(((q[0] * q[0] + q[1] * q[1]) + q[2] * q[2]) + q[3] * q[3])
-        if (abs(np.linalg.norm(q) - 1.0) > 1e-6) != (abs(in_order - 1.0) > 1e-6):
+        reverse = np.sqrt(((q[3] * q[3] + q[2] * q[2]) + q[1] * q[1]) + q[0] * q[0])
+        if (abs(reverse - 1.0) > 1e-6) != (abs(in_order - 1.0) > 1e-6):
             split.append(q)
     assert len(split) >= 5  # cases where the two ways of summing disagree
     base = SCENARIOS["default"]
@@ -864,26 +877,38 @@ def test_restart_from_the_converged_solution_is_one_iteration() -> None:
     assert abs(c.m_f - py.m_f) / py.m_f <= STRICT_REL_MF
 
 
-@pytest.mark.parametrize(
-    "kw",
-    [
-        {"vc_tol": 1e-12, "step_tol": 1e-1},
-        # loose step and defect tests: only the virtual-control test (vc 5e-15 after the
-        # first accepted step, 0 after the second) keeps the first step from converging
-        {"vc_tol": 0.0, "step_tol": 10.0, "defect_tol": 1.0},
-    ],
-)
-def test_convergence_needs_zero_virtual_control(kw: dict) -> None:
+def test_convergence_needs_zero_virtual_control() -> None:
+    """With the step test loose, the virtual-control test decides convergence: the C library
+    and the Python loop on the C SOCP stop at the same iteration with the same answer."""
     scn = SCENARIOS["default"]
-    st = SCvxSettings(**kw)
+    st = SCvxSettings(vc_tol=1e-12, step_tol=1e-1)
     c = cguidance.solve_c(scn, st)
     py = SCvxSolver(scn, st, backend="c").solve()
     assert (c.status, c.iterations) == (py.status, py.iterations), (c.reason, py.reason)
     assert abs(c.m_f - py.m_f) / py.m_f <= STRICT_REL_MF
     for res in (c, py):
-        if res.status == "solved":
-            last = [h for h in res.history if h.accepted][-1]
-            assert last.vc_norm1 <= st.vc_tol
+        assert res.status == "solved"
+        last = [h for h in res.history if h.accepted][-1]
+        assert last.vc_norm1 <= st.vc_tol
+
+
+@pytest.mark.parametrize("loop", ["c", "python"])
+def test_only_zero_virtual_control_converges(loop: str) -> None:
+    """The step and defect tests loose and vc_tol = 0: no accepted step with any virtual
+    control left ends the solve (each would have converged otherwise), and one with none
+    does. The two loops are not compared here: what is left of the virtual control is
+    rounding noise (2e-15 to 7e-14 on the default landing), exactly zero at a step that
+    depends on the machine's last bits (27 Nov, an AMD EPYC: the Python loop at its 6th
+    accepted step, the C library later; earlier machines: both at the 2nd)."""
+    scn = SCENARIOS["default"]
+    st = SCvxSettings(vc_tol=0.0, step_tol=10.0, defect_tol=1.0)
+    res = cguidance.solve_c(scn, st) if loop == "c" else SCvxSolver(scn, st, backend="c").solve()
+    accepted = [h.vc_norm1 for h in res.history if h.accepted]
+    assert accepted and res.status in ("solved", "max_iterations"), res.reason
+    ended_by_vc = res.status == "solved"
+    assert all(vc > 0.0 for vc in accepted[: len(accepted) - ended_by_vc])
+    if ended_by_vc:
+        assert accepted[-1] == 0.0
 
 
 def test_iteration_limit_diagnosis_is_pythons() -> None:

@@ -8,6 +8,7 @@ purpose.
 from __future__ import annotations
 
 import json
+import re
 from collections.abc import Callable
 from pathlib import Path
 
@@ -182,17 +183,21 @@ def test_the_propagation_is_stopped_after_its_evaluation_budget(written: Path, m
     assert verify_file(written).ok
 
 
-def test_the_tolerances_come_from_the_command_line(written: Path, capsys) -> None:
-    """The reference landing lands 2.3e-4 off (the solvers' discretization error) and meets
-    its path constraints to about Clarabel's tolerance (2.9e-10 to 1.0e-9 as rounding moves,
-    26 Nov): tighter tolerances fail it."""
+def test_the_tolerances_come_from_the_command_line(written: Path, tmp_path: Path, capsys) -> None:
+    """The reference landing lands 2.3e-4 off open loop (mostly the defects, up to defect_tol,
+    that SCvx's last trust-region steps leave: with them removed it lands 1.8e-5 off, the
+    RK4 error; 27 Nov): tighter tolerances fail it. The last digits of the miss move with the
+    machine's rounding (2.28e-4 on 26 Nov, 2.27e-4 on an AMD EPYC on 27 Nov), and so does
+    its largest path-constraint value (2.9e-10 to 1.0e-9 on 26 Nov, at most 1e-12 on 27
+    Nov): the path tolerance is tried on the landing with its thrust 1e-9 over (h = 5e-9
+    where the thrust is at T_max = 5)."""
     assert main(["verify", str(written), "--tol-landing", "1e-5"]) == 1
-    assert "landing position |r(t_f) - r_f|        2.28e-04      1e-05  FAIL" in (
-        capsys.readouterr().out
-    )
+    line = r"landing position \|r\(t_f\) - r_f\| +2\.[23]\de-04 +1e-05  FAIL"
+    assert re.search(line, capsys.readouterr().out)
     assert main(["verify", str(written), "--tol-nodes", "1e-5"]) == 1
-    assert main(["verify", str(written), "--tol-path", "1e-12"]) == 1
-    assert main(["verify", str(written), "--tol-path", "1e-8"]) == 0
+    over = _edited(written, tmp_path / "over.npz", u=_array(written, "u") * (1.0 + 1e-9))
+    assert main(["verify", str(over), "--tol-path", "2e-9"]) == 1
+    assert main(["verify", str(over), "--tol-path", "1e-8"]) == 0
 
 
 def test_a_pinned_attitude_is_measured_against_q_f_either_sign() -> None:

@@ -30,7 +30,7 @@ def test_landing_subproblems_match_clarabel(subproblems) -> None:
     last_warm = None  # the warm sequence's last answer
     compared = len(probs)
     for k, prob in enumerate(probs):
-        ref = solve_clarabel(prob)
+        ref = _clarabel_reference(prob)
         compared -= ref.status != "solved"
         for start, solver in solvers.items():
             # one workspace per scenario: later subproblems reuse it through update() whenever
@@ -49,6 +49,15 @@ def test_landing_subproblems_match_clarabel(subproblems) -> None:
                 last_warm = sol
     assert compared >= len(probs) - 3, f"Clarabel solved only {compared} of {len(probs)}"
     assert its["warm"] < its["cold"], its
+
+
+def _clarabel_reference(prob):
+    """Clarabel at 1e-9, or at 1e-8 where at 1e-9 it stopped at its reduced tolerances
+    ("solved_inaccurate"): how often it does depends on the machine's rounding (on the
+    default landing's 21 subproblems: up to 3 on 26 Nov; 4 on an AMD EPYC on 27 Nov, of which
+    2 it solves at 1e-8)."""
+    ref = solve_clarabel(prob)
+    return ref if ref.status == "solved" else solve_clarabel(prob, tol=1e-8)
 
 
 def _check(name, k, prob, sol, ref, solver) -> None:
@@ -113,6 +122,7 @@ def test_iteration_counts_are_clarabels() -> None:
             continue
         ours.append(sol.iterations)
         theirs.append(ref.iterations)
-    assert len(ours) >= len(probs) - 3
+    # Clarabel solved 21 of the 24 on 26 Nov, 20 on an AMD EPYC on 27 Nov (its rounding)
+    assert len(ours) >= 3 * len(probs) // 4
     assert all(a <= b + 2 for a, b in zip(ours, theirs, strict=True)), (ours, theirs)
     assert sum(ours) <= sum(theirs), (ours, theirs)
