@@ -40,7 +40,16 @@ import numpy as np
 
 from guidance.atomic import atomic_write
 from guidance.errors import UNREADABLE_NPZ, InputError
-from guidance.params import NC, NU, NX, InitialState, Params, Scenario, SCvxSettings
+from guidance.params import (
+    NC,
+    NU,
+    NX,
+    InitialState,
+    Params,
+    Scenario,
+    SCvxSettings,
+    rk4_steps_per_interval,
+)
 from guidance.provenance import code_version, provenance, record_code_version
 from guidance.scenario import ScenarioError, params_from_dict, validate
 
@@ -334,6 +343,7 @@ def _run_misfit(rec: dict[str, Any], run: dict, i: int) -> str | None:
         recorded = None
     if not isinstance(recorded, dict):
         return "its run record is not a JSON object"
+    recorded = with_rk4_steps(recorded)
     wanted = json.loads(run_record(run))
     differ = [k for k in RUN_KEYS if not _same_run_value(k, recorded.get(k), wanted[k])]
     if not differ:
@@ -410,13 +420,29 @@ def _read_run_config(out_dir: Path) -> dict:
         config = json.loads(path.read_text(encoding="utf-8"))
     except (OSError, ValueError, RecursionError) as exc:
         raise InputError(f"{path}: not a readable run record ({exc})") from None
-    missing = [k for k in RUN_KEYS if k not in config] if isinstance(config, dict) else RUN_KEYS
+    required = RUN_KEYS[:-1]  # a run recorded before 27 Nov has no RK4_KEY (with_rk4_steps)
+    missing = [k for k in required if k not in config] if isinstance(config, dict) else required
     if missing:
         raise InputError(f"{path}: not a run record (missing {', '.join(missing)})")
-    return config
+    return with_rk4_steps(config)
 
 
-RUN_KEYS = ("seed", "ranges", "params", "scvx_settings", "backend")
+# The RK4 steps per FOH interval the run's samples were solved with: a code rule, not a
+# setting (params.rk4_steps_per_interval, since 27 Nov). Runs recorded before it have none
+# and took rk4_substeps on every grid: the same steps as now at N = 50, fewer on a coarser
+# grid, whose samples solved before and after the change must not be packed together.
+RK4_KEY = "rk4_steps_per_interval"
+RUN_KEYS = ("seed", "ranges", "params", "scvx_settings", "backend", RK4_KEY)
+
+
+def with_rk4_steps(record: dict) -> dict:
+    """A run record (run.json, or the one a sample carries) with RK4_KEY: as recorded, or,
+    when it was recorded before the key, the steps of the rule then (rk4_substeps)."""
+    if RK4_KEY in record:
+        return record
+    settings = record.get("scvx_settings")
+    substeps = settings.get("rk4_substeps") if isinstance(settings, dict) else None
+    return {**record, RK4_KEY: substeps}
 
 
 # Settings added to SCvxSettings whose default keeps what the code before them did: a run
@@ -494,6 +520,7 @@ def generate(
         "params": params.to_json_dict(),
         "scvx_settings": dataclasses.asdict(settings),
         "backend": backend or default_backend(),
+        RK4_KEY: rk4_steps_per_interval(settings.rk4_substeps, params.N),
     }
     _check_run_config(out, config)
     version, record = code_version(), run_record(config)
@@ -668,6 +695,7 @@ def pack(out_dir: str | Path, dataset_path: str | Path, n_base: int | None = Non
         "sampling_ranges": config["ranges"],
         "params": config["params"],
         "scvx_settings": config["scvx_settings"],
+        RK4_KEY: config[RK4_KEY],
         "solver_backend": config.get("backend", "clarabel"),
         "theta_names": list(THETA_NAMES),
         "rotations_deg": list(ROTATION_DEG),

@@ -21,6 +21,7 @@ from guidance import dataset
 from guidance.cli import main
 from guidance.dataset import (
     N_ROTATIONS,
+    RK4_KEY,
     ROTATION_DEG,
     RUN_KEYS,
     SamplingRanges,
@@ -40,7 +41,7 @@ from guidance.dataset import (
     write_sample,
 )
 from guidance.errors import InputError
-from guidance.params import NC, SCvxSettings
+from guidance.params import NC, Params, SCvxSettings
 from guidance.provenance import code_version
 from guidance.scenario import validate
 from guidance.symmetry import rotate_scenario
@@ -325,6 +326,36 @@ def test_a_run_recorded_before_a_setting_existed_resumes_with_its_default(
             generate(run, 2, seed=11, ranges=EASY, workers=1, progress=False, backend="clarabel")
 
 
+def test_a_run_recorded_before_the_rk4_rule_resumes_only_where_the_steps_agree(
+    tiny_run, tmp_path
+) -> None:
+    """Runs recorded before 27 Nov carry no rk4_steps_per_interval and took rk4_substeps
+    steps on every grid. At N = 50 that is today's rule: the run resumes and its samples
+    pack. On a coarser grid the steps now differ (6 at N = 20): its resume is refused, as
+    its old samples and new ones would have been solved on different discretizations."""
+    run = _copy_run(tiny_run, tmp_path)
+    config = json.loads((run / "run.json").read_text())
+    assert config[RK4_KEY] == 2
+    del config[RK4_KEY]
+    (run / "run.json").write_text(json.dumps(config))
+    rec = read_sample(sample_path(run, 0))
+    recorded = json.loads(str(rec["run"]))
+    del recorded[RK4_KEY]
+    write_sample(run, {**rec, "run": json.dumps(recorded, sort_keys=True)})
+    solved = generate(run, 2, seed=11, ranges=EASY, workers=1, progress=False, backend="clarabel")
+    assert sum(solved.values()) == 0  # both kept
+    assert pack(run, tmp_path / "d.npz")[RK4_KEY] == 2
+    coarse = tmp_path / "coarse"
+    kw = dict(seed=11, ranges=EASY, workers=1, progress=False, backend="clarabel")
+    generate(coarse, 0, params=Params(N=20), **kw)
+    config = json.loads((coarse / "run.json").read_text())
+    assert config[RK4_KEY] == 6
+    del config[RK4_KEY]
+    (coarse / "run.json").write_text(json.dumps(config))
+    with pytest.raises(InputError, match=f"different {RK4_KEY} \\(2, not 6\\)"):
+        generate(coarse, 0, params=Params(N=20), **kw)
+
+
 def test_cli_prox_u_reaches_the_solves(tmp_path, monkeypatch) -> None:
     """`guidance dataset --prox-u 0` solves with the paper's objective (the data of the
     networks shipped until 23 Nov); the weight is part of the run's settings, so a resume with
@@ -397,6 +428,7 @@ def _another_run(config: dict, key: str) -> dict:
         "params": {**config["params"], "T_max": 4.5},
         "scvx_settings": {**config["scvx_settings"], "prox_u": 0.0},
         "backend": "c",
+        RK4_KEY: 6,  # the rule of a coarser grid, or another code's
     }
     return {**config, key: other[key]}
 
