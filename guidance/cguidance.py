@@ -42,7 +42,9 @@ from guidance.model import param_vector, pattern_index
 from guidance.params import N_MAX, N_MIN, NC, NU, NX, Params, Scenario, SCvxSettings
 from guidance.scenario import ScenarioError
 from guidance.scvx import (
+    POLISH_OUTCOMES,
     IterationRecord,
+    Polish,
     SCvxResult,
     check_masks_argument,
     mask_bits,
@@ -79,11 +81,11 @@ SETTING_FIELDS = (
     "lam", "rho0", "rho1", "rho2", "alpha", "beta", "eta_init", "eta_lb", "eta_ub",
     "iter_max", "max_subproblems", "step_tol", "vc_tol", "defect_tol", "rk4_substeps",
     "tight_tol", "socp_tol", "socp_max_iter", "socp_max_iter_total", "socp_warm_start",
-    "tau_r_update", "prox_u",
+    "tau_r_update", "prox_u", "polish",
 )  # fmt: skip
 _INT_SETTINGS = {
     "iter_max", "max_subproblems", "rk4_substeps", "socp_max_iter", "socp_max_iter_total",
-    "socp_warm_start", "tau_r_update",
+    "socp_warm_start", "tau_r_update", "polish",
 }  # fmt: skip
 
 
@@ -107,7 +109,8 @@ class _Result(ct.Structure):
     _fields_ = [
         ("status", _i), ("message", ct.c_char * MESSAGE_LEN), ("x", _dp), ("u", _dp),
         ("t_f", _d), ("iterations", _i), ("subproblems_solved", _i), ("max_defect", _d),
-        ("max_violation", _d), ("socp_iterations", _i),
+        ("max_violation", _d), ("socp_iterations", _i), ("polish", _i),
+        ("polish_iterations", _i), ("defect_before_polish", _d), ("m_f_before_polish", _d),
     ]  # fmt: skip
 
 
@@ -153,6 +156,8 @@ def library() -> ct.CDLL:
     lib.pdg_arena_high_water.restype = sz
     lib.pdg_setup_status_message.argtypes = [_i]
     lib.pdg_setup_status_message.restype = ct.c_char_p
+    lib.pdg_polish_message.argtypes = [_i]
+    lib.pdg_polish_message.restype = ct.c_char_p
     lib.pdg_problem_size.argtypes = [ct.c_void_p] + [ct.POINTER(_i)] * 5
     lib.pdg_debug_assemble.argtypes = [ct.c_void_p, ct.POINTER(_Scenario), _dp, _dp, _d, _d,
                                        _dp, _dp, _dp, _dp, _dp] + [ct.POINTER(_i)] * 4  # fmt: skip
@@ -474,6 +479,12 @@ def _collect(
         max_defect=float(res.max_defect),
         max_violation=float(res.max_violation),
         settings=settings,
+        polish=Polish(
+            POLISH_OUTCOMES[res.polish],
+            int(res.polish_iterations),
+            float(res.defect_before_polish),
+            float(res.m_f_before_polish),
+        ),
     )
 
 

@@ -83,7 +83,9 @@ def solve_landing(job: tuple[int, Scenario, SCvxSettings, str]) -> Landing:
 
     index, scenario, settings, method = job
     r = solve_tscvx_c(scenario, settings) if method == "tscvx" else solve_c(scenario, settings)
+    # the polish is one more subproblem, warm-started as the others
     per_subproblem = [h.solver_iterations for h in r.history]
+    per_subproblem += [r.polish.ipm_iterations] if r.polish.ipm_iterations else []
     row = Landing(
         index=index,
         status=r.status,
@@ -91,7 +93,7 @@ def solve_landing(job: tuple[int, Scenario, SCvxSettings, str]) -> Landing:
         m_f=r.m_f if r.x.size else math.nan,
         iterations=r.iterations,
         subproblems=r.subproblems_solved,
-        ipm_iterations=sum(per_subproblem),
+        ipm_iterations=r.ipm_iterations,
         untouched_budget=untouched_budget(per_subproblem),
         wall_s=r.solve_time_s,
     )

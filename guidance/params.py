@@ -185,6 +185,16 @@ class SCvxSettings:
     # 1e-8 (README, "How the reference SCvx is built", "Beyond the paper"). 0 gives the
     # paper's objective.
     prox_u: float = 2e-2
+    # Beyond the paper, off by default: once SCvx has converged, one more subproblem about
+    # the answer without the fuel term (scvx.POLISH_WEIGHT, scvx.POLISH_TOL_FACTOR), which
+    # moves the thrust as little as the linearized dynamics allow and so removes the defects
+    # the last trust-region steps left (a Gauss-Newton step onto the dynamics). On the
+    # default landing: largest defect 7.1e-6 -> 1.6e-10, open-loop miss 2.3e-4 -> 1.8e-5,
+    # final mass -7.1e-5 (what the defects had bought), 16 IPM iterations. Kept only when it
+    # leaves no virtual control, smaller defects and every path constraint met; needs
+    # prox_u > 0. Not the default: a solve started from a polished answer of the same landing
+    # stalls at eta_lb (README, "What the defects cost open loop").
+    polish: bool = False
     # Conic subproblem solver (either backend, and the C loop): gap and feasibility
     # tolerances, and the interior-point iteration limit.
     socp_tol: float = 1e-9

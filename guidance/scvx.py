@@ -60,6 +60,39 @@ class IterationRecord:
     restored: int = 0  # T-SCvx: dropped constraints the full-constraint guard put back here
 
 
+# What became of the polish (SCvxSettings.polish), in the C library's order (pdg_polish_status)
+POLISH_OUTCOMES = ("off", "kept", "no_budget", "failed", "not_better")
+POLISH_MEANINGS = (
+    "not run (off, prox_u = 0, or the solve did not converge)",
+    "the answer is the polished iterate",
+    "not run: the IPM iteration budget was spent",
+    "its conic solve or the model evaluation failed; the converged iterate kept",
+    "it left virtual control, no smaller defects or a path constraint unmet; the converged "
+    "iterate kept",
+)
+
+
+@dataclass(frozen=True)
+class Polish:
+    """The polish of a converged solve: one more subproblem about the answer without the fuel
+    term, whose solution replaces the answer when it has smaller defects (SCvxSettings.polish).
+    """
+
+    outcome: str = "off"  # POLISH_OUTCOMES
+    ipm_iterations: int = 0  # its IPM iterations (also in the call's total)
+    defect_before: float = float("nan")  # largest defect of the converged iterate
+    m_f_before: float = float("nan")  # its final mass
+
+    def describe(self, defect: float, m_f: float) -> str:
+        """What became of it, in a line; ``defect`` and ``m_f`` are the answer's."""
+        if self.outcome == "kept":
+            return (
+                f"largest defect {self.defect_before:.2e} -> {defect:.2e}, final mass "
+                f"{m_f - self.m_f_before:+.2e} U_M, {self.ipm_iterations} IPM iterations"
+            )
+        return POLISH_MEANINGS[POLISH_OUTCOMES.index(self.outcome)]
+
+
 def step_label(accepted: bool, restored: int) -> str:
     """The log's last column: a guard rejection (same radius) reads apart from a rho one."""
     if accepted:
@@ -84,6 +117,7 @@ class SCvxResult:
     max_violation: float = float("nan")  # max h over nodes and constraints (<= 0 when met)
     subproblems: list[ConicProblem] = field(default_factory=list)
     settings: SCvxSettings | None = None  # what the solve ran with (trajectory files record it)
+    polish: Polish = field(default_factory=Polish)
 
     @property
     def final_mask(self) -> np.ndarray:
@@ -92,6 +126,11 @@ class SCvxResult:
     @property
     def m_f(self) -> float:
         return float(self.x[-1, IM])
+
+    @property
+    def ipm_iterations(self) -> int:
+        """The call's IPM iterations: its subproblems' and the polish's."""
+        return sum(h.solver_iterations for h in self.history) + self.polish.ipm_iterations
 
 
 # T-SCvx masks: a 7N mask per iteration k (the last repeats), or a function k -> mask
@@ -240,7 +279,8 @@ class SCvxSolver:
                 break
             if not self._iteration(s, masks):
                 break
-        return self._result(s, t_start)
+        polish = self._polish(s) if s.status == "solved" else Polish()
+        return self._result(s, t_start, polish)
 
     def _start(self, guess: tuple[np.ndarray, np.ndarray, float] | None) -> _LoopState | None:
         """The iterate at the guess (the initial guess when none is given), with the scaling
@@ -309,16 +349,20 @@ class SCvxSolver:
             self.log(f"{s.k + 1:3d}  {s.reason}")
 
     def _solve_subproblem(
-        self, s: _LoopState, tpl: SubproblemTemplate
+        self, s: _LoopState, tpl: SubproblemTemplate, polish: bool = False
     ) -> tuple[ConicProblem, ConicSolution]:
-        """The subproblem about s.z with radius s.eta, solved from the last solution."""
+        """The subproblem about s.z with radius s.eta (the polish's: no fuel term, its own
+        weight and tolerance), solved from the last solution."""
         st = self.st
-        prob = tpl.assemble(s.disc, s.z, s.eta, st.lam, self.scn, self.sc, st.prox_u)
+        prox, fuel = (POLISH_WEIGHT, 0.0) if polish else (st.prox_u, 1.0)
+        prob = tpl.assemble(s.disc, s.z, s.eta, st.lam, self.scn, self.sc, prox, fuel)
         if self.record:
             s.subproblems.append(prob)
-        if id(tpl) not in self._sessions:
-            self._sessions[id(tpl)] = conic.session(self.backend, st.socp_tol, st.socp_max_iter)
-        session = self._sessions[id(tpl)]
+        # the polish solves to a tighter tolerance, in a session of its own (key -1)
+        key, tol = (-1, st.socp_tol * POLISH_TOL_FACTOR) if polish else (id(tpl), st.socp_tol)
+        if key not in self._sessions:
+            self._sessions[key] = conic.session(self.backend, tol, st.socp_max_iter)
+        session = self._sessions[key]
         warm = s.last_sol is not None and st.socp_warm_start and session.warm_starts
         cap, warm = iteration_cap(st, s.ipm_used, warm)
         s.capped = cap < st.socp_max_iter
@@ -426,6 +470,38 @@ class SCvxSolver:
             and s.viol <= st.defect_tol
         )
 
+    def _polish(self, s: _LoopState) -> Polish:
+        """Beyond the paper: the converged iterate's defects removed by one subproblem about
+        it on the full constraint set, with the fuel term out and the trust radius at eta_ub
+        (the step is of the defects' size): min lambda (sum t + sum s') + (prox_u / 2)
+        |u_hat - u_hat_ref|^2 moves the thrust least among the trajectories that meet the
+        linearized dynamics, whose nonlinear defects are then of the order of the step
+        squared. Kept when it leaves no virtual control, smaller defects and every path
+        constraint met (the C library's polish, pdg_scvx.c)."""
+        st = self.st
+        x, _, _ = physical(s.z, self.lay, self.sc)
+        before = Polish(defect_before=s.defect, m_f_before=float(x[-1, IM]))
+        if not st.polish or st.prox_u == 0.0:
+            return before
+        if s.ipm_used >= st.socp_max_iter_total:
+            return replace(before, outcome="no_budget")
+        s.eta = st.eta_ub
+        _, sol = self._solve_subproblem(s, self.template(None), polish=True)
+        done = replace(before, ipm_iterations=sol.iterations)
+        if not sol.ok:
+            budget = sol.status == "max_iterations" and s.capped
+            return replace(done, outcome="no_budget" if budget else "failed")
+        try:
+            disc = self._discretize(sol.x)
+        except ModelEvaluationError:
+            return replace(done, outcome="failed")
+        J, defect, viol = self.penalty(sol.x, disc)
+        vc = float(max(sol.x[self.lay.ivc :].sum(), 0.0))
+        if vc > st.vc_tol or not defect < s.defect or viol > st.defect_tol:
+            return replace(done, outcome="not_better")
+        s.z, s.disc, s.J, s.defect, s.viol = sol.x.copy(), disc, J, defect, viol
+        return replace(done, outcome="kept")
+
     def _budget_spent(self, s: _LoopState) -> None:
         """The solve's IPM iteration budget is spent: the result is the last accepted iterate
         (the C library's message, pdg_scvx.c budget_spent)."""
@@ -439,7 +515,7 @@ class SCvxSolver:
             f"{s.defect:.2e}, largest path-constraint value {s.viol:.2e}"
         )
 
-    def _result(self, s: _LoopState, t_start: float) -> SCvxResult:
+    def _result(self, s: _LoopState, t_start: float, polish: Polish) -> SCvxResult:
         status, reason = s.status, s.reason
         if status == "max_iterations" and not s.spent:
             status, reason = self._diagnose(s.z, s.vc, s.defect, s.viol, s.k)
@@ -462,6 +538,7 @@ class SCvxSolver:
             max_violation=s.viol,
             subproblems=s.subproblems,
             settings=self.st,
+            polish=polish,
         )
 
     def no_trajectory(self, reason: str, t_start: float) -> SCvxResult:
@@ -625,6 +702,16 @@ def _changed_fraction(prev: np.ndarray | None, cur: np.ndarray | None) -> float:
 RETRY_MARGIN = 1.001
 RETRY_SKIP_MAX = 64
 # The interior-point method of a retry starts from the rejected answer with its trajectory
+# The polish (SCvxSettings.polish, SCvxSolver._polish; C: pdg_scvx.c, the same numbers): its
+# objective is lambda (sum t + sum s') + (POLISH_WEIGHT / 2) |u_hat - u_hat_ref|^2, solved to
+# POLISH_TOL_FACTOR x socp_tol. Its optimum lies within about sqrt(2 gap / POLISH_WEIGHT) of
+# where an IPM stops, and the whole objective is only about 1e-8: at the subproblems' 1e-9,
+# with the weight prox_u = 0.02, Clarabel and the C runtime stopped 1.5e-5 apart in final mass
+# on the default landing, with weight 1 at 1e-11 7.5e-9 apart (27 Nov). A weight much larger
+# than 1 is no longer balanced by the penalty lambda: at 1e4 virtual control was left.
+POLISH_WEIGHT = 1.0
+POLISH_TOL_FACTOR = 1e-2
+
 # part pulled back towards the reference, to RETRY_START of the new radius: the retry's answer
 # lies near there, on or inside the smaller trust region, and the rejected one outside it
 # (4 % fewer IPM iterations on the catalog: README, "Warm start"). The C library does the

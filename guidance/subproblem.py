@@ -334,10 +334,12 @@ class SubproblemTemplate:
         scenario: Scenario,
         scaling: Scaling,
         prox_u: float = 0.0,
+        fuel: float = 1.0,
     ) -> ConicProblem:
         """Writes the numbers of the subproblem linearized about the scaled iterate z_ref;
-        prox_u > 0 adds (prox_u / 2) |u_hat - u_hat_ref|^2 (SCvxSettings.prox_u). The blocks
-        in the order of _build."""
+        prox_u > 0 adds (prox_u / 2) |u_hat - u_hat_ref|^2 (SCvxSettings.prox_u); ``fuel``
+        weighs the final-mass term (0: the polish, SCvxSettings.polish). The blocks in the
+        order of _build."""
         b = np.zeros(self.m)
         vals = [
             self._dynamics_values(disc, scaling, b),
@@ -347,7 +349,7 @@ class SubproblemTemplate:
         ]
         data = np.concatenate(vals)[self.perm]
         Amat = sp.csc_matrix((data, self.indices, self.indptr), shape=(self.m, self.n))
-        P, q = self._objective(z_ref, lam, prox_u)
+        P, q = self._objective(z_ref, lam, prox_u, fuel)
         return ConicProblem(P=P, q=q, A=Amat, b=b, cones=list(self.cones))
 
     def _dynamics_values(
@@ -428,13 +430,13 @@ class SubproblemTemplate:
         return vals
 
     def _objective(
-        self, z_ref: np.ndarray, lam: float, prox_u: float
+        self, z_ref: np.ndarray, lam: float, prox_u: float, fuel: float
     ) -> tuple[sp.csc_matrix | None, np.ndarray]:
-        """-m_hat(t_f) + lambda (sum t + sum s'), plus (prox_u / 2) |u_hat - u_ref|^2 as its
-        P part and linear part (the constant dropped)."""
+        """-fuel m_hat(t_f) + lambda (sum t + sum s'), plus (prox_u / 2) |u_hat - u_ref|^2 as
+        its P part and linear part (the constant dropped)."""
         L = self.lay
         q = np.zeros(self.n)
-        q[L.x_index(self.N - 1, IM)] = -1.0
+        q[L.x_index(self.N - 1, IM)] = -fuel
         q[L.ivc :] = lam
         P = None
         if prox_u > 0.0:

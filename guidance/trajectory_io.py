@@ -1,10 +1,10 @@
 """Trajectory .npz files (DESIGN.md contract) and their provenance.
 
-Text entries (``status``, ``reason``, ``method``, ``backend``) hold no NUL character: numpy
-stores them as fixed-width strings padded with NULs, so a trailing NUL would be read back as
-padding, by this reader and any other, and lost. A text with one is refused on writing, and a
-file with one in its text is refused on reading. The JSON entries refuse a key given twice
-(``json`` would keep the last and say nothing).
+Text entries (``status``, ``reason``, ``method``, ``backend``, ``polish``) hold no NUL
+character: numpy stores them as fixed-width strings padded with NULs, so a trailing NUL would
+be read back as padding, by this reader and any other, and lost. A text with one is refused
+on writing, and a file with one in its text is refused on reading. The JSON entries refuse a
+key given twice (``json`` would keep the last and say nothing).
 """
 
 from __future__ import annotations
@@ -36,12 +36,19 @@ def write_trajectory(
     backend: str,
     inputs: dict[str, Path] | None = None,
 ) -> None:
-    """Writes the contract keys plus the iteration masks, reason, scenario, the SCvx settings
-    the solve ran with (``result.settings``, when known) and provenance (with the path and
+    """Writes the contract keys plus the iteration masks, reason, what became of the polish
+    (scvx.POLISH_OUTCOMES), scenario, the SCvx settings the solve ran with
+    (``result.settings``, when known) and provenance (with the path and
     sha256 of each file in ``inputs``, such as the networks of a T-SCvx solve). A text with a
     NUL character raises InputError before anything is written."""
     path = Path(path)
-    text = {"status": result.status, "reason": result.reason, "method": method, "backend": backend}
+    text = {
+        "status": result.status,
+        "reason": result.reason,
+        "method": method,
+        "backend": backend,
+        "polish": result.polish.outcome,
+    }
     for key, value in text.items():
         _check_no_nul(path, key, value)
     with atomic_write(path) as f:
@@ -55,6 +62,7 @@ def write_trajectory(
             solve_time_s=np.float64(result.solve_time_s),
             params=np.str_(json.dumps(params.to_json_dict())),
             reason=np.str_(result.reason),
+            polish=np.str_(result.polish.outcome),
             masks=result.masks,
             scenario=np.str_(json.dumps(scenario_to_dict(scenario))),  # type: ignore[arg-type]
             method=np.str_(method),

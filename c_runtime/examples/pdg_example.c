@@ -126,6 +126,12 @@ static void print_summary(const pdg_scenario *scn, const pdg_result *res)
            res->t_f, m_f, scn->m0 - m_f);
     printf("largest defect %.2e, largest path-constraint value %.2e\n", res->max_defect,
            res->max_violation);
+    if (res->polish == PDG_POLISH_KEPT) {
+        printf("polish: largest defect %.2e before, final mass %+.2e, %d IPM iterations\n",
+               res->defect_before_polish, m_f - res->m_f_before_polish, res->polish_iterations);
+    } else if (res->polish != PDG_POLISH_OFF) {
+        printf("polish: %s\n", pdg_polish_message(res->polish));
+    }
 }
 
 /* One line per node: t, the state x and the thrust T_B with its norm. */

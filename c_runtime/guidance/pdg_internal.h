@@ -62,6 +62,7 @@ typedef struct {
     const double *zref;         /* scaled iterate */
     const unsigned char *keep;  /* 7N, NULL = keep everything */
     double eta, lam, prox_u;
+    double fuel;                /* weight of -m_hat(t_f): 1, 0 in the polish */
     double *b, *h, *c;          /* outputs: p, m, n */
 } pdg_values;
 
@@ -118,6 +119,7 @@ struct pdg_workspace {
     /* the SOCP runtime's iteration limit now: socp_max_iter, or less where the call's
      * budget (socp_max_iter_total) binds */
     int socp_cap;
+    int socp_polish; /* 1: the SOCP runtime's tolerances are now the polish's */
     uint64_t layout_sum; /* FNV-1a of the set-up constants above (pdg_layout_sum) */
 };
 

@@ -80,6 +80,7 @@ pdg_setup_status pdg_default_settings(pdg_settings *st)
     st->socp_warm_start = 1;
     st->tau_r_update = 1;
     st->prox_u = 2e-2;
+    st->polish = 0;
     return PDG_SETUP_OK;
 }
 

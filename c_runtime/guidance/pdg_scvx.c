@@ -37,6 +37,16 @@ static const char *const status_names[PDG_NSTATUS] = {
     "solved", "infeasible", "max_iterations", "solver_error", "invalid_input",
 };
 
+/* guidance/scvx.py POLISH_MEANINGS */
+static const char *const polish_messages[PDG_POLISH_NSTATUS] = {
+    "not run (off, prox_u = 0, or the solve did not converge)",
+    "the answer is the polished iterate",
+    "not run: the IPM iteration budget was spent",
+    "its conic solve or the model evaluation failed; the converged iterate kept",
+    "it left virtual control, no smaller defects or a path constraint unmet; the converged "
+    "iterate kept",
+};
+
 /* Python names of the SOCP statuses (guidance/conic.py Status). */
 static const char *socp_status_name(int s)
 {
@@ -54,6 +64,10 @@ static const char *socp_status_name(int s)
 const char *pdg_setup_status_message(pdg_setup_status s)
 {
     return (unsigned)s < PDG_SETUP_NSTATUS ? setup_messages[s] : "unknown status";
+}
+const char *pdg_polish_message(pdg_polish_status s)
+{
+    return (unsigned)s < PDG_POLISH_NSTATUS ? polish_messages[s] : "unknown status";
 }
 const char *pdg_status_message(pdg_status s)
 {
@@ -128,7 +142,8 @@ static int numbers_fault(const pdg_settings *s, char *text)
              {"socp_max_iter", s->socp_max_iter, 1, 500},
              {"socp_max_iter_total", s->socp_max_iter_total, 1, PDG_MAX_ITER_TOTAL},
              {"socp_warm_start", s->socp_warm_start, 0, 1},
-             {"tau_r_update", s->tau_r_update, 0, 1}};
+             {"tau_r_update", s->tau_r_update, 0, 1},
+             {"polish", s->polish, 0, 1}};
     size_t i;
     for (i = 0; i < sizeof d / sizeof d[0]; ++i) {
         if (!isfinite(d[i].v)) {
@@ -380,6 +395,7 @@ static void copy_settings(pdg_settings *d, const pdg_settings *s)
     d->socp_warm_start = s->socp_warm_start;
     d->tau_r_update = s->tau_r_update;
     d->prox_u = s->prox_u;
+    d->polish = s->polish;
 }
 
 /* Sizes of the subproblem for the vehicle's N, terminal condition and A_k pattern (no memory
@@ -640,6 +656,7 @@ static pdg_setup_status build(void *mem, size_t bytes, const pdg_params *vehicle
     ws->arena_bytes = bytes;
     ws->busy = 0;
     ws->socp_cap = st->socp_max_iter;
+    ws->socp_polish = 0;
     ws->layout_sum = pdg_layout_sum(ws);
     ws->magic = PDG_WS_MAGIC;
     *out = ws;
@@ -914,12 +931,14 @@ static double trust_update(const pdg_settings *st, double eta, double rho, int a
     return eta < st->eta_ub ? eta : st->eta_ub;
 }
 
-/* Assembles the subproblem about the scaled iterate z and hands its numbers to the SOCP. */
+/* Assembles the subproblem about the scaled iterate z and hands its numbers to the SOCP;
+ * polish: the polish's objective (no fuel term, P = PDG_POLISH_WEIGHT I; needs prox_u > 0). */
 static int assemble(pdg_workspace *ws, const double *z, const double *disc,
-                    const unsigned char *keep, double eta)
+                    const unsigned char *keep, double eta, int polish)
 {
     pdg_emitter em;
     pdg_values v;
+    int e;
     em.mode = 2;
     em.cnt = 0;
     em.p = ws->p;
@@ -935,7 +954,13 @@ static int assemble(pdg_workspace *ws, const double *z, const double *disc,
     v.keep = keep;
     v.eta = eta;
     v.lam = ws->st.lam;
-    v.prox_u = ws->st.prox_u;
+    v.prox_u = polish ? PDG_POLISH_WEIGHT : ws->st.prox_u;
+    v.fuel = polish ? 0.0 : 1.0;
+    if (ws->st.prox_u > 0.0) {
+        for (e = 0; e < ws->N * NU; ++e) {
+            ws->Px[e] = v.prox_u;
+        }
+    }
     v.b = ws->b;
     v.h = ws->h;
     v.c = ws->c;
@@ -1170,16 +1195,22 @@ static int evaluate(pdg_workspace *ws, const unsigned char *keep, candidate *cd)
 }
 
 /* The candidate becomes the iterate (its discretization is kept for the next subproblem). */
-static void accept(pdg_workspace *ws, int k)
+static void take_candidate(pdg_workspace *ws)
 {
-    const size_t n_mask = (size_t)NC * ws->N;
     double *swap = ws->disc;
-    memcpy(ws->masks_out + (size_t)k * n_mask, ws->tight, n_mask);
     memcpy(ws->z, ws->znew, sizeof(double) * (size_t)ws->lay.n);
     memcpy(ws->x, ws->xn, sizeof(double) * (size_t)ws->N * NX);
     memcpy(ws->u, ws->un, sizeof(double) * (size_t)ws->N * NU);
     ws->disc = ws->disc_new;
     ws->disc_new = swap;
+}
+
+/* ... as succession k, its tight labels recorded */
+static void accept(pdg_workspace *ws, int k)
+{
+    const size_t n_mask = (size_t)NC * ws->N;
+    memcpy(ws->masks_out + (size_t)k * n_mask, ws->tight, n_mask);
+    take_candidate(ws);
 }
 
 /* Puts back (forces) every constraint the subproblem dropped that the candidate violates;
@@ -1228,6 +1259,7 @@ typedef struct {
     int have_solution; /* a subproblem solution to warm-start the next IPM from */
     int stalled;       /* rejected at the smallest radius: the same subproblem forever */
     int spent;         /* the IPM iteration budget (socp_max_iter_total) is spent */
+    int polishing;     /* the next subproblem is the polish (pdg_settings.polish) */
 } scvx_state;
 
 /* Step 1 (T-SCvx): the caller's mask for iteration k + 1 plus what the full-constraint guard
@@ -1274,22 +1306,27 @@ static int iteration_cap(const pdg_settings *st, int used, int *warm)
     return cap < st->socp_max_iter ? cap : st->socp_max_iter;
 }
 
-/* The SOCP runtime's iteration limit set to cap (the other settings as at set-up). */
-static int set_socp_cap(pdg_workspace *ws, int cap)
+/* The SOCP runtime's iteration limit set to cap, its tolerances to the polish's or the
+ * settings' (the other settings as at set-up). */
+static int set_socp_limits(pdg_workspace *ws, int cap, int polish)
 {
     tscvx_settings ts;
     tscvx_info info;
-    if (cap == ws->socp_cap) {
+    if (cap == ws->socp_cap && polish == ws->socp_polish) {
         return 0;
     }
     socp_settings(&ws->st, &ts);
     tscvx_get_info(ws->socp, &info);
     ts.kkt_backend = info.kkt_backend; /* the method set-up chose (structural) */
     ts.max_iter = cap;
+    if (polish) {
+        ts.tol_gap_abs = ts.tol_gap_rel = ts.tol_feas = ws->st.socp_tol * PDG_POLISH_TOL_FACTOR;
+    }
     if (tscvx_update_settings(ws->socp, &ts) != TSCVX_SETUP_OK) {
         return -1;
     }
     ws->socp_cap = cap;
+    ws->socp_polish = polish;
     return 0;
 }
 
@@ -1308,7 +1345,8 @@ static int solve_subproblem(pdg_workspace *ws, const pdg_options *opt,
      * differ by one linearization or one radius (tscvx_warm_start) */
     int warm = s->have_solution && ws->st.socp_warm_start;
     const int cap = iteration_cap(&ws->st, res->socp_iterations, &warm);
-    if (set_socp_cap(ws, cap) == 0 && assemble(ws, ws->z, ws->disc, keep, s->eta) == 0) {
+    if (set_socp_limits(ws, cap, s->polishing) == 0 &&
+        assemble(ws, ws->z, ws->disc, keep, s->eta, s->polishing) == 0) {
         const double t0 = opt->clock_s ? opt->clock_s() : 0.0;
         if (warm) {
             tscvx_warm_start(ws->socp, ws->znew, ws->ydual, ws->zdual, ws->slack);
@@ -1468,6 +1506,45 @@ static int scvx_iteration(pdg_workspace *ws, const pdg_options *opt, scvx_state 
     return 1;
 }
 
+/* Beyond the paper (pdg_settings.polish): once converged, one more subproblem about the
+ * answer on the full constraint set, without the fuel term and at radius eta_ub, solved to
+ * tighter tolerances; its solution replaces the answer when it leaves no virtual control,
+ * smaller defects and every path constraint met (guidance/scvx.py SCvxSolver._polish). */
+static pdg_polish_status polish(pdg_workspace *ws, const pdg_options *opt, scvx_state *s,
+                                pdg_result *res)
+{
+    const pdg_settings *st = &ws->st;
+    pdg_log_row row;
+    candidate cd;
+    int sst;
+    if (!st->polish || !(st->prox_u > 0.0)) {
+        return PDG_POLISH_OFF;
+    }
+    if (res->socp_iterations >= st->socp_max_iter_total) {
+        return PDG_POLISH_NO_BUDGET;
+    }
+    s->polishing = 1;
+    s->eta = st->eta_ub;
+    sst = solve_subproblem(ws, opt, NULL, s, &row, res);
+    s->polishing = 0;
+    res->polish_iterations = row.solver_iterations;
+    if (sst != TSCVX_SOLVED && sst != TSCVX_SOLVED_INACCURATE) {
+        return sst == TSCVX_MAX_ITER && ws->socp_cap < st->socp_max_iter ? PDG_POLISH_NO_BUDGET
+                                                                         : PDG_POLISH_FAILED;
+    }
+    if (evaluate(ws, NULL, &cd) != 0) {
+        return PDG_POLISH_FAILED;
+    }
+    if (cd.vc > st->vc_tol || !(cd.defect < s->defect) || cd.viol > st->defect_tol) {
+        return PDG_POLISH_NOT_BETTER;
+    }
+    take_candidate(ws);
+    s->J = cd.J;
+    s->defect = cd.defect;
+    s->viol = cd.viol;
+    return PDG_POLISH_KEPT;
+}
+
 pdg_status pdg_solve(pdg_workspace *ws, const pdg_scenario *scenario, const pdg_options *opt,
                      pdg_result *res)
 {
@@ -1483,6 +1560,9 @@ int pdg_result_begin(pdg_workspace *ws, pdg_result *res)
     res->message[0] = '\0';
     res->iterations = res->subproblems_solved = res->socp_iterations = 0;
     res->t_f = res->max_defect = res->max_violation = NAN;
+    res->polish = PDG_POLISH_OFF;
+    res->polish_iterations = 0;
+    res->defect_before_polish = res->m_f_before_polish = NAN;
     if (!PDG_WS_READY(ws)) {
         snprintf(res->message, PDG_MESSAGE_LEN, "workspace not set up (call pdg_setup)");
         return -1;
@@ -1501,7 +1581,7 @@ static pdg_status run_scvx(pdg_workspace *ws, const pdg_scenario *scenario,
                            const pdg_options *opt, pdg_result *res, double eta_init)
 {
     pdg_status status;
-    scvx_state s = {0, 0.0, NAN, NAN, NAN, INFINITY, 0, 0, 0, 0, 0};
+    scvx_state s = {0, 0.0, NAN, NAN, NAN, INFINITY, 0, 0, 0, 0, 0, 0};
     int it;
 
     status = start(ws, scenario, opt, res, &s.J, &s.defect, &s.viol);
@@ -1519,6 +1599,11 @@ static pdg_status run_scvx(pdg_workspace *ws, const pdg_scenario *scenario,
     }
     if (status == PDG_MAX_ITERATIONS && !s.spent) {
         status = diagnose(ws, s.vc, s.defect, s.viol, s.k, s.stalled, res->message);
+    }
+    if (status == PDG_SOLVED) {
+        res->defect_before_polish = s.defect;
+        res->m_f_before_polish = ws->x[(size_t)(ws->N - 1) * NX + IM];
+        res->polish = polish(ws, opt, &s, res);
     }
     to_physical(ws, ws->z, res->x, res->u, &res->t_f);
     res->status = status;
@@ -1635,7 +1720,7 @@ int pdg_debug_assemble(pdg_workspace *ws, const pdg_scenario *s, const double *x
     prepare_scenario(ws, s, t_f);
     to_scaled(ws, x, u, t_f, ws->z);
     to_physical(ws, ws->z, ws->x, ws->u, &tf2);
-    if (discretize(ws, x, u, t_f, ws->disc) != 0 || assemble(ws, ws->z, ws->disc, NULL, eta)) {
+    if (discretize(ws, x, u, t_f, ws->disc) != 0 || assemble(ws, ws->z, ws->disc, NULL, eta, 0)) {
         return PDG_SOLVER_ERROR;
     }
     for (i = 0; c && i < ws->n; ++i) c[i] = ws->c[i];

@@ -143,7 +143,7 @@ typedef struct {
     double eta;     /* trust radius */
 } emit_ctx;
 
-/* c = lam on the virtual control and buffers, -1 on the final mass, and the linear part
+/* c = lam on the virtual control and buffers, -fuel on the final mass, and the linear part
  * -w u_ref of the proximal term (w/2)|u_hat - u_ref|^2 */
 static void objective(const pdg_layout *L, const pdg_values *v)
 {
@@ -151,7 +151,7 @@ static void objective(const pdg_layout *L, const pdg_values *v)
     for (i = 0; i < L->n; ++i) {
         v->c[i] = i >= L->ivc ? v->lam : 0.0;
     }
-    v->c[XI(L->N - 1, IM)] = -1.0;
+    v->c[XI(L->N - 1, IM)] = -v->fuel;
     for (i = L->iu; i < L->isig; ++i) {
         v->c[i] -= v->prox_u * v->zref[i];
     }

@@ -108,10 +108,23 @@ typedef enum {
     PDG_NSTATUS
 } pdg_status;
 
+/* What became of the polish of a solve (pdg_settings.polish, pdg_result.polish). */
+typedef enum {
+    PDG_POLISH_OFF = 0,    /* not run: off, prox_u = 0, or the solve did not converge */
+    PDG_POLISH_KEPT,       /* the answer is the polished iterate */
+    PDG_POLISH_NO_BUDGET,  /* not run: the IPM iteration budget was spent */
+    PDG_POLISH_FAILED,     /* its conic solve or the model evaluation failed; the converged
+                              iterate kept */
+    PDG_POLISH_NOT_BETTER, /* it left virtual control, no smaller defects or a path
+                              constraint unmet; the converged iterate kept */
+    PDG_POLISH_NSTATUS
+} pdg_polish_status;
+
 const char *pdg_setup_status_message(pdg_setup_status status);
 const char *pdg_status_message(pdg_status status);
 /* "solved", "infeasible", "max_iterations", "solver_error", "invalid_input" */
 const char *pdg_status_name(pdg_status status);
+const char *pdg_polish_message(pdg_polish_status polish);
 
 /* ---- problem ----------------------------------------------------------------------------- */
 
@@ -177,7 +190,20 @@ typedef struct {
      * the subproblem objective (not in L, Eq. (13)); it makes the subproblem's answer unique,
      * so that conic solvers agree. 0: the paper's linear objective. Fixed at pdg_setup. */
     double prox_u;
+    /* Beyond the paper, off by default: 1 = once converged, one more subproblem about the answer on the
+     * full constraint set without the fuel term, min lam (sum t + sum s') +
+     * (PDG_POLISH_WEIGHT / 2)|u_hat - u_hat_ref|^2 at radius eta_ub, solved to
+     * PDG_POLISH_TOL_FACTOR x socp_tol: the least thrust change that meets the linearized
+     * dynamics, which removes the defects the last trust-region steps left (of the order of
+     * the step squared after it). Its answer is kept when it leaves no virtual control,
+     * smaller defects and every path constraint met (pdg_result.polish). Needs prox_u > 0
+     * (the P pattern). 0 (the default): the converged iterate as it is; a solve started
+     * from a polished answer of the same landing stalls at eta_lb (README). */
+    int polish;
 } pdg_settings;
+
+#define PDG_POLISH_WEIGHT 1.0     /* guidance/scvx.py POLISH_WEIGHT */
+#define PDG_POLISH_TOL_FACTOR 1e-2 /* guidance/scvx.py POLISH_TOL_FACTOR */
 
 /* Returns k-th mask (7N bytes, nonzero = keep) into `mask` for SCvx iteration k = 1, 2, ...;
  * returns 1 when it wrote a mask, 0 to solve the full problem at that iteration. Any other
@@ -215,7 +241,12 @@ typedef struct {
     int subproblems_solved;   /* convex subproblems solved, rejections included */
     double max_defect;        /* max |x_{k+1} - F(x_k, u_k, u_k+1, t_f)|, physical units */
     double max_violation;     /* max path-constraint value h (<= 0 when met) */
-    int socp_iterations;      /* IPM iterations summed over the subproblems */
+    int socp_iterations;      /* IPM iterations summed over the subproblems (the polish's
+                                 included) */
+    pdg_polish_status polish; /* what became of the polish (pdg_settings.polish) */
+    int polish_iterations;    /* its IPM iterations (0: not run) */
+    double defect_before_polish; /* max_defect and the final mass of the converged iterate */
+    double m_f_before_polish;    /* (NaN: the solve did not converge) */
 } pdg_result;
 
 /* One row of the iteration log (the Python reference's columns). */

@@ -137,6 +137,10 @@ static void test_settings_and_sizes(void)
     st.tau_r_update = 2;
     CHECK(pdg_workspace_size(vehicle(50, 1), &st, NULL, 0, &need) == PDG_SETUP_BAD_SETTINGS);
     pdg_default_settings(&st);
+    CHECK(st.polish == 0); /* guidance/params.py SCvxSettings.polish */
+    st.polish = -1;
+    CHECK(pdg_workspace_size(vehicle(50, 1), &st, NULL, 0, &need) == PDG_SETUP_BAD_SETTINGS);
+    pdg_default_settings(&st);
     CHECK(st.prox_u == 2e-2); /* guidance/params.py SCvxSettings.prox_u */
     st.prox_u = -1e-3;
     CHECK(pdg_workspace_size(vehicle(50, 1), &st, NULL, 0, &need) == PDG_SETUP_BAD_SETTINGS);
@@ -167,6 +171,10 @@ static void test_settings_and_sizes(void)
         CHECK(strcmp(pdg_status_message(PDG_NSTATUS), "unknown status") == 0);
         CHECK(strcmp(pdg_status_message((pdg_status)-1), "unknown status") == 0);
         CHECK(strcmp(pdg_setup_status_message(PDG_SETUP_NSTATUS), "unknown status") == 0);
+        for (k = 0; k < PDG_POLISH_NSTATUS; ++k) {
+            CHECK(strlen(pdg_polish_message((pdg_polish_status)k)) > 8);
+        }
+        CHECK(strcmp(pdg_polish_message(PDG_POLISH_NSTATUS), "unknown status") == 0);
     }
     {   /* the check names the setting, its range and the value */
         char msg[PDG_MESSAGE_LEN];
@@ -316,7 +324,7 @@ static void test_solve(pdg_workspace *ws, int with_masks)
     pdg_log_row row;
     unsigned char m[PDG_NCON * 50];
     double mf;
-    int i;
+    int i, sum;
     pdg_default_scenario(&s);
     r.x = x;
     r.u = u;
@@ -332,11 +340,16 @@ static void test_solve(pdg_workspace *ws, int with_masks)
                                            * mass `guidance solve` prints is the new value */
     CHECK(r.iterations >= 9 && r.iterations <= 15);
     CHECK(r.max_defect <= 1e-5 && r.max_violation <= 1e-5);
+    CHECK(r.polish == PDG_POLISH_OFF && r.polish_iterations == 0); /* off by default */
+    CHECK(r.defect_before_polish == r.max_defect && r.m_f_before_polish == mf);
     CHECK(pdg_log_length(ws) == r.subproblems_solved);
+    sum = 0;
     for (i = 0; i < pdg_log_length(ws); ++i) {
         CHECK(pdg_get_log(ws, i, &row) == PDG_SETUP_OK);
         CHECK(row.solver_iterations > 0);
+        sum += row.solver_iterations;
     }
+    CHECK(sum == r.socp_iterations);
     CHECK(pdg_get_log(ws, pdg_log_length(ws), &row) == PDG_SETUP_BAD_INDEX);
     CHECK(pdg_get_log(ws, -1, &row) == PDG_SETUP_BAD_INDEX);
     CHECK(pdg_get_mask(ws, r.iterations - 1, m) == PDG_SETUP_OK);
@@ -459,6 +472,79 @@ static void test_iteration_budget(void)
     free(arena);
 }
 
+/* The polish (pdg_settings.polish): the default landing's defects removed, the final mass
+ * moved by what they had bought, its IPM iterations counted in the call's; with the budget
+ * spent at convergence it is not run, and with prox_u = 0 it is off. */
+static void test_polish(void)
+{
+    pdg_settings st;
+    pdg_scenario s;
+    pdg_result r;
+    pdg_log_row row;
+    void *arena = NULL;
+    size_t bytes = 0;
+    pdg_workspace *ws;
+    int i, sum = 0, plain_total;
+    double plain_mf;
+    pdg_default_settings(&st);
+    st.polish = 1;
+    ws = make_ws(50, 1, &st, &arena, &bytes);
+    if (!ws) {
+        return;
+    }
+    pdg_default_scenario(&s);
+    r.x = x;
+    r.u = u;
+    CHECK(pdg_solve(ws, &s, NULL, &r) == PDG_SOLVED);
+    printf("polished: largest defect %.1e -> %.1e, m_f %.9f -> %.9f, %d IPM iterations\n",
+           r.defect_before_polish, r.max_defect, r.m_f_before_polish,
+           x[PDG_NSTATE * 49 + 13], r.polish_iterations);
+    CHECK(r.polish == PDG_POLISH_KEPT && r.polish_iterations > 0);
+    CHECK(r.max_defect <= 1e-8 && r.max_violation <= 1e-8);
+    CHECK(r.defect_before_polish > 1e3 * r.max_defect && r.defect_before_polish <= 1e-5);
+    /* Python reference on Clarabel: 2.23833554 converged, 2.23826491 polished */
+    CHECK(fabs(r.m_f_before_polish - 2.2383355) < 1e-6);
+    CHECK(fabs(x[PDG_NSTATE * 49 + 13] - 2.2382649) < 1e-6);
+    for (i = 0; i < pdg_log_length(ws); ++i) {
+        CHECK(pdg_get_log(ws, i, &row) == PDG_SETUP_OK);
+        sum += row.solver_iterations;
+    }
+    CHECK(sum + r.polish_iterations == r.socp_iterations);
+    free(arena);
+    /* the budget spent to the last iteration at convergence: no polish. Cold IPM starts, so
+     * that each subproblem may use all that is left and a budget of the call's iterations
+     * changes none of them (warm-started ones get half of it) */
+    st.socp_warm_start = 0;
+    for (i = 0; i < 3; ++i) { /* unlimited, the call's total, one more */
+        st.socp_max_iter_total = i == 0 ? 24000 : plain_total + (i - 1);
+        ws = make_ws(50, 1, &st, &arena, &bytes);
+        if (ws) {
+            CHECK(pdg_solve(ws, &s, NULL, &r) == PDG_SOLVED);
+            if (i == 0) {
+                CHECK(r.polish == PDG_POLISH_KEPT);
+                plain_total = r.socp_iterations - r.polish_iterations;
+                plain_mf = r.m_f_before_polish;
+            } else { /* 0 or 1 iteration left: not run, or stopped at its first */
+                CHECK(r.polish == PDG_POLISH_NO_BUDGET && r.polish_iterations == i - 1);
+                CHECK(r.socp_iterations == st.socp_max_iter_total);
+                CHECK(x[PDG_NSTATE * 49 + 13] == plain_mf);
+                CHECK(r.max_defect == r.defect_before_polish);
+            }
+        }
+        free(arena);
+    }
+    st.socp_warm_start = 1;
+    /* the paper's linear objective has no P to carry the polish's */
+    st.socp_max_iter_total = 24000;
+    st.prox_u = 0.0;
+    ws = make_ws(50, 1, &st, &arena, &bytes);
+    if (ws) {
+        pdg_solve(ws, &s, NULL, &r);
+        CHECK(r.polish == PDG_POLISH_OFF && r.polish_iterations == 0);
+    }
+    free(arena);
+}
+
 int main(void)
 {
     pdg_settings st;
@@ -468,6 +554,7 @@ int main(void)
     const int full = getenv("PDG_TEST_QUICK") == NULL;
     test_settings_and_sizes();
     test_iteration_budget();
+    test_polish();
     memset(&st, 0, sizeof st); /* padding zero, as the workspace's copy */
     pdg_default_settings(&st);
     ws = make_ws(50, 1, &st, &arena, &bytes);
