@@ -473,8 +473,8 @@ class SCvxSolver:
     def _polish(self, s: _LoopState) -> Polish:
         """Beyond the paper: the converged iterate's defects removed by one subproblem about
         it on the full constraint set, with the fuel term out and the trust radius at eta_ub
-        (the step is of the defects' size): min lambda (sum t + sum s') + (prox_u / 2)
-        |u_hat - u_hat_ref|^2 moves the thrust least among the trajectories that meet the
+        (the step is of the defects' size): min lambda (sum t + sum s') + (POLISH_WEIGHT /
+        2) |u_hat - u_hat_ref|^2 moves the thrust least among the trajectories that meet the
         linearized dynamics, whose nonlinear defects are then of the order of the step
         squared. Kept when it leaves no virtual control, smaller defects and every path
         constraint met (the C library's polish, pdg_scvx.c)."""
@@ -701,17 +701,18 @@ def _changed_fraction(prev: np.ndarray | None, cur: np.ndarray | None) -> float:
 # skipped (a bound for alpha near 1). The C library has the same.
 RETRY_MARGIN = 1.001
 RETRY_SKIP_MAX = 64
-# The interior-point method of a retry starts from the rejected answer with its trajectory
+
 # The polish (SCvxSettings.polish, SCvxSolver._polish; C: pdg_scvx.c, the same numbers): its
 # objective is lambda (sum t + sum s') + (POLISH_WEIGHT / 2) |u_hat - u_hat_ref|^2, solved to
 # POLISH_TOL_FACTOR x socp_tol. Its optimum lies within about sqrt(2 gap / POLISH_WEIGHT) of
 # where an IPM stops, and the whole objective is only about 1e-8: at the subproblems' 1e-9,
 # with the weight prox_u = 0.02, Clarabel and the C runtime stopped 1.5e-5 apart in final mass
-# on the default landing, with weight 1 at 1e-11 7.5e-9 apart (27 Nov). A weight much larger
+# on the default landing, with weight 1 at 1e-11 7.6e-9 apart (27 Nov). A weight much larger
 # than 1 is no longer balanced by the penalty lambda: at 1e4 virtual control was left.
 POLISH_WEIGHT = 1.0
 POLISH_TOL_FACTOR = 1e-2
 
+# The interior-point method of a retry starts from the rejected answer with its trajectory
 # part pulled back towards the reference, to RETRY_START of the new radius: the retry's answer
 # lies near there, on or inside the smaller trust region, and the rejected one outside it
 # (4 % fewer IPM iterations on the catalog: README, "Warm start"). The C library does the
