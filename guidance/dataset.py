@@ -420,7 +420,7 @@ def _read_run_config(out_dir: Path) -> dict:
         config = json.loads(path.read_text(encoding="utf-8"))
     except (OSError, ValueError, RecursionError) as exc:
         raise InputError(f"{path}: not a readable run record ({exc})") from None
-    required = RUN_KEYS[:-1]  # a run recorded before 27 Nov has no RK4_KEY (with_rk4_steps)
+    required = tuple(k for k in RUN_KEYS if k != RK4_KEY)  # before 27 Nov: no RK4_KEY
     missing = [k for k in required if k not in config] if isinstance(config, dict) else required
     if missing:
         raise InputError(f"{path}: not a run record (missing {', '.join(missing)})")
