@@ -42,6 +42,18 @@ STATE_NAMES = ("r1", "r2", "r3", "v1", "v2", "v3", "q0", "q1", "q2", "q3", "w1",
 # How the reason of a call stopped by socp_max_iter_total starts (C: pdg_scvx.c budget_spent)
 BUDGET_SPENT = "IPM iteration budget spent"
 
+# The reason of a solve whose step was rejected at eta_lb from an iterate that meets every
+# tolerance (C: pdg_scvx.c). Near a plan whose defects are far below defect_tol (a polished
+# or exactly predicted one), every step of the subproblem is rejected: lambda times its
+# second-order defects outweighs the little it gains (the Maratos effect of an exact penalty).
+# An accepted step would only move the plan within step_tol, so it is returned, solved (paper
+# Algorithm 1 returns the reference when dJ = 0), where a reference short of a tolerance
+# ends "step rejected at the smallest trust radius".
+CONVERGED_AT_REFERENCE = (
+    "converged; the step at the smallest trust radius, within step_tol, was rejected: "
+    "the iterate kept"
+)
+
 
 @dataclass
 class IterationRecord:
@@ -328,8 +340,11 @@ class SCvxSolver:
             s.status, s.reason = "solved", "converged"
             return False
         if not record.accepted and not record.restored:
-            if s.eta <= st.eta_lb:
-                s.stalled = True  # same reference, same radius: rejected forever
+            if s.eta <= st.eta_lb:  # same reference, same radius: rejected forever
+                if self._converged(s, cand):  # the reference meets every tolerance
+                    s.status, s.reason = "solved", CONVERGED_AT_REFERENCE
+                else:
+                    s.stalled = True
                 return False
             if s.last_sol is not None and eta_new < cand.tr_step:  # the retry's warm start
                 f = RETRY_START * eta_new / cand.tr_step

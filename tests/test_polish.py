@@ -11,7 +11,13 @@ import pytest
 from guidance import cguidance
 from guidance.cli import main
 from guidance.params import Scenario, SCvxSettings
-from guidance.scvx import POLISH_MEANINGS, POLISH_OUTCOMES, SCvxResult, SCvxSolver
+from guidance.scvx import (
+    CONVERGED_AT_REFERENCE,
+    POLISH_MEANINGS,
+    POLISH_OUTCOMES,
+    SCvxResult,
+    SCvxSolver,
+)
 from guidance.trajectory_io import read_trajectory
 from guidance.verify import audit
 
@@ -75,6 +81,25 @@ def test_the_loops_polish_to_the_same_trajectory(polished) -> None:
         assert abs(r.m_f - ref.m_f) / ref.m_f <= 1e-7, name
         assert r.iterations == ref.iterations, name
     assert polished["c"].polish.ipm_iterations == polished["python_c"].polish.ipm_iterations
+
+
+def test_a_replan_from_the_polished_plan_converges_at_it(polished) -> None:
+    """Started from its own polished plan (defects 1e-10 against defect_tol's 1e-5), every step
+    the subproblem offers is rejected: lambda times its second-order defects outweighs its
+    gain, down to eta_lb. Until 27 Nov the solve ended there max_iterations; the plan meets
+    every tolerance, so it is now returned, solved, in both loops alike."""
+    p = polished["c"]
+    guess = (p.x, p.u, p.t_f)
+    plain = SCvxSettings()
+    c = cguidance.solve_c(SCN, plain, guess=guess)
+    py = SCvxSolver(SCN, plain, backend="c").solve(guess=guess)
+    for r in (c, py):
+        assert (r.status, r.reason) == ("solved", CONVERGED_AT_REFERENCE)
+        assert r.iterations == 0 and not any(h.accepted for h in r.history)
+        assert r.history[-1].eta == plain.eta_lb
+        # the plan itself (a guess is used as given)
+        assert (r.x == p.x).all() and (r.u == p.u).all() and r.t_f == p.t_f
+    assert c.subproblems_solved == py.subproblems_solved
 
 
 @pytest.mark.parametrize("left", [0, 1])

@@ -1438,6 +1438,14 @@ static void budget_spent(const pdg_workspace *ws, scvx_state *s, pdg_result *res
              s->k, s->defect, s->viol);
 }
 
+/* The convergence test: the candidate's step within step_tol, its virtual control within
+ * vc_tol, and the iterate (the candidate when accepted) within defect_tol. */
+static int converged(const pdg_settings *st, const scvx_state *s, const candidate *cd)
+{
+    return cd->step <= st->step_tol && s->vc <= st->vc_tol && s->defect <= st->defect_tol &&
+           s->viol <= st->defect_tol;
+}
+
 /* One subproblem of Algorithm 1 (Algorithm 2 with masks). Returns 1 to go on; 0 to stop,
  * with the status in *status (PDG_MAX_ITERATIONS when stalled, for diagnose). */
 static int scvx_iteration(pdg_workspace *ws, const pdg_options *opt, scvx_state *s,
@@ -1487,15 +1495,25 @@ static int scvx_iteration(pdg_workspace *ws, const pdg_options *opt, scvx_state 
         succeed(ws, s, &cd, has_mask);
     }
     /* step 5: convergence on the FULL constraint set; T-SCvx never returns what it rejects */
-    if (r->accepted && cd.step <= st->step_tol && s->vc <= st->vc_tol &&
-        s->defect <= st->defect_tol && s->viol <= st->defect_tol) {
+    if (r->accepted && converged(st, s, &cd)) {
         *status = PDG_SOLVED;
         snprintf(res->message, PDG_MESSAGE_LEN, "converged");
         return 0;
     }
     if (!r->accepted && !r->restored) {
-        if (s->eta <= st->eta_lb) {
-            s->stalled = 1; /* same reference, same radius: it would be rejected forever */
+        if (s->eta <= st->eta_lb) { /* same reference, same radius: rejected forever */
+            /* Beyond the paper: near a plan whose defects are far below defect_tol, lambda
+             * times a step's second-order defects outweighs its gain (the Maratos effect);
+             * a reference that meets every tolerance is returned, solved
+             * (guidance/scvx.py CONVERGED_AT_REFERENCE) */
+            if (converged(st, s, &cd)) {
+                *status = PDG_SOLVED;
+                snprintf(res->message, PDG_MESSAGE_LEN,
+                         "converged; the step at the smallest trust radius, within step_tol, "
+                         "was rejected: the iterate kept");
+            } else {
+                s->stalled = 1;
+            }
             return 0;
         }
         if (eta_new < cd.tr_step) {

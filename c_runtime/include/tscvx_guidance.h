@@ -92,7 +92,8 @@ typedef enum {
 /* Outcome of pdg_solve (the same names as the Python reference's statuses). */
 typedef enum {
     PDG_SOLVED = 0,        /* converged: small step, no virtual control, defects and path
-                              constraints met (the FULL constraint set) */
+                              constraints met (the FULL constraint set); a step rejected at
+                              eta_lb from an iterate that meets them ends here with it */
     PDG_INFEASIBLE,        /* virtual control still > vc_tol after iter_max iterations */
     PDG_MAX_ITERATIONS,    /* virtual control zero but not converged, or the IPM iteration
                               budget (socp_max_iter_total) spent: the result is the last
@@ -197,8 +198,8 @@ typedef struct {
      * dynamics, which removes the defects the last trust-region steps left (of the order of
      * the step squared after it). Its answer is kept when it leaves no virtual control,
      * smaller defects and every path constraint met (pdg_result.polish). Needs prox_u > 0
-     * (the P pattern). 0 (the default): the converged iterate as it is; a solve started
-     * from a polished answer of the same landing stalls at eta_lb (README). */
+     * (the P pattern). 0 (the default): the converged iterate as it is (the polish costs
+     * 6.8 % more instructions on the default landing; README). */
     int polish;
 } pdg_settings;
 

@@ -475,6 +475,50 @@ static void test_iteration_budget(void)
 /* The polish (pdg_settings.polish): the default landing's defects removed, the final mass
  * moved by what they had bought, its IPM iterations counted in the call's; with the budget
  * spent at convergence it is not run, and with prox_u = 0 it is off. */
+/* Re-planning from the polished plan (x, u, t_f of the last solve): lambda times any step's
+ * second-order defects outweighs its gain, so every step is rejected down to eta_lb, where
+ * the plan, meeting every tolerance, is returned solved (it used to end
+ * PDG_MAX_ITERATIONS). */
+static void test_replan_from_polished(double t_f)
+{
+    static double plan_x[50 * PDG_NSTATE], plan_u[50 * PDG_NCTRL];
+    pdg_settings st;
+    pdg_scenario s;
+    pdg_options o;
+    pdg_result r;
+    pdg_log_row row;
+    void *arena = NULL;
+    size_t bytes = 0;
+    pdg_workspace *ws;
+    int i;
+    memcpy(plan_x, x, sizeof plan_x);
+    memcpy(plan_u, u, sizeof plan_u);
+    pdg_default_settings(&st);
+    ws = make_ws(50, 1, &st, &arena, &bytes);
+    if (!ws) {
+        return;
+    }
+    pdg_default_scenario(&s);
+    memset(&o, 0, sizeof o);
+    o.guess_x = plan_x;
+    o.guess_u = plan_u;
+    o.guess_t_f = t_f;
+    r.x = x;
+    r.u = u;
+    CHECK(pdg_solve(ws, &s, &o, &r) == PDG_SOLVED);
+    printf("re-planned from the polished plan: %d subproblems, %s\n", r.subproblems_solved,
+           r.message);
+    CHECK(strncmp(r.message, "converged; the step at the smallest trust radius", 48) == 0);
+    CHECK(r.iterations == 0 && pdg_log_length(ws) == r.subproblems_solved);
+    for (i = 0; i < pdg_log_length(ws); ++i) {
+        CHECK(pdg_get_log(ws, i, &row) == PDG_SETUP_OK && !row.accepted);
+    }
+    CHECK(row.eta == st.eta_lb);
+    CHECK(memcmp(x, plan_x, sizeof plan_x) == 0 && memcmp(u, plan_u, sizeof plan_u) == 0);
+    CHECK(r.t_f == t_f);
+    free(arena);
+}
+
 static void test_polish(void)
 {
     pdg_settings st;
@@ -511,6 +555,7 @@ static void test_polish(void)
     }
     CHECK(sum + r.polish_iterations == r.socp_iterations);
     free(arena);
+    test_replan_from_polished(r.t_f);
     /* the budget spent to the last iteration at convergence: no polish. Cold IPM starts, so
      * that each subproblem may use all that is left and a budget of the call's iterations
      * changes none of them (warm-started ones get half of it) */
