@@ -412,9 +412,10 @@ def _run_config_path(out_dir: Path) -> Path:
     return out_dir / "run.json"
 
 
-def _read_run_config(out_dir: Path) -> dict:
+def _read_run_config(out_dir: Path, infer: bool = True) -> dict:
     """The run's run.json: a JSON object with the keys of RUN_KEYS; InputError naming the file
-    otherwise (a damaged or hand-edited one)."""
+    otherwise (a damaged or hand-edited one). ``infer``: RK4_KEY of a record made before it
+    filled in (with_rk4_steps); False: the record as written."""
     path = _run_config_path(out_dir)
     try:
         config = json.loads(path.read_text(encoding="utf-8"))
@@ -424,7 +425,7 @@ def _read_run_config(out_dir: Path) -> dict:
     missing = [k for k in required if k not in config] if isinstance(config, dict) else required
     if missing:
         raise InputError(f"{path}: not a run record (missing {', '.join(missing)})")
-    return with_rk4_steps(config)
+    return with_rk4_steps(config) if infer else config
 
 
 # The RK4 steps per FOH interval the run's samples were solved with: a code rule, not a
@@ -468,7 +469,8 @@ def _check_run_config(out_dir: Path, config: dict) -> None:
     if not path.exists():
         record_code_version(path, config)
         return
-    old = _read_run_config(out_dir)
+    as_written = _read_run_config(out_dir, infer=False)
+    old = with_rk4_steps(as_written)
     for key in RUN_KEYS:
         if not _same_run_value(key, old.get(key), config[key]):
             new = config[key]
@@ -477,7 +479,7 @@ def _check_run_config(out_dir: Path, config: dict) -> None:
                 f"{out_dir} holds samples made with a different {key}{given}; rerun with the "
                 "options that made it to resume, or use another --run-dir"
             )
-    record_code_version(path, old)
+    record_code_version(path, as_written)  # an inferred RK4_KEY is not written as recorded
 
 
 class WorkerDiedError(RuntimeError):

@@ -337,6 +337,7 @@ def test_a_run_recorded_before_the_rk4_rule_resumes_only_where_the_steps_agree(
     config = json.loads((run / "run.json").read_text())
     assert config[RK4_KEY] == 2
     del config[RK4_KEY]
+    config["code_versions"] = ["0.1.0 (before the rk4 rule)"]  # so that the resume records
     (run / "run.json").write_text(json.dumps(config))
     rec = read_sample(sample_path(run, 0))
     recorded = json.loads(str(rec["run"]))
@@ -345,6 +346,9 @@ def test_a_run_recorded_before_the_rk4_rule_resumes_only_where_the_steps_agree(
     solved = generate(run, 2, seed=11, ranges=EASY, workers=1, progress=False, backend="clarabel")
     assert sum(solved.values()) == 0  # both kept
     assert pack(run, tmp_path / "d.npz")[RK4_KEY] == 2
+    # the resume adds its code version, not the inferred steps as if recorded
+    resumed = json.loads((run / "run.json").read_text())
+    assert len(resumed["code_versions"]) == 2 and RK4_KEY not in resumed
     coarse = tmp_path / "coarse"
     kw = dict(seed=11, ranges=EASY, workers=1, progress=False, backend="clarabel")
     generate(coarse, 0, params=Params(N=20), **kw)
