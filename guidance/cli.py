@@ -435,7 +435,7 @@ def _add_solve(sub: argparse._SubParsersAction) -> None:
         "--polish",
         action="store_true",
         help="after convergence, one more subproblem without the fuel term that removes the "
-        "defects the last trust-region steps left (largest defect 1e-5 -> 1e-10; README, "
+        "defects the last trust-region steps left (largest defect 1e-5 -> 1e-10; docs/scvx.md, "
         "'What the defects cost open loop')",
     )
     s.set_defaults(func=cmd_solve)

@@ -32,7 +32,7 @@ class Tolerances:
     landing (1.8e-5 of it the RK4 error, 27 Nov), at most 2.7e-4 over the catalog and 40
     sampled landings solved by SCvx and T-SCvx in C, node states 2.2e-4; flown by an engine
     held at T_min where the plan dips below it, 4.5e-4 (23 Nov 2026). A vehicle outside the
-    sampled envelope can miss it (README, "What the defects cost open loop")."""
+    sampled envelope can miss it (docs/scvx.md, "What the defects cost open loop")."""
 
     initial: float = 1e-9  # max |x[0] - x0| against the file's scenario
     landing: float = 1e-3  # |r(t_f) - r_f| and |v(t_f) - v_f|, propagated

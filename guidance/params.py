@@ -182,7 +182,7 @@ class SCvxSettings:
     # linear objective leaves the subproblem's optimal set flat in the thrust history, so two
     # correct conic solvers stop at different points of it and SCvx follows them apart (final
     # masses 1e-4 apart); with w = 2e-2 the answer is unique and the solvers agree to about
-    # 1e-8 (README, "How the reference SCvx is built", "Beyond the paper"). 0 gives the
+    # 1e-8 (docs/scvx.md, "Beyond the paper"). 0 gives the
     # paper's objective.
     prox_u: float = 2e-2
     # Beyond the paper, off by default: once SCvx has converged, one more subproblem about
@@ -192,7 +192,7 @@ class SCvxSettings:
     # default landing: largest defect 7.1e-6 -> 1.6e-10, open-loop miss 2.3e-4 -> 1.8e-5,
     # final mass -7.1e-5 (what the defects had bought), 16 IPM iterations. Kept only when it
     # leaves no virtual control, smaller defects and every path constraint met; needs
-    # prox_u > 0. Not the default: 6.8 % more instructions on the default landing (README,
+    # prox_u > 0. Not the default: 6.8 % more instructions on the default landing (docs/scvx.md,
     # "What the defects cost open loop").
     polish: bool = False
     # Conic subproblem solver (either backend, and the C loop): gap and feasibility

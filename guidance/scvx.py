@@ -730,8 +730,8 @@ POLISH_TOL_FACTOR = 1e-2
 # The interior-point method of a retry starts from the rejected answer with its trajectory
 # part pulled back towards the reference, to RETRY_START of the new radius: the retry's answer
 # lies near there, on or inside the smaller trust region, and the rejected one outside it
-# (4 % fewer IPM iterations on the catalog: README, "Warm start"). The C library does the
-# same.
+# (4 % fewer IPM iterations on the catalog: docs/socp-runtime.md, "Warm start"). The C
+# library does the same.
 RETRY_START = 0.99
 
 

@@ -585,7 +585,7 @@ def test_masks_run_tscvx_with_the_full_constraint_guard() -> None:
         # 33 subproblems, 18 of them rejected: the two loops' rounding (1e-13 in the data)
         # moves the late ratios rho in their third digit, and the step test ends them one
         # iteration apart (16 and 15 with the warm-started IPM, 25 Nov; the same 15 cold, at
-        # 1.7e-7), within what "converged" means for the final mass (README: -8e-6 to +3.7e-5)
+        # 1.7e-7), within what "converged" means for the final mass (docs/scvx.md: -8e-6 to +3.7e-5)
         assert abs(c.iterations - py.iterations) <= 1
         assert abs(c.m_f - py.m_f) / py.m_f <= 1e-5
     drop = np.ones((scn.params.N, NC), bool)

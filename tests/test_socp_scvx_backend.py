@@ -5,7 +5,7 @@ count. It holds because the subproblem has a unique answer: the proximal term on
 (``SCvxSettings.prox_u``). With the paper's linear objective (``prox_u = 0``) the subproblems'
 optimal sets are flat in the thrust history, the two conic solvers stop at different points of
 them (both within their 1e-9 tolerances), and SCvx follows them apart: 1e-4 in final mass on
-this landing and iteration counts two apart (``guidance agreement``; README).
+this landing and iteration counts two apart (``guidance agreement``; docs/scvx.md).
 """
 
 from __future__ import annotations

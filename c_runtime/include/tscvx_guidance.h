@@ -199,7 +199,7 @@ typedef struct {
      * the step squared after it). Its answer is kept when it leaves no virtual control,
      * smaller defects and every path constraint met (pdg_result.polish). Needs prox_u > 0
      * (the P pattern). 0 (the default): the converged iterate as it is (the polish costs
-     * 6.8 % more instructions on the default landing; README). */
+     * 6.8 % more instructions on the default landing; docs/scvx.md). */
     int polish;
 } pdg_settings;
 

@@ -215,7 +215,7 @@ static int factor(tscvx_workspace *ws) {
  * direction, in direction()), dominant once tau collapses towards a certificate (kappa > tau).
  * The sparse SOC expansion's solves always need it, as in the predictor. Saves 6 % of a
  * guidance call; the cost, where within its tolerances the IPM stops depends more on
- * rounding, is measured in the README ("The SOCP runtime's KKT methods"). */
+ * rounding, is measured in docs/socp-runtime.md. */
 static int constant_solve(tscvx_workspace *ws) {
     const tscvx_int n = ws->n, m = ws->m;
     const tscvx_float tau = ws->tau;
@@ -339,7 +339,7 @@ static void take_step(tscvx_workspace *ws, tscvx_float a) {
  * was blended with the cold start (Skajaa, Andersen & Ye 2013), which gave each cone the
  * complementarity 0.02 (s_0 + z_0) whatever the residuals: up to 10 on the landing's
  * penalty rows (multipliers near 500). Over the SCvx solves of the landing catalog this
- * start takes 8 % fewer IPM iterations than that blend (README, "Warm start"). Returns -1
+ * start takes 8 % fewer IPM iterations than that blend (docs/socp-runtime.md, "Warm start"). Returns -1
  * when the centred s or z is not strictly inside the cones (the caller's s or z outside). */
 #define WARM_MU_MIN 1e-5
 #define WARM_MU_PER_RES 0.1
