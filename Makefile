@@ -74,6 +74,7 @@ pytest: setup lib
 lint: setup
 	$(VENV)/bin/ruff check guidance tests codegen
 	$(VENV)/bin/ruff format --check guidance tests codegen
+	$(VENV)/bin/mypy
 
 # gcc's static analyzer over every hand-written flight source, its findings errors (~15 s)
 analyze: lib

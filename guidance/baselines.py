@@ -27,6 +27,7 @@ import multiprocessing as mp
 import resource
 import tempfile
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -166,6 +167,8 @@ def _run_method(spec: dict[str, Any]) -> dict[str, Any]:
     with np.load(spec["data"]) as f:
         d = {k: f[k] for k in f.files}
     t0 = time.perf_counter()
+    table: KDTreeTable | PCALinearTable | None = None
+    predict: Callable[[np.ndarray], np.ndarray]
     if spec["method"] == "KDTree":
         table = KDTreeTable(d["X_tr"], d["Y_tr"])
         predict = table.predict
@@ -193,7 +196,7 @@ def _run_method(spec: dict[str, Any]) -> dict[str, Any]:
         "build_s": build_s,
         "peak_mb": _peak_mb() - base,
     }
-    if spec["method"] == "Linear Interpolation":
+    if isinstance(table, PCALinearTable):
         out["outside_hull"] = table.outside
     return out
 
@@ -242,7 +245,7 @@ def evaluate_task(
         if model_path is not None and Path(model_path).is_file():
             path = Path(tmp) / "nn.npz"
             np.savez(path, X_query=td.X_te_raw[q].astype(np.float32))
-            spec = {"method": "T-SCvx", "data": str(path), "model": str(model_path)}
+            spec: dict[str, Any] = {"method": "T-SCvx", "data": str(path), "model": str(model_path)}
             spec.update(kind=td.kind, params=params)
             r = _in_fresh_process(spec)
             raw = r["pred"]
@@ -314,7 +317,7 @@ def run_baselines(
         out[kind] = evaluate_task(
             td, model, interp_train, interp_test, max_queries, seed, ds.header.get("params")
         )
-        if "T-SCvx" in out[kind]:
+        if model is not None and "T-SCvx" in out[kind]:
             out[kind]["T-SCvx"]["data_warning"] = training_data_warning(model, digest, seed)
     return out
 

@@ -29,7 +29,7 @@ import subprocess
 import tempfile
 import time
 from collections import Counter
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -254,12 +254,13 @@ def run_clarabel(prob: ConicProblem, reps: int) -> Run:
 
     st = clarabel.DefaultSettings()  # Clarabel as shipped, not the reference's tuning
     st.verbose = False
-    best, sol = math.inf, None
+    best, sol = math.inf, None  # reps >= 1: sol is set
     for _ in range(reps):
         solver = clarabel_solver(prob, st)
         t0 = time.perf_counter()
         sol = solver.solve()
         best = min(best, time.perf_counter() - t0)
+    assert sol is not None
     return Run(best, int(sol.iterations), str(sol.status))
 
 
@@ -275,6 +276,7 @@ def run_ecos(prob: ConicProblem, reps: int) -> Run | None:
         kw = {"A": Aeq, "b": beq} if Aeq.shape[0] else {}
         out = ecos.solve(prob.q, G, h, dims, verbose=False, **kw)
         best = min(best, float(out["info"]["timing"]["tsolve"]))
+    assert out is not None
     return Run(best, int(out["info"]["iter"]), str(out["info"]["infostring"]))
 
 
@@ -304,6 +306,7 @@ def run_qoco(prob: ConicProblem, reps: int) -> Run:
         t0 = time.perf_counter()
         res = solver.solve()
         best = min(best, time.perf_counter() - t0)
+    assert res is not None
     return Run(best, int(res.iters), str(res.status))
 
 
@@ -463,7 +466,7 @@ def random_set(count: int = 30) -> list[ConicProblem]:
     import sys
 
     sys.path.insert(0, str(ROOT / "tests"))
-    from socp_problems import random_feasible  # type: ignore[import-not-found]
+    from socp_problems import random_feasible
 
     return [random_feasible(seed, n=int(40 + 4 * seed % 80)) for seed in range(count)]
 
@@ -479,7 +482,7 @@ def landing_set(limit: int | None = None, prox_u: float = 0.0) -> list[ConicProb
     return subs[:limit] if limit else subs
 
 
-def _median(xs: list[float]) -> float:
+def _median(xs: Sequence[float]) -> float:
     return statistics.median(xs) if xs else math.nan
 
 
@@ -642,7 +645,7 @@ def _count(c: Count | None) -> str:
     if c is None:
         return f"{'n/a':>12}"
     per = c.per_flop()
-    flops = f"{c.flops / 1e6:.1f} M flops, {per:.2f}/flop" if per else "flops n/a"
+    flops = f"{c.flops / 1e6:.1f} M flops, {per:.2f}/flop" if per and c.flops else "flops n/a"
     return f"{c.instructions:>12} ({flops})"
 
 

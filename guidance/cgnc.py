@@ -43,7 +43,7 @@ def available() -> bool:
     return LIB_PATH.exists()
 
 
-def _ptr(a: np.ndarray) -> _dp:
+def _ptr(a: np.ndarray) -> ctypes._Pointer[ctypes.c_double]:
     return a.ctypes.data_as(_dp)
 
 

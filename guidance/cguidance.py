@@ -59,6 +59,7 @@ SOCP_STATUS_NAMES = SOLVE_STATUS  # one table of the SOCP runtime's statuses (cs
 _d = ct.c_double
 _i = ct.c_int
 _dp = ct.POINTER(ct.c_double)
+_ip = ct.POINTER(ct.c_int)
 _ucp = ct.POINTER(ct.c_ubyte)
 
 
@@ -158,9 +159,9 @@ def library() -> ct.CDLL:
     lib.pdg_setup_status_message.restype = ct.c_char_p
     lib.pdg_polish_message.argtypes = [_i]
     lib.pdg_polish_message.restype = ct.c_char_p
-    lib.pdg_problem_size.argtypes = [ct.c_void_p] + [ct.POINTER(_i)] * 5
+    lib.pdg_problem_size.argtypes = [ct.c_void_p, _ip, _ip, _ip, _ip, _ip]
     lib.pdg_debug_assemble.argtypes = [ct.c_void_p, ct.POINTER(_Scenario), _dp, _dp, _d, _d,
-                                       _dp, _dp, _dp, _dp, _dp] + [ct.POINTER(_i)] * 4  # fmt: skip
+                                       _dp, _dp, _dp, _dp, _dp, _ip, _ip, _ip, _ip]  # fmt: skip
     lib.pdg_debug_guess.argtypes = [ct.c_void_p, ct.POINTER(_Scenario), _dp, _dp, _dp]
     lib.pdg_solve_tscvx.argtypes = [ct.c_void_p, ct.POINTER(_Scenario),
                                     ct.POINTER(_TscvxOptions), ct.POINTER(_Result),
@@ -171,7 +172,7 @@ def library() -> ct.CDLL:
     return lib
 
 
-def _fill(arr: ct.Array, values: Sequence[float], field: str) -> None:
+def _fill(arr: ct.Array, values: Sequence[float] | np.ndarray, field: str) -> None:
     """A fixed-size C array from a sequence of exactly its length (the C library checks the
     numbers themselves; a short or long sequence cannot reach it)."""
     if len(values) != len(arr):
@@ -302,7 +303,7 @@ def validate_c(scenario: Scenario) -> str | None:
     return msg.value.decode() if bad else None
 
 
-def _dptr(a: np.ndarray) -> _dp:
+def _dptr(a: np.ndarray) -> ct._Pointer[ct.c_double]:
     return a.ctypes.data_as(_dp)
 
 
@@ -372,7 +373,7 @@ def _point_at_masks(
     opt: _Options,
     masks: Callable[[int], np.ndarray | None] | Sequence[np.ndarray],
     N: int,
-    errors: list[str],
+    errors: list[BaseException],
 ) -> object:
     """Points opt at the masks, a callback (its exceptions collected in ``errors``) or a table
     of rows of 7N; returns what it points at."""
@@ -713,13 +714,12 @@ def c_assemble(scenario: Scenario, x: np.ndarray, u: np.ndarray, t_f: float,
     c, Ax, b, Gx, h = np.zeros(n), np.zeros(na), np.zeros(p), np.zeros(ng), np.zeros(m)
     Ap, Ai = np.zeros(n + 1, np.int32), np.zeros(na, np.int32)
     Gp, Gi = np.zeros(n + 1, np.int32), np.zeros(ng, np.int32)
-    ip = ct.POINTER(_i)
     xx = np.ascontiguousarray(x, dtype=float)
     uu = np.ascontiguousarray(u, dtype=float)
     st = library().pdg_debug_assemble(
         ws.ws, ct.byref(c_scenario(scenario)), _dptr(xx), _dptr(uu), float(t_f), float(eta),
-        _dptr(c), _dptr(Ax), _dptr(b), _dptr(Gx), _dptr(h), Ap.ctypes.data_as(ip),
-        Ai.ctypes.data_as(ip), Gp.ctypes.data_as(ip), Gi.ctypes.data_as(ip),
+        _dptr(c), _dptr(Ax), _dptr(b), _dptr(Gx), _dptr(h), Ap.ctypes.data_as(_ip),
+        Ai.ctypes.data_as(_ip), Gp.ctypes.data_as(_ip), Gi.ctypes.data_as(_ip),
     )  # fmt: skip
     if st != 0:
         raise ValueError(f"pdg_debug_assemble returned {st}")

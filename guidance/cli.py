@@ -49,7 +49,7 @@ def _setting(name: str, cast: Callable[[str], float] = float) -> Callable[[str],
 
     def parse(text: str) -> float:
         try:
-            return getattr(SCvxSettings(**{name: cast(text)}), name)
+            return getattr(SCvxSettings().replace(**{name: cast(text)}), name)
         except ValueError as exc:
             raise argparse.ArgumentTypeError(str(exc)) from None
 
@@ -279,7 +279,7 @@ def cmd_agreement(args: argparse.Namespace) -> int:
     # defaults: the whole catalog and 20 samples, or only the files when files are given
     files_only = bool(args.scenarios)
     if args.catalog is None:
-        catalog = [] if files_only else None
+        catalog: list[str] | None = [] if files_only else None
     else:
         catalog = None if args.catalog == ["all"] else args.catalog
     n = (0 if files_only else 20) if args.landings is None else args.landings

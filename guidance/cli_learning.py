@@ -337,7 +337,11 @@ def cmd_train(args: argparse.Namespace) -> int:
         try:
             _train_one(ds, kind, size, args, out, digest)
         except KeyboardInterrupt as exc:  # Ctrl-C: the finished epochs are checkpointed
-            how_far = f" after {exc.done} of {exc.total} epochs" if hasattr(exc, "done") else ""
+            done, total = (
+                getattr(exc, "done", None),
+                getattr(exc, "total", None),
+            )  # TrainingInterrupted
+            how_far = f" after {done} of {total} epochs" if done is not None else ""
             print(
                 f"\ninterrupted: {kind}-{size}{how_far} ({n_done} of {len(jobs)} models "
                 f"finished); the progress is kept in {out}: run the same command again to "
@@ -382,7 +386,7 @@ def _claim_train_dir(out: Path, dataset: str, digest: str) -> None:
             )
         return
     out.mkdir(parents=True, exist_ok=True)
-    entry = {"path": str(dataset), "content_sha256": digest, "sha256": file_digest(dataset)}
+    entry = {"path": str(dataset), "content_sha256": digest, "sha256": file_digest(Path(dataset))}
     write_text_atomic(record, json.dumps(entry, indent=1))
 
 

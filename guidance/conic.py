@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
-from typing import Literal, Protocol
+from typing import Any, Literal, Protocol
 
 import numpy as np
 import scipy.sparse as sp
@@ -123,21 +123,21 @@ def invalid_solution(n: int, m: int, message: str) -> ConicSolution:
     )
 
 
-def _clarabel_solution(sol: object, elapsed: float) -> ConicSolution:
-    status = _CLARABEL_STATUS.get(str(sol.status), "numerical_error")  # type: ignore[attr-defined]
+def _clarabel_solution(sol: Any, elapsed: float) -> ConicSolution:
+    status: Status = _CLARABEL_STATUS.get(str(sol.status), "numerical_error")
     return ConicSolution(
         status=status,
-        x=np.asarray(sol.x),  # type: ignore[attr-defined]
-        s=np.asarray(sol.s),  # type: ignore[attr-defined]
-        z=np.asarray(sol.z),  # type: ignore[attr-defined]
-        obj=float(sol.obj_val),  # type: ignore[attr-defined]
-        iterations=int(sol.iterations),  # type: ignore[attr-defined]
+        x=np.asarray(sol.x),
+        s=np.asarray(sol.s),
+        z=np.asarray(sol.z),
+        obj=float(sol.obj_val),
+        iterations=int(sol.iterations),
         solve_time_s=elapsed,
-        info={"solve_time_internal_s": float(sol.solve_time)},  # type: ignore[attr-defined]
+        info={"solve_time_internal_s": float(sol.solve_time)},
     )
 
 
-def clarabel_solver(prob: ConicProblem, settings: object) -> object:
+def clarabel_solver(prob: ConicProblem, settings: Any) -> Any:
     """A Clarabel solver set up for ``prob`` (set-up only: the caller times ``solve()``)."""
     import clarabel
 
@@ -185,14 +185,14 @@ class Pattern:
 
     n: int
     m: int
-    cones: tuple[tuple[object, ...], ...]
+    cones: tuple[tuple[ConeKind, int], ...]
     A: tuple[tuple[int, int], np.ndarray, np.ndarray]
     P: tuple[tuple[int, int], np.ndarray, np.ndarray] | None
 
     @classmethod
     def with_keys(cls, prob: ConicProblem, A: tuple, P: tuple | None) -> Pattern:
         """``prob``'s snapshot with the csc_key of its A and P (given: the caller has them)."""
-        cones = tuple(tuple(cone) for cone in prob.cones)
+        cones = tuple((kind, dim) for kind, dim in prob.cones)
         return cls(n=prob.n, m=prob.m, cones=cones, A=A, P=P)
 
     @classmethod
@@ -203,9 +203,11 @@ class Pattern:
     def matches(self, other: Pattern | None) -> bool:
         if other is None or (self.n, self.m, self.cones) != (other.n, other.m, other.cones):
             return False
-        if (self.P is None) != (other.P is None):
+        pairs = [(self.A, other.A)]
+        if self.P is not None and other.P is not None:
+            pairs.append((self.P, other.P))
+        elif self.P is not None or other.P is not None:
             return False
-        pairs = [(self.A, other.A)] if self.P is None else [(self.A, other.A), (self.P, other.P)]
         return all(
             k1[0] == k2[0] and np.array_equal(k1[1], k2[1]) and np.array_equal(k1[2], k2[2])
             for k1, k2 in pairs
@@ -233,7 +235,7 @@ class ClarabelSession:
 
     def __init__(self, tol: float = 1e-9, max_iter: int = 200) -> None:
         self.tol, self.max_iter = tol, max_iter
-        self._solver: object | None = None
+        self._solver: Any = None  # a clarabel.DefaultSolver once set up
         self._pattern: Pattern | None = None
         self._limit = max_iter  # the set-up solver's iteration limit now
 
@@ -256,7 +258,7 @@ class ClarabelSession:
             new = {"q": prob.q, "A": A.data, "b": prob.b}
             if P is not None:
                 new["P"] = P.data
-            self._solver.update(**new)  # type: ignore[attr-defined]
+            self._solver.update(**new)
         limit = self.max_iter if max_iter is None else max_iter
         if not 1 <= limit <= self.max_iter:  # as the C session answers it
             return invalid_solution(
@@ -264,10 +266,10 @@ class ClarabelSession:
             )
         if limit != self._limit:
             settings = _clarabel_settings(self.tol, limit, False)
-            self._solver.update(settings=settings)  # type: ignore[attr-defined]
+            self._solver.update(settings=settings)
             self._limit = limit
         t0 = time.perf_counter()
-        sol = self._solver.solve()  # type: ignore[attr-defined]
+        sol = self._solver.solve()
         return _clarabel_solution(sol, time.perf_counter() - t0)
 
 

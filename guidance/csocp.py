@@ -41,7 +41,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TypeVar
+from typing import Any, TypeVar
 
 import numpy as np
 import scipy.sparse as sp
@@ -92,7 +92,7 @@ class _Data(ct.Structure):
     ]
 
 
-_SETTING_FIELDS = [
+_SETTING_FIELDS: list[tuple[str, Any]] = [
     ("max_iter", c_int),
     ("tol_gap_abs", c_double),
     ("tol_gap_rel", c_double),
@@ -288,7 +288,7 @@ def _caller_values(M: sp.spmatrix) -> np.ndarray:
     return np.array(_positions(M)[2], dtype=float)
 
 
-def _numbered(M: object, name: str) -> _Numbered:
+def _numbered(M: Any, name: str) -> _Numbered:
     """M's entries numbered in the caller's value order and placed in canonical CSC; M itself
     is left as it is (nothing is sorted in place)."""
     if not sp.issparse(M):
@@ -464,7 +464,8 @@ def _settings_struct(lib: ct.CDLL, settings: dict[str, float | int]) -> _Setting
     for key, val in settings.items():
         if key not in fields:
             raise TypeError(f"unknown setting {key!r}")
-        if fields[key] is c_int and not _C_INT_MIN <= operator.index(val) <= _C_INT_MAX:
+        # operator.index refuses a float for an int field (TypeError) instead of truncating it
+        if fields[key] is c_int and not _C_INT_MIN <= operator.index(val) <= _C_INT_MAX:  # type: ignore[arg-type]
             raise InvalidProblemError(f"setting {key} = {val} is outside the C int range")
         setattr(st, key, val)
     return st
@@ -670,11 +671,11 @@ class Solver:
         inf = _Info()
         if self.ready:
             self.lib.tscvx_get_info(self.ws, ct.byref(inf))
-        return {name: float(getattr(inf, name)) for name, _ in _Info._fields_}
+        return {name: float(getattr(inf, name)) for name, *_ in _Info._fields_}
 
     @_one_at_a_time
     def iteration_log(self) -> list[dict[str, float]]:
-        rows = []
+        rows: list[dict[str, float]] = []
         if not self.ready:
             return rows
         inf = _Info()
@@ -683,7 +684,7 @@ class Solver:
         for k in range(inf.iterations + 1):
             if self.lib.tscvx_get_iter_log(self.ws, k, ct.byref(row)) != 0:
                 break
-            rows.append({name: getattr(row, name) for name, _ in _IterLog._fields_})
+            rows.append({name: getattr(row, name) for name, *_ in _IterLog._fields_})
         return rows
 
     @_one_at_a_time
@@ -711,7 +712,7 @@ class Solver:
         if status == "dual_infeasible":
             z[:] = np.nan
         info = self.info()
-        info["message"] = self.lib.tscvx_solve_status_message(st).decode()  # type: ignore[assignment]
+        info["message"] = self.lib.tscvx_solve_status_message(st).decode()
         if log:
             info["log"] = self.iteration_log()  # type: ignore[assignment]
         obj = info["pcost"] if status in ("solved", "solved_inaccurate") else float("nan")

@@ -30,7 +30,7 @@ import os
 import signal
 import sys
 import time
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Generator, Sequence
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
 from pathlib import Path
@@ -149,7 +149,7 @@ def draw_scenario(
         w0 = (0.0, u(*ranges.omega0), u(*ranges.omega0))
         m0 = u(*ranges.m0)
         scenario = Scenario(
-            InitialState(r0=r0, v0=v0, q0=tuple(q0), w0=w0, m0=m0),  # type: ignore[arg-type]
+            InitialState(r0=r0, v0=v0, q0=tuple(q0), w0=w0, m0=m0),
             base.replace(glideslope_deg=gs, tilt_max_deg=tilt_max),
         )
         try:
@@ -276,7 +276,8 @@ def run_record(config: dict) -> str:
 def write_sample(out_dir: Path, rec: dict[str, Any]) -> None:
     path = sample_path(out_dir, rec["id"])
     with atomic_write(path) as f:
-        np.savez(f, **{k: np.asarray(v) for k, v in rec.items()})
+        # numpy's stubs read ** as possibly its allow_pickle flag
+        np.savez(f, **{k: np.asarray(v) for k, v in rec.items()})  # type: ignore[arg-type]
 
 
 class SampleError(InputError):
@@ -558,7 +559,7 @@ def _raise_interrupt(signum: int, frame: object) -> None:
     raise KeyboardInterrupt  # SIGTERM stops the pool like Ctrl-C: solved samples are kept
 
 
-def imap_pool(fn: Callable[[Any], Any], jobs: Sequence, workers: int) -> Iterator[Any]:
+def imap_pool(fn: Callable[[Any], Any], jobs: Sequence, workers: int) -> Generator[Any, None, None]:
     """fn over jobs in a pool of single-threaded worker processes, results as they finish (in
     this process when workers <= 1). An exception in the caller (Ctrl-C) stops the pool;
     results already yielded are the caller's to keep. A worker killed by a signal (a crash in

@@ -12,6 +12,7 @@ import math
 import sys
 from collections.abc import Iterator
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -98,7 +99,7 @@ class Params:
     def to_json_dict(self) -> dict:
         return {f.name: _plain(getattr(self, f.name)) for f in dataclasses.fields(self)}
 
-    def replace(self, **changes: object) -> Params:
+    def replace(self, **changes: Any) -> Params:
         return dataclasses.replace(self, **changes)
 
 
@@ -113,9 +114,7 @@ N_MIN, N_MAX = 3, 400
 
 PARAM_NAMES = tuple(f.name for f in dataclasses.fields(Params))
 VECTOR_PARAM_SIZES = {
-    f.name: len(f.default)  # type: ignore[arg-type]
-    for f in dataclasses.fields(Params)
-    if isinstance(f.default, tuple)
+    f.name: len(f.default) for f in dataclasses.fields(Params) if isinstance(f.default, tuple)
 }
 
 
@@ -221,7 +220,8 @@ class SCvxSettings:
         """The ranges the flight library checks too, in its order (pdg_check_settings in
         pdg_scvx.c): with two bad settings both name the same one."""
         for f in dataclasses.fields(self):  # numpy scalars stored as the Python numbers
-            object.__setattr__(self, f.name, _checked_type(f.name, f.type, getattr(self, f.name)))
+            kind = str(f.type)  # the annotation's text (postponed annotations)
+            object.__setattr__(self, f.name, _checked_type(f.name, kind, getattr(self, f.name)))
         if self.discretization not in DISCRETIZATIONS:
             raise InputError(
                 f"discretization must be one of {', '.join(DISCRETIZATIONS)}, "
@@ -256,7 +256,7 @@ class SCvxSettings:
             yield name, getattr(self, name) >= 0.0, "be >= 0"
         yield "socp_tol", 0.0 < self.socp_tol < 1.0, "lie within (0, 1)"
 
-    def replace(self, **changes: object) -> SCvxSettings:
+    def replace(self, **changes: Any) -> SCvxSettings:
         return dataclasses.replace(self, **changes)
 
 

@@ -145,8 +145,10 @@ class SCvxResult:
         return sum(h.solver_iterations for h in self.history) + self.polish.ipm_iterations
 
 
-# T-SCvx masks: a 7N mask per iteration k (the last repeats), or a function k -> mask
-_Masks = Callable[[int], np.ndarray | None] | Sequence[np.ndarray] | None
+# T-SCvx masks: a 7N mask per iteration k (the last repeats), or a function k -> mask; each
+# is checked (mask_table, mask_bits), so any object may come. _Checked: the table checked.
+_Masks = Callable[[int], object] | Sequence[object] | None
+_Checked = Callable[[int], object] | list[np.ndarray] | None
 
 
 @dataclass
@@ -274,8 +276,9 @@ class SCvxSolver:
         """
         t_start = time.perf_counter()
         check_masks_argument(masks)
-        if masks is not None and not callable(masks):
-            masks = mask_table(masks, self.p.N)
+        checked: _Checked = (
+            masks if masks is None or callable(masks) else mask_table(masks, self.p.N)
+        )
         s = self._start(guess)
         if s is None:
             # No trajectory to return (the C library leaves x, u as given and t_f NaN).
@@ -289,7 +292,7 @@ class SCvxSolver:
             if s.ipm_used >= self.st.socp_max_iter_total:  # checked after iter_max, as in C
                 self._budget_spent(s)
                 break
-            if not self._iteration(s, masks):
+            if not self._iteration(s, checked):
                 break
         polish = self._polish(s) if s.status == "solved" else Polish()
         return self._result(s, t_start, polish)
@@ -314,7 +317,7 @@ class SCvxSolver:
             z, disc, J, defect, viol, self.st.eta_init, np.zeros(NC * self.p.N, dtype=bool)
         )
 
-    def _iteration(self, s: _LoopState, masks: _Masks) -> bool:
+    def _iteration(self, s: _LoopState, masks: _Checked) -> bool:
         """One subproblem of Algorithm 1 (Algorithm 2 with masks); False when the solve stops
         (converged, failed or stalled)."""
         st = self.st
@@ -682,8 +685,7 @@ def check_masks_argument(masks: object) -> None:
 def mask_table(masks: Sequence[object], N: int) -> list[np.ndarray]:
     """A table of masks (row k - 1 for iteration k, the last one repeating) checked row by
     row. One lone mask is refused: read as a table it would be 7N masks of one entry each."""
-    lone = isinstance(masks, np.ndarray) and (masks.ndim == 1 or masks.shape == (N, NC))
-    if lone:
+    if isinstance(masks, np.ndarray) and (masks.ndim == 1 or masks.shape == (N, NC)):
         raise InputError(
             f"masks: one mask of shape {masks.shape}; give a table of masks, one per "
             "iteration ([mask] for the same mask at every iteration), or a function k -> mask"
@@ -693,7 +695,7 @@ def mask_table(masks: Sequence[object], N: int) -> list[np.ndarray]:
     return [mask_bits(m, N, k) for k, m in enumerate(masks, start=1)]
 
 
-def _mask_for(masks: _Masks, k: int, N: int) -> np.ndarray | None:
+def _mask_for(masks: _Checked, k: int, N: int) -> np.ndarray | None:
     """Iteration k's mask (checked), None for the full problem."""
     if masks is None:
         return None

@@ -302,8 +302,8 @@ class SubproblemTemplate:
             [L.x_index(nodes[:, None], np.array(pair)[None, :]) for pair in TR_PAIRS], axis=1
         ).reshape(-1, 2)
         self.r_trp = R.m
-        for pair in self.tr_pairs:
-            R.add("soc", np.array([1, 2]), pair, 3)
+        for cols in self.tr_pairs:
+            R.add("soc", np.array([1, 2]), cols, 3)
 
     def trust_norm(self, dz: np.ndarray) -> float:
         """|dz| in the trust region's norm: the largest |component| of the scalar part and

@@ -42,5 +42,5 @@ def rotate_states(x: np.ndarray, psi: float) -> np.ndarray:
 def rotate_scenario(scenario: Scenario, psi: float) -> Scenario:
     x0 = rotate_states(scenario.x0, psi)
     s = scenario.initial
-    initial = InitialState(r0=tuple(x0[IR]), v0=tuple(x0[IV]), q0=tuple(x0[IQ]), w0=s.w0, m0=s.m0)  # type: ignore[arg-type]
+    initial = InitialState(r0=tuple(x0[IR]), v0=tuple(x0[IV]), q0=tuple(x0[IQ]), w0=s.w0, m0=s.m0)
     return Scenario(initial, scenario.params)

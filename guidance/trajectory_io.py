@@ -18,7 +18,7 @@ import numpy as np
 
 from guidance.atomic import atomic_write
 from guidance.errors import UNREADABLE_NPZ, DuplicateKeyError, InputError, unique_keys
-from guidance.params import Params, SCvxSettings, rk4_steps_per_interval
+from guidance.params import Params, Scenario, SCvxSettings, rk4_steps_per_interval
 from guidance.provenance import provenance
 from guidance.scenario import scenario_to_dict
 from guidance.scvx import SCvxResult
@@ -31,7 +31,7 @@ def write_trajectory(
     path: str | Path,
     result: SCvxResult,
     params: Params,
-    scenario: object,
+    scenario: Scenario,
     method: str,
     backend: str,
     inputs: dict[str, Path] | None = None,
@@ -64,15 +64,16 @@ def write_trajectory(
             reason=np.str_(result.reason),
             polish=np.str_(result.polish.outcome),
             masks=result.masks,
-            scenario=np.str_(json.dumps(scenario_to_dict(scenario))),  # type: ignore[arg-type]
+            scenario=np.str_(json.dumps(scenario_to_dict(scenario))),
             method=np.str_(method),
             backend=np.str_(backend),
             provenance=np.str_(json.dumps(provenance(inputs))),
-            **({} if result.settings is None else _settings_entries(result.settings, params.N)),
+            # numpy's stubs read ** as possibly its allow_pickle flag
+            **({} if result.settings is None else _settings_entries(result.settings, params.N)),  # type: ignore[arg-type]
         )
 
 
-def _settings_entries(settings: SCvxSettings, N: int) -> dict[str, np.ndarray]:
+def _settings_entries(settings: SCvxSettings, N: int) -> dict[str, np.generic]:
     """The settings the solve ran with, and the RK4 steps its intervals took (rk4_substeps is
     the least; a grid coarser than N = 50 takes more)."""
     steps = rk4_steps_per_interval(settings.rk4_substeps, N)

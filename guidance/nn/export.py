@@ -74,6 +74,8 @@ def export_onnx(
             dynamo=True,
             verbose=False,
         )
+    if program is None:  # torch's dynamo exporter returns its program
+        raise RuntimeError("torch.onnx.export returned no ONNX program")
     proto = program.model_proto
     probe_in = probe_inputs(res)
     with torch.no_grad():

@@ -81,7 +81,7 @@ def expected_sizes(kind: str, N: int) -> tuple[int, int]:
     raise ValueError(f"unknown model kind {kind!r}")
 
 
-def _fail(path: Path, msg: str) -> ModelMismatchError:
+def _fail(path: str | Path, msg: str) -> ModelMismatchError:
     return ModelMismatchError(f"model {path}: {msg}")
 
 

@@ -122,6 +122,11 @@ class Normalized(nn.Module):
     constraint network ``out_mean = 0, out_std = 1`` and the output stays logits.
     """
 
+    in_mean: torch.Tensor  # the registered buffers
+    in_scale: torch.Tensor
+    out_mean: torch.Tensor
+    out_std: torch.Tensor
+
     def __init__(
         self,
         net: Transformer,

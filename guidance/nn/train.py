@@ -331,13 +331,9 @@ def load_checkpoint(path: str | Path) -> TrainResult:
     net = Transformer(arch)
     net.load_state_dict(ck["state_dict"])
     net.eval()
+    in_mean, in_std, out_mean, out_std = (ck[name].numpy() for name in NORMALIZATION)
     return TrainResult(
-        ck["kind"],
-        arch,
-        net,
-        *(ck[name].numpy() for name in NORMALIZATION),
-        ck["threshold"],
-        ck["metrics"],
+        ck["kind"], arch, net, in_mean, in_std, out_mean, out_std, ck["threshold"], ck["metrics"]
     )
 
 
@@ -381,8 +377,10 @@ def train(
         threshold = trainer.threshold(last_fold=run.history[-1]["fold"] - 1)
     metrics = trainer.evaluate(threshold)
     metrics.update(_run_record(trainer, run, identity, time.perf_counter() - t_start))
-    norm = (getattr(data, name) for name in NORMALIZATION)
-    return TrainResult(kind, trainer.arch, trainer.net, *norm, threshold, metrics)
+    in_mean, in_std, out_mean, out_std = (getattr(data, name) for name in NORMALIZATION)
+    return TrainResult(
+        kind, trainer.arch, trainer.net, in_mean, in_std, out_mean, out_std, threshold, metrics
+    )
 
 
 def _run_record(
