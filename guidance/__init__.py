@@ -24,6 +24,7 @@ _EXPORTS = {
     "InputError": "guidance.errors",
     "load_scenario": "guidance.scenario",
     "solve": "guidance.api",
+    "plan_remainder": "guidance.guess",
     "read_trajectory": "guidance.trajectory_io",
     "write_trajectory": "guidance.trajectory_io",
     "audit": "guidance.verify",

@@ -169,6 +169,8 @@ def library() -> ct.CDLL:
     lib.pdg_tscvx_guess.argtypes = [ct.c_void_p, ct.POINTER(_Scenario), ct.c_void_p, _dp, _dp,
                                     _dp, ct.c_char_p]  # fmt: skip
     lib.pdg_theta_of.argtypes = [ct.POINTER(_Scenario), _dp]
+    lib.pdg_plan_remainder.argtypes = [ct.POINTER(_Scenario), _dp, _dp, _d, _d, _dp, _dp, _dp,
+                                       ct.c_char_p]  # fmt: skip
     return lib
 
 
@@ -682,6 +684,26 @@ def tscvx_guess_c(
         text = msg.value.decode()
         raise (FlightNetsError if text.startswith("nets: ") else InputError)(text)
     return x, u, tf.value
+
+
+def plan_remainder_c(
+    scenario: Scenario, x: np.ndarray, u: np.ndarray, t_f: float, t1: float
+) -> tuple[np.ndarray, np.ndarray, float]:
+    """The remainder of a plan from t1 as the scenario's guess, on board (pdg_plan_remainder;
+    guidance.guess.plan_remainder in Python). InputError with the library's message."""
+    N = scenario.params.N
+    xx = np.ascontiguousarray(x, dtype=float)
+    uu = np.ascontiguousarray(u, dtype=float)
+    if xx.shape != (N, NX) or uu.shape != (N, NU):
+        raise InputError(f"plan remainder: x, u must be {N} x {NX} and {N} x {NU}")
+    gx, gu, tf = np.zeros((N, NX)), np.zeros((N, NU)), ct.c_double(0.0)
+    msg = ct.create_string_buffer(MESSAGE_LEN)
+    st = library().pdg_plan_remainder(ct.byref(c_scenario(scenario)), _dptr(xx), _dptr(uu),
+                                      float(t_f), float(t1), _dptr(gx), _dptr(gu),
+                                      ct.byref(tf), msg)  # fmt: skip
+    if st != 0:
+        raise InputError(msg.value.decode())
+    return gx, gu, tf.value
 
 
 def theta_c(scenario: Scenario) -> np.ndarray:

@@ -18,6 +18,7 @@ from guidance.api import BACKENDS, CONSTRAINT_MODEL, METHODS, MODELS_DIR, SOLUTI
 from guidance.argtypes import at_least
 from guidance.atomic import check_outputs
 from guidance.errors import InputError, LibraryNotBuiltError
+from guidance.guess import plan_remainder
 from guidance.params import IM, Params, Scenario, SCvxSettings
 from guidance.scenario import read_scenario_data, scenario_from_dict, scenario_to_dict
 from guidance.tscvx import REDUCED_ETA_INIT
@@ -98,6 +99,8 @@ def cmd_solve(args: argparse.Namespace) -> int:
     scenario = _load(args.scenario, args.pin_final_attitude)
     _check_method_options(args)
     guess = _read_guess(args.guess, scenario.params)
+    if guess is not None and args.at is not None:  # in-flight re-planning
+        guess = plan_remainder(scenario, *guess, args.at)
     _check_output_files(args.out, args.plot, args.scenario)
     settings = SCvxSettings(
         iter_max=args.iter_max,
@@ -136,6 +139,10 @@ def _check_method_options(args: argparse.Namespace) -> None:
     """Refuse the options the chosen method has no use for."""
     if args.trust_update is not None and args.method != "tscvx":
         raise InputError("--trust-update: applies to --method tscvx only (SCvx has no masks)")
+    if args.at is not None and not args.guess:
+        raise InputError(
+            "--at: applies with --guess only (the plan whose remainder starts the solve)"
+        )
     if args.guess and args.method != "scvx":
         raise InputError(
             f"--guess {args.guess}: applies to --method scvx only (T-SCvx starts from its network)"
@@ -177,7 +184,10 @@ def _print_problem(args: argparse.Namespace, scenario: Scenario, settings: SCvxS
         f"subproblem objective: {objective}"
     )
     if args.guess:
-        print(f"initial guess: {args.guess} (projected onto the boundary and path constraints)")
+        part = "" if args.at is None else f", its remainder from t = {args.at:g} U_T"
+        print(
+            f"initial guess: {args.guess}{part} (projected onto the boundary and path constraints)"
+        )
 
 
 def _print_landing(result: SCvxResult, scenario: Scenario) -> None:
@@ -218,7 +228,8 @@ def _write_trajectory(args: argparse.Namespace, result: SCvxResult, scenario: Sc
 def _solve_inputs(args: argparse.Namespace) -> dict[str, Path] | None:
     """The files the solve started from, for the trajectory file's provenance."""
     if args.guess:  # SCvx only (_check_method_options)
-        return {"initial_guess": Path(args.guess)}
+        name = "initial_guess" if args.at is None else f"initial_guess from t = {args.at:g}"
+        return {name: Path(args.guess)}
     if args.method == "tscvx":  # the files the networks were read from
         return _network_files(Path(args.models), args.backend)
     return None
@@ -410,6 +421,13 @@ def _add_solve(sub: argparse._SubParsersAction) -> None:
         help="start SCvx from this trajectory file's x, u and t_f (same N; e.g. an earlier "
         "solve of a neighbouring landing: re-planning) instead of the cubic guess, projected "
         "onto the scenario's boundary conditions and convex path constraints",
+    )
+    s.add_argument(
+        "--at",
+        metavar="T",
+        type=float,
+        help="with --guess: start from that plan's remainder from time T (U_T) on, regridded "
+        "over [T, t_f]: in-flight re-planning, the scenario holding the state at T",
     )
     s.add_argument(
         "--pin-final-attitude",

@@ -253,6 +253,33 @@ def given_guess(
     return project_guess(scenario, x, u, t_f)
 
 
+def plan_remainder(
+    scenario: Scenario, x: object, u: object, t_f: object, t1: float
+) -> tuple[np.ndarray, np.ndarray, float]:
+    """In-flight re-planning: the plan (x, u, t_f: an answer on the scenario's N nodes from
+    t = 0) from time t1 in [0, t_f) on, as the guess of ``scenario``, the landing from the
+    state at t1. N nodes over [t1, t_f]: the states linearly interpolated between the plan's
+    nodes, the thrust as its first-order hold (exactly); then projected as every guess is
+    (``project_guess``: node 0 becomes the scenario's initial state). The same arithmetic,
+    operation for operation, as the C library's pdg_plan_remainder. Bad input raises
+    InputError."""
+    try:
+        x, u, t_f = checked_trajectory(x, u, t_f, scenario.params)
+    except InputError as exc:
+        raise InputError(f"guess: {exc}") from None
+    if not (np.isfinite(t1) and 0.0 <= t1 < t_f):
+        raise InputError(f"plan remainder: t1 = {t1:g} is not within the plan's [0, {t_f:g}) U_T")
+    N = scenario.params.N
+    h = t_f / (N - 1)
+    s = np.append(np.arange(N - 1) * (1.0 / (N - 1)), 1.0)  # node fractions, the last exact
+    t = t1 + (t_f - t1) * s
+    j = np.minimum((t / h).astype(int), N - 2)  # the plan's interval holding t
+    a = np.clip((t - j * h) / h, 0.0, 1.0)[:, None]
+    gx = x[j] + a * (x[j + 1] - x[j])
+    gu = u[j] + a * (u[j + 1] - u[j])
+    return project_guess(scenario, gx, gu, t_f - t1)
+
+
 def project_guess(
     scenario: Scenario, x: np.ndarray, u: np.ndarray, t_f: float
 ) -> tuple[np.ndarray, np.ndarray, float]:

@@ -31,8 +31,9 @@ def test_the_readme_example_runs_and_lands() -> None:
     result, warm, check = namespace["result"], namespace["warm"], namespace["check"]
     assert result.status == "solved", result.reason
     assert warm.status == "solved", warm.reason
-    replan = namespace["replan"]
+    replan, onward = namespace["replan"], namespace["onward"]
     assert replan.status == "solved", replan.reason
+    assert onward.status == "solved", onward.reason  # in flight, from the plan's remainder
     assert check.landing_position_error <= 1e-3 and check.max_path_violation <= 1e-6
     assert np.isfinite(check.path_between_nodes).all()  # sampled between the nodes
 

@@ -2,6 +2,7 @@
  * from a geometric grid, attitude along the required thrust, projection onto the boundary
  * conditions and the convex constraints). No optimization, no allocation. */
 #include <math.h>
+#include <stdio.h>
 
 #include "pdg_internal.h"
 
@@ -487,4 +488,60 @@ void pdg_project_guess(const pdg_scenario *sc, double *x, double *u, double *t_f
         project_thrust(&sc->params, u + 3 * k);
     }
     *t_f = *t_f > 1e-2 ? *t_f : 1e-2;
+}
+
+/* The message (PDG_MESSAGE_LEN bytes, may be NULL) of a refused call; PDG_INVALID_INPUT. */
+static int refuse(char *message, const char *text)
+{
+    if (message) {
+        snprintf(message, PDG_MESSAGE_LEN, "plan remainder: %s", text);
+    }
+    return PDG_INVALID_INPUT;
+}
+
+/* In-flight re-planning: the plan (x, u, t_f on the scenario's N nodes from t = 0) from time
+ * t1 on, on N nodes over [t1, t_f] -- the states linearly interpolated between the plan's
+ * nodes, the thrust as its first-order hold (exactly) -- then projected as every guess is, so
+ * that node 0 is the scenario's initial state (the state measured at t1). The arithmetic of
+ * guidance/guess.py plan_remainder, operation for operation. */
+int pdg_plan_remainder(const pdg_scenario *scenario, const double *x, const double *u,
+                       double t_f, double t1, double *gx, double *gu, double *gt_f,
+                       char *message)
+{
+    int N, k, i;
+    double h;
+    if (!scenario || !x || !u || !gx || !gu || !gt_f) {
+        return refuse(message, "a required pointer is NULL");
+    }
+    if (pdg_validate_scenario(scenario, message) != 0) {
+        return PDG_INVALID_INPUT;
+    }
+    N = scenario->params.N;
+    if (!pdg_all_finite(x, (size_t)N * NX) || !pdg_all_finite(u, (size_t)N * NU) ||
+        !isfinite(t_f) || !(t_f > 0.0)) {
+        return refuse(message, "x, u and t_f must be finite and t_f positive");
+    }
+    if (!(t1 >= 0.0 && t1 < t_f)) { /* NaN fails too */
+        char text[160];
+        snprintf(text, sizeof text, "t1 = %g is not within the plan's [0, %g) U_T", t1, t_f);
+        return refuse(message, text);
+    }
+    h = t_f / (N - 1);
+    for (k = 0; k < N; ++k) {
+        const double t = t1 + (t_f - t1) * node_s(k, N);
+        int j = (int)(t / h); /* the plan's interval holding t (t >= 0: truncation floors) */
+        double a;
+        j = j < N - 2 ? j : N - 2;
+        a = (t - j * h) / h;
+        a = a < 0.0 ? 0.0 : (a > 1.0 ? 1.0 : a);
+        for (i = 0; i < NX; ++i) {
+            gx[NX * k + i] = x[NX * j + i] + a * (x[NX * (j + 1) + i] - x[NX * j + i]);
+        }
+        for (i = 0; i < NU; ++i) {
+            gu[NU * k + i] = u[NU * j + i] + a * (u[NU * (j + 1) + i] - u[NU * j + i]);
+        }
+    }
+    *gt_f = t_f - t1;
+    pdg_project_guess(scenario, gx, gu, gt_f);
+    return 0;
 }

@@ -379,6 +379,19 @@ pdg_setup_status pdg_theta_of(const pdg_scenario *scenario, double *theta);
 int pdg_tscvx_guess(pdg_workspace *ws, const pdg_scenario *scenario, struct tscvx_nn *solution,
                     double *x, double *u, double *t_f, char *message);
 
+/* In-flight re-planning: the remainder of a plan (x N x 14, u N x 3, t_f: a solve's answer on
+ * the scenario's N nodes from t = 0) from time t1 in [0, t_f) on, as the guess (x, u, t_f) of a
+ * solve of `scenario`, the landing from the state at t1: N nodes over [t1, t_f], the states
+ * linearly interpolated between the plan's nodes, the thrust as its first-order hold, then
+ * projected onto the scenario's boundary conditions (node 0 its initial state) and convex
+ * path constraints as the built-in guess is. For options.guess_x/guess_u/guess_t_f of
+ * pdg_solve. Returns 0, or PDG_INVALID_INPUT with the reason in `message` (PDG_MESSAGE_LEN
+ * bytes, may be NULL): a scenario pdg_validate_scenario refuses, NULL or non-finite input, t1
+ * outside [0, t_f). No workspace, no allocation. */
+int pdg_plan_remainder(const pdg_scenario *scenario, const double *x, const double *u,
+                       double t_f, double t1, double *gx, double *gu, double *gt_f,
+                       char *message);
+
 /* T-SCvx: the complete guidance call described above (both networks NULL: plain SCvx, as
  * pdg_solve). result as pdg_solve; `report` may be NULL. */
 pdg_status pdg_solve_tscvx(pdg_workspace *ws, const pdg_scenario *scenario,

@@ -590,6 +590,74 @@ static void test_polish(void)
     free(arena);
 }
 
+/* In-flight re-planning: the default landing's plan from node 15 on, with the plan's state
+ * there as the new start (its roll rate zero: the vehicle makes no roll torque), re-plans in
+ * fewer subproblems than the plan took; bad input is refused with a message. */
+static void test_plan_remainder(pdg_workspace *ws)
+{
+    static double plan_x[50 * PDG_NSTATE], plan_u[50 * PDG_NCTRL];
+    static double gx[50 * PDG_NSTATE], gu[50 * PDG_NCTRL];
+    const double *x15 = plan_x + 15 * PDG_NSTATE;
+    pdg_scenario s, here;
+    pdg_options o;
+    pdg_result r;
+    char msg[PDG_MESSAGE_LEN];
+    double t_f, t1, gt_f, nq;
+    int i, plan_subproblems;
+    pdg_default_scenario(&s);
+    r.x = plan_x;
+    r.u = plan_u;
+    CHECK(pdg_solve(ws, &s, NULL, &r) == PDG_SOLVED);
+    t_f = r.t_f;
+    t1 = t_f * 15.0 / 49.0;
+    plan_subproblems = r.subproblems_solved;
+    here = s;
+    nq = sqrt(x15[6] * x15[6] + x15[7] * x15[7] + x15[8] * x15[8] + x15[9] * x15[9]);
+    for (i = 0; i < 3; ++i) {
+        here.r0[i] = x15[i];
+        here.v0[i] = x15[3 + i];
+        here.w0[i] = i == 0 ? 0.0 : x15[10 + i];
+    }
+    for (i = 0; i < 4; ++i) {
+        here.q0[i] = x15[6 + i] / nq;
+    }
+    here.m0 = x15[13];
+    CHECK(pdg_plan_remainder(&here, plan_x, plan_u, t_f, t1, gx, gu, &gt_f, msg) == 0);
+    CHECK(gt_f == t_f - t1 && gx[0] == here.r0[0] && gx[13] == here.m0);
+    memset(&o, 0, sizeof o);
+    o.guess_x = gx;
+    o.guess_u = gu;
+    o.guess_t_f = gt_f;
+    r.x = x;
+    r.u = u;
+    CHECK(pdg_solve(ws, &here, &o, &r) == PDG_SOLVED);
+    printf("re-planned from t = %.3f: %d subproblems (the plan %d), m_f %.6f (the plan %.6f)\n",
+           t1, r.subproblems_solved, plan_subproblems, x[49 * PDG_NSTATE + 13],
+           plan_x[49 * PDG_NSTATE + 13]);
+    CHECK(r.subproblems_solved < plan_subproblems);
+    CHECK(fabs(x[49 * PDG_NSTATE + 13] - plan_x[49 * PDG_NSTATE + 13]) < 1e-3);
+    /* refusals */
+    CHECK(pdg_plan_remainder(NULL, plan_x, plan_u, t_f, t1, gx, gu, &gt_f, msg) ==
+          PDG_INVALID_INPUT);
+    CHECK(strstr(msg, "NULL") != NULL);
+    CHECK(pdg_plan_remainder(&here, plan_x, plan_u, t_f, t_f, gx, gu, &gt_f, msg) ==
+          PDG_INVALID_INPUT);
+    CHECK(strstr(msg, "is not within the plan's") != NULL);
+    CHECK(pdg_plan_remainder(&here, plan_x, plan_u, t_f, NAN, gx, gu, &gt_f, NULL) ==
+          PDG_INVALID_INPUT);
+    CHECK(pdg_plan_remainder(&here, plan_x, plan_u, t_f, -1.0, gx, gu, &gt_f, msg) ==
+          PDG_INVALID_INPUT);
+    plan_u[7] = INFINITY;
+    CHECK(pdg_plan_remainder(&here, plan_x, plan_u, t_f, t1, gx, gu, &gt_f, msg) ==
+          PDG_INVALID_INPUT);
+    CHECK(strstr(msg, "must be finite") != NULL);
+    plan_u[7] = 0.0;
+    here.q0[0] *= 2.0;
+    CHECK(pdg_plan_remainder(&here, plan_x, plan_u, t_f, t1, gx, gu, &gt_f, msg) ==
+          PDG_INVALID_INPUT);
+    CHECK(strstr(msg, "q0") != NULL);
+}
+
 int main(void)
 {
     pdg_settings st;
@@ -608,6 +676,7 @@ int main(void)
         CHECK(memcmp(&ws->st, &st, sizeof st) == 0);
         test_bad_input(ws);
         test_solve(ws, full);
+        test_plan_remainder(ws);
         test_stale_workspace(ws, arena, bytes);
     }
     free(arena);
