@@ -475,6 +475,20 @@ static void test_iteration_budget(void)
 /* The polish (pdg_settings.polish): the default landing's defects removed, the final mass
  * moved by what they had bought, its IPM iterations counted in the call's; with the budget
  * spent at convergence it is not run, and with prox_u = 0 it is off. */
+/* pdg_solve of s started from the guess (gx, gu, t_f), the answer into x, u */
+static pdg_status solve_from_guess(pdg_workspace *ws, const pdg_scenario *s, const double *gx,
+                                   const double *gu, double t_f, pdg_result *r)
+{
+    pdg_options o;
+    memset(&o, 0, sizeof o);
+    o.guess_x = gx;
+    o.guess_u = gu;
+    o.guess_t_f = t_f;
+    r->x = x;
+    r->u = u;
+    return pdg_solve(ws, s, &o, r);
+}
+
 /* Re-planning from the polished plan (x, u, t_f of the last solve): lambda times any step's
  * second-order defects outweighs its gain, so every step is rejected down to eta_lb, where
  * the plan, meeting every tolerance, is returned solved (it used to end
@@ -484,7 +498,6 @@ static void test_replan_from_polished(double t_f)
     static double plan_x[50 * PDG_NSTATE], plan_u[50 * PDG_NCTRL];
     pdg_settings st;
     pdg_scenario s;
-    pdg_options o;
     pdg_result r;
     pdg_log_row row;
     void *arena = NULL;
@@ -499,13 +512,7 @@ static void test_replan_from_polished(double t_f)
         return;
     }
     pdg_default_scenario(&s);
-    memset(&o, 0, sizeof o);
-    o.guess_x = plan_x;
-    o.guess_u = plan_u;
-    o.guess_t_f = t_f;
-    r.x = x;
-    r.u = u;
-    CHECK(pdg_solve(ws, &s, &o, &r) == PDG_SOLVED);
+    CHECK(solve_from_guess(ws, &s, plan_x, plan_u, t_f, &r) == PDG_SOLVED);
     printf("re-planned from the polished plan: %d subproblems, %s\n", r.subproblems_solved,
            r.message);
     CHECK(strncmp(r.message, "converged; the step at the smallest trust radius", 48) == 0);
@@ -599,7 +606,6 @@ static void test_plan_remainder(pdg_workspace *ws)
     static double gx[50 * PDG_NSTATE], gu[50 * PDG_NCTRL];
     const double *x15 = plan_x + 15 * PDG_NSTATE;
     pdg_scenario s, here;
-    pdg_options o;
     pdg_result r;
     char msg[PDG_MESSAGE_LEN];
     double t_f, t1, gt_f, nq;
@@ -624,13 +630,7 @@ static void test_plan_remainder(pdg_workspace *ws)
     here.m0 = x15[13];
     CHECK(pdg_plan_remainder(&here, plan_x, plan_u, t_f, t1, gx, gu, &gt_f, msg) == 0);
     CHECK(gt_f == t_f - t1 && gx[0] == here.r0[0] && gx[13] == here.m0);
-    memset(&o, 0, sizeof o);
-    o.guess_x = gx;
-    o.guess_u = gu;
-    o.guess_t_f = gt_f;
-    r.x = x;
-    r.u = u;
-    CHECK(pdg_solve(ws, &here, &o, &r) == PDG_SOLVED);
+    CHECK(solve_from_guess(ws, &here, gx, gu, gt_f, &r) == PDG_SOLVED);
     printf("re-planned from t = %.3f: %d subproblems (the plan %d), m_f %.6f (the plan %.6f)\n",
            t1, r.subproblems_solved, plan_subproblems, x[49 * PDG_NSTATE + 13],
            plan_x[49 * PDG_NSTATE + 13]);
