@@ -96,7 +96,7 @@ demo: setup lib
 	$(GUIDANCE) solve --method tscvx --backend c --out out/tscvx_c.npz --plot out/tscvx_c.png
 	$(GUIDANCE) verify out/scvx.npz out/scvx_c.npz out/tscvx_c.npz
 	./$(BUILD)/pdg_example > out/pdg_example.txt
-	@grep -E '^(SCvx|status|iterations)' out/pdg_example.txt
+	@grep -E '^(SCvx|status|iterations|re-plan)' out/pdg_example.txt
 	./$(BUILD)/pdg_example $(BUILD)/models/solution.tnn $(BUILD)/models/constraint.tnn \
 	  > out/pdg_example_tscvx.txt
 	@grep -E '^(T-SCvx|status|iterations)' out/pdg_example_tscvx.txt

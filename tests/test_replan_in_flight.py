@@ -109,6 +109,26 @@ def test_replan_from_the_command_line(plan: SCvxResult, tmp_path: Path, capsys) 
     assert "--at: applies with --guess only" in capsys.readouterr().err
 
 
+def test_the_plain_c_example_replans(plan: SCvxResult) -> None:
+    """build/pdg_example (no Python) solves the default landing, then re-plans from its node
+    16 with pdg_plan_remainder: both solved, the plan's final mass printed as the library
+    gives it, the re-plan's within 2e-4 of it in fewer subproblems."""
+    import re
+    import subprocess
+
+    example = cguidance.LIB_PATH.parent / "pdg_example"
+    run = subprocess.run([str(example)], capture_output=True, text=True, check=False, timeout=120)
+    assert run.returncode == 0, run.stdout[-2000:] + run.stderr
+    summary = re.search(r"subproblems (\d+), t_f [\d.]+, m_f ([\d.]+)", run.stdout)
+    assert summary and float(summary.group(2)) == pytest.approx(plan.m_f, abs=1e-6)
+    line = re.search(
+        r"re-plan at .*: solved \(.*\), (\d+) subproblems, .* m_f ([\d.]+)", run.stdout
+    )
+    assert line, run.stdout[-600:]
+    assert int(line.group(1)) < int(summary.group(1))
+    assert float(line.group(2)) == pytest.approx(plan.m_f, rel=2e-4)
+
+
 @pytest.mark.parametrize("t1", [-0.1, float("nan"), 1e9])
 def test_a_time_off_the_plan_is_refused(plan: SCvxResult, t1: float) -> None:
     with pytest.raises(InputError, match="not within the plan's"):

@@ -1,7 +1,8 @@
 /*
  * pdg_example.c -- the flight guidance library used from plain C, without Python.
  *
- *   pdg_example                                   SCvx (pdg_solve)
+ *   pdg_example                                   SCvx (pdg_solve), then a re-plan in flight
+ *                                                 from a third of the way (pdg_plan_remainder)
  *   pdg_example SOLUTION.tnn [CONSTRAINT.tnn]      T-SCvx on board (pdg_solve_tscvx): the
  *                                                 solution network's warm start, and with the
  *                                                 second file the constraint network's masks
@@ -13,7 +14,7 @@
  *   cc -std=c99 -Ic_runtime/include pdg_example.c build/libtscvx_gnc.a build/libtscvx.a \
  *      -lamd -lldl -lsuitesparseconfig -lm
  *
- * Exit status: 0 solved, 3 not solved (the status line says why), 2 input refused by the
+ * Exit status: 0 solved (the re-plan too), 3 not solved (the status line says why), 2 input refused by the
  * library or a usage error (nothing solved, nothing printed but the message), 1 set-up
  * failure (a file that cannot be read included).
  *
@@ -153,6 +154,50 @@ static void print_trajectory(const pdg_scenario *scn, const pdg_result *res)
     }
 }
 
+/* In-flight re-planning (pdg_plan_remainder): the landing from the plan's state at node k,
+ * standing in for the state navigation measures there (its roll rate zero: the vehicle makes
+ * no roll torque), started from the rest of the plan. Returns the solve's status. */
+static pdg_status replan(pdg_workspace *ws, const pdg_scenario *scn, const pdg_result *plan,
+                         int k)
+{
+    static double gx[PDG_N_MAX * PDG_NSTATE], gu[PDG_N_MAX * PDG_NCTRL];
+    static double x[PDG_N_MAX * PDG_NSTATE], u[PDG_N_MAX * PDG_NCTRL];
+    const int N = scn->params.N;
+    const double *xk = plan->x + PDG_NSTATE * k, t1 = plan->t_f * k / (N - 1);
+    const double nq = sqrt(xk[6] * xk[6] + xk[7] * xk[7] + xk[8] * xk[8] + xk[9] * xk[9]);
+    pdg_scenario here = *scn;
+    pdg_options o = {0};
+    pdg_result r;
+    pdg_status status;
+    double t0;
+    int i;
+    for (i = 0; i < 3; ++i) {
+        here.r0[i] = xk[i];
+        here.v0[i] = xk[3 + i];
+        here.w0[i] = i == 0 ? 0.0 : xk[10 + i];
+    }
+    for (i = 0; i < 4; ++i) {
+        here.q0[i] = xk[6 + i] / nq;
+    }
+    here.m0 = xk[13];
+    if (pdg_plan_remainder(&here, plan->x, plan->u, plan->t_f, t1, gx, gu, &o.guess_t_f,
+                           r.message) != 0) {
+        fprintf(stderr, "re-plan refused: %s\n", r.message);
+        return PDG_INVALID_INPUT;
+    }
+    o.guess_x = gx;
+    o.guess_u = gu;
+    r.x = x;
+    r.u = u;
+    t0 = now_s();
+    status = pdg_solve(ws, &here, &o, &r);
+    printf("re-plan at t = %.4f (node %d) from the rest of the plan: %s (%s), %d subproblems, "
+           "%.1f ms, touchdown at %.6f, m_f %.6f\n",
+           t1, k, pdg_status_name(status), r.message, r.subproblems_solved,
+           1e3 * (now_s() - t0), t1 + r.t_f, x[PDG_NSTATE * (N - 1) + 13]);
+    return status;
+}
+
 /* T-SCvx's networks (solution, then constraint), each in its own arena. 0 = ok, else a
  * message on stderr. */
 static int load_nets(int count, char **paths, memory *m)
@@ -226,6 +271,10 @@ int main(int argc, char **argv)
     print_summary(&scn, &res);
     printf("arena %zu bytes, high-water %zu bytes\n", mem.bytes, pdg_arena_high_water(ws));
     print_trajectory(&scn, &res);
+    if (!tscvx && status == PDG_SOLVED) { /* the same workspace serves the re-plan */
+        printf("\n");
+        status = replan(ws, &scn, &res, scn.params.N / 3);
+    }
     /* 6. cleanup: the arenas are the caller's */
     release(&mem);
     return status == PDG_SOLVED ? 0 : 3;
