@@ -28,7 +28,7 @@ from guidance.params import InitialState, Scenario
 from guidance.scenario import scenario_to_dict
 from guidance.scvx import SCvxResult
 from guidance.trajectory_io import read_trajectory
-from guidance.verify import audit, propagate
+from guidance.verify import T_F_RANGE, VALUE_LIMIT, audit, propagate
 
 pytestmark = pytest.mark.skipif(
     not cguidance.LIB_PATH.exists(), reason="build/libtscvx_gnc.so not built (make lib)"
@@ -146,3 +146,43 @@ def test_a_plan_that_is_no_trajectory_is_refused(plan: SCvxResult) -> None:
         cguidance.plan_remainder_c(SCN, x, plan.u, plan.t_f, 1.0)
     with pytest.raises(InputError, match="x, u must be"):
         cguidance.plan_remainder_c(SCN, plan.x[:-1], plan.u, plan.t_f, 1.0)
+
+
+def _edge_plans(plan: SCvxResult) -> dict[str, tuple[np.ndarray, np.ndarray, float, bool]]:
+    """Plans at and just beyond the trajectory file's limits (verify.VALUE_LIMIT, T_F_RANGE),
+    each with whether it is taken."""
+    x_at, x_beyond = plan.x.copy(), plan.x.copy()
+    x_at[7, 0], x_beyond[7, 0] = VALUE_LIMIT, np.nextafter(VALUE_LIMIT, np.inf)
+    u_beyond = plan.u.copy()
+    u_beyond[3, 1] = -2 * VALUE_LIMIT
+    lo, hi = T_F_RANGE
+    return {
+        "x at the value limit": (x_at, plan.u, plan.t_f, True),
+        "x beyond it": (x_beyond, plan.u, plan.t_f, False),
+        "u beyond it": (plan.x, u_beyond, plan.t_f, False),
+        "t_f at its least": (plan.x, plan.u, lo, True),
+        "t_f below it": (plan.x, plan.u, np.nextafter(lo, 0.0), False),
+        "t_f at its most": (plan.x, plan.u, hi, True),
+        "t_f beyond it": (plan.x, plan.u, np.nextafter(hi, np.inf), False),
+    }
+
+
+EDGE_CASES = ["x at the value limit", "x beyond it", "u beyond it", "t_f at its least",
+              "t_f below it", "t_f at its most", "t_f beyond it"]  # fmt: skip
+
+
+@pytest.mark.parametrize("case", EDGE_CASES)
+def test_a_plan_out_of_range_is_refused_alike(plan: SCvxResult, case: str) -> None:
+    """Python and the C library take and refuse the same plans, at the limits a trajectory
+    file is checked against (C: PDG_PLAN_VALUE_MAX, PDG_PLAN_T_F_MIN/MAX)."""
+    x, u, t_f, taken = _edge_plans(plan)[case]
+    t1 = 0.5 * t_f
+    if taken:
+        gx, gu, gt_f = plan_remainder(SCN, x, u, t_f, t1)
+        cx, cu, ct_f = cguidance.plan_remainder_c(SCN, x, u, t_f, t1)
+        assert np.array_equal(gx, cx) and np.array_equal(gu, cu) and gt_f == ct_f
+        return
+    with pytest.raises(InputError, match=r"beyond|t_f = "):
+        plan_remainder(SCN, x, u, t_f, t1)
+    with pytest.raises(InputError, match=r"beyond|t_f = "):
+        cguidance.plan_remainder_c(SCN, x, u, t_f, t1)

@@ -491,6 +491,18 @@ void pdg_project_guess(const pdg_scenario *sc, double *x, double *u, double *t_f
 }
 
 /* The message (PDG_MESSAGE_LEN bytes, may be NULL) of a refused call; PDG_INVALID_INPUT. */
+/* Largest |v_i| of n finite numbers. */
+static double max_abs(const double *v, size_t n)
+{
+    double m = 0.0;
+    size_t i;
+    for (i = 0; i < n; ++i) {
+        const double a = fabs(v[i]);
+        m = a > m ? a : m;
+    }
+    return m;
+}
+
 static int refuse(char *message, const char *text)
 {
     if (message) {
@@ -520,6 +532,16 @@ int pdg_plan_remainder(const pdg_scenario *scenario, const double *x, const doub
     if (!pdg_all_finite(x, (size_t)N * NX) || !pdg_all_finite(u, (size_t)N * NU) ||
         !isfinite(t_f) || !(t_f > 0.0)) {
         return refuse(message, "x, u and t_f must be finite and t_f positive");
+    }
+    if (max_abs(x, (size_t)N * NX) > PDG_PLAN_VALUE_MAX ||
+        max_abs(u, (size_t)N * NU) > PDG_PLAN_VALUE_MAX) {
+        return refuse(message, "x, u: values beyond 1e9, outside any landing");
+    }
+    if (!(t_f >= PDG_PLAN_T_F_MIN && t_f <= PDG_PLAN_T_F_MAX)) {
+        char text[160];
+        snprintf(text, sizeof text, "t_f = %g is outside [%g, %g] U_T, no landing's", t_f,
+                 PDG_PLAN_T_F_MIN, PDG_PLAN_T_F_MAX);
+        return refuse(message, text);
     }
     if (!(t1 >= 0.0 && t1 < t_f)) { /* NaN fails too */
         char text[160];

@@ -71,6 +71,12 @@ extern "C" {
 /* Largest magnitude of any real number in a scenario (guidance/scenario.py MAGNITUDE_MAX):
  * Table 1's landing is O(1) in these nondimensional units; beyond this input is refused. */
 #define PDG_MAGNITUDE_MAX 1e4
+/* A plan pdg_plan_remainder takes is checked as a trajectory file is (guidance/verify.py
+ * VALUE_LIMIT and T_F_RANGE): its values at most PDG_PLAN_VALUE_MAX in magnitude, its t_f
+ * within [PDG_PLAN_T_F_MIN, PDG_PLAN_T_F_MAX] U_T (a landing takes a few U_T). */
+#define PDG_PLAN_VALUE_MAX 1e9
+#define PDG_PLAN_T_F_MIN 1e-6
+#define PDG_PLAN_T_F_MAX 1e4
 
 /* ---- status codes ------------------------------------------------------------------------ */
 
@@ -386,7 +392,8 @@ int pdg_tscvx_guess(pdg_workspace *ws, const pdg_scenario *scenario, struct tscv
  * projected onto the scenario's boundary conditions (node 0 its initial state) and convex
  * path constraints as the built-in guess is. For options.guess_x/guess_u/guess_t_f of
  * pdg_solve. Returns 0, or PDG_INVALID_INPUT with the reason in `message` (PDG_MESSAGE_LEN
- * bytes, may be NULL): a scenario pdg_validate_scenario refuses, NULL or non-finite input, t1
+ * bytes, may be NULL): a scenario pdg_validate_scenario refuses, NULL or non-finite input, a
+ * value beyond PDG_PLAN_VALUE_MAX, t_f outside [PDG_PLAN_T_F_MIN, PDG_PLAN_T_F_MAX], t1
  * outside [0, t_f). No workspace, no allocation. */
 int pdg_plan_remainder(const pdg_scenario *scenario, const double *x, const double *u,
                        double t_f, double t1, double *gx, double *gu, double *gt_f,

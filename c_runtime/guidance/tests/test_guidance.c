@@ -651,7 +651,14 @@ static void test_plan_remainder(pdg_workspace *ws)
     CHECK(pdg_plan_remainder(&here, plan_x, plan_u, t_f, t1, gx, gu, &gt_f, msg) ==
           PDG_INVALID_INPUT);
     CHECK(strstr(msg, "must be finite") != NULL);
+    plan_u[7] = 2.0 * PDG_PLAN_VALUE_MAX;
+    CHECK(pdg_plan_remainder(&here, plan_x, plan_u, t_f, t1, gx, gu, &gt_f, msg) ==
+          PDG_INVALID_INPUT);
+    CHECK(strstr(msg, "values beyond") != NULL);
     plan_u[7] = 0.0;
+    CHECK(pdg_plan_remainder(&here, plan_x, plan_u, 2.0 * PDG_PLAN_T_F_MAX, t1, gx, gu, &gt_f,
+                             msg) == PDG_INVALID_INPUT);
+    CHECK(strstr(msg, "t_f = 20000 is outside") != NULL);
     here.q0[0] *= 2.0;
     CHECK(pdg_plan_remainder(&here, plan_x, plan_u, t_f, t1, gx, gu, &gt_f, msg) ==
           PDG_INVALID_INPUT);
