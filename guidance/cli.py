@@ -1,5 +1,5 @@
 """Command line: ``guidance solve | scenario | verify | bench | agreement | dispersion |
-budget`` (the learning tools register theirs from ``guidance.cli_learning``)."""
+closed-loop | budget`` (the learning tools register theirs from ``guidance.cli_learning``)."""
 
 from __future__ import annotations
 
@@ -352,6 +352,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_agreement(sub)
     _add_verify(sub)
     _add_dispersion(sub)
+    _add_closed_loop(sub)
     g = sub.add_parser("budget", help="RAD750 time and memory budget of one C guidance call")
     g.set_defaults(func=cmd_budget)
     try:
@@ -578,6 +579,24 @@ def _add_dispersion(sub: argparse._SubParsersAction) -> None:
     )
     dispersion.add_arguments(d)
     d.set_defaults(func=cmd_dispersion)
+
+
+def _add_closed_loop(sub: argparse._SubParsersAction) -> None:
+    from guidance import closed_loop
+
+    c = sub.add_parser(
+        "closed-loop",
+        help="fly a landing through a disturbance, re-planning in flight, against open loop",
+        description=closed_loop.__doc__.split("\n\n")[0].replace("\n", " "),
+    )
+    closed_loop.add_arguments(c)
+    c.set_defaults(func=cmd_closed_loop)
+
+
+def cmd_closed_loop(args: argparse.Namespace) -> int:
+    from guidance import closed_loop
+
+    return closed_loop.run(args)
 
 
 def main(argv: Sequence[str] | None = None) -> int:

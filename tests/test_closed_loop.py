@@ -1,0 +1,148 @@
+"""Closed-loop flight with in-flight re-planning (``guidance.closed_loop``,
+``guidance closed-loop``):
+
+- a plan flown without a disturbance is the open-loop check's flight (``verify.propagate``),
+  whole or in pieces that end between nodes;
+- the disturbances act as modelled: without aerodynamics an acceleration bias b moves the
+  vehicle by exactly b t^2 / 2, and a thrust error e burns exactly (1 + e) times the thrust's
+  propellant;
+- without a disturbance the re-plans keep the vehicle on its plan to the pad;
+- through a thrust error, re-planning lands many times nearer the pad than the plan flown
+  open loop; a re-plan that fails (the engine too weak for the last burn) leaves the vehicle
+  on its plan;
+- bad settings are refused with the reason; the command line prints the figures and JSON.
+"""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from guidance import cguidance
+from guidance.cli import main
+from guidance.closed_loop import (
+    ClosedLoop,
+    Disturbance,
+    ReplanSettings,
+    _fly,
+    fly_closed_loop,
+    state_scenario,
+)
+from guidance.errors import InputError
+from guidance.params import IM, IR, IV, Scenario
+from guidance.scvx import SCvxResult
+from guidance.verify import propagate
+
+pytestmark = pytest.mark.skipif(
+    not cguidance.LIB_PATH.exists(), reason="build/libtscvx_gnc.so not built (make lib)"
+)
+
+SCN = Scenario()
+SETTINGS = ReplanSettings(period=1.0, lock=0.5)  # 6 re-plans of the default landing
+
+
+@pytest.fixture(scope="module")
+def plan() -> SCvxResult:
+    return cguidance.solve_c(SCN)
+
+
+def test_a_plan_flown_undisturbed_is_the_open_loop_check(plan: SCvxResult) -> None:
+    reference = propagate(SCN.x0, plan.u, plan.t_f, SCN.params)[-1]
+    whole, _ = _fly(SCN.x0, plan.u, plan.t_f, 0.0, plan.t_f, SCN, Disturbance())
+    np.testing.assert_allclose(whole, reference, rtol=0, atol=1e-8)
+    x, t = SCN.x0, 0.0
+    for t_next in (0.37 * plan.t_f, 0.8123 * plan.t_f, plan.t_f):  # ends between nodes
+        x, _ = _fly(x, plan.u, plan.t_f, t, t_next, SCN, Disturbance())
+        t = t_next
+    np.testing.assert_allclose(x, reference, rtol=0, atol=1e-8)
+
+
+def test_the_disturbances_act_as_modelled(plan: SCvxResult) -> None:
+    no_aero = Scenario(SCN.initial, SCN.params.replace(aero_coeff=0.0))
+    T = 0.6 * plan.t_f
+    nominal, _ = _fly(SCN.x0, plan.u, plan.t_f, 0.0, T, no_aero, Disturbance())
+    b = np.array([0.01, -0.02, 0.03])
+    biased, _ = _fly(SCN.x0, plan.u, plan.t_f, 0.0, T, no_aero, Disturbance(accel_bias=tuple(b)))
+    np.testing.assert_allclose(biased[IR] - nominal[IR], 0.5 * b * T**2, rtol=0, atol=1e-8)
+    np.testing.assert_allclose(biased[IV] - nominal[IV], b * T, rtol=0, atol=1e-8)
+    # mass: m(T) = m0 - (1 + e) alpha int |u| - beta T
+    e, beta = 0.03, SCN.params.beta_mdot
+    strong, _ = _fly(SCN.x0, plan.u, plan.t_f, 0.0, T, SCN, Disturbance(thrust_error=e))
+    burned = SCN.x0[IM] - nominal[IM] - beta * T
+    assert SCN.x0[IM] - strong[IM] - beta * T == pytest.approx((1 + e) * burned, abs=1e-8)
+
+
+def _landed(res: ClosedLoop) -> None:
+    """Each re-plan's record holds together: kept ones solved, with a touchdown after it."""
+    for r in res.replans:
+        assert r.kept == (r.outcome == "solved")
+        assert (r.touchdown > r.t) if r.kept else np.isnan(r.touchdown)
+
+
+def test_undisturbed_replans_keep_the_vehicle_on_its_plan(plan: SCvxResult) -> None:
+    res = fly_closed_loop(SCN, Disturbance(), SETTINGS, plan)
+    _landed(res)
+    assert len(res.replans) == 6 and all(r.kept for r in res.replans)
+    assert res.closed.position_error < 1e-5 and res.closed.velocity_error < 1e-5
+    # the principle of optimality, within SCvx's tolerances
+    assert res.closed.m_f == pytest.approx(plan.m_f, abs=5e-4)
+    assert res.closed.touchdown == pytest.approx(plan.t_f, abs=0.02)
+    assert res.open.position_error < 1e-3  # guidance verify's landing tolerance
+
+
+def test_replanning_corrects_a_thrust_error(plan: SCvxResult) -> None:
+    res = fly_closed_loop(SCN, Disturbance(thrust_error=0.02), SETTINGS, plan)
+    _landed(res)
+    assert all(r.kept for r in res.replans)
+    assert res.open.position_error > 0.3  # 2 % more thrust for a whole landing
+    assert res.closed.position_error < res.open.position_error / 10
+    assert res.closed.velocity_error < res.open.velocity_error / 2
+
+
+def test_a_failed_replan_leaves_the_vehicle_on_its_plan(plan: SCvxResult) -> None:
+    """2 % too little thrust: late in the last, full-thrust burn no landing is left."""
+    res = fly_closed_loop(SCN, Disturbance(thrust_error=-0.02), ReplanSettings(), plan)
+    _landed(res)
+    failed = [r for r in res.replans if not r.kept]
+    assert failed and all(r.t > 4.0 for r in failed)
+    assert {r.outcome for r in failed} <= {"infeasible", "max_iterations"}
+    last_kept = [r for r in res.replans if r.kept][-1]
+    assert res.closed.touchdown == last_kept.touchdown  # flown to that plan's end
+    assert res.closed.position_error < res.open.position_error / 3
+
+
+@pytest.mark.parametrize(
+    ("make", "reason"),
+    [
+        (lambda: Disturbance(thrust_error=float("nan")), "thrust_error"),
+        (lambda: Disturbance(thrust_error=0.6), "thrust_error"),
+        (lambda: Disturbance(accel_bias=(0.0, 2.0, 0.0)), "accel_bias"),
+        (lambda: Disturbance(accel_bias=(0.0, 0.0)), "accel_bias"),
+        (lambda: ReplanSettings(period=0.0), "period"),
+        (lambda: ReplanSettings(lock=float("inf")), "lock"),
+    ],
+)
+def test_bad_settings_are_refused(make, reason: str) -> None:
+    with pytest.raises(InputError, match=reason):
+        make()
+
+
+def test_a_roll_rate_beyond_rounding_is_refused() -> None:
+    x = SCN.x0.copy()
+    x[10] = 1e-6
+    with pytest.raises(InputError, match="roll rate"):
+        state_scenario(x, SCN)
+    x[10] = 3e-14  # the integration's rounding: zeroed
+    assert state_scenario(x, SCN).initial.w0[0] == 0.0
+
+
+def test_the_command_line(capsys) -> None:
+    assert main(["closed-loop", "--period", "1.5", "--thrust-error", "0.01", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["disturbance"]["thrust_error"] == 0.01 and out["settings"]["period"] == 1.5
+    assert out["closed"]["position_error"] < out["open"]["position_error"]
+    assert [r["t"] for r in out["replans"]] == [1.5, 3.0, 4.5, 6.0]  # 0.87 U_T left at 6
+    assert main(["closed-loop", "--thrust-error", "0.9"]) == 2
+    assert "thrust_error" in capsys.readouterr().err
