@@ -21,6 +21,7 @@ import argparse
 import json
 import math
 import os
+import shlex
 import sys
 from collections import Counter
 from collections.abc import Sequence
@@ -144,7 +145,7 @@ def report(rows: Sequence[Landing], method: str, nodes: int, seed: int, ipm_budg
         lines.append(f"    {status:16s} {n:5d}")
     lines.append(f"  per solved call             {'median':>8s} {'95 %':>8s} {'largest':>8s}")
     for label, key in (
-        ("SCvx iterations", "iterations"),
+        ("iterations", "iterations"),
         ("subproblems", "subproblems"),
         ("IPM iterations", "ipm_iterations"),
     ):
@@ -184,13 +185,16 @@ def campaign_record(args: argparse.Namespace) -> dict[str, object]:
     solve = ["guidance", "solve", "--backend", "c", "--method", args.method]
     if args.ipm_budget != SCvxSettings().socp_max_iter_total:
         solve += ["--ipm-budget", str(args.ipm_budget)]
+    landing_file = Path("landing_<i>.json")
+    if getattr(args, "failures", None) is not None:  # the file as written there
+        landing_file = args.failures / landing_file
     return {
         "count": args.landings,
         "seed": args.seed,
         "nodes": args.nodes,
         "method": args.method,
         "ipm_budget": args.ipm_budget,
-        "solve_again": " ".join(solve) + " landing_<i>.json",
+        "solve_again": " ".join(solve) + " " + shlex.quote(str(landing_file)),
     }
 
 

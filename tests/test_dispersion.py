@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import shlex
 from pathlib import Path
 
 import numpy as np
@@ -115,6 +116,12 @@ def test_a_small_campaign_reports_and_writes_its_failures(tmp_path: Path, capsys
     assert campaign["ipm_budget"] == 30 and campaign["nodes"] == 10
     assert campaign["failures"]["landing_1.json"]["status"] == "max_iterations"
     assert "--ipm-budget 30" in campaign["solve_again"]
+    # the command as recorded solves a failure again, from any folder
+    again = shlex.split(campaign["solve_again"].replace("<i>", "1"))
+    assert again[:2] == ["guidance", "solve"] and again[-1] == str(folder / "landing_1.json")
+    capsys.readouterr()
+    assert cli.main(again[1:]) == 0
+    assert "status        max_iterations" in capsys.readouterr().out
     # the folder now holds a campaign: another one is refused before any work
     assert cli.main(["dispersion", "--landings", "1", "--failures", str(folder)]) == 2
     assert "holds an earlier campaign's landings" in capsys.readouterr().err
