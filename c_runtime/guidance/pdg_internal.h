@@ -51,6 +51,8 @@ typedef struct {
     const int *dest; /* mode 2: entry -> slot (A slot, or nnz_A + G slot) */
     double *Ax, *Gx; /* mode 2 */
     int nnz_A;
+    int nnz;         /* mode 2: nnz_A + nnz_G, the slots dest may name */
+    int bad_slot;    /* mode 2: a dest outside them was met (a corrupted map): nothing written */
     const unsigned char *phi_a; /* the entries of A_k the dynamics rows carry (foh.h) */
 } pdg_emitter;
 

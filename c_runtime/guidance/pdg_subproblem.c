@@ -104,7 +104,9 @@ static void put(pdg_emitter *e, int row, int col, double val)
         e->col[e->cnt] = col;
     } else if (e->mode == 2) {
         const int d = e->dest[e->cnt];
-        if (d < e->nnz_A) {
+        if (d < 0 || d >= e->nnz) { /* an upset in the map: refuse, never write outside */
+            e->bad_slot = 1;
+        } else if (d < e->nnz_A) {
             e->Ax[d] = val;
         } else {
             e->Gx[d - e->nnz_A] = val;

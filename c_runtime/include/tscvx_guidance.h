@@ -30,7 +30,8 @@
  *   6. cleanup is trivial: the caller owns the arena.
  *
  * Every call taking the workspace checks its mark and a checksum of what pdg_setup fixed (the
- * sizes, settings and layout, the pointers into the arena): a workspace whose arena was
+ * sizes, settings and layout, the pointers into the arena, the map of the subproblem's
+ * entries into its matrices): a workspace whose arena was
  * reused, or where one of those took a bit flip, is refused (PDG_SETUP_NOT_READY,
  * PDG_INVALID_INPUT from the solves), never followed. The SOCP workspace inside it checks
  * its mark only (tscvx_socp.h).
@@ -408,7 +409,9 @@ pdg_status pdg_solve_tscvx(pdg_workspace *ws, const pdg_scenario *scenario,
 /* For tests: assembles the subproblem about the physical iterate (x, u, t_f) of `scenario`
  * with trust radius eta (scaling, guess-independent: Ss = t_f) and copies its data out:
  * c (n), A values (nnz_A, the CSC order of Ap/Ai), b (p), G values, h (m), and the pattern
- * (Ap n+1, Ai, Gp n+1, Gi; any pointer may be NULL). Returns 0 or a pdg_status. */
+ * (Ap n+1, Ai, Gp n+1, Gi; any pointer may be NULL). Returns 0, PDG_INVALID_INPUT (a
+ * scenario the workspace refuses, non-finite x or u, t_f or eta not finite and positive) or
+ * PDG_SOLVER_ERROR (the model evaluation failed). */
 int pdg_debug_assemble(pdg_workspace *ws, const pdg_scenario *scenario, const double *x,
                        const double *u, double t_f, double eta, double *c, double *Ax,
                        double *b, double *Gx, double *h, int *Ap, int *Ai, int *Gp, int *Gi);

@@ -242,6 +242,15 @@ static void test_stale_workspace(pdg_workspace *ws, void *arena, size_t bytes)
     CHECK(pdg_debug_guess(ws, &s, x, u, &tf) == 0);
     CHECK(pdg_debug_assemble(ws, &s, x, u, tf, -5.0, NULL, NULL, NULL, NULL, NULL, NULL, NULL,
                              NULL, NULL) == PDG_INVALID_INPUT);
+    CHECK(pdg_debug_assemble(ws, &s, x, u, 0.0, 0.5, NULL, NULL, NULL, NULL, NULL, NULL, NULL,
+                             NULL, NULL) == PDG_INVALID_INPUT);
+    CHECK(pdg_debug_assemble(ws, &s, x, u, NAN, 0.5, NULL, NULL, NULL, NULL, NULL, NULL, NULL,
+                             NULL, NULL) == PDG_INVALID_INPUT);
+    x[20] = NAN;
+    CHECK(pdg_debug_assemble(ws, &s, x, u, tf, 0.5, NULL, NULL, NULL, NULL, NULL, NULL, NULL,
+                             NULL, NULL) == PDG_INVALID_INPUT);
+    x[20] = 0.0;
+    CHECK(pdg_debug_guess(ws, &s, x, u, &tf) == 0);
     CHECK(pdg_debug_assemble(ws, &s, x, u, tf, 0.5, NULL, NULL, NULL, NULL, NULL, NULL, NULL,
                              NULL, NULL) == 0);
     /* a bit flipped in a set-up constant (a loop bound, a setting): refused until restored */
@@ -257,6 +266,13 @@ static void test_stale_workspace(pdg_workspace *ws, void *arena, size_t bytes)
         ws->st.max_subproblems ^= 1 << 12;
         CHECK(pdg_solve(ws, &s, NULL, &r) == PDG_INVALID_INPUT);
         ws->st.max_subproblems = max_sub;
+        /* the map of the subproblem's entries into A and G: a flip that would send a write
+         * out of the arrays (refused by the checksum; assemble's own range check, behind it,
+         * refuses the entry if the flip comes during a call) */
+        ws->dest[5] ^= 1 << 20;
+        CHECK(pdg_solve(ws, &s, NULL, &r) == PDG_INVALID_INPUT);
+        CHECK(strstr(r.message, "workspace not set up") != NULL);
+        ws->dest[5] ^= 1 << 20;
         CHECK(pdg_solve(ws, &s, NULL, &r) == PDG_SOLVED);
     }
     memset(arena, 0x5A, bytes);
@@ -313,6 +329,18 @@ static int call_back_in(void *ctx, int k, unsigned char *mask, int n)
     }
     if (pdg_debug_guess(ws, &s, inner_x, inner_u, &t_f) == PDG_INVALID_INPUT) {
         ++reentry_refused;
+    }
+    return 0;
+}
+
+/* Mask callback standing for an upset during a solve: at iteration 2 it flips a high bit of
+ * an entry of the map of the subproblem's entries into A and G (ctx: the workspace). */
+static int upset_map(void *ctx, int k, unsigned char *mask, int n)
+{
+    pdg_workspace *ws = (pdg_workspace *)ctx;
+    (void)mask, (void)n;
+    if (k == 2) {
+        ws->dest[5] ^= 1 << 20;
     }
     return 0;
 }
@@ -383,6 +411,17 @@ static void test_solve(pdg_workspace *ws, int with_masks)
         CHECK(pdg_solve(ws, &s, &o, &r) == PDG_INVALID_INPUT);
         CHECK(strstr(r.message, "not both") != NULL);
         CHECK(pdg_solve(ws, &s, NULL, &r) == PDG_SOLVED); /* not left busy */
+        /* the map upset within the solve: its next subproblem refused (never written outside
+         * A and G, which valgrind and ASan check here), the solve ends with the reason */
+        memset(&o, 0, sizeof o);
+        o.mask_fn = upset_map;
+        o.mask_ctx = ws;
+        CHECK(pdg_solve(ws, &s, &o, &r) == PDG_INVALID_INPUT);
+        CHECK(strstr(r.message, "iteration 2: the workspace was damaged") != NULL);
+        printf("map upset at iteration 2: %d subproblems solved\n", r.subproblems_solved);
+        CHECK(pdg_solve(ws, &s, NULL, &r) == PDG_INVALID_INPUT); /* and then by the checksum */
+        ws->dest[5] ^= 1 << 20;
+        CHECK(pdg_solve(ws, &s, NULL, &r) == PDG_SOLVED);
     }
     /* boundary conditions hold exactly enough */
     CHECK(fabs(x[0] - 4.0) < 1e-7 && fabs(x[PDG_NSTATE * 49 + 3] + 0.1) < 1e-7);
