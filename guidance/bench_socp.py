@@ -681,7 +681,8 @@ def main(argv: list[str] | None = None) -> int:
             "own floating-point arithmetic, and instructions per flop"
         )
         if not BENCH_DRIVER.exists():
-            print(f"  (tscvx: n/a, {BENCH_DRIVER.relative_to(ROOT)} is not built: make bench)")
+            driver = BENCH_DRIVER.relative_to(ROOT)
+            print(f"  (tscvx: n/a, {driver} is not built: make {driver})")
         for name, probs in sets[:3]:
             ours = instructions_ours(probs[0])
             sparse = instructions_ours(probs[0], KKT_SPARSE, flops=False)

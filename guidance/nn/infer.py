@@ -141,7 +141,11 @@ class OnnxModel:
         self.path = path = Path(path)
         params = params or Params()
         if not path.is_file():
-            raise _fail(path, "file not found (run `make models`)")
+            raise _fail(
+                path,
+                "file not found (the shipped networks are in models/; "
+                "`make models` trains them again)",
+            )
         opts = ort.SessionOptions()
         opts.intra_op_num_threads = 1
         opts.inter_op_num_threads = 1
