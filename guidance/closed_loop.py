@@ -21,13 +21,12 @@ from dataclasses import asdict, dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
-from scipy.integrate import solve_ivp
 
 from guidance.constraints import path_constraint_values
 from guidance.errors import InputError
 from guidance.guess import plan_remainder
 from guidance.params import IM, IQ, IR, IV, IW, InitialState, Scenario
-from guidance.verify import MAX_EVALUATIONS, PropagationError, dynamics_numpy, engine_thrust
+from guidance.verify import PropagationError, fly_interval
 from guidance.verify import final_attitude_error as attitude_error
 
 if TYPE_CHECKING:
@@ -115,45 +114,35 @@ def _fly(
     state x0: its first-order-hold command through the engine's limits and the disturbance.
     Returns the state at s1 and the path-constraint values (M x 7) of the sampled states and
     commands (the thrust constraints bind the command guidance gives; the engine's error on
-    it is the disturbance's)
-    Each plan interval (or part of one) is integrated on its own, as guidance verify does:
-    the thrust has a kink at every node."""
+    it is the disturbance's). Each plan interval (or part of one) is integrated on its own by
+    ``verify.fly_interval``, as guidance verify does: the thrust has a kink at every node."""
     p = scn.params
     N = u.shape[0]
     h = t_f / (N - 1)
-    bias = np.concatenate([np.zeros(3), dist.accel_bias, np.zeros(8)])
-    scale = 1.0 + dist.thrust_error
+    frac = np.linspace(0.0, 1.0, SAMPLES + 2)[:, None]  # sampled fractions of a piece
 
     def command(s: float) -> np.ndarray:
         j = min(int(s / h), N - 2)
         a = min(max((s - j * h) / h, 0.0), 1.0)
         return u[j] + a * (u[j + 1] - u[j])
 
-    evaluations = 0
-
-    def rhs(s: float, x: np.ndarray) -> np.ndarray:
-        nonlocal evaluations
-        evaluations += 1
-        if evaluations > MAX_EVALUATIONS:  # solve_ivp passes the exception on
-            raise PropagationError(f"more than {MAX_EVALUATIONS} evaluations of the dynamics")
-        return dynamics_numpy(x, scale * engine_thrust(command(s), p), p) + bias
-
     x, xs, us = np.asarray(x0, dtype=float), [], []
     j = min(int(s0 / h), N - 2)
     a = s0
     while a < s1 and j <= N - 2:  # at most N - 1 intervals
         b = min((j + 1) * h if j < N - 2 else t_f, s1)
-        if b > a:
-            grid = np.linspace(a, b, SAMPLES + 2)
-            evaluations = 0
-            with np.errstate(all="ignore"):
-                sol = solve_ivp(rhs, (a, b), x, method="DOP853", rtol=RTOL, atol=RTOL,
-                                t_eval=grid)  # fmt: skip
-            if sol.status != 0 or not np.isfinite(sol.y).all():
-                raise PropagationError(f"the flight stopped at t = {a:.4f} of the plan")
+        if b > a:  # the hold is linear over the piece [a, b] of interval j
+            ua, ub = command(a), command(b)
+            try:
+                sol = fly_interval(x, ua, ub, b - a, p, RTOL, True, engine=True,
+                                   thrust_scale=1.0 + dist.thrust_error,
+                                   accel_bias=np.asarray(dist.accel_bias))  # fmt: skip
+            except PropagationError as exc:
+                msg = f"the flight stopped at t = {a:.4f} of the plan: {exc}"
+                raise PropagationError(msg) from None
             x = sol.y[:, -1]
-            xs.append(sol.y.T)
-            us.append(np.array([command(s) for s in grid]))
+            xs.append(sol.sol(frac[:, 0] * (b - a)).T)
+            us.append(ua + frac * (ub - ua))
         a, j = b, j + 1
     if not xs:
         return x, np.zeros((0, 7))

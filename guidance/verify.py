@@ -74,7 +74,7 @@ def engine_thrust(u: np.ndarray, p: Params) -> np.ndarray:
     return u
 
 
-def _interval(
+def fly_interval(
     x0: np.ndarray,
     u_k: np.ndarray,
     u_k1: np.ndarray,
@@ -83,10 +83,17 @@ def _interval(
     rtol: float,
     dense: bool,
     engine: bool = False,
+    thrust_scale: float = 1.0,
+    accel_bias: np.ndarray | None = None,
 ):  # -> scipy's OdeResult
-    """One interval; PropagationError says why it did not reach dt."""
+    """One interval of open-loop flight from x0 under the first-order hold from u_k (t = 0) to
+    u_k1 (t = dt); ``engine``: the thrust an engine limited to [T_min, T_max] gives for it
+    (``engine_thrust``); the engine's thrust times ``thrust_scale`` and an inertial
+    acceleration ``accel_bias`` (3,) the plan does not know of (``closed_loop``).
+    PropagationError says why it did not reach dt."""
     du = u_k1 - u_k
     evaluations = 0
+    bias = None if accel_bias is None else np.concatenate([np.zeros(3), accel_bias, np.zeros(8)])
 
     def rhs(t: float, x: np.ndarray) -> np.ndarray:
         nonlocal evaluations
@@ -94,7 +101,8 @@ def _interval(
         if evaluations > MAX_EVALUATIONS:  # solve_ivp passes the exception on
             raise PropagationError(f"more than {MAX_EVALUATIONS} evaluations of the dynamics")
         u = u_k + (t / dt) * du
-        return dynamics_numpy(x, engine_thrust(u, p) if engine else u, p)
+        dx = dynamics_numpy(x, thrust_scale * (engine_thrust(u, p) if engine else u), p)
+        return dx if bias is None else dx + bias
 
     # an overflow shows as a non-finite state below, not as numpy's warnings on the way
     with np.errstate(all="ignore"):
@@ -113,7 +121,7 @@ def integrate_interval(
 ) -> np.ndarray:
     """x(dt) from x0 under the first-order hold from u_k (t = 0) to u_k1 (t = dt);
     PropagationError when the integration cannot reach dt."""
-    return _interval(x0, u_k, u_k1, dt, p, rtol, False).y[:, -1]
+    return fly_interval(x0, u_k, u_k1, dt, p, rtol, False).y[:, -1]
 
 
 @dataclass
@@ -152,7 +160,7 @@ def propagate_sampled(
     nodes[0] = x0
     for k in range(N - 1):
         try:
-            sol = _interval(nodes[k], u[k], u[k + 1], dt, p, rtol, between > 0, engine)
+            sol = fly_interval(nodes[k], u[k], u[k + 1], dt, p, rtol, between > 0, engine)
         except PropagationError as exc:
             return Propagation(nodes, xb, ub, f"interval {k} of {N - 1}: {exc}")
         nodes[k + 1] = sol.y[:, -1]

@@ -154,7 +154,9 @@ enum { TSCVX_KKT_AUTO = 0, TSCVX_KKT_LDL = 1, TSCVX_KKT_STATIC = 2, TSCVX_KKT_BA
 /* ---- settings ---------------------------------------------------------------------------- */
 
 typedef struct {
-    tscvx_int max_iter;          /* IPM iteration limit, 1..500 (fixes the log size at setup) */
+    tscvx_int max_iter;          /* IPM iteration limit, 1..500 (fixes the log size at setup);
+                                    per run: a warm-started solve that fails runs again cold,
+                                    so one tscvx_solve takes at most 2 max_iter */
     tscvx_float tol_gap_abs;     /* |pcost - dcost| <= tol_gap_abs, or ... */
     tscvx_float tol_gap_rel;     /* ... <= tol_gap_rel * max(1, min(|pcost|, |dcost|)) */
     tscvx_float tol_feas;        /* |Ax-b|,|Gx+s-h| <= tol_feas (1 + |b,h|); dual same with c */
