@@ -409,7 +409,7 @@ int pdg_check_scenario(const pdg_scenario *s, char *msg)
 
 int pdg_validate_scenario(const pdg_scenario *scenario, char *message)
 {
-    return pdg_check_scenario(scenario, message);
+    return pdg_check_scenario(scenario, message) != 0 ? PDG_INVALID_INPUT : 0;
 }
 
 /* The params' part of pdg_check_scenario: its number checks on a scenario holding the vehicle

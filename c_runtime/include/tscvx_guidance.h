@@ -304,8 +304,8 @@ pdg_setup_status pdg_setup(pdg_workspace **ws, void *arena, size_t arena_bytes,
                            const pdg_params *vehicle, const pdg_settings *settings);
 
 /* Validates the scenario as guidance/scenario.py does (every number finite and within
- * PDG_MAGNITUDE_MAX, then the physics); 0 = valid, otherwise writes the message
- * ("scenario field 'm0': ...") into `message` (PDG_MESSAGE_LEN bytes). */
+ * PDG_MAGNITUDE_MAX, then the physics): 0 when valid, otherwise PDG_INVALID_INPUT with the
+ * message ("scenario field 'm0': ...") in `message` (PDG_MESSAGE_LEN bytes; may be NULL). */
 int pdg_validate_scenario(const pdg_scenario *scenario, char *message);
 
 /* Runs SCvx (T-SCvx with masks). `options` may be NULL. result->x and result->u must point

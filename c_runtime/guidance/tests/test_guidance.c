@@ -113,6 +113,11 @@ static void test_bad_input(pdg_workspace *ws)
         CHECK(pdg_solve(ws, &s, &o, &r) == PDG_INVALID_INPUT);
     }
     CHECK(pdg_validate_scenario(&s, r.message) == 0);
+    s.m0 = -1.0; /* a pdg_status, not a bare 1 (PDG_INFEASIBLE's value) */
+    CHECK(pdg_validate_scenario(&s, r.message) == PDG_INVALID_INPUT);
+    CHECK(strstr(r.message, "m0") != NULL);
+    CHECK(pdg_validate_scenario(&s, NULL) == PDG_INVALID_INPUT);
+    s.m0 = 3.0;
 #undef BAD
 }
 
