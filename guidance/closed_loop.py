@@ -17,6 +17,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import sys
 from dataclasses import asdict, dataclass, field
 from typing import TYPE_CHECKING
 
@@ -300,13 +301,18 @@ def add_arguments(ap: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """``guidance closed-loop``: 0 (the figures say how well it landed)."""
+    """``guidance closed-loop``: 0 (the figures say how well it landed), 1 when a flight
+    cannot be integrated (the reason on stderr)."""
     from guidance.scenario import read_scenario_data, scenario_from_dict
 
     dist = Disturbance(args.thrust_error, tuple(args.accel_bias))
     settings = ReplanSettings(args.period, args.lock, args.backend)
     scn = scenario_from_dict(read_scenario_data(args.scenario)) if args.scenario else Scenario()
-    res = fly_closed_loop(scn, dist, settings)
+    try:
+        res = fly_closed_loop(scn, dist, settings)
+    except PropagationError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 1
     if args.json:
         out = {"disturbance": asdict(dist), "settings": asdict(settings), **asdict(res)}
         print(json.dumps(_plain(out), indent=1))

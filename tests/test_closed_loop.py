@@ -146,3 +146,14 @@ def test_the_command_line(capsys) -> None:
     assert [r["t"] for r in out["replans"]] == [1.5, 3.0, 4.5, 6.0]  # 0.87 U_T left at 6
     assert main(["closed-loop", "--thrust-error", "0.9"]) == 2
     assert "thrust_error" in capsys.readouterr().err
+
+
+def test_a_flight_that_cannot_be_integrated_exits_1(monkeypatch, capsys) -> None:
+    from guidance import closed_loop
+
+    def broken(*args: object, **kwargs: object) -> None:
+        raise closed_loop.PropagationError("the state is no longer finite")
+
+    monkeypatch.setattr(closed_loop, "fly_interval", broken)
+    assert main(["closed-loop"]) == 1
+    assert "the flight stopped at t = 0.0000 of the plan" in capsys.readouterr().err
