@@ -142,8 +142,10 @@ typedef struct {
 /* Why setup (and the size queries) would refuse `data`: the same checks in the same order,
  * the same status, and in `message` (TSCVX_MESSAGE_LEN bytes; may be NULL) the array and the
  * entry at fault, e.g. "G: row index 5 in column 1 is outside 0..2" or "c[3] = nan";
- * TSCVX_SETUP_OK and "" for data they accept. The factorization test of P at setup is not
- * repeated here (TSCVX_SETUP_P_NOT_PSD from setup with an OK here means it). */
+ * TSCVX_SETUP_OK and "" for data they accept. Two checks of setup are not repeated here:
+ * the factorization test of P (TSCVX_SETUP_P_NOT_PSD from setup with an OK here means it) and
+ * the size of the KKT system, which depends on the settings (soc_dense_max, the method):
+ * TSCVX_SETUP_TOO_LARGE. */
 #define TSCVX_MESSAGE_LEN 160
 tscvx_setup_status tscvx_check_data(const tscvx_data *data, char *message);
 
