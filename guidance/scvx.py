@@ -595,7 +595,10 @@ class SCvxSolver:
         parts = [f"virtual control {vc:.3g} > {st.vc_tol:g} after {k} iterations"]
         parts.append(f"largest defect {defect:.3g} at interval {interval}, state {STATE_NAMES[i]}")
         if x[-1, IM] <= self.p.m_dry + 1e-6 * self.sc.Sx[IM]:
-            parts.append(f"mass at the floor (m_f = {x[-1, IM]:.6f} = m_dry): not enough fuel")
+            parts.append(
+                f"mass at the floor (m_f = {x[-1, IM]:.6f} = m_dry): not enough fuel, or no "
+                "landing within the constraints"
+            )
         return "infeasible", "; ".join(parts)
 
 

@@ -1081,7 +1081,8 @@ static pdg_status diagnose(pdg_workspace *ws, double vc, double defect, double v
     if (len < PDG_MESSAGE_LEN &&
         ws->x[NX * (ws->N - 1) + IM] <= ws->scn.params.m_dry + 1e-6 * ws->sc.Sx[IM]) {
         snprintf(msg + len, (size_t)(PDG_MESSAGE_LEN - len),
-                 "; mass at the floor (m_f = %.6f = m_dry): not enough fuel",
+                 "; mass at the floor (m_f = %.6f = m_dry): not enough fuel, or no landing "
+                 "within the constraints",
                  ws->x[NX * (ws->N - 1) + IM]);
     }
     return PDG_INFEASIBLE;
