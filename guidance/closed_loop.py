@@ -25,7 +25,7 @@ import numpy as np
 
 from guidance.constraints import path_constraint_values
 from guidance.errors import InputError
-from guidance.guess import plan_remainder
+from guidance.guess import hold_at, plan_remainder
 from guidance.params import IM, IQ, IR, IV, IW, InitialState, Scenario
 from guidance.verify import PropagationError, fly_interval
 from guidance.verify import final_attitude_error as attitude_error
@@ -122,18 +122,13 @@ def _fly(
     h = t_f / (N - 1)
     frac = np.linspace(0.0, 1.0, SAMPLES + 2)[:, None]  # sampled fractions of a piece
 
-    def command(s: float) -> np.ndarray:
-        j = min(int(s / h), N - 2)
-        a = min(max((s - j * h) / h, 0.0), 1.0)
-        return u[j] + a * (u[j + 1] - u[j])
-
     x, xs, us = np.asarray(x0, dtype=float), [], []
     j = min(int(s0 / h), N - 2)
     a = s0
     while a < s1 and j <= N - 2:  # at most N - 1 intervals
         b = min((j + 1) * h if j < N - 2 else t_f, s1)
         if b > a:  # the hold is linear over the piece [a, b] of interval j
-            ua, ub = command(a), command(b)
+            ua, ub = hold_at(u, t_f, np.array([a, b]))
             try:
                 sol = fly_interval(x, ua, ub, b - a, p, RTOL, True, engine=True,
                                    thrust_scale=1.0 + dist.thrust_error,

@@ -270,14 +270,20 @@ def plan_remainder(
     if not (np.isfinite(t1) and 0.0 <= t1 < t_f):
         raise InputError(f"plan remainder: t1 = {t1:g} is not within the plan's [0, {t_f:g}) U_T")
     N = scenario.params.N
-    h = t_f / (N - 1)
     s = np.append(np.arange(N - 1) * (1.0 / (N - 1)), 1.0)  # node fractions, the last exact
     t = t1 + (t_f - t1) * s
+    gx, gu = hold_at(x, t_f, t), hold_at(u, t_f, t)
+    return project_guess(scenario, gx, gu, t_f - t1)
+
+
+def hold_at(values: np.ndarray, t_f: float, t: np.ndarray) -> np.ndarray:
+    """values (N x d, on N nodes over [0, t_f]) linearly interpolated at the times t (M,):
+    M x d, the first-order hold of a thrust; pdg_plan_remainder's arithmetic."""
+    N = values.shape[0]
+    h = t_f / (N - 1)
     j = np.minimum((t / h).astype(int), N - 2)  # the plan's interval holding t
     a = np.clip((t - j * h) / h, 0.0, 1.0)[:, None]
-    gx = x[j] + a * (x[j + 1] - x[j])
-    gu = u[j] + a * (u[j + 1] - u[j])
-    return project_guess(scenario, gx, gu, t_f - t1)
+    return values[j] + a * (values[j + 1] - values[j])
 
 
 def project_guess(
