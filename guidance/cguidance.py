@@ -152,9 +152,8 @@ def library() -> ct.CDLL:
     lib.pdg_check_vehicle.argtypes = [ct.POINTER(_Params), ct.c_char_p]
     lib.pdg_get_log.argtypes = [ct.c_void_p, _i, ct.POINTER(_LogRow)]
     lib.pdg_get_mask.argtypes = [ct.c_void_p, _i, _ucp]
-    lib.pdg_log_length.argtypes = [ct.c_void_p]
-    lib.pdg_arena_high_water.argtypes = [ct.c_void_p]
-    lib.pdg_arena_high_water.restype = sz
+    lib.pdg_log_length.argtypes = [ct.c_void_p, ct.POINTER(_i)]
+    lib.pdg_arena_high_water.argtypes = [ct.c_void_p, ct.POINTER(sz)]
     lib.pdg_setup_status_message.argtypes = [_i]
     lib.pdg_setup_status_message.restype = ct.c_char_p
     lib.pdg_polish_message.argtypes = [_i]
@@ -256,13 +255,27 @@ class Workspace:
 
     @property
     def high_water(self) -> int:
-        return int(self.lib.pdg_arena_high_water(self.ws))
+        bytes_ = ct.c_size_t()
+        _read_ok(self.lib, "pdg_arena_high_water",
+                 self.lib.pdg_arena_high_water(self.ws, ct.byref(bytes_)))  # fmt: skip
+        return bytes_.value
+
+    def log_length(self) -> int:
+        rows = _i()
+        _read_ok(self.lib, "pdg_log_length", self.lib.pdg_log_length(self.ws, ct.byref(rows)))
+        return rows.value
 
     def problem_size(self) -> dict[str, int]:
         vals = [_i() for _ in range(5)]
         if self.lib.pdg_problem_size(self.ws, *[ct.byref(v) for v in vals]) != 0:
             raise RuntimeError("pdg_problem_size: the workspace is not set up")
         return dict(zip(("n", "p", "m", "nnz_A", "nnz_G"), [v.value for v in vals], strict=True))
+
+
+def _read_ok(lib: ct.CDLL, call: str, status: int) -> None:
+    """Raises for a record read the library refused (a workspace not set up, a bad index)."""
+    if status != 0:
+        raise RuntimeError(f"{call}: {lib.pdg_setup_status_message(status).decode()}")
 
 
 # A guidance workspace or a network is used by one C call at a time, and ctypes releases the
@@ -444,8 +457,8 @@ def _collect(
         raise _refusal(message)
     history = []
     row = _LogRow()
-    for i in range(lib.pdg_log_length(ws.ws)):
-        lib.pdg_get_log(ws.ws, i, ct.byref(row))
+    for i in range(ws.log_length()):
+        _read_ok(lib, "pdg_get_log", lib.pdg_get_log(ws.ws, i, ct.byref(row)))
         history.append(
             IterationRecord(
                 row.k,
@@ -467,7 +480,7 @@ def _collect(
         )
     mask_log = np.zeros((res.iterations, NC * N), np.uint8)
     for k in range(res.iterations):
-        lib.pdg_get_mask(ws.ws, k, mask_log[k].ctypes.data_as(_ucp))
+        _read_ok(lib, "pdg_get_mask", lib.pdg_get_mask(ws.ws, k, mask_log[k].ctypes.data_as(_ucp)))
     return SCvxResult(
         status=STATUS_NAMES[status],
         reason=message,

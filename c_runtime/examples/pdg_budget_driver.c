@@ -167,7 +167,9 @@ static void print_report(pdg_status status, const pdg_result *res, const pdg_sce
     printf("nodes %d\n", scn->params.N);
     print_result(status, res, scn->params.N);
     printf("arena_bytes %zu\n", need);
-    printf("arena_high_water %zu\n", pdg_arena_high_water(ws));
+    size_t high_water = 0;
+    pdg_arena_high_water(ws, &high_water);
+    printf("arena_high_water %zu\n", high_water);
     printf("stack_high_water %zu\n", stack);
     printf("heap_allocations_in_solve %ld\n", n_alloc);
     printf("wall_s_min %.6f\n", wall);

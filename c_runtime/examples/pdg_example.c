@@ -101,12 +101,15 @@ static int set_up(const pdg_scenario *scn, const pdg_settings *st, memory *m,
 /* Lifecycle step 5: the iteration log of the last solve. */
 static void print_log(const pdg_workspace *ws)
 {
-    int i;
+    int i, rows = 0;
+    pdg_log_length(ws, &rows); /* rows stays 0 for a workspace not set up */
     printf("  k        J         dJ         dL        rho    radius   |vc|_1  tight  sub[ms]  "
            "step\n");
-    for (i = 0; i < pdg_log_length(ws); ++i) {
+    for (i = 0; i < rows; ++i) {
         pdg_log_row r;
-        pdg_get_log(ws, i, &r);
+        if (pdg_get_log(ws, i, &r) != PDG_SETUP_OK) {
+            break;
+        }
         printf("%3d %10.5f %10.3e %10.3e %8.3f %9.4f %8.1e %6d %8.1f  %s", r.k, r.J, r.dJ,
                r.dL, r.rho, r.eta, r.vc_norm1, r.n_tight, 1e3 * r.subproblem_time_s,
                r.accepted ? "acc" : "rej");
@@ -269,7 +272,9 @@ int main(int argc, char **argv)
     /* 5. the record of the solve, and its answer */
     print_log(ws);
     print_summary(&scn, &res);
-    printf("arena %zu bytes, high-water %zu bytes\n", mem.bytes, pdg_arena_high_water(ws));
+    size_t high_water = 0;
+    pdg_arena_high_water(ws, &high_water);
+    printf("arena %zu bytes, high-water %zu bytes\n", mem.bytes, high_water);
     print_trajectory(&scn, &res);
     if (!tscvx && status == PDG_SOLVED) { /* the same workspace serves the re-plan */
         printf("\n");

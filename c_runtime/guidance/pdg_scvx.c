@@ -1692,7 +1692,17 @@ static int log_rows(const pdg_workspace *ws)
     return n > 0 ? n : 0;
 }
 
-int pdg_log_length(const pdg_workspace *ws) { return PDG_WS_READY(ws) ? log_rows(ws) : 0; }
+pdg_setup_status pdg_log_length(const pdg_workspace *ws, int *rows)
+{
+    if (!ws || !rows) {
+        return PDG_SETUP_NULL_ARGUMENT;
+    }
+    if (!PDG_WS_READY(ws)) {
+        return PDG_SETUP_NOT_READY;
+    }
+    *rows = log_rows(ws);
+    return PDG_SETUP_OK;
+}
 
 pdg_setup_status pdg_get_log(const pdg_workspace *ws, int i, pdg_log_row *row)
 {
@@ -1724,9 +1734,16 @@ pdg_setup_status pdg_get_mask(const pdg_workspace *ws, int k, unsigned char *mas
     return PDG_SETUP_OK;
 }
 
-size_t pdg_arena_high_water(const pdg_workspace *ws)
+pdg_setup_status pdg_arena_high_water(const pdg_workspace *ws, size_t *bytes)
 {
-    return PDG_WS_READY(ws) ? ws->arena_high : 0;
+    if (!ws || !bytes) {
+        return PDG_SETUP_NULL_ARGUMENT;
+    }
+    if (!PDG_WS_READY(ws)) {
+        return PDG_SETUP_NOT_READY;
+    }
+    *bytes = ws->arena_high;
+    return PDG_SETUP_OK;
 }
 
 pdg_setup_status pdg_problem_size(const pdg_workspace *ws, int *n, int *p, int *m, int *nnz_A,

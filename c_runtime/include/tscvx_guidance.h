@@ -313,16 +313,19 @@ int pdg_validate_scenario(const pdg_scenario *scenario, char *message);
 pdg_status pdg_solve(pdg_workspace *ws, const pdg_scenario *scenario,
                      const pdg_options *options, pdg_result *result);
 
-/* Log rows 0 .. pdg_log_length() - 1 and accepted-iteration masks 0 .. iterations - 1 (7N
- * bytes each: the tight-constraint labels of the accepted solution) of the last solve. */
-int pdg_log_length(const pdg_workspace *ws);
+/* The last solve's record: its log rows 0 .. rows - 1 (pdg_log_length) and its
+ * accepted-iteration masks 0 .. iterations - 1 (7N bytes each: the tight-constraint labels of
+ * the accepted solution). Each returns PDG_SETUP_NULL_ARGUMENT for a NULL pointer,
+ * PDG_SETUP_NOT_READY (outputs untouched) for a workspace not set up, PDG_SETUP_BAD_INDEX
+ * for a row or mask out of range. */
+pdg_setup_status pdg_log_length(const pdg_workspace *ws, int *rows);
 pdg_setup_status pdg_get_log(const pdg_workspace *ws, int i, pdg_log_row *row);
 pdg_setup_status pdg_get_mask(const pdg_workspace *ws, int k, unsigned char *mask);
 
-/* Most bytes of the arena ever used (setup scratch included; 0 for a workspace not set up)
- * and the size of the subproblem: variables n, equality rows p, cone rows m, nonzeros of A
- * and G (any output may be NULL; PDG_SETUP_NOT_READY, outputs untouched, when not set up). */
-size_t pdg_arena_high_water(const pdg_workspace *ws);
+/* Most bytes of the arena ever used, setup scratch included (statuses as above), and the size
+ * of the subproblem: variables n, equality rows p, cone rows m, nonzeros of A and G (any
+ * output may be NULL; PDG_SETUP_NOT_READY, outputs untouched, when not set up). */
+pdg_setup_status pdg_arena_high_water(const pdg_workspace *ws, size_t *bytes);
 pdg_setup_status pdg_problem_size(const pdg_workspace *ws, int *n, int *p, int *m, int *nnz_A,
                                   int *nnz_G);
 

@@ -32,6 +32,13 @@ static inline const pdg_params *vehicle(int N, int roll_free)
     return &p;
 }
 
+/* The last solve's log rows (-1 when the library refuses to say). */
+static inline int log_rows(const pdg_workspace *ws)
+{
+    int rows = -1;
+    return pdg_log_length(ws, &rows) == PDG_SETUP_OK ? rows : -1;
+}
+
 /* Arena bytes for (N, roll_free, settings) in *need; *tries counts the sizing calls. */
 static inline pdg_setup_status arena_size(int N, int roll_free, const pdg_settings *st,
                                           size_t *need, int *tries)

@@ -36,8 +36,9 @@ static pdg_workspace *make_ws(int N, int roll_free, const pdg_settings *st, void
     CHECK(ws == NULL);
     CHECK(pdg_setup(&ws, *arena, need, vehicle(N, roll_free), st) == PDG_SETUP_OK);
     CHECK(ws != NULL);
-    CHECK(pdg_arena_high_water(ws) <= need);
-    CHECK(pdg_arena_high_water(ws) > need / 2);
+    size_t high_water = 0;
+    CHECK(pdg_arena_high_water(ws, &high_water) == PDG_SETUP_OK);
+    CHECK(high_water <= need && high_water > need / 2);
     return ws;
 }
 
@@ -285,7 +286,14 @@ static void test_stale_workspace(pdg_workspace *ws, void *arena, size_t bytes)
     r.u = u;
     CHECK(pdg_solve(ws, &s, NULL, &r) == PDG_INVALID_INPUT);
     CHECK(pdg_get_log(ws, 0, &row) == PDG_SETUP_NOT_READY);
-    CHECK(pdg_log_length(ws) == 0 && pdg_arena_high_water(ws) == 0);
+    int rows = -7;
+    size_t high_water = 7;
+    CHECK(pdg_log_length(ws, &rows) == PDG_SETUP_NOT_READY && rows == -7);
+    CHECK(pdg_arena_high_water(ws, &high_water) == PDG_SETUP_NOT_READY && high_water == 7);
+    CHECK(pdg_log_length(NULL, &rows) == PDG_SETUP_NULL_ARGUMENT);
+    CHECK(pdg_log_length(ws, NULL) == PDG_SETUP_NULL_ARGUMENT);
+    CHECK(pdg_arena_high_water(NULL, &high_water) == PDG_SETUP_NULL_ARGUMENT);
+    CHECK(pdg_arena_high_water(ws, NULL) == PDG_SETUP_NULL_ARGUMENT);
     int n = -1;
     CHECK(pdg_problem_size(ws, &n, NULL, NULL, NULL, NULL) == PDG_SETUP_NOT_READY && n == -1);
     CHECK(pdg_default_scenario(NULL) == PDG_SETUP_NULL_ARGUMENT);
@@ -375,15 +383,15 @@ static void test_solve(pdg_workspace *ws, int with_masks)
     CHECK(r.max_defect <= 1e-5 && r.max_violation <= 1e-5);
     CHECK(r.polish == PDG_POLISH_OFF && r.polish_iterations == 0); /* off by default */
     CHECK(r.defect_before_polish == r.max_defect && r.m_f_before_polish == mf);
-    CHECK(pdg_log_length(ws) == r.subproblems_solved);
+    CHECK(log_rows(ws) == r.subproblems_solved);
     sum = 0;
-    for (i = 0; i < pdg_log_length(ws); ++i) {
+    for (i = 0; i < log_rows(ws); ++i) {
         CHECK(pdg_get_log(ws, i, &row) == PDG_SETUP_OK);
         CHECK(row.solver_iterations > 0);
         sum += row.solver_iterations;
     }
     CHECK(sum == r.socp_iterations);
-    CHECK(pdg_get_log(ws, pdg_log_length(ws), &row) == PDG_SETUP_BAD_INDEX);
+    CHECK(pdg_get_log(ws, log_rows(ws), &row) == PDG_SETUP_BAD_INDEX);
     CHECK(pdg_get_log(ws, -1, &row) == PDG_SETUP_BAD_INDEX);
     CHECK(pdg_get_mask(ws, r.iterations - 1, m) == PDG_SETUP_OK);
     CHECK(pdg_get_mask(ws, r.iterations, m) == PDG_SETUP_BAD_INDEX);
@@ -392,12 +400,12 @@ static void test_solve(pdg_workspace *ws, int with_masks)
         const int n_log = ws->n_log, n_masks = ws->n_masks_out;
         ws->n_log = 600;
         ws->n_masks_out = 600;
-        CHECK(pdg_log_length(ws) == ws->st.max_subproblems);
+        CHECK(log_rows(ws) == ws->st.max_subproblems);
         CHECK(pdg_get_log(ws, ws->st.max_subproblems, &row) == PDG_SETUP_BAD_INDEX);
         CHECK(pdg_get_log(ws, 599, &row) == PDG_SETUP_BAD_INDEX);
         CHECK(pdg_get_mask(ws, ws->st.iter_max, m) == PDG_SETUP_BAD_INDEX);
         ws->n_log = -5;
-        CHECK(pdg_log_length(ws) == 0);
+        CHECK(log_rows(ws) == 0);
         ws->n_log = n_log, ws->n_masks_out = n_masks;
     }
     {   /* a solve called from inside its own mask callback is refused, and the outer solve
@@ -467,7 +475,7 @@ static void test_solve(pdg_workspace *ws, int with_masks)
         o.mask_fn = fail_second;
         CHECK(pdg_solve(ws, &s, &o, &r) == PDG_INVALID_INPUT);
         CHECK(strstr(r.message, "masks: the mask callback answered -1 for iteration 2") != NULL);
-        CHECK(r.iterations == 1 && pdg_log_length(ws) == r.subproblems_solved);
+        CHECK(r.iterations == 1 && log_rows(ws) == r.subproblems_solved);
     }
 }
 
@@ -503,7 +511,7 @@ static void test_iteration_budget(void)
            r.socp_iterations, r.subproblems_solved, r.iterations, r.message);
     CHECK(strstr(r.message, "IPM iteration budget spent (") == r.message);
     CHECK(r.socp_iterations <= 80 && r.socp_iterations >= 60 && r.iterations >= 1);
-    for (i = 0; i < pdg_log_length(ws); ++i) {
+    for (i = 0; i < log_rows(ws); ++i) {
         CHECK(pdg_get_log(ws, i, &row) == PDG_SETUP_OK);
         sum += row.solver_iterations;
     }
@@ -560,8 +568,8 @@ static void test_replan_from_polished(double t_f)
     printf("re-planned from the polished plan: %d subproblems, %s\n", r.subproblems_solved,
            r.message);
     CHECK(strncmp(r.message, "converged; the step at the smallest trust radius", 48) == 0);
-    CHECK(r.iterations == 0 && pdg_log_length(ws) == r.subproblems_solved);
-    for (i = 0; i < pdg_log_length(ws); ++i) {
+    CHECK(r.iterations == 0 && log_rows(ws) == r.subproblems_solved);
+    for (i = 0; i < log_rows(ws); ++i) {
         CHECK(pdg_get_log(ws, i, &row) == PDG_SETUP_OK && !row.accepted);
     }
     CHECK(row.eta == st.eta_lb);
@@ -600,7 +608,7 @@ static void test_polish(void)
     /* Python reference on Clarabel: 2.23833554 converged, 2.23826491 polished */
     CHECK(fabs(r.m_f_before_polish - 2.2383355) < 1e-6);
     CHECK(fabs(x[PDG_NSTATE * 49 + 13] - 2.2382649) < 1e-6);
-    for (i = 0; i < pdg_log_length(ws); ++i) {
+    for (i = 0; i < log_rows(ws); ++i) {
         CHECK(pdg_get_log(ws, i, &row) == PDG_SETUP_OK);
         sum += row.solver_iterations;
     }

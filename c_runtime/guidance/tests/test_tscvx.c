@@ -175,10 +175,10 @@ int main(int argc, char **argv)
     o.eta_init = -1.0;
     r0.x = x;
     r0.u = u;
-    CHECK(pdg_solve(ws, &s, NULL, &r0) == PDG_SOLVED && pdg_log_length(ws) > 0);
+    CHECK(pdg_solve(ws, &s, NULL, &r0) == PDG_SOLVED && log_rows(ws) > 0);
     CHECK(pdg_solve_tscvx(ws, &s, &o, &r, NULL) == PDG_INVALID_INPUT);
     CHECK(strstr(r.message, "eta_init") != NULL);
-    CHECK(pdg_log_length(ws) == 0); /* a refused call leaves no record of the solve before */
+    CHECK(log_rows(ws) == 0); /* a refused call leaves no record of the solve before */
     o.eta_init = 20.0; /* above eta_ub = 10: refused, not replaced by the default */
     CHECK(pdg_solve_tscvx(ws, &s, &o, &r, NULL) == PDG_INVALID_INPUT);
     CHECK(strstr(r.message, "[eta_lb, eta_ub] = [0.001, 10], got 20") != NULL);
