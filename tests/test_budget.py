@@ -1,9 +1,11 @@
 """RAD750 budget check (guidance/budget.py): the figures are produced, memory fits with a wide
 margin, and the time budget is reported honestly (an expected failure while it does not fit,
-with the measured figure in the reason -- never a pretended pass)."""
+with the measured figure in the reason -- never a pretended pass). While it does not fit, a
+slower call is caught against QOCO counted in the same run."""
 
 from __future__ import annotations
 
+import importlib.util
 import shutil
 
 import pytest
@@ -45,7 +47,6 @@ def figures(calls: list[budget.Budget]) -> budget.Budget:
 def test_figures_are_produced(figures: budget.Budget) -> None:
     assert figures.status == "solved"
     assert figures.instructions > 1e6
-    assert figures.rad750_s == pytest.approx(budget.rad750_seconds(figures.instructions))
     assert figures.code_bytes > 10_000
     assert 0 < figures.arena_high_water <= figures.arena_bytes
     assert 0 < figures.stack_high_water < 1 << 20
@@ -53,7 +54,7 @@ def test_figures_are_produced(figures: budget.Budget) -> None:
     text = budget.report(figures)
     for item in ("RAD750-equivalent time", "guidance arena", "stack high-water", "1.3 x"):
         assert item in text
-    assert sum(figures.instructions_by_part.values()) == figures.instructions
+    _check_parts(figures)
     # the SOCP runtime's work outside its solves is its own part, not hidden in "rest"
     parts = figures.instructions_by_part
     assert parts["socp_data_update"] > 0 and parts["socp_warm_start"] > 0
@@ -61,9 +62,64 @@ def test_figures_are_produced(figures: budget.Budget) -> None:
     assert "rest: subproblem assembly" in text
 
 
+def _check_parts(c: budget.Budget) -> None:
+    """The named parts are disjoint pieces of the call: each counted, together within it
+    ("rest" is what they leave, so a part counted twice would make it negative)."""
+    parts = c.instructions_by_part
+    assert min(parts.values()) >= 0, parts
+    assert sum(v for k, v in parts.items() if k != "rest") <= c.instructions
+    assert parts["socp_solve"] > c.instructions / 2  # the conic solves are most of the call
+
+
 @needs_tscvx
 def test_memory_within_budget_with_margin(figures: budget.Budget) -> None:
     assert figures.memory_bytes <= budget.MEMORY_BUDGET_B / 4  # 15 MB of 60
+
+
+needs_qoco = pytest.mark.skipif(
+    importlib.util.find_spec("qoco") is None, reason="QOCO (the bench extra) not installed"
+)
+
+
+@pytest.fixture(scope="module")
+def qoco_subproblem() -> tuple[int, int]:
+    """Instructions of this runtime and of QOCO (callgrind, this run) on the flight call's
+    first subproblem: the default landing from the built-in guess, with the proximal term."""
+    from guidance import bench_socp
+    from guidance.params import SCvxSettings
+
+    prob = bench_socp.landing_set(limit=1, prox_u=SCvxSettings().prox_u)[0]
+    ours = bench_socp.instructions_ours(prob, flops=False)
+    qoco = bench_socp.instructions_qoco(prob)
+    assert ours is not None and qoco is not None, "callgrind gave no count"
+    return ours.instructions, qoco.instructions
+
+
+@needs_tscvx
+@needs_qoco
+def test_a_subproblem_costs_fewer_instructions_than_qoco(
+    qoco_subproblem: tuple[int, int],
+) -> None:
+    """Issue 3 asks for a fifth of QOCO's count (27 Nov: 1/2.3, `make bench`); this guards
+    what is reached, with room for the other machine's compiler."""
+    ours, qoco = qoco_subproblem
+    assert ours < qoco, f"{ours / 1e6:.1f} M instructions against QOCO's {qoco / 1e6:.1f} M"
+
+
+@needs_tscvx
+@needs_qoco
+def test_a_guidance_call_costs_less_than_qoco_on_its_subproblems(
+    calls: list[budget.Budget], qoco_subproblem: tuple[int, int]
+) -> None:
+    """The time budget is not met (the expected failures below), so these keep a slower call
+    from passing unnoticed: each call, discretization, assembly and networks included, costs
+    less than QOCO would on its subproblems alone (27 Nov: 2.4 to 2.8 times less)."""
+    _, qoco = qoco_subproblem
+    for c in calls:
+        assert c.instructions < c.subproblems * qoco, (
+            f"{c.variant}: {c.instructions / 1e6:.0f} M instructions for {c.subproblems} "
+            f"subproblems; QOCO takes {qoco / 1e6:.0f} M on one"
+        )
 
 
 @needs_tscvx
@@ -92,17 +148,18 @@ def test_tscvx_call_figures_are_produced(calls: list[budget.Budget]) -> None:
     for c in calls:
         assert c.status == "solved"
         assert c.instructions > 1e6
-        assert c.rad750_s == pytest.approx(budget.rad750_seconds(c.instructions))
         assert c.heap_allocations_in_solve == 0
         assert 0 < c.arena_high_water <= c.arena_bytes
         assert 0 < c.stack_high_water < 1 << 20
-        assert sum(c.instructions_by_part.values()) == c.instructions
+        _check_parts(c)
         assert c.variant in text
-        # the arena the call is given (reserved), which its high-water mark cannot pass
-        assert c.memory_bytes == (c.code_bytes + c.const_data_bytes + c.arena_bytes
-                                  + c.stack_high_water + c.nn_weights_bytes
-                                  + c.nn_arena_bytes + c.result_bytes)  # fmt: skip
         assert c.result_bytes == 8 * 50 * (14 + 3)  # x and u of the default N = 50
+    # the arena the call is given is the one the library sizes for the default landing (the
+    # Python bindings ask it the same way); its high-water mark cannot pass it
+    from guidance.cguidance import workspace
+    from guidance.params import Scenario
+
+    assert scvx.arena_bytes == workspace(Scenario()).arena_bytes
     assert scvx.nn_weights_bytes == scvx.nn_arena_bytes == 0
     assert scvx.instructions_by_part.get("network_inference", 0) == 0
     # the networks the call runs: their weights (in place) and arenas are in its memory
@@ -212,7 +269,6 @@ def test_network_inference_within_5M_instructions(nets: list[budget.NetBudget]) 
         print(figure)
         assert n.instructions > 1e5, figure
         assert n.within_budget(), figure
-        assert n.rad750_s == pytest.approx(budget.rad750_seconds(n.instructions))
         assert n.name in text and "RAD750 ms" in text
 
 

@@ -134,14 +134,16 @@ def test_update_equals_fresh_setup_and_no_new_symbolic_work() -> None:
 
 def test_iteration_log_and_info() -> None:
     prob = random_feasible(11)
-    sol = csocp.solve(prob, log=True)
+    solver = csocp.Solver(prob)
+    sol = solver.solve(log=True)
     log = sol.info["log"]
     assert len(log) == sol.iterations + 1
     assert [row["iter"] for row in log] == list(range(sol.iterations + 1))
     assert set(log[0]) == {"iter", "pcost", "dcost", "gap", "pres", "dres", "mu", "step"}
     assert log[-1]["pcost"] == pytest.approx(sol.obj)
     assert log[-1]["mu"] < log[0]["mu"]
-    assert sol.info["arena_high_water"] <= sol.info["arena_used"] + 10 * 2**20
+    # the workspace holds part of the arena it was given; setup's scratch may have used more
+    assert 0 < sol.info["arena_used"] <= sol.info["arena_high_water"] <= solver.arena_bytes
 
 
 def test_max_iterations_status() -> None:
