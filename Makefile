@@ -5,6 +5,9 @@ PYTHON ?= python3
 VENV   := .venv
 PY     := $(VENV)/bin/python
 PIP    := $(VENV)/bin/pip
+# The package alone builds the flight library and runs the demo and the budget (no torch);
+# the tests, benchmarks and training take its extras (.[dev], about 1.7 GB with torch).
+FLIGHT_STAMP := $(VENV)/.installed-flight
 STAMP  := $(VENV)/.installed
 # `python -m` from the checkout's root runs this checkout's package, wherever the venv's
 # editable install points (several worktrees may share one venv).
@@ -13,7 +16,7 @@ GUIDANCE := $(PY) -m guidance
 APT_PACKAGES := libeigen3-dev libsuitesparse-dev valgrind gcc python3-venv
 BUILD  := build
 
-.PHONY: all setup apt lib gnc ctest pytest test lint analyze demo bench budget models coverage clean
+.PHONY: all setup setup-flight apt lib gnc ctest pytest test lint analyze demo bench budget models coverage clean
 
 all: lib
 
@@ -27,12 +30,17 @@ apt:
 	  $$SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq $$missing; \
 	fi
 
-$(STAMP): pyproject.toml
+$(FLIGHT_STAMP): pyproject.toml
 	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PIP) install -q --upgrade pip
+	$(PIP) install -q -e .
+	@touch $@
+
+$(STAMP): $(FLIGHT_STAMP)
 	$(PIP) install -q -e '.[dev]'
 	@touch $@
 
+setup-flight: apt $(FLIGHT_STAMP)
 setup: apt $(STAMP)
 
 # ---- flight C library (rules in c_runtime/runtime.mk) --------------------------------------
@@ -89,7 +97,7 @@ test: setup lib ctest ctest-asan analyze lint pytest
 # The default landing three ways: the ground reference, the flight library, and T-SCvx with
 # the shipped networks (warm start + tight-constraint masks) in the flight library; then the
 # plain C example program, without and with the networks.
-demo: setup lib
+demo: setup-flight lib
 	@mkdir -p out
 	$(GUIDANCE) solve --method scvx --backend clarabel --out out/scvx.npz --plot out/scvx.png
 	$(GUIDANCE) solve --method scvx --backend c --out out/scvx_c.npz --plot out/scvx_c.png
@@ -106,7 +114,7 @@ bench: setup lib $(BUILD)/ctest/bench_driver
 	$(GUIDANCE) bench --backend clarabel c-socp c --tscvx-landings 24 --callgrind
 	$(GUIDANCE) agreement --landings 20
 
-budget: setup lib
+budget: setup-flight lib
 	$(GUIDANCE) budget
 
 # `models` (data generation, training, export) lives with the models it makes.

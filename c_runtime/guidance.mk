@@ -19,7 +19,7 @@ GNC_CFLAGS := $(FLIGHT_CFLAGS) -fPIC -Ic_runtime/include -Ic_runtime/guidance -I
 GNC_LINK   := $(BUILD)/libtscvx_gnc.a $(BUILD)/libtscvx.a -lamd -lldl -lsuitesparseconfig -lm
 GNC_TESTS  := test_guidance test_tscvx
 
-$(GEN_DIR)/tscvx_model.c $(GEN_DIR)/tscvx_model.h &: codegen/generate.py guidance/model.py | $(STAMP)
+$(GEN_DIR)/tscvx_model.c $(GEN_DIR)/tscvx_model.h &: codegen/generate.py guidance/model.py | $(FLIGHT_STAMP)
 	$(PY) codegen/generate.py $(GEN_DIR)
 	@touch $(GEN_DIR)/tscvx_model.c $(GEN_DIR)/tscvx_model.h  # the generator keeps identical files untouched
 
@@ -83,7 +83,7 @@ ctest-asan-gnc: lib
 	  echo "== $$t (ASan/UBSan)"; $(BUILD)/ctest-asan/$$t; done
 ctest-asan: ctest-asan-gnc
 
-budget-gnc: setup lib $(BUILD)/pdg_budget_driver
+budget-gnc: setup-flight lib $(BUILD)/pdg_budget_driver
 	$(PY) -m guidance.budget
 
 .PHONY: gnc example ctest-gnc ctest-asan-gnc budget-gnc

@@ -19,7 +19,7 @@ $(NN_OBJDIR)/%.o: c_runtime/nn/%.c $(NN_HDRS) $(FLAGS_STAMP)
 	@mkdir -p $(NN_OBJDIR)
 	$(CC) $(NN_CFLAGS) -c $< -o $@
 
-$(BUILD)/models/%.tnn: models/%.onnx guidance/nn/flight.py guidance/nn/infer.py | $(STAMP)
+$(BUILD)/models/%.tnn: models/%.onnx guidance/nn/flight.py guidance/nn/infer.py | $(FLIGHT_STAMP)
 	$(PY) -m guidance.nn.flight $< $@
 	@touch $@  # the writer keeps an identical file untouched
 
