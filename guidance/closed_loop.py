@@ -8,8 +8,10 @@ first plan to its end, through the same disturbance) is the yardstick.
 A re-plan that does not end ``solved``, or a state the scenario check refuses (outside the
 glideslope, out of fuel), leaves the vehicle on its current plan, as flight software keeps
 the last good plan. Re-planning stops once less than ``lock`` of the plan is left: the last
-seconds are flown on the last plan. Navigation is perfect: the re-plan starts from the true
-state (its roll rate, rounding noise of the integration, set to the plan's zero).
+seconds are flown on the last plan. A re-plan starts from what navigation knows of the state:
+the true state with a knowledge error in position and velocity (``Navigation``: Gaussian,
+seeded; none by default), its roll rate, rounding noise of the integration, set to the
+plan's zero. The thrust commands are flown from the true state.
 """
 
 from __future__ import annotations
@@ -58,6 +60,32 @@ class Disturbance:
 
 
 @dataclass(frozen=True)
+class Navigation:
+    """What the re-plans know of the state: the true position and velocity plus independent
+    Gaussian errors of these standard deviations per axis (U_L, U_L/U_T), drawn at each
+    re-plan from a generator seeded with ``seed``. Attitude, rates and mass are known."""
+
+    position_sigma: float = 0.0
+    velocity_sigma: float = 0.0
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        for name in ("position_sigma", "velocity_sigma"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and 0.0 <= value <= 1.0):
+                raise InputError(f"{name}: expected a number in [0, 1], got {value!r}")
+        if not (isinstance(self.seed, int) and 0 <= self.seed < 2**63):
+            raise InputError(f"seed: expected an integer in [0, 2^63), got {self.seed!r}")
+
+    def estimate(self, x: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        """The state navigation gives for the true state x (a copy; x itself with no error)."""
+        est = np.array(x, dtype=float)
+        est[IR] += rng.normal(0.0, self.position_sigma, 3)
+        est[IV] += rng.normal(0.0, self.velocity_sigma, 3)
+        return est
+
+
+@dataclass(frozen=True)
 class ReplanSettings:
     """period: U_T of flight between re-plans; lock: no re-plan once less than this of the
     plan is left; backend: the solver of the re-plans (guidance.api.solve's)."""
@@ -76,6 +104,8 @@ class ReplanSettings:
 @dataclass
 class Replan:
     t: float  # U_T from the start of the flight
+    # |estimate - true| of the state it started from: position, velocity
+    knowledge_error: tuple[float, float]
     outcome: str  # the solve's status, or why no solve was made ("refused: ...")
     kept: bool  # the new plan is flown
     subproblems: int
@@ -179,12 +209,13 @@ def state_scenario(x: np.ndarray, scn: Scenario) -> Scenario:
 
 
 def fly_closed_loop(
-    scn: Scenario, dist: Disturbance, settings: ReplanSettings, plan: SCvxResult | None = None
-) -> ClosedLoop:
+    scn: Scenario, dist: Disturbance, settings: ReplanSettings, plan: SCvxResult | None = None,
+    nav: Navigation | None = None,
+) -> ClosedLoop:  # fmt: skip
     """Plans the landing (or takes ``plan``, a solve of it), then flies it twice through
-    ``dist``: open loop, and closed loop with a re-plan every settings.period. InputError when
-    the first plan is not solved (there is nothing to fly); PropagationError when a flight
-    cannot be integrated."""
+    ``dist``: open loop, and closed loop with a re-plan every settings.period from the state
+    ``nav`` knows (default: the true state). InputError when the first plan is not solved
+    (there is nothing to fly); PropagationError when a flight cannot be integrated."""
     from guidance.api import solve
 
     first = solve(scn, backend=settings.backend) if plan is None else plan
@@ -193,6 +224,8 @@ def fly_closed_loop(
     x_open, h_open = _fly(scn.x0, first.u, first.t_f, 0.0, first.t_f, scn, dist)
     open_flight = _landing(x_open, first.t_f, scn, [h_open])
 
+    nav = Navigation() if nav is None else nav
+    rng = np.random.default_rng(nav.seed)
     cur, start = first, 0.0  # the plan flown and the flight time its t = 0 stands for
     x, t, path, replans = scn.x0, 0.0, [], []
     for _ in range(int(first.t_f / settings.period) + 1000):  # each pass flies one period
@@ -201,7 +234,7 @@ def fly_closed_loop(
         x, h = _fly(x, cur.u, cur.t_f, t - start, t + settings.period - start, scn, dist)
         path.append(h)
         t += settings.period
-        record, new = _replan(x, t, t - start, cur, scn, settings)
+        record, new = _replan(x, nav.estimate(x, rng), t, t - start, cur, scn, settings)
         replans.append(record)
         if new is not None:
             cur, start = new, t
@@ -212,21 +245,25 @@ def fly_closed_loop(
 
 
 def _replan(
-    x: np.ndarray, t: float, s: float, cur: SCvxResult, scn: Scenario, settings: ReplanSettings
-) -> tuple[Replan, SCvxResult | None]:
-    """The re-plan at flight time t from the true state x, started from the current plan's
-    remainder from its time s, and the new plan when it is kept (solved)."""
+    x: np.ndarray, est: np.ndarray, t: float, s: float, cur: SCvxResult, scn: Scenario,
+    settings: ReplanSettings,
+) -> tuple[Replan, SCvxResult | None]:  # fmt: skip
+    """The re-plan at flight time t from navigation's estimate est of the true state x,
+    started from the current plan's remainder from its time s, and the new plan when it is
+    kept (solved)."""
     from guidance.api import solve
 
+    known = (float(np.linalg.norm(est[IR] - x[IR])), float(np.linalg.norm(est[IV] - x[IV])))
     try:
-        here = state_scenario(x, scn)
+        here = state_scenario(est, scn)
         guess = plan_remainder(here, cur.x, cur.u, cur.t_f, s)
         res = solve(here, backend=settings.backend, guess=guess)
     except InputError as exc:
-        return Replan(t, f"refused: {exc}", False, 0, math.nan, math.nan), None
+        return Replan(t, known, f"refused: {exc}", False, 0, math.nan, math.nan), None
+    n = res.subproblems_solved
     if res.status != "solved":
-        return Replan(t, res.status, False, res.subproblems_solved, math.nan, math.nan), None
-    return Replan(t, res.status, True, res.subproblems_solved, t + res.t_f, res.m_f), res
+        return Replan(t, known, res.status, False, n, math.nan, math.nan), None
+    return Replan(t, known, res.status, True, n, t + res.t_f, res.m_f), res
 
 
 def _row(name: str, f: Flight) -> str:
@@ -237,29 +274,38 @@ def _row(name: str, f: Flight) -> str:
     )  # fmt: skip
 
 
-def report(res: ClosedLoop, dist: Disturbance, settings: ReplanSettings) -> str:
+def report(
+    res: ClosedLoop, dist: Disturbance, settings: ReplanSettings, nav: Navigation | None = None
+) -> str:
     """The re-plans and the two flights' landings, as ``guidance closed-loop`` prints them."""
+    nav = Navigation() if nav is None else nav
     kept = sum(r.kept for r in res.replans)
     lines = [
         f"Closed loop: thrust error {dist.thrust_error:+g}, acceleration bias "
         f"{tuple(dist.accel_bias)} U_L/U_T^2; a re-plan every {settings.period:g} U_T "
         f"until {settings.lock:g} U_T of the plan is left ({settings.backend} backend)",
+        f"  navigation: position error {nav.position_sigma:g} U_L, velocity error "
+        f"{nav.velocity_sigma:g} U_L/U_T (1 sigma per axis, seed {nav.seed})"
+        if nav.position_sigma or nav.velocity_sigma
+        else "  navigation: perfect (re-plans start from the true state)",
         f"  first plan: {res.plan_status}, m_f {res.plan_m_f:.6f}",
         f"  re-plans: {len(res.replans)}, {kept} kept (solved); the others left the vehicle "
         "on its plan",
-        "      t  outcome             subproblems  touchdown        m_f",
+        "      t  |dr| known  |dv| known  outcome             subproblems  touchdown        m_f",
     ]
     for r in res.replans:
-        lines.append(f"  {r.t:5.2f}  {r.outcome[:60]:<20} {r.subproblems:10d} {r.touchdown:10.4f} "
-                     f"{r.m_f:10.6f}")  # fmt: skip
+        dr, dv = r.knowledge_error
+        lines.append(f"  {r.t:5.2f}  {dr:10.2e}  {dv:10.2e}  {r.outcome[:60]:<20} "
+                     f"{r.subproblems:10d} {r.touchdown:10.4f} {r.m_f:10.6f}")  # fmt: skip
     lines += [
         "  flight       touchdown  |r - r_f|  |v - v_f|   attitude  |w - w_f|       m_f  max path",
         _row("open loop", res.open),
         _row("closed loop", res.closed),
     ]
-    if res.closed.position_error > 0.0:
-        ratio = res.open.position_error / res.closed.position_error
-        lines.append(f"  landing error: closed loop {ratio:.1f}x smaller than open loop")
+    o, c = res.open.position_error, res.closed.position_error
+    if o > 0.0 and c > 0.0:
+        ratio, word = (o / c, "smaller") if c <= o else (c / o, "larger")
+        lines.append(f"  landing error: closed loop {ratio:.1f}x {word} than open loop")
     return "\n".join(lines)
 
 
@@ -285,6 +331,13 @@ def add_arguments(ap: argparse.ArgumentParser) -> None:
                     metavar=("AX", "AY", "AZ"),
                     help="unmodelled inertial acceleration, U_L/U_T^2 (|g| = 1; default 0)",
                     )  # fmt: skip
+    ap.add_argument("--nav-error", type=float, nargs=2, default=(0.0, 0.0),
+                    metavar=("SIGMA_R", "SIGMA_V"),
+                    help="navigation's knowledge error at each re-plan: standard deviations "
+                    "per axis of position (U_L) and velocity (U_L/U_T), each in [0, 1] "
+                    "(default 0 0: perfect)")  # fmt: skip
+    ap.add_argument("--seed", type=int, default=0,
+                    help="seed of the navigation errors (default %(default)s)")  # fmt: skip
     ap.add_argument("--period", type=float, default=ReplanSettings().period,
                     help="U_T of flight between re-plans (default %(default)s)")  # fmt: skip
     ap.add_argument("--lock", type=float, default=ReplanSettings().lock,
@@ -302,15 +355,17 @@ def run(args: argparse.Namespace) -> int:
 
     dist = Disturbance(args.thrust_error, tuple(args.accel_bias))
     settings = ReplanSettings(args.period, args.lock, args.backend)
+    nav = Navigation(args.nav_error[0], args.nav_error[1], args.seed)
     scn = scenario_from_dict(read_scenario_data(args.scenario)) if args.scenario else Scenario()
     try:
-        res = fly_closed_loop(scn, dist, settings)
+        res = fly_closed_loop(scn, dist, settings, nav=nav)
     except PropagationError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 1
     if args.json:
-        out = {"disturbance": asdict(dist), "settings": asdict(settings), **asdict(res)}
+        out = {"disturbance": asdict(dist), "navigation": asdict(nav),
+               "settings": asdict(settings), **asdict(res)}  # fmt: skip
         print(json.dumps(_plain(out), indent=1))
     else:
-        print(report(res, dist, settings))
+        print(report(res, dist, settings, nav))
     return 0

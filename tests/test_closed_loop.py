@@ -25,6 +25,7 @@ from guidance.cli import main
 from guidance.closed_loop import (
     ClosedLoop,
     Disturbance,
+    Navigation,
     ReplanSettings,
     _fly,
     fly_closed_loop,
@@ -121,6 +122,10 @@ def test_a_failed_replan_leaves_the_vehicle_on_its_plan(plan: SCvxResult) -> Non
         (lambda: Disturbance(accel_bias=(0.0, 2.0, 0.0)), "accel_bias"),
         (lambda: Disturbance(accel_bias=(0.0, 0.0)), "accel_bias"),
         (lambda: ReplanSettings(period=0.0), "period"),
+        (lambda: Navigation(position_sigma=-0.01), "position_sigma"),
+        (lambda: Navigation(velocity_sigma=float("nan")), "velocity_sigma"),
+        (lambda: Navigation(velocity_sigma=2.0), "velocity_sigma"),
+        (lambda: Navigation(seed=-1), "seed"),
         (lambda: ReplanSettings(lock=float("inf")), "lock"),
     ],
 )
@@ -146,6 +151,19 @@ def test_the_command_line(capsys) -> None:
     assert [r["t"] for r in out["replans"]] == [1.5, 3.0, 4.5, 6.0]  # 0.87 U_T left at 6
     assert main(["closed-loop", "--thrust-error", "0.9"]) == 2
     assert "thrust_error" in capsys.readouterr().err
+    noisy = ["closed-loop", "--period", "2", "--thrust-error", "0", "--nav-error", "0.01", "0",
+             "--seed", "3", "--json"]  # fmt: skip
+    assert main(noisy) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["navigation"] == {"position_sigma": 0.01, "velocity_sigma": 0.0, "seed": 3}
+    known = [r["knowledge_error"] for r in out["replans"]]
+    assert all(dr > 0.0 and dv == 0.0 for dr, dv in known)
+    assert main(noisy) == 0  # the same seed, the same flight
+    assert json.loads(capsys.readouterr().out) == out
+    assert main([*noisy[:-2], "4", "--json"]) == 0
+    assert [r["knowledge_error"] for r in json.loads(capsys.readouterr().out)["replans"]] != known
+    assert main(["closed-loop", "--nav-error", "0.01", "-1"]) == 2
+    assert "velocity_sigma" in capsys.readouterr().err
 
 
 def test_a_flight_that_cannot_be_integrated_exits_1(monkeypatch, capsys) -> None:
@@ -157,3 +175,49 @@ def test_a_flight_that_cannot_be_integrated_exits_1(monkeypatch, capsys) -> None
     monkeypatch.setattr(closed_loop, "fly_interval", broken)
     assert main(["closed-loop"]) == 1
     assert "the flight stopped at t = 0.0000 of the plan" in capsys.readouterr().err
+
+
+def test_replans_start_from_what_navigation_knows(plan: SCvxResult) -> None:
+    """Without aerodynamics (a solve needs them positive: 1e-9, the drag 1e-9 of g) the thrust
+    accelerates the true vehicle as the estimated one (the same attitude and mass), so after
+    the last kept re-plan, from an estimate off by (e_r, e_v), the vehicle lands off by
+    exactly -(e_r + e_v T) and -e_v, T the time flown on that plan: within the plan's own
+    miss. The errors are the seeded draws, one pair per re-plan."""
+    no_aero = Scenario(SCN.initial, SCN.params.replace(aero_coeff=1e-9))
+    nav = Navigation(position_sigma=0.01, velocity_sigma=0.01, seed=7)
+    res = fly_closed_loop(no_aero, Disturbance(), SETTINGS, nav=nav)
+    _landed(res)
+    rng = np.random.default_rng(7)
+    draws = [(rng.normal(0, 0.01, 3), rng.normal(0, 0.01, 3)) for _ in res.replans]
+    for r, (e_r, e_v) in zip(res.replans, draws, strict=True):
+        assert r.knowledge_error == pytest.approx((np.linalg.norm(e_r), np.linalg.norm(e_v)))
+    last = max(i for i, r in enumerate(res.replans) if r.kept)
+    e_r, e_v = draws[last]
+    T = res.closed.touchdown - res.replans[last].t
+    assert res.closed.velocity_error == pytest.approx(np.linalg.norm(e_v), abs=5e-4)
+    assert res.closed.position_error == pytest.approx(np.linalg.norm(e_r + e_v * T), abs=5e-4)
+    assert res.closed.position_error > 5e-3  # far above the plan's own miss
+    # perfect navigation: the same flight as without it, to the bit
+    again = fly_closed_loop(no_aero, Disturbance(), SETTINGS, nav=Navigation())
+    perfect = fly_closed_loop(no_aero, Disturbance(), SETTINGS)
+    assert again.closed == perfect.closed
+    assert all(r.knowledge_error == (0.0, 0.0) for r in perfect.replans)
+
+
+def test_the_report_says_what_was_flown() -> None:
+    from guidance.closed_loop import Flight, Replan, report
+
+    def flight(error: float) -> Flight:
+        return Flight(6.0, error, 0.0, 0.0, 0.0, 2.2, -1.0)
+
+    replan = Replan(0.5, (0.012, 0.0034), "infeasible", False, 13, np.nan, np.nan)
+    res = ClosedLoop("solved", 2.24, flight(0.02), flight(0.004), [replan])
+    text = report(res, Disturbance(), SETTINGS, Navigation(0.01, 0.002, 5))
+    assert "navigation: position error 0.01 U_L, velocity error 0.002 U_L/U_T" in text
+    assert "seed 5" in text and "re-plans: 1, 0 kept" in text
+    assert "   0.50    1.20e-02    3.40e-03  infeasible" in text
+    assert text.endswith("landing error: closed loop 5.0x larger than open loop")
+    res.closed, res.open = flight(0.004), flight(0.02)
+    text = report(res, Disturbance(), SETTINGS)
+    assert "navigation: perfect" in text
+    assert text.endswith("landing error: closed loop 5.0x smaller than open loop")
