@@ -127,7 +127,7 @@ def cmd_solve(args: argparse.Namespace) -> int:
     if not np.isfinite(result.t_f):  # stopped before its first subproblem
         print("no trajectory: nothing written")
         return EXIT_NO_TRAJECTORY
-    _print_landing(result, scenario)
+    _print_landing(result, scenario, args.at)
     if args.out:
         _write_trajectory(args, result, scenario)
     if args.plot:
@@ -190,12 +190,18 @@ def _print_problem(args: argparse.Namespace, scenario: Scenario, settings: SCvxS
         )
 
 
-def _print_landing(result: SCvxResult, scenario: Scenario) -> None:
-    """The figures of a solve that has a trajectory: time, mass, accuracy, run time."""
+def _print_landing(result: SCvxResult, scenario: Scenario, at: float | None = None) -> None:
+    """The figures of a solve that has a trajectory: time, mass, accuracy, run time. A re-plan
+    from time ``at`` of a plan (--at) counts its t_f from there; its touchdown is on the
+    plan's clock too."""
     fuel = scenario.initial.m0 - result.x[-1, IM]
     propellant = scenario.initial.m0 - scenario.params.m_dry
     sub_times = [h.subproblem_time_s for h in result.history]
-    print(f"t_f           {result.t_f:.6f} U_T")
+    if at is None:
+        print(f"t_f           {result.t_f:.6f} U_T")
+    else:
+        print(f"t_f           {result.t_f:.6f} U_T from the re-plan (touchdown at t = "
+              f"{at + result.t_f:.6f} U_T of the plan's clock)")  # fmt: skip
     print(f"final mass    {result.m_f:.6f} U_M")
     print(f"fuel          {fuel:.6f} U_M ({100 * fuel / propellant:.1f} % of the propellant)")
     print(  # the largest h: <= 0 when every path constraint holds

@@ -100,8 +100,13 @@ def test_replan_from_the_command_line(plan: SCvxResult, tmp_path: Path, capsys) 
     scn_file.write_text(json.dumps(scenario_to_dict(here)))
     args = ["solve", str(scn_file), "--backend", "c", "--guess", str(plan_file)]
     assert main([*args, "--at", repr(t1), "--out", str(out)]) == 0
-    assert f"its remainder from t = {t1:g} U_T" in capsys.readouterr().out
+    printed = capsys.readouterr().out
+    assert f"its remainder from t = {t1:g} U_T" in printed
     data = read_trajectory(out)
+    # the re-plan's t_f counts from t1; the touchdown is on the plan's clock, near the plan's
+    t_f = float(data["t_f"])  # type: ignore[arg-type]
+    assert f"{t_f:.6f} U_T from the re-plan (touchdown at t = {t1 + t_f:.6f}" in printed
+    assert abs(t1 + t_f - plan.t_f) <= 2e-3 * plan.t_f
     assert f"initial_guess from t = {t1:g}" in data["provenance"]["files"]  # type: ignore[index]
     assert main([*args, "--at", "99"]) == 2
     assert "is not within the plan's [0, " in capsys.readouterr().err
