@@ -15,6 +15,9 @@ from pathlib import Path
 from guidance.atomic import write_text_atomic
 
 ROOT = Path(__file__).resolve().parent.parent
+# What a result's numbers depend on in the repository: the package, the flight C code and its
+# generator (the c and c-socp backends, the weight files), and how they are built.
+CODE_PATHS = ("guidance", "c_runtime", "codegen", "Makefile", "pyproject.toml")
 # The libraries whose arithmetic a trajectory depends on.
 SOLVER_PACKAGES = ("numpy", "scipy", "casadi", "clarabel", "onnxruntime")
 
@@ -27,7 +30,8 @@ def _version(package: str) -> str | None:
 
 
 def code_version() -> str:
-    """'guidance 0.1.0 git 2177901' ('+dirty' when guidance/ has uncommitted changes)."""
+    """'guidance 0.1.0 git 2177901' ('+dirty' when CODE_PATHS have uncommitted changes: a
+    result of the C library depends on c_runtime/ as much as one of Python on guidance/)."""
     pkg = _version("guidance") or "unknown"
 
     def git(*args: str) -> str:
@@ -36,7 +40,8 @@ def code_version() -> str:
         ).stdout.strip()
 
     try:
-        rev, dirty = git("rev-parse", "--short", "HEAD"), git("status", "--porcelain", "guidance")
+        rev = git("rev-parse", "--short", "HEAD")
+        dirty = git("status", "--porcelain", "--", *CODE_PATHS)
     except (OSError, subprocess.SubprocessError):
         rev, dirty = "", ""
     return f"guidance {pkg}" + (f" git {rev}{'+dirty' if dirty else ''}" if rev else "")

@@ -1,0 +1,51 @@
+"""A data file's code version says '+dirty' when anything its numbers depend on has uncommitted
+changes: the package, and the flight C code, its generator and its build (the c and c-socp
+backends' results depend on them as much as the reference's on guidance/)."""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+from pathlib import Path
+
+import pytest
+
+from guidance import provenance
+
+needs_git = pytest.mark.skipif(shutil.which("git") is None, reason="git not installed")
+
+
+def _repo(root: Path) -> None:
+    files = ["guidance/a.py", "c_runtime/src/b.c", "codegen/generate.py", "Makefile",
+             "pyproject.toml", "docs/notes.md"]  # fmt: skip
+    for name in files:
+        (root / name).parent.mkdir(parents=True, exist_ok=True)
+        (root / name).write_text("0\n")
+    for cmd in (["init", "-q"], ["add", "."], ["-c", "user.name=t", "-c", "user.email=t@t",
+                                               "commit", "-qm", "c"]):  # fmt: skip
+        subprocess.run(["git", "-C", str(root), *cmd], check=True)
+
+
+@needs_git
+@pytest.mark.parametrize(
+    ("edited", "dirty"),
+    [
+        (None, False),
+        ("guidance/a.py", True),
+        ("c_runtime/src/b.c", True),
+        ("codegen/generate.py", True),
+        ("Makefile", True),
+        ("pyproject.toml", True),
+        ("docs/notes.md", False),  # the numbers do not depend on the documents
+    ],
+)
+def test_dirty_covers_what_the_numbers_depend_on(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, edited: str | None, dirty: bool
+) -> None:
+    _repo(tmp_path)
+    monkeypatch.setattr(provenance, "ROOT", tmp_path)
+    if edited:
+        (tmp_path / edited).write_text("1\n")
+    version = provenance.code_version()
+    assert " git " in version
+    assert version.endswith("+dirty") == dirty, version
