@@ -37,7 +37,7 @@ class Variant:
 
 
 def sample_landings(n: int, seed: int = BENCH_SEED) -> list[Scenario]:
-    from guidance.dataset import SamplingRanges, base_scenario
+    from guidance.dataset import ROTATION_DEG, SamplingRanges, base_scenario
     from guidance.symmetry import rotate_scenario
 
     rng = np.random.default_rng(seed)
@@ -45,7 +45,8 @@ def sample_landings(n: int, seed: int = BENCH_SEED) -> list[Scenario]:
     out = []
     for i in range(n):
         scenario, _ = base_scenario(seed, i, ranges)
-        out.append(rotate_scenario(scenario, math.radians(45.0 * int(rng.integers(8)))))
+        deg = ROTATION_DEG[int(rng.integers(len(ROTATION_DEG)))]  # the dataset's symmetry
+        out.append(rotate_scenario(scenario, math.radians(deg)))
     return out
 
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from guidance.params import IM, Params
+from guidance.params import I_HORIZONTAL, I_TILT, I_UP, IM, IW, U_AXIAL, Params
 
 TIGHT_DUAL_TOL = 1e-5  # a constraint whose multiplier exceeds this is tight (scaled problem)
 
@@ -20,11 +20,11 @@ def path_constraint_values(x: np.ndarray, u: np.ndarray, p: Params) -> np.ndarra
     return np.stack(
         [
             p.m_dry - x[:, IM],
-            p.tan_glideslope * np.linalg.norm(x[:, 1:3], axis=1) - x[:, 0],
-            np.linalg.norm(x[:, 8:10], axis=1) - p.tilt_q_max,
-            np.linalg.norm(x[:, 10:13], axis=1) - p.omega_max,
+            p.tan_glideslope * np.linalg.norm(x[:, I_HORIZONTAL], axis=1) - x[:, I_UP],
+            np.linalg.norm(x[:, I_TILT], axis=1) - p.tilt_q_max,
+            np.linalg.norm(x[:, IW], axis=1) - p.omega_max,
             T - p.T_max,
-            p.cos_gimbal * T - u[:, 0],
+            p.cos_gimbal * T - u[:, U_AXIAL],
             p.T_min - T,
         ],
         axis=1,
@@ -33,7 +33,7 @@ def path_constraint_values(x: np.ndarray, u: np.ndarray, p: Params) -> np.ndarra
 
 def constraint_scales(p: Params, Sx: np.ndarray, Su: float) -> np.ndarray:
     """The unit of each constraint used for penalties and the tightness threshold (7,)."""
-    return np.array([Sx[IM], Sx[0], 1.0, p.omega_max, Su, Su, Su])
+    return np.array([Sx[IM], Sx[I_UP], 1.0, p.omega_max, Su, Su, Su])
 
 
 def tight_mask(

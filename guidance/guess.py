@@ -15,7 +15,20 @@ import numpy as np
 
 from guidance.errors import InputError
 from guidance.model import dcm_bi_numpy
-from guidance.params import IM, IQ, IR, IV, IW, NU, NX, Scenario
+from guidance.params import (
+    I_HORIZONTAL,
+    I_UP,
+    IM,
+    IQ,
+    IR,
+    IV,
+    IW,
+    NU,
+    NX,
+    U_AXIAL,
+    U_LATERAL,
+    Scenario,
+)
 from guidance.verify import checked_trajectory
 
 BLEND_FRACTION = 0.25
@@ -322,18 +335,18 @@ def project_guess(
     # the mass only falls: within [m_dry, m0] (a prediction above m0 is hundreds of trust
     # radii away in the scaled mass, (m - m_dry) / (m0 - m_dry), when little propellant is left)
     x[:, IM] = np.clip(x[:, IM], p.m_dry, scenario.initial.m0)
-    horiz = np.linalg.norm(x[:, 1:3], axis=1)
-    x[:, 0] = np.maximum(x[:, 0], p.tan_glideslope * horiz)
+    horiz = np.linalg.norm(x[:, I_HORIZONTAL], axis=1)
+    x[:, I_UP] = np.maximum(x[:, I_UP], p.tan_glideslope * horiz)
     # Thrust: into the gimbal cone about body axis 1, then into [T_min, T_max].
     un = np.maximum(np.linalg.norm(u, axis=1), 1e-12)
-    lateral = np.linalg.norm(u[:, 1:3], axis=1)
+    lateral = np.linalg.norm(u[:, U_LATERAL], axis=1)
     tan_d = np.tan(np.arccos(p.cos_gimbal))
-    axial = np.maximum(u[:, 0], 0.0)
+    axial = np.maximum(u[:, U_AXIAL], 0.0)
     too_wide = lateral > tan_d * axial
     # project (axial, lateral) onto the cone boundary where needed
     cone_dir = np.array([p.cos_gimbal, np.sqrt(1 - p.cos_gimbal**2)])
-    proj = np.maximum(u[:, 0] * cone_dir[0] + lateral * cone_dir[1], 1e-9)
-    new_axial = np.where(too_wide, proj * cone_dir[0], u[:, 0])
+    proj = np.maximum(u[:, U_AXIAL] * cone_dir[0] + lateral * cone_dir[1], 1e-9)
+    new_axial = np.where(too_wide, proj * cone_dir[0], u[:, U_AXIAL])
     new_lat = np.where(too_wide, proj * cone_dir[1], lateral)
     scale_lat = np.where(lateral > 1e-12, new_lat / np.maximum(lateral, 1e-12), 0.0)
     u = np.column_stack([new_axial, u[:, 1] * scale_lat, u[:, 2] * scale_lat])

@@ -20,7 +20,7 @@ import casadi as ca
 import numpy as np
 
 from guidance.errors import ModelEvaluationError
-from guidance.params import NU, NX, Params
+from guidance.params import I_HORIZONTAL, I_TILT, I_UP, IM, IQ, IV, IW, NU, NX, U_AXIAL, Params
 
 # Parameter vector layout for the CasADi functions.
 P_NAMES = (
@@ -96,7 +96,7 @@ def _norm(v: ca.SX) -> ca.SX:
 
 def dynamics_expr(x: ca.SX, u: ca.SX, p: ca.SX) -> ca.SX:
     """Time derivative f(x, u; p) of the state (physical time)."""
-    v, q, w, m = x[3:6], x[6:10], x[10:13], x[13]
+    v, q, w, m = x[IV], x[IQ], x[IW], x[IM]
     g_I = ca.vertcat(p[0], 0, 0)
     J = ca.vertcat(p[1], p[2], p[3])
     r_T, r_cp = p[4:7], p[7:10]
@@ -153,15 +153,15 @@ def constraint_param_vector(params: Params) -> np.ndarray:
 
 
 def path_constraints_expr(x: ca.SX, u: ca.SX, c: ca.SX) -> ca.SX:
-    r, q, w, m = x[0:3], x[6:10], x[10:13], x[13]
+    w, m = x[IW], x[IM]
     T = _norm(u)
     return ca.vertcat(
         c[0] - m,
-        c[1] * _norm(r[1:3]) - r[0],
-        _norm(q[2:4]) - c[2],
+        c[1] * _norm(x[I_HORIZONTAL]) - x[I_UP],
+        _norm(x[I_TILT]) - c[2],
         _norm(w) - c[3],
         T - c[4],
-        c[5] * T - u[0],
+        c[5] * T - u[U_AXIAL],
         c[6] - T,
     )
 

@@ -26,6 +26,14 @@ IV = slice(3, 6)
 IQ = slice(6, 10)
 IW = slice(10, 13)
 IM = 13
+# The parts the path constraints read: the inertial x axis points up (g = (-|g|, 0, 0)) and the
+# body x axis is the thrust axis, so altitude is r1, the horizontal position (r2, r3), the tilt
+# of the thrust axis from vertical |(q2, q3)|, and the thrust's axial component u1.
+I_UP = 0
+I_HORIZONTAL = slice(1, 3)
+I_TILT = slice(8, 10)
+U_AXIAL = 0
+U_LATERAL = slice(1, 3)
 
 # Path constraints per node, in mask order (bit 7k + c).
 CONSTRAINT_NAMES = (

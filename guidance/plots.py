@@ -9,7 +9,7 @@ import numpy as np
 
 from guidance.atomic import atomic_write
 from guidance.model import dcm_bi_numpy
-from guidance.params import IM, IR, Params
+from guidance.params import I_TILT, IM, IQ, IR, IW, U_AXIAL, Params
 
 
 def landing_figure(
@@ -22,12 +22,12 @@ def landing_figure(
 
     N = x.shape[0]
     t = np.linspace(0.0, t_f, N)
-    C_IB = np.transpose(dcm_bi_numpy(x[:, 6:10]), (0, 2, 1))
+    C_IB = np.transpose(dcm_bi_numpy(x[:, IQ]), (0, 2, 1))
     T_I = np.einsum("kij,kj->ki", C_IB, u)
     Tn = np.linalg.norm(u, axis=1)
-    gimbal = np.degrees(np.arccos(np.clip(u[:, 0] / np.maximum(Tn, 1e-12), -1, 1)))
-    tilt = np.degrees(np.arccos(np.clip(1 - 2 * np.sum(x[:, 8:10] ** 2, axis=1), -1, 1)))
-    wn = np.degrees(np.linalg.norm(x[:, 10:13], axis=1))
+    gimbal = np.degrees(np.arccos(np.clip(u[:, U_AXIAL] / np.maximum(Tn, 1e-12), -1, 1)))
+    tilt = np.degrees(np.arccos(np.clip(1 - 2 * np.sum(x[:, I_TILT] ** 2, axis=1), -1, 1)))
+    wn = np.degrees(np.linalg.norm(x[:, IW], axis=1))
 
     fig = plt.figure(figsize=(13, 7.5))
     ax = fig.add_subplot(1, 2, 1, projection="3d")
