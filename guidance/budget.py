@@ -390,8 +390,9 @@ def report(b: Budget) -> str:
         ),
         f"  solve: {b.status}, {b.iterations} iterations, {b.subproblems} subproblems, "
         f"{b.socp_iterations} IPM iterations, m_f = {b.m_f:.9f}",
-        "  model: RAD750 s = 1.3 x instructions / (0.5 x 200e6); budget 1 s "
-        f"= {b.instruction_budget / 1e6:.1f} M host instructions",
+        f"  model: RAD750 s = {RISC_EXPANSION:g} x instructions / ({IPC:g} x "
+        f"{CLOCK_HZ / 1e6:g}e6); budget {TIME_BUDGET_S:g} s = "
+        f"{b.instruction_budget / 1e6:.1f} M host instructions",
         "",
         f"  {'item':48s} {'measured':>16s} {'budget':>14s}  ok",
         f"  {'host instructions (callgrind)':48s} {b.instructions / 1e6:14.1f} M "
