@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING
 
 from guidance.errors import InputError
 from guidance.guess import given_guess
+from guidance.nn.conventions import CONSTRAINT_MODEL, MODELS_DIR, SOLUTION_MODEL
 from guidance.params import Scenario, SCvxSettings
 from guidance.scenario import checked
 from guidance.scvx import SCvxResult, SCvxSolver, format_log
@@ -17,9 +18,6 @@ from guidance.tscvx import REDUCED_ETA_INIT, solve_tscvx
 if TYPE_CHECKING:
     import numpy as np
 
-MODELS_DIR = Path(__file__).resolve().parent.parent / "models"  # the shipped networks
-CONSTRAINT_MODEL = "constraint.onnx"
-SOLUTION_MODEL = "solution.onnx"
 METHODS = ("scvx", "tscvx")
 BACKENDS = ("clarabel", "c-socp", "c")
 

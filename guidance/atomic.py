@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import itertools
 import os
+import shutil
 import stat
 import tempfile
 import threading
@@ -49,6 +50,28 @@ def atomic_write(path: str | Path) -> Iterator[BinaryIO]:
         tmp.unlink(missing_ok=True)
         if not written:
             _remove_folders(made)
+
+
+@contextmanager
+def staged_files(folder: str | Path) -> Iterator[Path]:
+    """``with staged_files(models) as stage: write files into stage``: a set of files that
+    replaces its namesakes in ``folder`` as a set or not at all. The block writes them into
+    ``stage``, a new hidden folder beside ``folder``; only when the block has finished are
+    they moved into ``folder`` (each through atomic_write, in name order). An exception in the
+    block leaves ``folder`` as it was (not even made), and the stage is removed either way."""
+    folder = Path(folder)
+    near = _first_existing(folder.parent)
+    try:
+        stage = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", suffix=".tmp", dir=near))
+    except OSError as exc:
+        raise InputError(f"{folder}: cannot write beside it in {near} ({exc.strerror})") from None
+    try:
+        yield stage
+        for staged in sorted(stage.iterdir()):
+            with open(staged, "rb") as src, atomic_write(folder / staged.name) as dst:
+                shutil.copyfileobj(src, dst)
+    finally:
+        shutil.rmtree(stage, ignore_errors=True)
 
 
 def write_bytes_atomic(path: str | Path, data: bytes) -> None:

@@ -35,7 +35,9 @@ from typing import Any
 import numpy as np
 
 from guidance.dataset import Dataset
-from guidance.nn.train import KINDS, dataset_digest, ood_flags, split_bases, standardization, xy
+from guidance.errors import InputError
+from guidance.nn.conventions import KINDS, TEST_FRACTION, network_file
+from guidance.nn.train import dataset_digest, ood_flags, split_bases, standardization, xy
 from guidance.scenario import params_from_dict
 
 METHODS = ("Linear Interpolation", "KDTree", "T-SCvx")
@@ -54,7 +56,9 @@ class TaskData:
     out_std: np.ndarray
 
 
-def task_data(ds: Dataset, kind: str, test_fraction: float = 0.2, seed: int = 0) -> TaskData:
+def task_data(
+    ds: Dataset, kind: str, test_fraction: float = TEST_FRACTION, seed: int = 0
+) -> TaskData:
     solved = ds.solved()
     X, Y, bid, theta = xy(solved, kind)
     trv_b, te_b = split_bases(solved.base_id, test_fraction, seed)
@@ -309,11 +313,22 @@ def run_baselines(
     seed: int = 0,
     kinds: tuple[str, ...] = KINDS,
 ) -> dict[str, dict[str, dict[str, Any]]]:
+    """The tables' and, with ``models_dir``, the networks' scores on each task of ``kinds``.
+    A network of ``kinds`` missing from ``models_dir`` is an InputError, before any work:
+    scoring only the tables would look like a network-free run."""
+    models = {kind: Path(models_dir) / network_file(kind) for kind in kinds} if models_dir else {}
+    missing = [str(path) for path in models.values() if not path.is_file()]
+    if missing:
+        raise InputError(
+            f"{' and '.join(missing)}: no such network to score beside the tables (`guidance "
+            "export` writes them): give the models folder that holds them, or leave their "
+            "kind out (guidance baselines --kind)"
+        )
     out = {}
     digest = dataset_digest(ds)
     for kind in kinds:
         td = task_data(ds, kind, seed=seed)
-        model = Path(models_dir) / f"{kind}.onnx" if models_dir else None
+        model = models.get(kind)
         out[kind] = evaluate_task(
             td, model, interp_train, interp_test, max_queries, seed, ds.header.get("params")
         )

@@ -69,9 +69,9 @@ def _solver(backend: str) -> Callable[..., SCvxResult]:
 def run(n: int, backend: str = "c", models_dir: Path | None = None, progress: bool = True):
     from tqdm import tqdm
 
-    from guidance.api import CONSTRAINT_MODEL, MODELS_DIR, SOLUTION_MODEL
     from guidance.dataset import theta_of
     from guidance.guess import project_guess
+    from guidance.nn.conventions import CONSTRAINT_MODEL, MODELS_DIR, SOLUTION_MODEL
     from guidance.nn.infer import ConstraintModel, SolutionModel
     from guidance.tscvx import REDUCED_ETA_INIT
 

@@ -49,6 +49,7 @@ from pathlib import Path
 from guidance import callgrind
 from guidance.argtypes import at_least
 from guidance.errors import LibraryNotBuiltError
+from guidance.nn.conventions import CONSTRAINT, KINDS, SOLUTION, TNN_SUFFIX, network_file
 from guidance.params import N_MAX, N_MIN
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -66,9 +67,14 @@ TIME_BUDGET_S = 1.0
 MEMORY_BUDGET_B = 60 * 2**20
 # Networks (tscvx_nn.h): one inference each; 5 M host instructions per inference (issue 5).
 NN_DRIVER = BUILD / "nn_budget_driver"
-NN_MODELS = {"constraint": BUILD / "models" / "constraint.tnn",
-             "solution": BUILD / "models" / "solution.tnn"}  # fmt: skip
+NN_MODELS = {kind: BUILD / "models" / network_file(kind, TNN_SUFFIX) for kind in KINDS}
 NN_INSTRUCTION_BUDGET = 5_000_000
+# Planning estimate of host (x86-64) instructions per multiply-accumulate of the C inference
+# (c_runtime/nn, scalar double code), calibrated on its callgrind count: 2.8 to 2.9 on the
+# networks of the first shipped set (3.22 M for 1.14 M MACs, 3.69 M for 1.27 M). It ranks the
+# candidates at export (guidance export); the model card prints the callgrind count of the
+# shipped files.
+INSTR_PER_MAC = 3.0
 NN_CONSTRAINT_CALLS = 20  # T-SCvx: one mask per SCvx iteration, iter_max = 20 (Table 1)
 
 
@@ -162,6 +168,19 @@ class NetBudget:
 
     def within_budget(self) -> bool:
         return self.instructions <= NN_INSTRUCTION_BUDGET
+
+
+def est_instructions(macs: int) -> float:
+    """Planning estimate of host instructions per inference of a network of ``macs``
+    multiply-accumulates (today's INSTR_PER_MAC: reports written under an older factor are
+    re-estimated, not read back)."""
+    return INSTR_PER_MAC * macs
+
+
+def fits_budget(macs: int) -> bool:
+    """Whether a network of ``macs`` multiply-accumulates fits NN_INSTRUCTION_BUDGET, by the
+    planning estimate."""
+    return est_instructions(macs) <= NN_INSTRUCTION_BUDGET
 
 
 def rad750_seconds(instructions: float) -> float:
@@ -449,8 +468,8 @@ def report_networks(nets: list[NetBudget], call: Budget | None = None) -> str:
     for n in nets:
         lines.append(f"  {n.name}: {n.architecture}")
     by = {n.name: n for n in nets}
-    if {"constraint", "solution"} <= by.keys():
-        total = by["solution"].instructions + NN_CONSTRAINT_CALLS * by["constraint"].instructions
+    if set(KINDS) <= by.keys():
+        total = by[SOLUTION].instructions + NN_CONSTRAINT_CALLS * by[CONSTRAINT].instructions
         lines.append(
             f"  T-SCvx trajectory: 1 solution + {NN_CONSTRAINT_CALLS} constraint inferences "
             f"= {total / 1e6:.1f} M host instructions = {rad750_seconds(total):.3f} s "

@@ -39,6 +39,13 @@ from guidance.csocp import SOLVE_STATUS
 from guidance.errors import InputError, describe
 from guidance.guess import checked_guess
 from guidance.model import param_vector, pattern_index
+from guidance.nn.conventions import (
+    CONSTRAINT,
+    ONNX_SUFFIX,
+    SOLUTION,
+    TNN_SUFFIX,
+    network_file,
+)
 from guidance.params import N_MAX, N_MIN, NC, NU, NX, Params, Scenario, SCvxSettings
 from guidance.scenario import ScenarioError
 from guidance.scvx import (
@@ -507,7 +514,7 @@ def _collect(
 # ---- T-SCvx on board (pdg_solve_tscvx) -----------------------------------------------------
 
 BUILD_MODELS_DIR = Path(__file__).resolve().parents[1] / "build" / "models"  # `make lib`'s .tnn
-NET_KINDS = ("solution", "constraint")
+NET_KINDS = (SOLUTION, CONSTRAINT)  # the C call's order: the warm start's, then the masks'
 
 
 class FlightNetsError(InputError):
@@ -516,11 +523,12 @@ class FlightNetsError(InputError):
 
 def net_source(models_dir: Path, kind: str) -> Path:
     """``{kind}.tnn`` in the folder, else ``{kind}.onnx`` (converted to the flight blob)."""
-    for ext in ("tnn", "onnx"):
-        path = Path(models_dir) / f"{kind}.{ext}"
+    names = [network_file(kind, suffix) for suffix in (TNN_SUFFIX, ONNX_SUFFIX)]
+    for name in names:
+        path = Path(models_dir) / name
         if path.is_file():
             return path
-    raise FlightNetsError(f"no {kind}.tnn or {kind}.onnx in {models_dir} (run `make lib`)")
+    raise FlightNetsError(f"no {' or '.join(names)} in {models_dir} (run `make lib`)")
 
 
 def flight_net(models_dir: Path | str, kind: str):
@@ -535,7 +543,7 @@ def flight_net(models_dir: Path | str, kind: str):
 
     def load() -> FlightNet:
         try:
-            blob = tnn_bytes(path) if path.suffix == ".onnx" else path.read_bytes()
+            blob = tnn_bytes(path) if path.suffix == ONNX_SUFFIX else path.read_bytes()
         except OSError as exc:  # the CLI prints an InputError; an OSError was a traceback
             raise FlightNetsError(f"model {path}: cannot read it ({exc.strerror or exc})") from None
         except InputError as exc:  # an ONNX file unreadable or not a T-SCvx export
@@ -561,7 +569,7 @@ def check_trained_params(models_dir: Path | str, kind: str, params: Params) -> N
     from guidance.nn.infer import META_KEY, _params_diff
 
     path = net_source(Path(models_dir), kind)
-    if path.suffix != ".onnx":
+    if path.suffix != ONNX_SUFFIX:
         return
     stat = path.stat()
     key = (str(path.resolve()), stat.st_mtime_ns, stat.st_size)

@@ -14,11 +14,12 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from guidance import file_check
-from guidance.api import BACKENDS, CONSTRAINT_MODEL, METHODS, MODELS_DIR, SOLUTION_MODEL, solve
+from guidance.api import BACKENDS, METHODS, solve
 from guidance.argtypes import at_least
 from guidance.atomic import check_outputs
 from guidance.errors import InputError, LibraryNotBuiltError
 from guidance.guess import plan_remainder
+from guidance.nn.conventions import KINDS, MODELS_DIR, network_file
 from guidance.params import IM, Params, Scenario, SCvxSettings
 from guidance.scenario import read_scenario_data, scenario_from_dict, scenario_to_dict
 from guidance.tscvx import REDUCED_ETA_INIT
@@ -258,8 +259,8 @@ def _network_files(models: Path, backend: str) -> dict[str, Path]:
     if backend == "c":
         from guidance.cguidance import net_source
 
-        return {kind: net_source(models, kind) for kind in ("constraint", "solution")}
-    return {"constraint": models / CONSTRAINT_MODEL, "solution": models / SOLUTION_MODEL}
+        return {kind: net_source(models, kind) for kind in KINDS}
+    return {kind: models / network_file(kind) for kind in KINDS}
 
 
 def cmd_scenario(args: argparse.Namespace) -> int:

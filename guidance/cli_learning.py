@@ -20,14 +20,30 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from guidance.atomic import check_folder, write_text_atomic
+from guidance.budget import est_instructions, fits_budget
 from guidance.errors import InputError
+from guidance.json_files import missing_or_mistyped, read_json_object
+from guidance.nn.conventions import (
+    BASELINES_FILE,
+    CONSTRAINT,
+    EPOCHS,
+    KINDS,
+    LEARNING_RATE,
+    MASK_CEILING_FILE,
+    METRICS_FILE,
+    MODEL_CARD_FILE,
+    MODELS_DIR,
+    REFERENCE_EPOCHS,
+    SOLUTION,
+    network_file,
+)
 
 if TYPE_CHECKING:
     from guidance.dataset import Dataset
-    from guidance.nn.train import TrainConfig
+    from guidance.nn.train import TrainConfig, TrainResult
 
 # Sizes trained by ``guidance train`` (label -> architecture). "flight" sizes are meant to fit
-# DESIGN.md's budget (<= 5 million host instructions per inference, see INSTR_PER_MAC);
+# DESIGN.md's budget (budget.NN_INSTRUCTION_BUDGET per inference, see budget.INSTR_PER_MAC);
 # "reference" sizes are the paper's (Section "Training, Validation, and Testing").
 FLIGHT_SIZES = {
     "flight-s": dict(tokens="scalar", d_model=32, n_heads=2, n_layers=2, d_ff=64),
@@ -38,23 +54,10 @@ REFERENCE_SIZES = {
     "constraint": dict(tokens="single", d_model=384, n_heads=2, n_layers=4, d_ff=2048),
     "solution": dict(tokens="single", d_model=768, n_heads=2, n_layers=4, d_ff=2048),
 }
-# Planning estimate of host (x86-64) instructions per multiply-accumulate of the C inference
-# (c_runtime/nn, scalar double code), calibrated on its callgrind count: 2.8 to 2.9 on the
-# networks of the first shipped set (3.22 M for 1.14 M MACs, 3.69 M for 1.27 M). It ranks the
-# candidates at export; the model card prints the callgrind count of the shipped files.
-INSTR_PER_MAC = 3.0
-INSTR_BUDGET = 5e6
-# Epochs per fold. The constraint task has one row per (landing, iteration), about 14 times
-# the solution task's rows, so it needs fewer passes. It is limited by the number of base
-# landings, not by training time: the eight rotations of a landing share one mask, and the
-# net memorizes the ~1,100 training landings within a few passes (the held-out fold-1 val
-# loss rises from the third epoch on). With 1, 2, 3 and 6 epochs per fold (6: dropout 0.3)
-# the calibration-split precision at recall 0.99 was 0.557, 0.542, 0.533 and 0.536.
-TRAIN_DEFAULTS = {"epochs": 1, "solution_epochs": 8, "reference_epochs": 2, "lr": 1e-3}
 DEFAULT_DATASET = "data/dataset.npz"
 DEFAULT_RUN_DIR = "data/runs/default"
 DEFAULT_TRAIN_DIR = "data/train"
-DEFAULT_MODELS_DIR = "models"
+DEFAULT_MODELS_DIR = str(MODELS_DIR)  # the repository's, as guidance solve's, from anywhere
 # Choices of --backend of the commands that solve sampled landings (dataset, mask-ceiling);
 # without it, dataset.default_backend().
 _SAMPLE_BACKENDS = ["c", "clarabel", "c-socp"]
@@ -114,7 +117,7 @@ def _add_train(sub: argparse._SubParsersAction) -> None:
     t = sub.add_parser("train", help="train the constraint and solution transformers (resumable)")
     t.add_argument("--dataset", default=DEFAULT_DATASET)
     t.add_argument("--train-dir", default=DEFAULT_TRAIN_DIR, help="checkpoints and report")
-    t.add_argument("--kind", choices=["constraint", "solution", "both"], default="both")
+    t.add_argument("--kind", choices=[*KINDS, "both"], default="both")
     t.add_argument(
         "--sizes",
         type=_sizes,
@@ -124,22 +127,22 @@ def _add_train(sub: argparse._SubParsersAction) -> None:
     t.add_argument(
         "--epochs",
         type=at_least(1),
-        default=TRAIN_DEFAULTS["epochs"],
+        default=EPOCHS[CONSTRAINT],
         help="per fold, constraint net",
     )
     t.add_argument(
         "--solution-epochs",
         type=at_least(1),
-        default=TRAIN_DEFAULTS["solution_epochs"],
+        default=EPOCHS[SOLUTION],
         help="per fold, solution net",
     )
     t.add_argument(
         "--reference-epochs",
         type=at_least(1),
-        default=TRAIN_DEFAULTS["reference_epochs"],
+        default=REFERENCE_EPOCHS,
         help="per fold, for the paper-size reference (the paper: 2)",
     )
-    t.add_argument("--lr", type=positive_float, default=TRAIN_DEFAULTS["lr"])
+    t.add_argument("--lr", type=positive_float, default=LEARNING_RATE)
     t.add_argument(
         "--max-minutes", type=_non_negative_float, default=0.0, help="cap per model (0: none)"
     )
@@ -180,6 +183,12 @@ def _add_baselines(sub: argparse._SubParsersAction) -> None:
     b = sub.add_parser("baselines", help="lookup-table baselines against the networks")
     b.add_argument("--dataset", default=DEFAULT_DATASET)
     b.add_argument("--models-dir", default=DEFAULT_MODELS_DIR)
+    b.add_argument(
+        "--kind",
+        choices=[*KINDS, "both"],
+        default="both",
+        help="the tasks scored (default both); each one's network must be in MODELS_DIR",
+    )
     # the interpolation's PCA needs n - 1 >= 1 components: two rows span a line
     b.add_argument(
         "--interp-train", type=at_least(2), default=1000, help="subset (paper: 100; >= 2)"
@@ -189,7 +198,7 @@ def _add_baselines(sub: argparse._SubParsersAction) -> None:
         "--max-queries", type=at_least(1), default=2000, help="test rows for KD-tree / NN"
     )
     b.add_argument("--seed", type=_seed, default=0, help="the split seed used in training")
-    b.add_argument("--json", help="write the results here (default: MODELS_DIR/baselines.json)")
+    b.add_argument("--json", help=f"write the results here (default: MODELS_DIR/{BASELINES_FILE})")
     b.set_defaults(func=cmd_baselines)
 
 
@@ -227,7 +236,9 @@ def _add_mask_ceiling(sub: argparse._SubParsersAction) -> None:
         default="data/runs/mask_ceiling",
         help="neighbour masks kept as solved (resumable); '' to keep nothing",
     )
-    c.add_argument("--json", help="write the results here (default: MODELS_DIR/mask_ceiling.json)")
+    c.add_argument(
+        "--json", help=f"write the results here (default: MODELS_DIR/{MASK_CEILING_FILE})"
+    )
     c.set_defaults(func=cmd_mask_ceiling)
 
 
@@ -331,7 +342,7 @@ def cmd_train(args: argparse.Namespace) -> int:
         _clear_train_dir(out)
     digest = dataset_digest(ds)
     _claim_train_dir(out, args.dataset, digest)
-    kinds = ["constraint", "solution"] if args.kind == "both" else [args.kind]
+    kinds = list(KINDS) if args.kind == "both" else [args.kind]
     jobs = [(kind, size) for kind in kinds for size in args.sizes]
     for n_done, (kind, size) in enumerate(jobs):
         try:
@@ -359,9 +370,7 @@ TRAIN_DATASET_FILE = "dataset.json"  # in the train dir: the data all its checkp
 def _model_files(out: Path) -> list[Path]:
     """What ``guidance train`` wrote in ``out``: checkpoints, run states, reports."""
     return [
-        p
-        for p in out.glob("*")
-        if p.name == TRAIN_DATASET_FILE or (p.name.split("-")[0] in ("constraint", "solution"))
+        p for p in out.glob("*") if p.name == TRAIN_DATASET_FILE or (p.name.split("-")[0] in KINDS)
     ]
 
 
@@ -377,7 +386,13 @@ def _claim_train_dir(out: Path, dataset: str, digest: str) -> None:
 
     record = out / TRAIN_DATASET_FILE
     if record.exists():
-        old = json.loads(record.read_text())
+        old = read_json_object(
+            record,
+            "the record of the dataset a train folder's networks are trained on",
+            f"delete it and rerun with --restart (deletes the networks in {out}), or use "
+            "another --train-dir",
+            {"path": str, "content_sha256": str},
+        )
         if old["content_sha256"] != digest:
             raise InputError(
                 f"{out} holds networks trained on another dataset ({old['path']}, content "
@@ -417,8 +432,8 @@ def _train_one(
     cfg = _train_config(args, kind, size)
     report, state = out / f"{name}.json", out / f"{name}.state.pt"
     if report.exists():  # written last: the model is finished
-        why = identity_mismatch(json.loads(report.read_text()).get("identity"),
-                                run_identity(kind, arch, cfg, digest))  # fmt: skip
+        entry = read_json_object(report, "a trained model's report", _RETRAIN)
+        why = identity_mismatch(entry.get("identity"), run_identity(kind, arch, cfg, digest))
         if why:
             raise InputError(
                 f"{report} was trained with another {why}: rerun with --restart (deletes "
@@ -454,13 +469,28 @@ def _train_one(
     print(summarize(res), flush=True)
 
 
+# What to do about a damaged report or checkpoint in a train folder
+_RETRAIN = (
+    "delete it and its checkpoint (KIND-SIZE.pt) and re-run `guidance train` with the same "
+    "options (it trains that network again), or --restart"
+)
+
+
 def sweep_report(train_dir: Path) -> dict[str, dict]:
-    """Every trained model's report (``KIND-SIZE.json`` beside its checkpoint)."""
-    return {
-        p.stem: json.loads(p.read_text())
-        for p in sorted(train_dir.glob("*.json"))
-        if p.stem.split("-")[0] in ("constraint", "solution")
-    }
+    """Every trained model's report (``KIND-SIZE.json`` beside its checkpoint), checked for
+    what export and the model card read of it; InputError naming a report that is not one."""
+    from guidance.nn.card import REPORT_NEEDS
+
+    reports = {}
+    for p in sorted(train_dir.glob("*.json")):
+        if p.stem.split("-")[0] not in KINDS:
+            continue
+        entry = read_json_object(p, "a trained model's report", _RETRAIN, REPORT_NEEDS)
+        if entry["kind"] != p.stem.split("-")[0]:
+            raise InputError(f"{p}: reports a {entry['kind']!r} network, not the one it names; "
+                             f"{_RETRAIN}")  # fmt: skip
+        reports[p.stem] = entry
+    return reports
 
 
 def _fold1_val(history: list[dict]) -> float:
@@ -469,19 +499,9 @@ def _fold1_val(history: list[dict]) -> float:
     return [h["val"] for h in history if h["fold"] == 1][-1]
 
 
-def est_instructions(macs: int) -> float:
-    """Planning estimate of host instructions per inference (today's INSTR_PER_MAC: reports
-    written under an older factor are re-estimated, not read back)."""
-    return INSTR_PER_MAC * macs
-
-
-def fits_budget(macs: int) -> bool:
-    return est_instructions(macs) <= INSTR_BUDGET
-
-
-def best_checkpoints(train_dir: Path) -> dict[str, str]:
-    """Per kind, the flight-fitting checkpoint with the lowest held-out (fold 1) val loss."""
-    report = sweep_report(train_dir)
+def best_checkpoints(report: dict[str, dict]) -> dict[str, str]:
+    """Per kind, the flight-fitting checkpoint with the lowest held-out (fold 1) val loss, of
+    the reports of a train folder (:func:`sweep_report`)."""
     best: dict[str, tuple[float, str]] = {}
     for name, r in report.items():
         if not fits_budget(r["macs"]):
@@ -493,28 +513,34 @@ def best_checkpoints(train_dir: Path) -> dict[str, str]:
 
 # ---- export -------------------------------------------------------------------------------
 def cmd_export(args: argparse.Namespace) -> int:
+    """All or nothing: every input (the reports, the dataset, the checkpoints) is read and
+    checked before anything is written, and the new networks, metrics and card replace the
+    old ones in MODELS_DIR only once all of them are written (atomic.staged_files): a failure
+    leaves the folder's set as it was, never new networks beside the old card."""
+    from guidance.atomic import staged_files
     from guidance.baselines import task_data
     from guidance.dataset import load_dataset
     from guidance.nn.card import measure_onnx, write_card
     from guidance.nn.export import export_onnx
-    from guidance.nn.train import dataset_digest, load_checkpoint
+    from guidance.nn.train import dataset_digest
     from guidance.provenance import provenance
 
     train_dir, models = Path(args.train_dir), Path(args.models_dir)
     if not train_dir.is_dir():
         raise InputError(f"--train-dir {train_dir}: no such folder (run `guidance train`)")
-    best = best_checkpoints(train_dir)
+    check_folder("--models-dir", models)
+    report = sweep_report(train_dir)
+    best = best_checkpoints(report)
     if not best:
         raise InputError(f"no flight-size checkpoint in {train_dir}: run `guidance train`")
-    check_folder("--models-dir", models)
+    _check_no_stale_network(models, best)
     ds = load_dataset(args.dataset)
     if "params" not in ds.header:
         raise InputError(f"{args.dataset} records no problem parameters (header 'params')")
     digest = dataset_digest(ds)
-    report = sweep_report(train_dir)
     for name in best.values():
         _check_trained_on(report[name], name, ds, args.dataset, digest)
-    models.mkdir(parents=True, exist_ok=True)
+    nets = {kind: (name, _best_checkpoint(train_dir, name, kind)) for kind, name in best.items()}
     metrics: dict = {
         "provenance": provenance(),  # the export's code, solver versions and time
         "sweep": report,
@@ -522,36 +548,69 @@ def cmd_export(args: argparse.Namespace) -> int:
         "dataset_header": ds.header,
         "dataset_content_sha256": digest,
     }
-    for kind, name in sorted(best.items()):
-        res = load_checkpoint(train_dir / f"{name}.pt")
-        path = models / f"{kind}.onnx"
-        split_seed = int(res.metrics["train_config"]["split_seed"])
-        export_onnx(
-            res,
-            path,
-            ds.header["params"],  # the problem the training data were solved for
-            extra={
+    written = []
+    with staged_files(models) as stage:
+        for kind, (name, res) in sorted(nets.items()):
+            path = stage / network_file(kind)
+            split_seed = int(res.metrics["train_config"]["split_seed"])
+            export_onnx(
+                res,
+                path,
+                ds.header["params"],  # the problem the training data were solved for
+                extra={
+                    "checkpoint": name,
+                    "metrics": _brief(res.metrics),
+                    "dataset_content_sha256": digest,
+                    "split_seed": split_seed,
+                },
+            )
+            td = task_data(ds, kind, seed=split_seed)
+            ort = measure_onnx(path, kind, td.X_te_raw[:500], ds.header["params"])
+            metrics["shipped"][kind] = {
                 "checkpoint": name,
-                "metrics": _brief(res.metrics),
-                "dataset_content_sha256": digest,
-                "split_seed": split_seed,
-            },
-        )
-        td = task_data(ds, kind, seed=split_seed)
-        ort = measure_onnx(path, kind, td.X_te_raw[:500], ds.header["params"])
-        metrics["shipped"][kind] = {
-            "checkpoint": name,
-            "file": path.name,
-            "bytes": path.stat().st_size,
-            "onnxruntime": ort,
-            **{k: v for k, v in res.metrics.items() if k != "test_bases"},
-            "arch": res.arch.to_dict(),
-        }
-        print(f"wrote {path} ({name}, {path.stat().st_size:,} bytes): {ort}")
-    write_text_atomic(models / "metrics.json", json.dumps(metrics, indent=1, default=float))
-    write_card(models)
-    print(f"wrote {models / 'metrics.json'} and {models / 'MODEL_CARD.md'}")
+                "file": path.name,
+                "bytes": path.stat().st_size,
+                "onnxruntime": ort,
+                **{k: v for k, v in res.metrics.items() if k != "test_bases"},
+                "arch": res.arch.to_dict(),
+            }
+            written.append(f"{models / path.name} ({name}, {path.stat().st_size:,} bytes): {ort}")
+        write_text_atomic(stage / METRICS_FILE, json.dumps(metrics, indent=1, default=float))
+        write_card(stage, results=models)  # with the baselines and ceiling already in MODELS_DIR
+    for line in written:
+        print(f"wrote {line}")
+    print(f"wrote {models / METRICS_FILE} and {models / MODEL_CARD_FILE}")
     return 0
+
+
+def _check_no_stale_network(models: Path, best: dict[str, str]) -> None:
+    """Refuses to export beside a network of a kind not exported: the folder would hold the
+    old one next to the new, described by no card (guidance solve would use the pair)."""
+    for kind in KINDS:
+        old = models / network_file(kind)
+        if kind not in best and old.exists():
+            raise InputError(
+                f"--models-dir {models}: holds {old.name}, and the train folder has no "
+                f"flight-size {kind} network to replace it: the new set would pair it with "
+                "networks it was not exported with; export into another folder (or move "
+                f"{old.name} away)"
+            )
+
+
+def _best_checkpoint(train_dir: Path, name: str, kind: str) -> TrainResult:
+    """The checkpoint of report ``name``, checked for what export reads of it."""
+    from guidance.nn.train import load_checkpoint
+
+    path = train_dir / f"{name}.pt"
+    res = load_checkpoint(path)  # InputError naming it when missing or damaged
+    needs = {"train_config.split_seed": int, "n_params": int, "macs": int}
+    problems = missing_or_mistyped(res.metrics, needs)
+    if res.kind != kind:
+        problems.insert(0, f"a {res.kind!r} network, its report says {kind!r}")
+    if problems:
+        raise InputError(f"{path}: not the checkpoint of its report ({', '.join(problems)}); "
+                         f"{_RETRAIN}")  # fmt: skip
+    return res
 
 
 def _check_trained_on(entry: dict, name: str, dataset: Dataset, path: str, digest: str) -> None:
@@ -560,16 +619,17 @@ def _check_trained_on(entry: dict, name: str, dataset: Dataset, path: str, diges
 
     A checkpoint from before the content digest was recorded is matched by the header fields
     it did record (when the dataset was made, its size, its feasible fraction)."""
-    trained = entry.get("identity", {}).get("dataset")
+    identity, recorded = entry.get("identity"), entry.get("dataset")
+    trained = identity.get("dataset") if isinstance(identity, dict) else None
+    recorded = recorded if isinstance(recorded, dict) else {}
     if trained is not None:
         if trained != digest:
             raise InputError(
-                f"{name} was trained on another dataset (content sha256 {trained[:12]}, "
-                f"{entry.get('dataset', {}).get('path')}) than {path} ({digest[:12]}): "
+                f"{name} was trained on another dataset (content sha256 {str(trained)[:12]}, "
+                f"{recorded.get('path')}) than {path} ({digest[:12]}): "
                 "give the dataset it was trained on"
             )
         return
-    recorded = entry.get("dataset", {})
     keys = ("created_utc", "n_base", "n_samples", "feasible_fraction")
     if not all(k in recorded for k in keys):
         print(f"warning: {name} records neither a dataset digest nor its header (trained "
@@ -595,12 +655,15 @@ def cmd_baselines(args: argparse.Namespace) -> int:
     from guidance.atomic import check_outputs
     from guidance.baselines import format_table, results_json, run_baselines
     from guidance.dataset import load_dataset
-    from guidance.nn.card import write_card
+    from guidance.nn.card import card_sources, write_card
     from guidance.provenance import provenance
 
     models = Path(args.models_dir)
-    out = Path(args.json) if args.json else models / "baselines.json"
+    out = Path(args.json) if args.json else models / BASELINES_FILE
     check_outputs(("--json", out))  # before the baselines, not after
+    card = not args.json and (models / METRICS_FILE).exists()
+    if card:  # what the card is made from, checked before the baselines run
+        card_sources(models, skip=(BASELINES_FILE,))
     ds = load_dataset(args.dataset)
     res = run_baselines(
         ds,
@@ -609,6 +672,7 @@ def cmd_baselines(args: argparse.Namespace) -> int:
         interp_test=args.interp_test,
         max_queries=args.max_queries,
         seed=args.seed,
+        kinds=KINDS if args.kind == "both" else (args.kind,),
     )
     for kind in res:
         print(format_table(kind, res[kind]))
@@ -616,9 +680,9 @@ def cmd_baselines(args: argparse.Namespace) -> int:
     report = {"provenance": provenance(), "dataset": ds.header, "results": res}
     write_text_atomic(out, results_json(report))
     print(f"wrote {out}")
-    if not args.json and (models / "metrics.json").exists():
+    if card:
         write_card(models)
-        print(f"updated {models / 'MODEL_CARD.md'}")
+        print(f"updated {models / MODEL_CARD_FILE}")
     return 0
 
 
@@ -650,19 +714,22 @@ def cmd_mask_ceiling(args: argparse.Namespace) -> int:
         results_dict,
         theta_spread,
     )
-    from guidance.nn.card import write_card
+    from guidance.nn.card import card_sources, write_card
 
     models = Path(args.models_dir)
-    out = Path(args.json) if args.json else models / "mask_ceiling.json"
+    out = Path(args.json) if args.json else models / MASK_CEILING_FILE
     # before the solves, not after; nor the run's folder, which the solves fill
     check_outputs(("--json", out), inputs=(("--run-dir folder", args.run_dir),))
     if args.run_dir:
         check_folder("--run-dir", args.run_dir)
     eps = args.eps
+    metrics = models / METRICS_FILE
+    card = not args.json and metrics.exists()
+    if card:  # what the card is made from, checked before the solves
+        card_sources(models, skip=(MASK_CEILING_FILE,))
     n_train = args.train_landings
-    metrics = models / "metrics.json"
     if n_train is None and metrics.exists():
-        n_train = json.loads(metrics.read_text())["shipped"]["constraint"]["n_trainval_bases"]
+        n_train = _shipped_training_landings(metrics)
     std = theta_spread()
     backend = args.backend or default_backend()
     try:
@@ -682,7 +749,18 @@ def cmd_mask_ceiling(args: argparse.Namespace) -> int:
     run = dict(landings=args.landings, neighbours=args.neighbours, backend=backend, seed=args.seed)
     write_text_atomic(out, json.dumps(results_dict(scores, spacing, n_train, **run), indent=1))
     print(f"wrote {out}")
-    if not args.json and metrics.exists():
+    if card:
         write_card(models)
-        print(f"updated {models / 'MODEL_CARD.md'}")
+        print(f"updated {models / MODEL_CARD_FILE}")
     return 0
+
+
+def _shipped_training_landings(metrics: Path) -> int:
+    """The train+validation base landings of the constraint network metrics.json describes."""
+    key = f"shipped.{CONSTRAINT}.n_trainval_bases"
+    fix = "re-run `guidance export`, or give --train-landings"
+    record = read_json_object(metrics, "the metrics `guidance export` writes", fix, {key: int})
+    n = record["shipped"][CONSTRAINT]["n_trainval_bases"]
+    if n < 1:
+        raise InputError(f"{metrics}: '{key}' is {n}, not a number of landings; {fix}")
+    return int(n)

@@ -40,6 +40,7 @@ import numpy as np
 
 from guidance.atomic import atomic_write
 from guidance.errors import UNREADABLE_NPZ, InputError
+from guidance.json_files import ANY, read_json_object
 from guidance.params import (
     NC,
     NU,
@@ -417,15 +418,13 @@ def _read_run_config(out_dir: Path, infer: bool = True) -> dict:
     """The run's run.json: a JSON object with the keys of RUN_KEYS; InputError naming the file
     otherwise (a damaged or hand-edited one). ``infer``: RK4_KEY of a record made before it
     filled in (with_rk4_steps); False: the record as written."""
-    path = _run_config_path(out_dir)
-    try:
-        config = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError, RecursionError) as exc:
-        raise InputError(f"{path}: not a readable run record ({exc})") from None
-    required = tuple(k for k in RUN_KEYS if k != RK4_KEY)  # before 27 Nov: no RK4_KEY
-    missing = [k for k in required if k not in config] if isinstance(config, dict) else required
-    if missing:
-        raise InputError(f"{path}: not a run record (missing {', '.join(missing)})")
+    required = {k: ANY for k in RUN_KEYS if k != RK4_KEY}  # before 27 Nov: no RK4_KEY
+    config = read_json_object(
+        _run_config_path(out_dir),
+        "a dataset run's record",
+        "restore it from a copy, or start the run in another --run-dir",
+        required,
+    )
     return with_rk4_steps(config) if infer else config
 
 

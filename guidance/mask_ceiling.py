@@ -19,7 +19,6 @@ included), in the same units.
 from __future__ import annotations
 
 import dataclasses
-import json
 from collections.abc import Callable, Sequence
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
@@ -40,7 +39,8 @@ from guidance.dataset import (
     theta_of,
     worker_died,
 )
-from guidance.errors import InputError
+from guidance.errors import UNREADABLE_NPZ, InputError
+from guidance.json_files import read_json_object
 from guidance.params import Scenario, SCvxSettings
 from guidance.provenance import provenance, record_code_version
 from guidance.scenario import ScenarioError, validate
@@ -156,7 +156,11 @@ def _check_run(run_dir: Path, config: dict[str, Any]) -> list[str]:
     if not path.exists():
         run_dir.mkdir(parents=True, exist_ok=True)
         return record_code_version(path, config)
-    old = json.loads(path.read_text())
+    old = read_json_object(
+        path,
+        "the record of a mask-ceiling run",
+        f"delete the folder {run_dir} (its neighbours are solved again) or use another --run-dir",
+    )
     differ = ", ".join(k for k in config if old.get(k) != config[k])
     if differ:
         raise InputError(
@@ -209,11 +213,34 @@ def _cached_masks(
         for i in range(n_landings):
             path = _cache_file(cache, eps, i) if cache is not None else None
             if path is not None and path.exists():
-                with np.load(path) as f:  # arr_0, arr_1, ... in the order of the neighbours
-                    found[eps, i] = [f[k] for k in sorted(f.files, key=lambda k: int(k[4:]))]
+                found[eps, i] = _read_masks(path)
             else:
                 missing.append((eps, i))
     return found, missing
+
+
+def _read_masks(path: Path) -> list[np.ndarray]:
+    """The neighbour masks a run keeps in ``path`` (arr_0, arr_1, ... in the order of the
+    neighbours, each (iterations, 7N) of 0/1); InputError naming the file otherwise."""
+    try:
+        with np.load(path, allow_pickle=False) as f:
+            names = sorted(f.files, key=lambda k: int(k.removeprefix("arr_")))
+            masks = [f[k] for k in names]
+    except UNREADABLE_NPZ as exc:
+        problem = f"not readable ({type(exc).__name__}: {exc})"
+    else:
+        bad = [m for m in masks if m.ndim != 2 or m.dtype != np.uint8 or m.max(initial=0) > 1]
+        if not bad and len({m.shape[1] for m in masks}) <= 1:
+            return masks
+        problem = (
+            f"holds a {bad[0].dtype} array of shape {bad[0].shape}, not 0/1 masks"
+            if bad
+            else "its masks differ in width"
+        )
+    raise InputError(
+        f"{path}: not a neighbourhood a mask-ceiling run keeps ({problem}); delete it (its "
+        "neighbours are solved again)"
+    )
 
 
 def _solve_missing(

@@ -170,3 +170,138 @@ def test_run_dirs_that_cannot_be_folders_are_refused(tmp_path, capsys) -> None:
         err = capsys.readouterr().err
         assert err.startswith(f"error: --run-dir {run_dir}: ") and message in err
     assert not models.exists() and not (tmp_path / "d.npz").exists()
+
+
+# ---- one models folder for every command ---------------------------------------------------
+def test_every_models_dir_default_is_the_repositorys_models_folder() -> None:
+    """baselines' was "models" of the current directory, solve's the repository's: run from
+    elsewhere, baselines scored no network and said nothing."""
+    from guidance.cli import build_parser
+    from guidance.nn.conventions import MODELS_DIR
+
+    assert Path(__file__).resolve().parents[1] / "models" == MODELS_DIR
+    parser = build_parser()
+    assert parser.parse_args(["solve"]).models == str(MODELS_DIR)
+    for command in ("export", "baselines", "mask-ceiling"):
+        assert parser.parse_args([command]).models_dir == str(MODELS_DIR), command
+
+
+@pytest.mark.parametrize(
+    "kind, missing", [((), "constraint.onnx and "), (("--kind", "solution"), "solution.onnx")]
+)
+def test_baselines_without_the_networks_is_bad_input(kind, missing, data, tmp_path, capsys):
+    """A models folder without the networks asked for (default: both) was scored as tables
+    alone, exit 0."""
+    models, out = tmp_path / "models", tmp_path / "b.json"
+    models.mkdir()
+    small = ["--max-queries", "5", "--interp-train", "5", "--interp-test", "2"]
+    argv = ["baselines", "--dataset", str(data), "--models-dir", str(models), "--json", str(out),
+            *kind, *small]  # fmt: skip
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"error: {models / missing}") and "no such network" in err
+    assert not out.exists()
+
+
+# ---- damaged JSON files: exit 2 naming the file, never a traceback --------------------------
+@pytest.mark.parametrize(
+    "record, problem",
+    [
+        ("{", "not valid JSON"),
+        ('{"path": "x"}', "no 'content_sha256'"),
+        ("[]", "a list, not a JSON object"),
+    ],
+)
+def test_train_refuses_a_damaged_dataset_record(record, problem, data, tmp_path, capsys):
+    out = tmp_path / "train"
+    out.mkdir()
+    (out / "dataset.json").write_text(record)
+    argv = ["train", "--dataset", str(data), "--train-dir", str(out), "--kind", "solution",
+            "--sizes", "flight-s", "--no-progress"]  # fmt: skip
+    assert main(argv) == 2  # was: JSONDecodeError, KeyError 'content_sha256'
+    err = capsys.readouterr().err
+    assert err.startswith(f"error: {out / 'dataset.json'}: not the record of the dataset")
+    assert problem in err and "--restart" in err
+    assert sorted(p.name for p in out.iterdir()) == ["dataset.json"]
+
+
+@pytest.mark.parametrize("report", ["[]", "{", '{"kind": "solution"'])
+def test_train_refuses_a_damaged_report_of_a_finished_model(report, data, tmp_path, capsys):
+    out = tmp_path / "train"
+    out.mkdir()
+    (out / "solution-flight-s.json").write_text(report)
+    argv = ["train", "--dataset", str(data), "--train-dir", str(out), "--kind", "solution",
+            "--sizes", "flight-s", "--no-progress"]  # fmt: skip
+    assert main(argv) == 2  # was: AttributeError ('list' has no attribute 'get')
+    err = capsys.readouterr().err
+    assert err.startswith(f"error: {out / 'solution-flight-s.json'}: not a trained model's report")
+    assert "re-run `guidance train`" in err
+
+
+REPORT = {"kind": "solution", "arch": {}, "n_params": 10, "macs": 1000,
+          "heldout_val_loss": 1.0, "final_val_loss": 1.0, "train_seconds": 1.0}  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    "text, problem",
+    [
+        ("{", "not valid JSON"),
+        (json.dumps({k: v for k, v in REPORT.items() if k != "macs"}), "no 'macs'"),
+        (json.dumps({**REPORT, "macs": "x"}), "'macs' is a string, not an integer"),
+        (json.dumps({**REPORT, "heldout_val_loss": None}), "'heldout_val_loss' is null"),
+        (json.dumps({**REPORT, "kind": "constraint"}), "reports a 'constraint' network"),
+    ],
+)
+def test_export_refuses_a_damaged_report(text, problem, data, tmp_path, capsys) -> None:
+    train_dir, models = tmp_path / "train", tmp_path / "models"
+    train_dir.mkdir()
+    (train_dir / "solution-flight-s.json").write_text(text)
+    argv = ["export", "--train-dir", str(train_dir), "--dataset", str(data),
+            "--models-dir", str(models)]  # fmt: skip
+    assert main(argv) == 2  # was: JSONDecodeError, KeyError 'macs', TypeError
+    err = capsys.readouterr().err
+    assert err.startswith(f"error: {train_dir / 'solution-flight-s.json'}: ") and problem in err
+    assert not models.exists()
+
+
+def test_card_refuses_a_damaged_metrics_file(tmp_path) -> None:
+    """write_card read metrics.json unchecked (JSONDecodeError, KeyError)."""
+    from guidance.errors import InputError
+    from guidance.nn.card import write_card
+
+    shipped = Path(__file__).resolve().parents[1] / "models" / "metrics.json"
+    good = json.loads(shipped.read_text())
+    for text, problem in [
+        ("{", "not valid JSON"),
+        ("{}", "no 'dataset_header', no 'sweep', no 'shipped'"),
+        (json.dumps({**good, "shipped": {}}), "no shipped network"),
+        (json.dumps({**good, "sweep": {"x": {}}}), "no 'sweep.x.kind'"),
+    ]:
+        (tmp_path / "metrics.json").write_text(text)
+        with pytest.raises(InputError) as exc:
+            write_card(tmp_path)
+        assert str(exc.value).startswith(f"{tmp_path / 'metrics.json'}: ") and problem in str(
+            exc.value
+        )
+        assert str(exc.value).endswith("re-run `guidance export`")
+    (tmp_path / "metrics.json").write_text(json.dumps(good))
+    (tmp_path / "baselines.json").write_text("[]")
+    with pytest.raises(InputError, match=r"baselines.json: not what `guidance baselines` writes"):
+        write_card(tmp_path)
+    assert not (tmp_path / "MODEL_CARD.md").exists()
+
+
+def test_one_definition_of_the_kinds_files_and_budget() -> None:
+    """The kinds, their files and the instruction budget were spelled out in many modules."""
+    from guidance import api, budget, cguidance
+    from guidance.nn import card, conventions, flight
+
+    kinds = conventions.KINDS
+    assert set(cguidance.NET_KINDS) == set(kinds) == set(flight.KIND_CODES)
+    assert list(budget.NN_MODELS) == list(kinds)
+    assert [p.name for p in budget.NN_MODELS.values()] == ["constraint.tnn", "solution.tnn"]
+    assert (api.CONSTRAINT_MODEL, api.SOLUTION_MODEL) == ("constraint.onnx", "solution.onnx")
+    assert api.MODELS_DIR is conventions.MODELS_DIR
+    assert card.fits_budget is budget.fits_budget  # was cli_learning's, with its own 5e6
+    m = budget.NN_INSTRUCTION_BUDGET / budget.INSTR_PER_MAC
+    assert budget.fits_budget(int(m)) and not budget.fits_budget(int(m) + 1)

@@ -190,3 +190,74 @@ def test_baselines_refuse_a_json_they_could_not_write_before_running(tmp_path, c
     argv = ["baselines", "--dataset", str(tmp_path / "none.npz"), "--json", str(tmp_path / "taken")]
     assert main(argv) == 2
     assert "--json" in capsys.readouterr().err
+
+
+# ---- damaged files: exit 2 naming the file, before any solve -------------------------------
+@pytest.mark.parametrize(
+    "text, card, problem",
+    [
+        ("{", False, "not valid JSON"),
+        ("{}", False, "no 'shipped'"),
+        ('{"shipped": {"solution": {}}}', False, "no 'shipped.constraint'"),
+        ('{"shipped": {"constraint": {"n_trainval_bases": "x"}}}', False, "is a string"),
+        ('{"shipped": {"constraint": {"n_trainval_bases": 0}}}', False, "is 0, not a number"),
+        ("{", True, "not valid JSON"),
+        ("{}", True, "no 'dataset_header'"),
+    ],
+)
+def test_cli_refuses_a_damaged_metrics_file(text, card, problem, tmp_path, capsys, monkeypatch):
+    """metrics.json was read unchecked: JSONDecodeError, KeyError 'shipped'."""
+
+    def no_measure(*args, **kwargs):
+        raise AssertionError("measured before metrics.json was checked")
+
+    monkeypatch.setattr(mask_ceiling, "measure", no_measure)
+    models = tmp_path / "models"
+    models.mkdir()
+    (models / "metrics.json").write_text(text)
+    out = [] if card else ["--json", str(tmp_path / "m.json")]  # the card is updated without
+    argv = ["mask-ceiling", "--run-dir", "", "--models-dir", str(models), *out]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"error: {models / 'metrics.json'}: ") and problem in err
+    assert "re-run `guidance export`" in err
+    assert sorted(p.name for p in models.iterdir()) == ["metrics.json"]
+
+
+@pytest.mark.parametrize("text", ["{", "[]"])
+def test_cli_refuses_a_damaged_run_record(text, tmp_path, capsys, monkeypatch) -> None:
+    """run.json of --run-dir was read unchecked (JSONDecodeError)."""
+    monkeypatch.setattr(mask_ceiling, "theta_spread", lambda: np.ones(16))
+    run = tmp_path / "run"
+    run.mkdir()
+    (run / "run.json").write_text(text)
+    argv = ["mask-ceiling", "--run-dir", str(run), "--json", str(tmp_path / "m.json"),
+            "--landings", "1", "--neighbours", "3", "--eps", "0", "--workers", "1",
+            "--train-landings", "5"]  # fmt: skip
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"error: {run / 'run.json'}: not the record of a mask-ceiling run")
+    assert f"delete the folder {run}" in err and not (tmp_path / "m.json").exists()
+
+
+def test_a_damaged_neighbourhood_file_is_named(tmp_path) -> None:
+    """A cut or foreign .npz in the run folder raised numpy's ValueError (pickled data)."""
+    path = tmp_path / "eps0_landing0000.npz"
+    masks = [np.array([[0, 1], [1, 0]], np.uint8)] * 3
+    np.savez(path, *masks)
+    found, missing = mask_ceiling._cached_masks(tmp_path, [0.0], 1)
+    assert missing == [] and all(np.array_equal(m, masks[0]) for m in found[0.0, 0])
+    for content, problem in [
+        (lambda f: f.write(b"junk"), "not readable"),
+        (lambda f: np.savez(f, np.array([{"a": 1}], dtype=object)), "not readable"),
+        (lambda f: np.savez(f, np.zeros((2, 3))), "float64 array of shape (2, 3), not 0/1"),
+        (lambda f: np.savez(f, np.zeros((2, 3), np.uint8), np.zeros((2, 4), np.uint8)),
+         "differ in width"),
+    ]:  # fmt: skip
+        with open(path, "wb") as f:
+            content(f)
+        with pytest.raises(InputError) as exc:
+            mask_ceiling._cached_masks(tmp_path, [0.0], 1)
+        message = str(exc.value)
+        assert message.startswith(f"{path}: not a neighbourhood a mask-ceiling run keeps (")
+        assert problem in message and "delete it" in message

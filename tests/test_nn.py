@@ -428,7 +428,9 @@ def test_export_and_baselines_record_their_provenance(tmp_path: Path) -> None:
     assert main(["export", "--train-dir", str(out), "--dataset", str(a),
                  "--models-dir", str(models)]) == 0  # fmt: skip
     small = ["--max-queries", "20", "--interp-train", "20", "--interp-test", "5"]
-    assert main(["baselines", "--dataset", str(a), "--models-dir", str(models), *small]) == 0
+    baselines = ["baselines", "--dataset", str(a), "--models-dir", str(models), *small]
+    assert main(baselines) == 2  # no constraint network to score: was scored as tables alone
+    assert main([*baselines, "--kind", "solution"]) == 0
     for name in ("metrics.json", "baselines.json"):
         made_by = json.loads((models / name).read_text())["provenance"]
         assert made_by["generator"] == code_version(), name
@@ -515,3 +517,129 @@ def test_an_interrupted_export_leaves_the_previous_file(trained, monkeypatch) ->
     assert [p for p in paths["solution"].parent.iterdir() if "tmp" in p.name] == []
     meta = load_model(paths["solution"], "solution").meta
     assert meta["code_version"].startswith("guidance ")
+
+
+# ---- export: all or nothing ----------------------------------------------------------------
+@pytest.fixture(scope="module")
+def trained_dir(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
+    """(dataset, train folder) of both kinds of flight-s networks, one epoch per fold."""
+    from guidance.cli import main
+
+    tmp = tmp_path_factory.mktemp("export")
+    data = _write_dataset(random_dataset(n_base=12, seed=1), tmp / "a.npz")
+    out = tmp / "train"
+    one = ["--epochs", "1", "--solution-epochs", "1", "--threads", "1", "--no-progress"]
+    argv = ["train", "--dataset", str(data), "--train-dir", str(out), "--sizes", "flight-s", *one]
+    assert main(argv) == 0
+    return data, out
+
+
+def _old_set(models: Path) -> dict[str, bytes]:
+    """A models folder holding an earlier export (stand-ins) and the files of other commands."""
+    models.mkdir()
+    for name in ("constraint.onnx", "solution.onnx", "metrics.json", "MODEL_CARD.md"):
+        (models / name).write_bytes(f"old {name}".encode())
+    return {p.name: p.read_bytes() for p in models.iterdir()}
+
+
+def _export(data: Path, train_dir: Path, models: Path) -> int:
+    from guidance.cli import main
+
+    return main(["export", "--train-dir", str(train_dir), "--dataset", str(data),
+                 "--models-dir", str(models)])  # fmt: skip
+
+
+def test_export_with_a_missing_checkpoint_leaves_the_old_set(trained_dir, tmp_path, capsys):
+    """The constraint network was written, then the missing solution checkpoint crashed the
+    export (FileNotFoundError): a new constraint network beside the old solution network."""
+    import shutil
+
+    data, trained = trained_dir
+    train_dir = tmp_path / "train"
+    shutil.copytree(trained, train_dir)
+    (train_dir / "solution-flight-s.pt").unlink()
+    models = tmp_path / "models"
+    before = _old_set(models)
+    assert _export(data, train_dir, models) == 2
+    err = capsys.readouterr().err
+    checkpoint = train_dir / "solution-flight-s.pt"
+    assert err.startswith(f"error: {checkpoint}: cannot read the checkpoint")
+    assert "re-run `guidance train`" in err
+    assert {p.name: p.read_bytes() for p in models.iterdir()} == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["models", "train"]  # no stage left
+
+
+def test_an_export_failing_midway_leaves_the_old_set(trained_dir, tmp_path, monkeypatch):
+    """A failure after the first network is written (here its measurement) changes nothing."""
+    from guidance.nn import card
+
+    data, train_dir = trained_dir
+    models = tmp_path / "models"
+    before = _old_set(models)
+
+    def broken(path, *args, **kwargs):
+        assert path.is_file()  # the network was written, where the old one would have been
+        raise RuntimeError("onnxruntime died")
+
+    monkeypatch.setattr(card, "measure_onnx", broken)
+    with pytest.raises(RuntimeError, match="onnxruntime died"):
+        _export(data, train_dir, models)
+    assert {p.name: p.read_bytes() for p in models.iterdir()} == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["models"]
+
+
+def test_export_refuses_to_leave_an_old_network_beside_the_new(trained_dir, tmp_path, capsys):
+    """A solution-only export into a folder with a constraint network kept the old one, now
+    described by no card and paired by guidance solve with a network it was not made with."""
+    import shutil
+
+    data, trained = trained_dir
+    train_dir = tmp_path / "train"
+    shutil.copytree(trained, train_dir, ignore=shutil.ignore_patterns("constraint-*"))
+    models = tmp_path / "models"
+    before = _old_set(models)
+    assert _export(data, train_dir, models) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"error: --models-dir {models}: holds constraint.onnx")
+    assert {p.name: p.read_bytes() for p in models.iterdir()} == before
+
+
+def test_a_damaged_checkpoint_is_bad_input(trained_dir, tmp_path, capsys) -> None:
+    import shutil
+
+    from guidance.nn.train import load_checkpoint
+
+    _, trained = trained_dir
+    train_dir = tmp_path / "train"
+    shutil.copytree(trained, train_dir)
+    path = train_dir / "solution-flight-s.pt"
+    ck = torch.load(path, weights_only=True)
+    for content, problem in [
+        (b"junk", "not a readable checkpoint"),
+        (path.read_bytes()[:1000], "not a readable checkpoint"),
+        ({k: v for k, v in ck.items() if k != "arch"}, "not a checkpoint `guidance train` wrote"),
+    ]:
+        if isinstance(content, bytes):
+            path.write_bytes(content)
+        else:
+            torch.save(content, path)
+        with pytest.raises(InputError) as exc:
+            load_checkpoint(path)
+        assert str(exc.value).startswith(f"{path}: {problem}"), str(exc.value)
+
+
+def test_train_without_a_configuration_trains_as_the_train_command() -> None:
+    """TrainConfig's epochs (2) were not `guidance train`'s (constraint 1, solution 8): the
+    defaults are one definition now, and train() without a configuration takes the command's."""
+    from guidance.cli import build_parser
+    from guidance.cli_learning import _train_config
+    from guidance.nn.conventions import EPOCHS, KINDS
+    from guidance.nn.train import default_config
+
+    args = build_parser().parse_args(["train"])
+    for kind in KINDS:
+        assert _train_config(args, kind, "flight-s") == default_config(kind)
+        assert default_config(kind).epochs == EPOCHS[kind]
+    assert EPOCHS == {"constraint": 1, "solution": 8}  # what `make models` has trained with
+    with pytest.raises(TypeError):
+        TrainConfig()  # no epochs that fit every kind

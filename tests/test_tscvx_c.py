@@ -56,7 +56,7 @@ def _scenario(name: str) -> Scenario:
 
 @pytest.fixture(scope="module")
 def onnx_models():
-    from guidance.cli import CONSTRAINT_MODEL, MODELS_DIR, SOLUTION_MODEL
+    from guidance.nn.conventions import CONSTRAINT_MODEL, MODELS_DIR, SOLUTION_MODEL
     from guidance.nn.infer import ConstraintModel, SolutionModel
 
     return (

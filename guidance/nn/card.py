@@ -7,16 +7,27 @@ is one that was measured by the commands it names.
 
 from __future__ import annotations
 
-import json
 import tempfile
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from guidance.atomic import write_text_atomic
-from guidance.cli_learning import INSTR_BUDGET, INSTR_PER_MAC, est_instructions, fits_budget
+from guidance.budget import INSTR_PER_MAC, NN_INSTRUCTION_BUDGET, est_instructions, fits_budget
+from guidance.errors import InputError
+from guidance.json_files import NUMBER, JsonType, read_json_object
+from guidance.nn.conventions import (
+    BASELINES_FILE,
+    KINDS,
+    MASK_CEILING_FILE,
+    METRICS_FILE,
+    MODEL_CARD_FILE,
+    TEST_FRACTION,
+    TNN_SUFFIX,
+    network_file,
+)
 
 # The card is written line by line: each section hands its lines to ``add``.
 _Add = Callable[[str], object]
@@ -60,11 +71,12 @@ def callgrind_instructions(models: Path) -> dict[str, int]:
         return {}
     out: dict[str, int] = {}
     with tempfile.TemporaryDirectory() as tmp:
-        for kind in ("constraint", "solution"):
-            if not (models / f"{kind}.onnx").is_file():  # a folder may hold one network
+        for kind in KINDS:
+            onnx = models / network_file(kind)
+            if not onnx.is_file():  # a folder may hold one network
                 continue
-            tnn = Path(tmp) / f"{kind}.tnn"
-            write_tnn(models / f"{kind}.onnx", tnn)
+            tnn = Path(tmp) / network_file(kind, TNN_SUFFIX)
+            write_tnn(onnx, tnn)
             cmd = [str(NN_DRIVER), str(tnn), "--repeat", "1"]
             out[kind] = callgrind.total(cmd, "tscvx_nn_run")
     return out
@@ -114,11 +126,82 @@ def _f(v: Any, fmt: str = "{:.4f}") -> str:
         return "n/a"
 
 
-def write_card(models: Path) -> Path:
-    """Writes ``models``/MODEL_CARD.md from the measurements stored there; returns its path."""
-    metrics = json.loads((models / "metrics.json").read_text())
-    baselines = _read_if_present(models / "baselines.json")
-    ceiling = _read_if_present(models / "mask_ceiling.json")
+# What the card reads of each trained model's report (KIND-SIZE.json in the train folder,
+# written by `guidance train`; `guidance export` copies them into metrics.json's "sweep").
+REPORT_NEEDS: dict[str, JsonType] = {
+    "kind": str,
+    "arch": dict,
+    "n_params": int,
+    "macs": int,
+    "heldout_val_loss": NUMBER,
+    "final_val_loss": NUMBER,
+    "train_seconds": NUMBER,
+}
+# What it reads of metrics.json (`guidance export`) in every case.
+METRICS_NEEDS: dict[str, JsonType] = {
+    "dataset_header": dict,
+    "sweep": dict,
+    **{f"sweep.*.{key}": t for key, t in REPORT_NEEDS.items()},
+    "shipped": dict,
+    **{f"shipped.*.{key}": int for key in ("n_params", "macs", "bytes")},
+    **{f"shipped.*.{key}": str for key in ("file", "checkpoint")},
+    **{f"shipped.*.{key}": dict for key in ("arch", "train_config")},
+    **{f"shipped.*.onnxruntime.{key}": NUMBER for key in ("time_ms", "time_ms_std", "peak_mb")},
+}
+_REEXPORT = "re-run `guidance export`"
+
+
+def read_metrics(models: Path) -> dict[str, Any]:
+    """``models``/metrics.json, checked for what the card reads; InputError naming it."""
+    path = models / METRICS_FILE
+    metrics = read_json_object(path, "the metrics `guidance export` writes", _REEXPORT,
+                               METRICS_NEEDS)  # fmt: skip
+    if not metrics["shipped"]:
+        raise InputError(f"{path}: no shipped network in 'shipped'; {_REEXPORT}")
+    return metrics
+
+
+def write_card(models: Path, results: Path | None = None) -> Path:
+    """Writes ``models``/MODEL_CARD.md from the measurements stored there (those of `guidance
+    baselines` and `guidance mask-ceiling` from ``results``, default ``models``); returns its
+    path. A measurement file that is not what its command writes is an InputError naming it."""
+    results = models if results is None else results
+    metrics, baselines, ceiling = card_sources(models, results)
+    try:
+        lines = _card_lines(models, metrics, baselines, ceiling)
+    except (KeyError, TypeError, ValueError, AttributeError, IndexError) as exc:
+        files = [models / METRICS_FILE] + [
+            results / name for name in (BASELINES_FILE, MASK_CEILING_FILE)
+            if (results / name).exists()
+        ]  # fmt: skip
+        raise InputError(
+            f"{', '.join(map(str, files))}: an entry the model card needs is missing or not "
+            f"what the commands write ({type(exc).__name__}: {exc}); re-run the command that "
+            "wrote it (`guidance export`, `guidance baselines`, `guidance mask-ceiling`)"
+        ) from None
+    path = models / MODEL_CARD_FILE
+    write_text_atomic(path, "\n".join(lines) + "\n")
+    return path
+
+
+def card_sources(
+    models: Path, results: Path | None = None, skip: tuple[str, ...] = ()
+) -> tuple[dict[str, Any], Any, Any]:
+    """What the card is made from, checked: metrics.json in ``models``, and from ``results``
+    (default ``models``) baselines.json and mask_ceiling.json when present (None when not, or
+    named in ``skip``: a command checks, before its work, the ones it does not rewrite)."""
+    results = models if results is None else results
+    metrics = read_metrics(models)
+    baselines = ceiling = None
+    if BASELINES_FILE not in skip:
+        baselines = _read_if_present(results / BASELINES_FILE, "baselines", {"results": dict})
+    if MASK_CEILING_FILE not in skip:
+        needs = {"run.landings": int, "run.neighbours": int, "run.backend": str, "scores": list}
+        ceiling = _read_if_present(results / MASK_CEILING_FILE, "mask-ceiling", needs)
+    return metrics, baselines, ceiling
+
+
+def _card_lines(models: Path, metrics: dict[str, Any], baselines: Any, ceiling: Any) -> list[str]:
     header, shipped = metrics["dataset_header"], metrics["shipped"]
     lines: list[str] = []
     add = lines.append
@@ -136,13 +219,14 @@ def write_card(models: Path) -> Path:
         _ceiling_section(add, ceiling)
     _goals_section(add, shipped, measured)
     _limits_section(add, header)
-    path = models / "MODEL_CARD.md"
-    write_text_atomic(path, "\n".join(lines) + "\n")
-    return path
+    return lines
 
 
-def _read_if_present(path: Path) -> Any:
-    return json.loads(path.read_text()) if path.exists() else None
+def _read_if_present(path: Path, command: str, needs: Mapping[str, JsonType]) -> Any:
+    if not path.exists():
+        return None
+    what, fix = f"what `guidance {command}` writes", f"re-run `guidance {command}`"
+    return read_json_object(path, what, fix, needs)
 
 
 def _tested_constraint(shipped: dict) -> dict | None:
@@ -165,7 +249,10 @@ def _intro(add: _Add) -> None:
     add("# Model card: T-SCvx constraint and solution networks")
     add("")
     add("Generated by `guidance export` (and `guidance baselines`, `guidance mask-ceiling`) from")
-    add("`models/metrics.json`, `models/baselines.json` and `models/mask_ceiling.json`; do not")
+    add(
+        f"`models/{METRICS_FILE}`, `models/{BASELINES_FILE}` and `models/{MASK_CEILING_FILE}`;"
+        " do not"
+    )
     add("edit by hand. Reproduce everything with `make models` (data generation, training,")
     add("export, baselines, mask ceiling).")
     add("")
@@ -230,7 +317,10 @@ def _data_section(add: _Add, metrics: dict) -> None:
     for k, v in h.get("sampling_ranges", {}).items():
         add(f"- `{k}`: [{v[0]:g}, {v[1]:g}]")
     add("")
-    add("Split by base landing: 20 % of the base landings (all 8 rotations each) are the test")
+    add(
+        f"Split by base landing: {100 * TEST_FRACTION:g} % of the base landings (all 8 rotations "
+        "each) are the test"
+    )
     add("split, never seen in training; K = 3 folds (by base landing) over the rest.")
     add("")
 
@@ -315,8 +405,8 @@ def _inference_section(add: _Add, shipped: dict, measured: dict[str, int]) -> No
         f"set while it loads the model and answers the queries. Instructions: the planning "
         f"estimate ({INSTR_PER_MAC:g} host instructions per multiply-accumulate) that ranks the "
         f"candidates, and the callgrind count of one `tscvx_nn_run` of the flight C inference "
-        f"(c_runtime/nn), against the budget of {INSTR_BUDGET / 1e6:g} million per inference "
-        "(DESIGN.md)."
+        f"(c_runtime/nn), against the budget of {NN_INSTRUCTION_BUDGET / 1e6:g} million per "
+        "inference (DESIGN.md)."
     )
     add("")
 
@@ -410,7 +500,7 @@ def _budget_goal(shipped: dict, measured: dict[str, int]) -> str:
     """The instruction budget goal: from the callgrind counts, or from the planning estimate
     when the C build was missing."""
     if measured:
-        fits = all(v <= INSTR_BUDGET for v in measured.values())
+        fits = all(v <= NN_INSTRUCTION_BUDGET for v in measured.values())
         how = "callgrind, C inference: " + ", ".join(
             f"{k} {v / 1e6:.2f} M" for k, v in sorted(measured.items())
         )
@@ -418,7 +508,7 @@ def _budget_goal(shipped: dict, measured: dict[str, int]) -> str:
         fits = all(fits_budget(v["macs"]) for v in shipped.values())
         how = "planning estimate only: the C build was missing when this card was written"
     return (
-        f"- <= {INSTR_BUDGET / 1e6:g} million host instructions per inference: "
+        f"- <= {NN_INSTRUCTION_BUDGET / 1e6:g} million host instructions per inference: "
         f"**{_met(fits)}** ({how})."
     )
 

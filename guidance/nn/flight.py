@@ -45,12 +45,13 @@ import numpy as np
 
 from guidance.atomic import write_bytes_atomic
 from guidance.errors import InputError
+from guidance.nn.conventions import CONSTRAINT, SOLUTION
 
 MAGIC = b"TSCVXNN\0"
 FORMAT_VERSION = 2  # 2: the trained-for problem parameters after the probes
 HEADER_BYTES = 128
 CRC_OFFSET = 124
-KINDS = {"constraint": 1, "solution": 2}
+KIND_CODES = {CONSTRAINT: 1, SOLUTION: 2}  # the blob header's kind field (tscvx_nn.h)
 TOKENS = {"single": 0, "scalar": 1}
 _HEADER = struct.Struct("<8sIIII8IIIddQQ")  # up to the reserved bytes (96 bytes)
 PROBE_RTOL = 1e-4
@@ -164,7 +165,7 @@ def _weights_of(path: str | Path, model: Any, meta: dict[str, Any]) -> FlightWei
     inits = _Initializers(path, model.graph)
     d_in, d_out, d, ff = arch["d_in"], arch["d_out"], arch["d_model"], arch["d_ff"]
     H, n_layers, tokens = arch["n_heads"], arch["n_layers"], arch["tokens"]
-    if (d_in, d_out) != (meta["d_in"], meta["d_out"]) or meta["kind"] not in KINDS:
+    if (d_in, d_out) != (meta["d_in"], meta["d_out"]) or meta["kind"] not in KIND_CODES:
         raise OnnxLayoutError(f"{path}: metadata sizes or kind inconsistent")
     ln_eps = _layer_norm_eps(path, model.graph, n_layers)
     arrays = _weight_arrays(inits, arch)
@@ -339,7 +340,7 @@ def pack(fw: FlightWeights) -> bytes:
     trained = np.asarray(fw.trained, "<f8")
     payload = weights.tobytes() + probes.tobytes() + trained.tobytes()
     head = _HEADER.pack(
-        MAGIC, FORMAT_VERSION, HEADER_BYTES, KINDS[fw.kind], TOKENS[fw.tokens],
+        MAGIC, FORMAT_VERSION, HEADER_BYTES, KIND_CODES[fw.kind], TOKENS[fw.tokens],
         fw.d_in, fw.d_out, fw.d_model, fw.n_heads, fw.n_layers, fw.d_ff, fw.seq_len, fw.N,
         len(fw.probe_in), trained.size, fw.ln_eps, fw.threshold,
         weights.size + probes.size + trained.size, weights.size,
@@ -531,7 +532,7 @@ def load_flight_model(path: str | Path, kind: str, params=None) -> FlightNet:
         net = FlightNet(blob)
     except FlightNetError as exc:
         raise ModelMismatchError(f"model {path}: refused by the C library: {exc}") from exc
-    got = {v: k for k, v in KINDS.items()}.get(net.info.kind)
+    got = {v: k for k, v in KIND_CODES.items()}.get(net.info.kind)
     if got != kind:
         raise ModelMismatchError(
             f"model {path}: is a {got!r} network, a {kind!r} one was asked for"

@@ -36,7 +36,9 @@ import json
 import math
 import pickle
 import re
+import struct
 import time
+import zipfile
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -49,28 +51,36 @@ from torch import nn
 from guidance.atomic import atomic_write
 from guidance.dataset import Dataset
 from guidance.errors import InputError
+from guidance.nn.conventions import KINDS, LEARNING_RATE, TEST_FRACTION, default_epochs
 from guidance.nn.model import ArchConfig, Transformer, n_params
 from guidance.params import CONSTRAINT_NAMES
 
-KINDS = ("constraint", "solution")
 STD_FLOOR = 1e-9
 
 
 @dataclass(frozen=True)
 class TrainConfig:
-    epochs: int = 2  # per fold (the paper: two epochs)
+    # per fold; no default here: the kinds train for different numbers of epochs (train()
+    # without a configuration takes conventions.default_epochs, as `guidance train` does)
+    epochs: int
     folds: int = 3
     batch_size: int = 128
-    lr: float = 1e-3
+    lr: float = LEARNING_RATE
     weight_decay: float = 1e-4
     warmup_steps: int = 4000
-    test_fraction: float = 0.2
+    test_fraction: float = TEST_FRACTION
     split_seed: int = 0
     target_recall: float = 0.99
     recall_confidence: float = 0.95  # over resamples of the calibration landings
     calibration_fraction: float = 0.1  # of train+val base landings, constraint net only
     max_seconds: float = float("inf")  # wall-clock cap on the whole training
     threads: int = 0  # torch threads (0: leave torch's default)
+
+
+def default_config(kind: str) -> TrainConfig:
+    """The configuration ``guidance train`` trains a flight-size ``kind`` network with when
+    given no option."""
+    return TrainConfig(epochs=default_epochs(kind))
 
 
 # ---- data ---------------------------------------------------------------------------------
@@ -258,6 +268,16 @@ def load_plain(path: str | Path) -> dict[str, Any]:
     checkpoint from elsewhere cannot run code on loading (torch's default since 2.6)."""
     try:
         return torch.load(path, weights_only=True)
+    except OSError as exc:  # missing, a folder, unreadable
+        raise InputError(
+            f"{path}: cannot read the checkpoint ({exc.strerror or exc}); re-run `guidance "
+            "train` with the same options (it trains the missing networks again)"
+        ) from None
+    except (RuntimeError, EOFError, ValueError, struct.error, zipfile.BadZipFile) as exc:
+        raise InputError(
+            f"{path}: not a readable checkpoint (damaged or cut: {exc}); delete it and its "
+            "report (the .json beside it) and re-run `guidance train` with the same options"
+        ) from None
     except pickle.UnpicklingError as exc:
         # torch's text is mostly advice to load unsafely; keep what it refused
         found = re.search(r"Unsupported global: GLOBAL (\S+)", str(exc))
@@ -326,15 +346,22 @@ class TrainingInterrupted(KeyboardInterrupt):
 
 
 def load_checkpoint(path: str | Path) -> TrainResult:
+    """A network :meth:`TrainResult.save` wrote; InputError naming the file when it is not one
+    (missing, damaged, or without the entries it writes)."""
     ck = load_plain(path)
-    arch = ArchConfig(**ck["arch"])
-    net = Transformer(arch)
-    net.load_state_dict(ck["state_dict"])
-    net.eval()
-    in_mean, in_std, out_mean, out_std = (ck[name].numpy() for name in NORMALIZATION)
-    return TrainResult(
-        ck["kind"], arch, net, in_mean, in_std, out_mean, out_std, ck["threshold"], ck["metrics"]
-    )
+    try:
+        arch = ArchConfig(**ck["arch"])
+        net = Transformer(arch)
+        net.load_state_dict(ck["state_dict"])
+        net.eval()
+        in_mean, in_std, out_mean, out_std = (ck[name].numpy() for name in NORMALIZATION)
+        kind, threshold, metrics = ck["kind"], float(ck["threshold"]), dict(ck["metrics"])
+    except (KeyError, TypeError, ValueError, AttributeError, RuntimeError) as exc:
+        raise InputError(
+            f"{path}: not a checkpoint `guidance train` wrote ({type(exc).__name__}: {exc}); "
+            "delete it and its report (the .json beside it) and re-run `guidance train`"
+        ) from None
+    return TrainResult(kind, arch, net, in_mean, in_std, out_mean, out_std, threshold, metrics)
 
 
 def train(
@@ -352,9 +379,10 @@ def train(
     With ``state_path``, the run is checkpointed there after every epoch (model, optimizer,
     schedule, random states) and resumed from it, provided it was written for the same
     configuration and ``dataset`` (its :func:`dataset_digest`); otherwise InputError.
-    Ctrl-C raises :class:`TrainingInterrupted`.
+    Ctrl-C raises :class:`TrainingInterrupted`. Without ``cfg``: the defaults of `guidance
+    train` for a flight-size network of this kind.
     """
-    cfg = cfg or TrainConfig()
+    cfg = cfg or default_config(kind)
     if cfg.epochs < 1:
         raise InputError(f"epochs per fold must be at least 1, got {cfg.epochs}")
     if cfg.threads:
