@@ -39,8 +39,8 @@ import scipy.sparse as sp
 from guidance import callgrind
 from guidance.conic import ConeKind, ConicProblem, ConicSolution, clarabel_solver
 from guidance.params import SCvxSettings
+from guidance.paths import BUILD_DIR, ROOT
 
-ROOT = Path(__file__).resolve().parents[1]
 KKT_SPARSE = 2  # tscvx_settings.kkt_backend: the sparse static-pattern LDL' (csocp.KKT_STATIC)
 
 
@@ -415,7 +415,7 @@ def _callgrind(cmd: list[str], toggle: str, solver_object: str | None) -> Count 
         return None
 
 
-BENCH_DRIVER = ROOT / "build" / "ctest" / "bench_driver"  # `make bench` (or `make ctest`) builds it
+BENCH_DRIVER = BUILD_DIR / "ctest" / "bench_driver"  # `make bench` (or `make ctest`) builds it
 
 
 def instructions_ours(

@@ -51,11 +51,10 @@ from guidance.argtypes import at_least
 from guidance.errors import LibraryNotBuiltError
 from guidance.nn.conventions import CONSTRAINT, KINDS, SOLUTION, TNN_SUFFIX, network_file
 from guidance.params import N_MAX, N_MIN
+from guidance.paths import BUILD_DIR, ROOT
 
-ROOT = Path(__file__).resolve().parent.parent
-BUILD = ROOT / "build"
-DRIVER = BUILD / "pdg_budget_driver"
-LIBS = [BUILD / "libtscvx_gnc.a", BUILD / "libtscvx.a"]
+DRIVER = BUILD_DIR / "pdg_budget_driver"
+LIBS = [BUILD_DIR / "libtscvx_gnc.a", BUILD_DIR / "libtscvx.a"]
 SUITESPARSE = ["libamd.a", "libldl.a", "libsuitesparseconfig.a"]
 SYSTEM_LIB_DIRS = [Path("/usr/lib/x86_64-linux-gnu"), Path("/usr/lib")]
 
@@ -66,8 +65,8 @@ CLOCK_HZ = 200e6
 TIME_BUDGET_S = 1.0
 MEMORY_BUDGET_B = 60 * 2**20
 # Networks (tscvx_nn.h): one inference each; 5 M host instructions per inference (issue 5).
-NN_DRIVER = BUILD / "nn_budget_driver"
-NN_MODELS = {kind: BUILD / "models" / network_file(kind, TNN_SUFFIX) for kind in KINDS}
+NN_DRIVER = BUILD_DIR / "nn_budget_driver"
+NN_MODELS = {kind: BUILD_DIR / "models" / network_file(kind, TNN_SUFFIX) for kind in KINDS}
 NN_INSTRUCTION_BUDGET = 5_000_000
 # Planning estimate of host (x86-64) instructions per multiply-accumulate of the C inference
 # (c_runtime/nn, scalar double code), calibrated on its callgrind count: 2.8 to 2.9 on the

@@ -20,7 +20,8 @@ from collections import defaultdict
 from dataclasses import dataclass, field
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+from guidance.paths import ROOT
+
 SOURCES = "c_runtime/"  # the hand-written flight code (not the generated model's header)
 
 

@@ -12,16 +12,13 @@ import numpy as np
 from guidance.errors import LibraryNotBuiltError, ModelEvaluationError
 from guidance.model import N_AUG, NP
 from guidance.params import NU, NX
+from guidance.paths import BUILD_DIR
 
 FOH_NOT_FINITE = -2  # pdg_foh_interval's status for a non-finite model evaluation (foh.h)
 # The guidance library (the SOCP runtime inside); TSCVX_GNC_LIB points elsewhere (`make
 # coverage` runs the suite against an instrumented build). One path for every binding.
 LIB_ENV = "TSCVX_GNC_LIB"
-LIB_PATH = Path(
-    os.environ.get(
-        LIB_ENV, str(Path(__file__).resolve().parent.parent / "build" / "libtscvx_gnc.so")
-    )
-)
+LIB_PATH = Path(os.environ.get(LIB_ENV, str(BUILD_DIR / "libtscvx_gnc.so")))
 _dp = ctypes.POINTER(ctypes.c_double)
 
 

@@ -47,6 +47,7 @@ from guidance.nn.conventions import (
     network_file,
 )
 from guidance.params import N_MAX, N_MIN, NC, NU, NX, Params, Scenario, SCvxSettings
+from guidance.paths import BUILD_DIR
 from guidance.scenario import ScenarioError
 from guidance.scvx import (
     POLISH_OUTCOMES,
@@ -513,7 +514,7 @@ def _collect(
 
 # ---- T-SCvx on board (pdg_solve_tscvx) -----------------------------------------------------
 
-BUILD_MODELS_DIR = Path(__file__).resolve().parents[1] / "build" / "models"  # `make lib`'s .tnn
+BUILD_MODELS_DIR = BUILD_DIR / "models"  # `make lib`'s .tnn
 NET_KINDS = (SOLUTION, CONSTRAINT)  # the C call's order: the warm start's, then the masks'
 
 

@@ -56,9 +56,10 @@ from guidance.conic import (
     invalid_solution,
 )
 from guidance.errors import LibraryNotBuiltError
+from guidance.paths import BUILD_DIR
 
 _LIB_ENV = "TSCVX_LIB"
-_LIB_DEFAULT = Path(__file__).resolve().parents[1] / "build" / "libtscvx.so"
+_LIB_DEFAULT = BUILD_DIR / "libtscvx.so"
 
 c_int = ct.c_int
 c_double = ct.c_double

@@ -13,8 +13,8 @@ from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 
 from guidance.atomic import write_text_atomic
+from guidance.paths import ROOT
 
-ROOT = Path(__file__).resolve().parent.parent
 # What a result's numbers depend on in the repository: the package, the flight C code and its
 # generator (the c and c-socp backends, the weight files), and how they are built.
 CODE_PATHS = ("guidance", "c_runtime", "codegen", "Makefile", "pyproject.toml")

@@ -7,16 +7,21 @@ it.
 
 from __future__ import annotations
 
-from pathlib import Path
+from guidance.paths import ROOT
 
 # The folder of the shipped networks, the default of every command that reads or writes one
 # (guidance solve, export, baselines, mask-ceiling): the repository's, wherever the command
 # runs from.
-MODELS_DIR = Path(__file__).resolve().parents[2] / "models"
+MODELS_DIR = ROOT / "models"
 
 CONSTRAINT = "constraint"  # (theta, k) -> the k-th subproblem's tight constraints
 SOLUTION = "solution"  # theta -> the warm start (x, u, t_f)
 KINDS = (CONSTRAINT, SOLUTION)
+
+# A model file carries probe inputs and the outputs its exporter computed; a reader (onnxruntime
+# or the flight blob's C inference) that does not reproduce them to this relative tolerance
+# is running another model, or running it wrongly.
+PROBE_RTOL = 1e-4
 
 ONNX_SUFFIX = ".onnx"  # what `guidance export` writes, onnxruntime reads
 TNN_SUFFIX = ".tnn"  # the flight blob `make lib` converts it to (guidance.nn.flight)

@@ -45,7 +45,7 @@ import numpy as np
 
 from guidance.atomic import write_bytes_atomic
 from guidance.errors import InputError
-from guidance.nn.conventions import CONSTRAINT, SOLUTION
+from guidance.nn.conventions import CONSTRAINT, PROBE_RTOL, SOLUTION
 
 MAGIC = b"TSCVXNN\0"
 FORMAT_VERSION = 2  # 2: the trained-for problem parameters after the probes
@@ -54,7 +54,6 @@ CRC_OFFSET = 124
 KIND_CODES = {CONSTRAINT: 1, SOLUTION: 2}  # the blob header's kind field (tscvx_nn.h)
 TOKENS = {"single": 0, "scalar": 1}
 _HEADER = struct.Struct("<8sIIII8IIIddQQ")  # up to the reserved bytes (96 bytes)
-PROBE_RTOL = 1e-4
 COPY_WEIGHTS = 1
 MESSAGE_LEN = 160  # TSCVX_NN_MESSAGE_LEN (tscvx_nn.h)
 

@@ -18,6 +18,7 @@ import numpy as np
 
 from guidance.dataset import N_THETA, THETA_NAMES
 from guidance.errors import InputError
+from guidance.nn.conventions import PROBE_RTOL
 from guidance.params import NC, NU, NX, PARAM_NAMES, Params, Scenario
 
 META_KEY = "tscvx"
@@ -26,7 +27,6 @@ META_VERSION = 1
 # Parameters that are network inputs (theta); every other parameter must match the model's.
 INPUT_PARAMS = ("glideslope_deg", "tilt_max_deg")
 TRAINED_PARAMS = tuple(name for name in PARAM_NAMES if name not in INPUT_PARAMS)
-PROBE_RTOL = 1e-4
 
 
 def _metadata_object(path: str | Path, raw: str) -> dict[str, Any]:
