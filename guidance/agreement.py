@@ -19,16 +19,20 @@ accept/reject steps amplify that (SCvxSettings.prox_u).
 
 from __future__ import annotations
 
+import hashlib
+import json
+import math
 import statistics
 import sys
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 from guidance.params import Scenario, SCvxSettings
 
 if TYPE_CHECKING:
+    from guidance.provenance import RunResults
     from guidance.scvx import SCvxResult
 
 STRICT_REL_MF = 1e-6  # issue 3's "same trajectory": final mass within 1e-6 relative ...
@@ -90,10 +94,30 @@ VARIANTS: dict[str, Callable[[Scenario, SCvxSettings], Outcome]] = {
 }
 
 
-def solve_landing(job: tuple[str, Scenario, SCvxSettings]) -> tuple[str, dict[str, Outcome]]:
-    """Every variant on one landing (a pool job: module-level, picklable)."""
-    name, scenario, st = job
-    return name, {variant: solve(scenario, st) for variant, solve in VARIANTS.items()}
+def solve_landing(job: tuple[int, Scenario, SCvxSettings]) -> tuple[int, dict[str, Outcome]]:
+    """Every variant on landing ``i`` (a pool job: module-level, picklable)."""
+    i, scenario, st = job
+    return i, {variant: solve(scenario, st) for variant, solve in VARIANTS.items()}
+
+
+def outcomes_json(outcomes: dict[str, Outcome]) -> dict[str, dict[str, object]]:
+    """A landing's outcomes as strict JSON (a NaN final mass as null), for a run directory."""
+    return {
+        v: {**asdict(o), "m_f": None if math.isnan(o.m_f) else o.m_f} for v, o in outcomes.items()
+    }
+
+
+def outcomes_of(plain: dict[str, dict[str, Any]]) -> dict[str, Outcome]:
+    """``outcomes_json`` read back; ValueError, KeyError or TypeError for anything else."""
+    if list(plain) != list(VARIANTS):
+        raise ValueError("not the outcomes of every variant")
+    out = {}
+    for v, o in plain.items():
+        m_f, iterations, status = o["m_f"], o["iterations"], o["status"]
+        if not (m_f is None or type(m_f) in (int, float)) or type(iterations) is not int:
+            raise TypeError(f"{v}: not a final mass and an iteration count")
+        out[v] = Outcome(math.nan if m_f is None else float(m_f), iterations, str(status))
+    return out
 
 
 def rel_gap(a: Landed, b: Landed) -> float:
@@ -188,30 +212,36 @@ def main(
     files: Sequence[str] = (),
     progress: bool = True,
     settings: SCvxSettings | None = None,
+    run_dir: str | Path | None = None,
 ) -> int:
+    """The comparison, printed: 0; 1 without the C library; 130 when interrupted (Ctrl-C,
+    SIGTERM). With ``run_dir`` each landing's outcomes are kept there as they finish, and the
+    same command again solves only the landings it does not hold."""
     from guidance.cguidance import LIB_PATH
-    from guidance.dataset import imap_pool
+    from guidance.dataset import WorkerDiedError
 
     st = settings or SCvxSettings()
-    jobs = [(name, s, st) for name, s in landings(catalog, n_random, files)]
+    named = landings(catalog, n_random, files)
     if not LIB_PATH.exists():
         print(f"{LIB_PATH} not found: run `make lib` (the C variants need it)", file=sys.stderr)
         return 1
-    order = {name: i for i, (name, _, _) in enumerate(jobs)}
-    done: dict[str, dict[str, Outcome]] = {}
-    bar = None
-    if progress:
-        from tqdm import tqdm
+    store = None
+    if run_dir is not None:
+        from guidance.provenance import RunResults
 
-        bar = tqdm(total=len(jobs), desc="landings", unit="landing")
-    for name, outcome in imap_pool(solve_landing, jobs, workers):
-        done[name] = outcome
-        if bar is not None:
-            bar.update()
-    if bar is not None:
-        bar.close()
-    names = sorted(done, key=order.__getitem__)
-    results = [done[n] for n in names]
+        store = RunResults(run_dir, _run_config(named, st), "landings")
+    done = {} if store is None else store.kept(len(named), outcomes_of)
+    jobs = [(i, s, st) for i, (_, s) in enumerate(named) if i not in done]
+    try:
+        _solve(jobs, done, store, len(named), workers, progress)
+    except KeyboardInterrupt:
+        print(_interrupted(len(done), len(named), store), file=sys.stderr)
+        return 130
+    except WorkerDiedError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 1
+    names = [name for name, _ in named]
+    results = [done[i] for i in range(len(named))]
     plural = "" if len(results) == 1 else "s"
     objective = "paper's linear objective" if st.prox_u == 0 else f"prox_u = {st.prox_u:g}"
     print(
@@ -222,3 +252,54 @@ def main(
     print()
     print(summary_table(results))
     return 0
+
+
+def _run_config(named: Sequence[tuple[str, Scenario]], st: SCvxSettings) -> dict[str, object]:
+    """What defines a run's outcomes (a --run-dir's run.json): the landings by name and a
+    digest of their scenarios (a file edited since), the settings and the variants."""
+    scenarios = json.dumps([asdict(s) for _, s in named]).encode()
+    return {
+        "landings": [name for name, _ in named],
+        "scenarios_sha256": hashlib.sha256(scenarios).hexdigest(),
+        "scvx_settings": asdict(st),
+        "variants": list(VARIANTS),
+    }
+
+
+def _solve(
+    jobs: list[tuple[int, Scenario, SCvxSettings]],
+    done: dict[int, dict[str, Outcome]],
+    store: RunResults | None,
+    total: int,
+    workers: int,
+    progress: bool,
+) -> None:
+    """Solves ``jobs`` into ``done`` and the run directory, each landing as it finishes."""
+    from tqdm import tqdm
+
+    from guidance.dataset import pool_results
+
+    kept = (lambda: store.count(total)) if store is not None else (lambda: 0)
+    run_dir = store.run_dir if store is not None else None
+    bar = tqdm(total=len(jobs), disable=not progress, unit="landing", file=sys.stderr,
+               desc=f"landings ({len(done)} done before)")  # fmt: skip
+    pool = pool_results(solve_landing, jobs, workers, kept, total, run_dir)
+    with bar, pool as results:
+        for i, outcomes in results:
+            if store is not None:
+                store.keep(i, outcomes_json(outcomes))
+            done[i] = outcomes
+            bar.update()
+
+
+def _interrupted(finished: int, total: int, store: RunResults | None) -> str:
+    if store is None:
+        return (
+            f"\ninterrupted: {finished} of {total} landings were finished; nothing is kept "
+            "without --run-dir (with --run-dir DIR each landing is kept as it finishes, and "
+            "the same command resumes)"
+        )
+    return (
+        f"\ninterrupted: {store.count(total)} of {total} landings are kept in "
+        f"{store.run_dir}; run the same command again to resume"
+    )

@@ -189,3 +189,23 @@ def _check_writable(flag: str, path: str | Path) -> None:
             pass
     except OSError as exc:
         raise InputError(f"{flag} {path}: cannot {what} ({exc.strerror})") from None
+
+
+MAX_SET_ASIDE = 1000
+
+
+def set_aside(p: Path) -> Path:
+    """Renames a damaged file of a run (a sample, a landing's result) to the first free name
+    of NNNNNN.unreadable, NNNNNN.unreadable.1, ... and returns it, for the run to solve its
+    item again: one damaged again keeps the earlier evidence (a rename would replace it).
+    InputError when MAX_SET_ASIDE names are taken."""
+    first = p.with_suffix(".unreadable")
+    for n in range(MAX_SET_ASIDE):
+        aside = first if n == 0 else first.with_name(f"{first.name}.{n}")
+        if not (aside.exists() or aside.is_symlink()):
+            p.rename(aside)
+            return aside
+    raise InputError(
+        f"{p} cannot be set aside: {first.name} to {first.name}.{MAX_SET_ASIDE - 1} "
+        "exist; move the old ones away and resume"
+    )

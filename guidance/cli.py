@@ -16,7 +16,7 @@ import numpy as np
 from guidance import file_check
 from guidance.api import BACKENDS, METHODS, solve
 from guidance.argtypes import at_least
-from guidance.atomic import check_outputs
+from guidance.atomic import check_folder, check_outputs
 from guidance.errors import InputError, LibraryNotBuiltError
 from guidance.guess import plan_remainder
 from guidance.nn.conventions import KINDS, MODELS_DIR, network_file
@@ -303,7 +303,11 @@ def cmd_agreement(args: argparse.Namespace) -> int:
     n = (0 if files_only else 20) if args.landings is None else args.landings
     try:
         settings = SCvxSettings(prox_u=args.prox_u)
-        return agreement.main(catalog, n, args.workers, args.scenarios, settings=settings)
+        if args.run_dir is not None:
+            check_folder("--run-dir", args.run_dir)
+        return agreement.main(
+            catalog, n, args.workers, args.scenarios, settings=settings, run_dir=args.run_dir
+        )
     except ValueError as exc:  # an unknown catalog name or a bad scenario file
         print(f"error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
@@ -544,6 +548,12 @@ def _add_agreement(sub: argparse._SubParsersAction) -> None:
         help="landings solved at once, one process each (default: the cores, %(default)s)",
     )
     add_prox_u(a, "on which the solvers part")
+    a.add_argument(
+        "--run-dir",
+        type=Path,
+        help="folder keeping each landing's outcomes as it finishes (run.json: the run's "
+        "landings and settings); the same command again resumes, solving only what is missing",
+    )
     a.set_defaults(func=cmd_agreement)
 
 

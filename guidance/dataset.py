@@ -30,15 +30,16 @@ import os
 import signal
 import sys
 import time
-from collections.abc import Callable, Generator, Sequence
+from collections.abc import Callable, Generator, Iterator, Sequence
 from concurrent.futures.process import BrokenProcessPool
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, NoReturn
 
 import numpy as np
 
-from guidance.atomic import atomic_write
+from guidance.atomic import atomic_write, set_aside
 from guidance.errors import UNREADABLE_NPZ, InputError
 from guidance.json_files import ANY, read_json_object
 from guidance.params import (
@@ -384,30 +385,11 @@ def done_ids(
             try:
                 read_sample(p, run)
             except SampleError as exc:
-                aside = _set_aside(p)
+                aside = set_aside(p)
                 print(f"{p} {exc.problem}: set aside as {aside}, solved again", file=sys.stderr)
                 continue
         ids.add(i)
     return ids
-
-
-MAX_SET_ASIDE = 1000
-
-
-def _set_aside(p: Path) -> Path:
-    """Renames a damaged sample file to the first free name of NNNNNN.unreadable,
-    NNNNNN.unreadable.1, ... and returns it: a sample damaged again keeps the earlier
-    evidence (a rename would replace it). InputError when MAX_SET_ASIDE names are taken."""
-    first = p.with_suffix(".unreadable")
-    for n in range(MAX_SET_ASIDE):
-        aside = first if n == 0 else first.with_name(f"{first.name}.{n}")
-        if not (aside.exists() or aside.is_symlink()):
-            p.rename(aside)
-            return aside
-    raise InputError(
-        f"{p} cannot be set aside: {first.name} to {first.name}.{MAX_SET_ASIDE - 1} "
-        "exist; move the old ones away and resume"
-    )
 
 
 def _run_config_path(out_dir: Path) -> Path:
@@ -536,21 +518,19 @@ def generate(
     counts: dict[str, int] = {}
     bar = _progress(len(jobs), progress, n_base - len(jobs))
     _limit_threads()
-    previous = signal.signal(signal.SIGTERM, _raise_interrupt)
-    results = imap_pool(solve_sample, jobs, workers)
+
+    def kept() -> int:
+        return len([i for i in done_ids(out) if i < n_base])
+
     try:
-        for rec in results:
-            write_sample(out, {**rec, "code_version": version, "run": record})
-            counts[str(rec["status"])] = counts.get(str(rec["status"]), 0) + 1
-            bar.update(1)
-            bar.set_postfix(counts)
-    except BrokenProcessPool as exc:
-        kept = len([i for i in done_ids(out) if i < n_base])
-        raise worker_died(kept, n_base, out) from exc
+        with pool_results(solve_sample, jobs, workers, kept, n_base, out) as results:
+            for rec in results:
+                write_sample(out, {**rec, "code_version": version, "run": record})
+                counts[str(rec["status"])] = counts.get(str(rec["status"]), 0) + 1
+                bar.update(1)
+                bar.set_postfix(counts)
     finally:
-        results.close()  # stops the pool now, also when this loop fails
         bar.close()
-        signal.signal(signal.SIGTERM, previous)
     return counts
 
 
@@ -594,6 +574,31 @@ def imap_pool(fn: Callable[[Any], Any], jobs: Sequence, workers: int) -> Generat
         _stop(pool)
         raise
     pool.shutdown()
+
+
+@contextmanager
+def pool_results(
+    fn: Callable[[Any], Any],
+    jobs: Sequence,
+    workers: int,
+    kept: Callable[[], int],
+    total: int,
+    run_dir: Path | None,
+) -> Iterator[Generator[Any, None, None]]:
+    """``with pool_results(...) as results: for r in results: keep(r)``: imap_pool's results
+    for a resumable run that keeps each one as it comes (in ``run_dir``; None: nowhere).
+    SIGTERM (a killed job) stops the run as Ctrl-C does, with KeyboardInterrupt in the loop;
+    leaving the block stops the pool now, also when the loop fails; a dead worker raises
+    WorkerDiedError saying how many of ``total`` are kept (``kept()``) and how to go on."""
+    previous = signal.signal(signal.SIGTERM, _raise_interrupt)
+    results = imap_pool(fn, jobs, workers)
+    try:
+        yield results
+    except BrokenProcessPool as exc:
+        raise worker_died(kept(), total, run_dir) from exc
+    finally:
+        results.close()  # stops the pool now, also when the loop fails
+        signal.signal(signal.SIGTERM, previous)
 
 
 def _worker_init() -> None:

@@ -12,12 +12,17 @@ and largest of the iterations, subproblems and IPM iterations per solved call, a
 smallest ``socp_max_iter_total`` (``--ipm-budget``) that leaves every landing of the campaign
 as it is (``untouched_budget``). ``--failures DIR`` writes each landing that was not solved,
 or failed the check, as a scenario file, with ``campaign.json`` saying how to solve it again.
+``--run-dir DIR`` keeps each landing as it finishes (provenance.RunResults: ``run.json`` with
+the campaign's parameters and code versions, ``results/NNNNNN.json``); the same command again
+resumes, solving only the missing landings, and a campaign with other parameters is refused.
+Ctrl-C or SIGTERM stops the workers, says what is kept and exits 130.
 Exit 1 when a solved landing fails the open-loop check (as ``guidance verify`` does).
 """
 
 from __future__ import annotations
 
 import argparse
+import hashlib
 import json
 import math
 import os
@@ -25,15 +30,20 @@ import shlex
 import sys
 from collections import Counter
 from collections.abc import Sequence
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, dataclass, fields, replace
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from guidance.argtypes import at_least
 from guidance.errors import InputError
 from guidance.params import INT_SETTING_RANGES, N_MAX, N_MIN, Scenario, SCvxSettings
+from guidance.provenance import code_version
 from guidance.scvx import BUDGET_SPENT
+
+if TYPE_CHECKING:
+    from guidance.provenance import RunResults
 
 METHODS = ("scvx", "tscvx")
 NETWORK_N = Scenario().params.N  # the grid the shipped networks are trained for
@@ -273,15 +283,59 @@ def add_arguments(ap: argparse.ArgumentParser) -> None:
         help="new folder for each landing not solved or failing the open-loop check "
         "(landing_<i>.json, a scenario file) and campaign.json (how to solve one again)",
     )  # fmt: skip
+    ap.add_argument(
+        "--run-dir", type=Path,
+        help="folder keeping each landing as it finishes (run.json: the campaign's options); "
+        "the same command again resumes an interrupted campaign, solving only what is missing",
+    )  # fmt: skip
     ap.add_argument("--json", action="store_true", help="print the campaign and every landing")
 
 
 def run(args: argparse.Namespace, progress: bool = True) -> int:
     """The campaign for parsed options (add_arguments): 0, or 1 when a solved landing fails the
-    open-loop check."""
+    open-loop check (or a worker process died); 130 when interrupted (Ctrl-C, SIGTERM)."""
     from guidance.bench_tscvx import sample_landings
+    from guidance.dataset import WorkerDiedError
+
+    _check_options(args)
+    settings = SCvxSettings(socp_max_iter_total=args.ipm_budget)
+    scenarios = [
+        Scenario(s.initial, s.params.replace(N=args.nodes))
+        for s in sample_landings(args.landings, seed=args.seed)
+    ]
+    store = None
+    if args.run_dir is not None:
+        from guidance.provenance import RunResults
+
+        store = RunResults(args.run_dir, run_config(args, scenarios, settings), "landings")
+    done = {} if store is None else store.kept(args.landings, landing_of)
+    jobs = [(i, s, settings, args.method) for i, s in enumerate(scenarios) if i not in done]
+    try:
+        _solve(jobs, done, store, args, progress)
+    except KeyboardInterrupt:
+        print(_interrupted(args, len(done), store), file=sys.stderr)
+        return 130
+    except WorkerDiedError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 1
+    rows = [done[i] for i in range(args.landings)]
+    if args.json:
+        versions = store.versions if store is not None else [code_version()]
+        record = {**campaign_record(args), "code_versions": versions}
+        record["landings"] = [_plain(r) for r in rows]
+        print(json.dumps(record, indent=1, allow_nan=False))
+    else:
+        print(report(rows, args.method, args.nodes, args.seed, args.ipm_budget))
+    sys.stdout.flush()  # the report stands even if the failures cannot be written
+    if args.failures is not None:
+        write_failures(args.failures, rows, scenarios, args)
+    return 1 if any(r.status == "solved" and not r.verified for r in rows) else 0
+
+
+def _check_options(args: argparse.Namespace) -> None:
+    """Refuse, before any work, what the campaign could not run or keep."""
+    from guidance.atomic import check_folder
     from guidance.cguidance import LIB_PATH
-    from guidance.dataset import imap_pool
     from guidance.errors import LibraryNotBuiltError
 
     if not LIB_PATH.exists():
@@ -291,33 +345,111 @@ def run(args: argparse.Namespace, progress: bool = True) -> int:
             f"--method tscvx: the shipped networks are for N = {NETWORK_N}, "
             f"not --nodes {args.nodes}"
         )
+    if args.run_dir is not None:
+        check_folder("--run-dir", args.run_dir)
+        if args.failures is not None and _same_folder(args.failures, args.run_dir):
+            raise InputError(f"--failures {args.failures}: is the --run-dir folder")
     if args.failures is not None:
         _failures_folder(args.failures)
-    settings = SCvxSettings(socp_max_iter_total=args.ipm_budget)
-    scenarios = [
-        Scenario(s.initial, s.params.replace(N=args.nodes))
-        for s in sample_landings(args.landings, seed=args.seed)
-    ]
-    jobs = [(i, s, settings, args.method) for i, s in enumerate(scenarios)]
-    rows: list[Landing] = []
-    bar = None
-    if progress:
-        from tqdm import tqdm
 
-        bar = tqdm(total=len(jobs), desc="landings", unit="landing", file=sys.stderr)
-    for row in imap_pool(solve_landing, jobs, args.workers):
-        rows.append(row)
-        if bar is not None:
+
+def _same_folder(a: Path, b: Path) -> bool:
+    return os.path.realpath(a) == os.path.realpath(b)
+
+
+def run_config(
+    args: argparse.Namespace, scenarios: Sequence[Scenario], settings: SCvxSettings
+) -> dict[str, object]:
+    """What defines a campaign's landings (a --run-dir's run.json): the options, the settings
+    of every call, a digest of the landings drawn (the sampler's code) and, for T-SCvx, of
+    the networks. A resume must have every one."""
+    drawn = json.dumps([asdict(s) for s in scenarios]).encode()
+    config: dict[str, object] = {
+        "landings": args.landings,
+        "seed": args.seed,
+        "nodes": args.nodes,
+        "method": args.method,
+        "ipm_budget": args.ipm_budget,
+        "scvx_settings": asdict(settings),
+        "drawn_landings_sha256": hashlib.sha256(drawn).hexdigest(),
+    }
+    if args.method == "tscvx":
+        from guidance.cguidance import BUILD_MODELS_DIR, NET_KINDS, net_source
+        from guidance.provenance import file_digest
+
+        config["networks_sha256"] = {
+            kind: file_digest(net_source(BUILD_MODELS_DIR, kind)) for kind in NET_KINDS
+        }
+    return config
+
+
+def landing_of(plain: dict[str, object]) -> Landing:
+    """A landing kept in a run directory (``_plain``) read back: the same fields, each of its
+    kind (null: NaN); ValueError or TypeError otherwise."""
+    names = {f.name: f.type for f in fields(Landing)}
+    if not isinstance(plain, dict) or set(plain) != set(names):
+        raise ValueError("not a landing's figures")
+    values: dict[str, object] = {}
+    for name, kind in names.items():
+        v = plain[name]
+        if kind == "float" and (v is None or type(v) in (int, float)):
+            values[name] = math.nan if v is None else float(v)  # type: ignore[arg-type]
+        elif type(v).__name__ == kind:  # exactly: a bool is no int here
+            values[name] = v
+        else:
+            raise ValueError(f"{name} is {v!r}, not a {kind}")
+    return Landing(**values)  # type: ignore[arg-type]
+
+
+def _solve(
+    jobs: list[tuple[int, Scenario, SCvxSettings, str]],
+    done: dict[int, Landing],
+    store: RunResults | None,
+    args: argparse.Namespace,
+    progress: bool,
+) -> None:
+    """Solves ``jobs`` into ``done`` and, with a run directory, into it, each landing as it
+    finishes: an interruption or a dead worker loses only the landings in flight."""
+    from tqdm import tqdm
+
+    from guidance.dataset import pool_results
+
+    run_dir = store.run_dir if store is not None else None
+    kept = (lambda: store.count(args.landings)) if store is not None else (lambda: 0)
+    bar = tqdm(total=len(jobs), disable=not progress, unit="landing", file=sys.stderr,
+               desc=f"landings ({len(done)} done before)")  # fmt: skip
+    pool = pool_results(solve_landing, jobs, args.workers, kept, args.landings, run_dir)
+    with bar, pool as rows:
+        for row in rows:
+            if store is not None:
+                store.keep(row.index, _plain(row))
+            done[row.index] = row
             bar.update()
-    if bar is not None:
-        bar.close()
-    rows.sort(key=lambda r: r.index)
-    if args.json:
-        record = {**campaign_record(args), "landings": [_plain(r) for r in rows]}
-        print(json.dumps(record, indent=1, allow_nan=False))
-    else:
-        print(report(rows, args.method, args.nodes, args.seed, args.ipm_budget))
-    sys.stdout.flush()  # the report stands even if the failures cannot be written
+
+
+def _interrupted(args: argparse.Namespace, finished: int, store: RunResults | None) -> str:
+    """What an interrupted campaign says: what it kept, and how to go on."""
+    if store is None:
+        return (
+            f"\ninterrupted: {finished} of {args.landings} landings were finished; nothing is "
+            "kept without --run-dir (with --run-dir DIR a campaign keeps each landing as it "
+            "finishes, and the same command resumes it)"
+        )
+    kept = store.count(args.landings)
+    return (
+        f"\ninterrupted: {kept} of {args.landings} landings are kept in {store.run_dir}; "
+        f"to resume: {resume_command(args)}"
+    )
+
+
+def resume_command(args: argparse.Namespace) -> str:
+    """The command that goes on with this campaign (its options, each written out)."""
+    cmd = ["guidance", "dispersion", "--landings", str(args.landings), "--seed", str(args.seed),
+           "--nodes", str(args.nodes), "--method", args.method,
+           "--ipm-budget", str(args.ipm_budget)]  # fmt: skip
+    if args.workers != (os.cpu_count() or 1):
+        cmd += ["--workers", str(args.workers)]
     if args.failures is not None:
-        write_failures(args.failures, rows, scenarios, args)
-    return 1 if any(r.status == "solved" and not r.verified for r in rows) else 0
+        cmd += ["--failures", str(args.failures)]
+    cmd += ["--run-dir", str(args.run_dir)] + (["--json"] if args.json else [])
+    return shlex.join(cmd)

@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Callable, Sequence
-from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -32,17 +31,15 @@ from guidance.dataset import (
     ROTATION_DEG,
     SamplingRanges,
     base_scenario,
-    imap_pool,
+    pool_results,
     rotate_theta,
     scenario_of,
     scvx_solver,
     theta_of,
-    worker_died,
 )
 from guidance.errors import UNREADABLE_NPZ, InputError
-from guidance.json_files import read_json_object
 from guidance.params import Scenario, SCvxSettings
-from guidance.provenance import provenance, record_code_version
+from guidance.provenance import check_run, provenance
 from guidance.scenario import ScenarioError, validate
 
 # theta components moved by a perturbation: r0, v0, the pitch and yaw rates, m0, glideslope
@@ -152,22 +149,7 @@ def _cache_file(run_dir: Path, eps: float, i: int) -> Path:
 
 def _check_run(run_dir: Path, config: dict[str, Any]) -> list[str]:
     """A resume must use the run's options; returns the code versions that worked on it."""
-    path = run_dir / "run.json"
-    if not path.exists():
-        run_dir.mkdir(parents=True, exist_ok=True)
-        return record_code_version(path, config)
-    old = read_json_object(
-        path,
-        "the record of a mask-ceiling run",
-        f"delete the folder {run_dir} (its neighbours are solved again) or use another --run-dir",
-    )
-    differ = ", ".join(k for k in config if old.get(k) != config[k])
-    if differ:
-        raise InputError(
-            f"{run_dir} holds neighbours of another run (different {differ}); rerun with "
-            "the options that made it to resume, or use another --run-dir"
-        )
-    return record_code_version(path, old)
+    return check_run(run_dir, config, "neighbours")
 
 
 def measure(
@@ -255,20 +237,16 @@ def _solve_missing(
     each as it finishes: a dead worker (WorkerDiedError) loses only the unfinished ones."""
     from tqdm import tqdm
 
-    with tqdm(total=len(jobs), disable=not progress, unit="landing",
-              desc=f"neighbourhoods ({len(found)} done before)") as bar:  # fmt: skip
-        results = imap_pool(neighbour_masks, jobs, workers)
-        try:
-            for eps, i, masks in results:
-                found[eps, i] = masks
-                if cache is not None:
-                    with atomic_write(_cache_file(cache, eps, i)) as f:
-                        np.savez(f, *masks)
-                bar.update()
-        except BrokenProcessPool as exc:
-            raise worker_died(len(found), n_total, cache) from exc
-        finally:
-            results.close()  # stops the pool now, also when this loop fails
+    bar = tqdm(total=len(jobs), disable=not progress, unit="landing",
+               desc=f"neighbourhoods ({len(found)} done before)")  # fmt: skip
+    pool = pool_results(neighbour_masks, jobs, workers, found.__len__, n_total, cache)
+    with bar, pool as results:
+        for eps, i, masks in results:
+            found[eps, i] = masks
+            if cache is not None:
+                with atomic_write(_cache_file(cache, eps, i)) as f:
+                    np.savez(f, *masks)
+            bar.update()
 
 
 def _score(eps: float, rule: str, min_votes: int, groups: list[list[np.ndarray]]) -> Score:

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import pytest
 
+from guidance import agreement
 from guidance.agreement import (
     CONVERGED,
     REFERENCE,
@@ -102,3 +103,93 @@ def test_the_proximal_term_is_what_makes_the_solvers_agree(
     c_library = rows["0"].split("|")[3]
     assert "*" in c_library, rows["0"]
     assert "*" not in rows["0.02"], rows["0.02"]
+
+
+# ---- interruption and resume (--run-dir) ----------------------------------------------------
+# Two catalog landings and two sampled ones, each "solved" by stand-ins for the variants
+# (figures of the scenario: the reference's mass, the others off by 1e-9 k), in this process.
+RUN = ["agreement", "--catalog", "overhead", "crossing", "--landings", "2", "--workers", "1"]
+SOLVE_LANDING = agreement.solve_landing
+
+
+def _main(argv: list[str]) -> int:
+    """main, with a Ctrl-C escaping it (a traceback and an exit by the signal, before the
+    command handled it) failing the test instead of stopping pytest."""
+    try:
+        return main(argv)
+    except KeyboardInterrupt:
+        pytest.fail("KeyboardInterrupt escaped guidance's main: a traceback, not exit 130")
+
+
+def _stand_ins(monkeypatch, stop_at: int | None = None) -> list[int]:
+    """The landings solved from now on, in order; the solve after ``stop_at`` of them raises
+    KeyboardInterrupt instead, as Ctrl-C during it."""
+    for k, variant in enumerate(VARIANTS):
+        monkeypatch.setitem(
+            VARIANTS,
+            variant,
+            lambda s, st, k=k: Outcome(s.initial.m0 * (1 + 1e-9 * k), 10 + k % 2, "solved"),
+        )
+    solved: list[int] = []
+
+    def solve(job):
+        if len(solved) == stop_at:  # the landings are solved in their order (--workers 1)
+            raise KeyboardInterrupt
+        solved.append(job[0])
+        return SOLVE_LANDING(job)
+
+    monkeypatch.setattr(agreement, "solve_landing", solve)
+    return solved
+
+
+@pytest.mark.skipif(not LIB_PATH.exists(), reason="build/libtscvx_gnc.so not built (make lib)")
+def test_an_interrupted_run_resumes_solving_only_what_is_missing(
+    tmp_path: Path, monkeypatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    solved = _stand_ins(monkeypatch)
+    assert _main(RUN) == 0
+    whole = capsys.readouterr().out
+    assert solved == [0, 1, 2, 3] and "4 of 4" in whole
+
+    run = [*RUN, "--run-dir", str(tmp_path / "run")]
+    solved = _stand_ins(monkeypatch, stop_at=2)
+    assert _main(run) == 130
+    out, err = capsys.readouterr()
+    assert solved == [0, 1] and out == ""
+    assert f"interrupted: 2 of 4 landings are kept in {tmp_path / 'run'}; run the same" in err
+    solved = _stand_ins(monkeypatch)
+    assert _main(run) == 0
+    assert solved == [2, 3]
+    assert capsys.readouterr().out == whole
+    record = json.loads((tmp_path / "run" / "run.json").read_text())
+    assert record["landings"] == ["overhead", "crossing", "sampled 0", "sampled 1"]
+    assert record["code_versions"] and record["scvx_settings"]["prox_u"] == 0.02
+
+
+@pytest.mark.skipif(not LIB_PATH.exists(), reason="build/libtscvx_gnc.so not built (make lib)")
+def test_a_resume_with_other_landings_or_settings_is_refused(
+    tmp_path: Path, monkeypatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    run = [*RUN, "--run-dir", str(tmp_path / "run")]
+    _stand_ins(monkeypatch, stop_at=0)
+    assert _main(run) == 130
+    capsys.readouterr()
+    for extra, said in (
+        (["--landings", "3"], "(different landings, scenarios_sha256)"),
+        (["--prox-u", "0"], "(different scvx_settings)"),
+    ):
+        assert _main([*run, *extra]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith(f"error: {tmp_path / 'run'} holds landings of another run"), err
+        assert said in err, err
+
+
+@pytest.mark.skipif(not LIB_PATH.exists(), reason="build/libtscvx_gnc.so not built (make lib)")
+def test_ctrl_c_without_a_run_directory_says_nothing_was_kept(
+    monkeypatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    solved = _stand_ins(monkeypatch, stop_at=3)
+    assert _main(RUN) == 130
+    out, err = capsys.readouterr()
+    assert solved == [0, 1, 2] and out == ""
+    assert "interrupted: 3 of 4 landings were finished; nothing is kept without --run-dir" in err

@@ -149,3 +149,184 @@ def test_options_outside_their_range_are_refused(tmp_path: Path, capsys) -> None
     assert "is a file, not a folder" in capsys.readouterr().err
     assert cli.main(["dispersion", "--failures", "/proc/no_such_folder"]) == 2
     assert "cannot create it" in capsys.readouterr().err
+
+
+# ---- interruption and resume (--run-dir) ----------------------------------------------------
+ROOT = Path(__file__).resolve().parent.parent
+CAMPAIGN = ["--landings", "6", "--nodes", "10"]
+SOLVE_LANDING = dispersion.solve_landing  # the worker's job, before any test replaces it
+
+
+def _main(argv: list[str]) -> int:
+    """cli.main, with a Ctrl-C escaping it (a traceback and an exit by the signal, before
+    the command handled it) failing the test instead of stopping pytest."""
+    try:
+        return cli.main(argv)
+    except KeyboardInterrupt:
+        pytest.fail("KeyboardInterrupt escaped guidance's main: a traceback, not exit 130")
+
+
+def _counting(monkeypatch, stop_at: int | None = None) -> list[int]:
+    """The landings solved from now on (in this process: --workers 1), in order; landing
+    ``stop_at`` raises KeyboardInterrupt instead, as Ctrl-C during its solve."""
+    solved: list[int] = []
+    real = SOLVE_LANDING
+
+    def solve(job):
+        if job[0] == stop_at:
+            raise KeyboardInterrupt
+        solved.append(job[0])
+        return real(job)
+
+    monkeypatch.setattr(dispersion, "solve_landing", solve)
+    return solved
+
+
+def _landings(out: str) -> list[dict]:
+    """Each landing's figures of a --json campaign, the host's wall time aside."""
+    return [{k: v for k, v in r.items() if k != "wall_s"} for r in _strict(out)["landings"]]
+
+
+def _report(out: str) -> list[str]:
+    return [line for line in out.splitlines() if "host wall time" not in line]
+
+
+@pytest.fixture(scope="module")
+def uninterrupted() -> dict[str, object]:
+    """The campaign run through at once, without a run directory: its JSON and its report."""
+    import contextlib
+    import io
+
+    out = {}
+    for key, extra in (("json", ["--json"]), ("report", [])):
+        text = io.StringIO()
+        with contextlib.redirect_stdout(text):
+            assert cli.main(["dispersion", "--workers", "1", *CAMPAIGN, *extra]) == 0
+        out[key] = text.getvalue()
+    return {"json": _landings(out["json"]), "report": _report(out["report"])}
+
+
+def test_an_interrupted_campaign_resumes_solving_only_what_is_missing(
+    tmp_path: Path, monkeypatch, capsys, uninterrupted
+) -> None:
+    """Ctrl-C at landing 3: landings 0-2 are kept in the run directory, the command printed
+    goes on with 3-5 only, and its campaign is the uninterrupted one, landing by landing."""
+    run_dir = tmp_path / "run"
+    solved = _counting(monkeypatch, stop_at=3)
+    argv = ["dispersion", "--workers", "1", *CAMPAIGN, "--json", "--run-dir", str(run_dir)]
+    assert _main(argv) == 130
+    out, err = capsys.readouterr()
+    assert solved == [0, 1, 2] and out == ""
+    assert f"interrupted: 3 of 6 landings are kept in {run_dir}; to resume: " in err
+    names = sorted(p.name for p in (run_dir / "results").iterdir())
+    assert names == ["000000.json", "000001.json", "000002.json"]
+    record = json.loads((run_dir / "run.json").read_text())  # the campaign's parameters
+    assert (record["landings"], record["nodes"], record["seed"]) == (6, 10, 20261122)
+    assert record["code_versions"] and record["scvx_settings"]["socp_max_iter_total"] == 24000
+
+    resume = shlex.split(err.split("to resume: ")[1].strip())
+    assert resume[:2] == ["guidance", "dispersion"] and "--json" in resume
+    solved = _counting(monkeypatch)
+    assert _main(resume[1:]) == 0
+    assert solved == [3, 4, 5]
+    assert _landings(capsys.readouterr().out) == uninterrupted["json"]
+    # the report, once all is kept: the uninterrupted one, nothing solved again
+    assert _main(["dispersion", *CAMPAIGN, "--run-dir", str(run_dir)]) == 0
+    assert solved == [3, 4, 5]
+    assert _report(capsys.readouterr().out) == uninterrupted["report"]
+    # a damaged result is set aside, and its landing alone solved again
+    (run_dir / "results" / "000004.json").write_text('{"id": 4, "run": ')
+    assert _main(argv) == 0
+    assert solved == [3, 4, 5, 4]
+    out, err = capsys.readouterr()
+    assert _landings(out) == uninterrupted["json"]
+    assert "set aside as" in err and (run_dir / "results" / "000004.unreadable").exists()
+
+
+def test_ctrl_c_stops_the_workers_and_the_campaign_resumes(
+    tmp_path: Path, monkeypatch, capsys, uninterrupted
+) -> None:
+    """A real Ctrl-C (SIGINT to the process group) once the first landing is kept, two
+    worker processes solving: exit 130, no traceback, and the landings kept are read back."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    run_dir = tmp_path / "run"
+    argv = ["dispersion", *CAMPAIGN, "--json", "--run-dir", str(run_dir)]
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "guidance", *argv, "--workers", "2"],
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,  # its own group, signalled as a terminal's Ctrl-C is
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),  # as in a terminal
+    )
+    t0 = time.monotonic()
+    while not (run_dir / "results" / "000000.json").exists() and proc.poll() is None:
+        assert time.monotonic() - t0 < 120, "no landing finished"
+        time.sleep(0.01)
+    assert proc.poll() is None, proc.communicate()[1]  # still solving
+    os.killpg(proc.pid, signal.SIGINT)
+    out, err = proc.communicate(timeout=60)
+    kept = sorted(int(p.stem) for p in (run_dir / "results").glob("*.json"))
+    assert proc.returncode == 130, err
+    assert "Traceback" not in err and out == ""
+    assert f"interrupted: {len(kept)} of 6 landings are kept in {run_dir}; to resume: " in err
+    assert 0 < len(kept) < 6
+    solved = _counting(monkeypatch)
+    assert _main([*argv, "--workers", "1"]) == 0
+    assert solved == [i for i in range(6) if i not in kept]
+    assert _landings(capsys.readouterr().out) == uninterrupted["json"]
+
+
+def test_a_resume_with_other_parameters_is_refused(tmp_path: Path, monkeypatch, capsys) -> None:
+    run_dir = tmp_path / "run"
+    argv = ["dispersion", "--workers", "1", *CAMPAIGN, "--run-dir", str(run_dir)]
+    _counting(monkeypatch, stop_at=0)
+    assert _main(argv) == 130  # nothing solved, the run recorded
+    capsys.readouterr()
+    for option, value, said in (
+        ("--nodes", "12", "different nodes, drawn_landings_sha256); it records nodes 10, not 12"),
+        ("--seed", "3", "it records seed 20261122, not 3"),
+        ("--landings", "7", "it records landings 6, not 7"),
+        ("--ipm-budget", "500", "different ipm_budget, scvx_settings"),
+    ):
+        assert _main([*argv, option, value]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith(f"error: {run_dir} holds landings of another run"), err
+        assert said in err, err
+    assert not (run_dir / "results").exists()  # nothing solved into it
+
+
+def test_ctrl_c_without_a_run_directory_says_nothing_was_kept(monkeypatch, capsys) -> None:
+    solved = _counting(monkeypatch, stop_at=2)
+    assert _main(["dispersion", "--workers", "1", *CAMPAIGN]) == 130
+    out, err = capsys.readouterr()
+    assert solved == [0, 1] and out == ""
+    assert "interrupted: 2 of 6 landings were finished; nothing is kept without --run-dir" in err
+
+
+def test_failures_of_a_resumed_campaign_are_written_at_its_end(
+    tmp_path: Path, monkeypatch, capsys
+) -> None:
+    """--failures with --run-dir: written once the campaign is whole, from the landings kept
+    before the interruption too; the run directory itself is refused as the folder."""
+    run_dir, folder = tmp_path / "run", tmp_path / "failures"
+    argv = ["dispersion", "--workers", "1", "--landings", "3", "--nodes", "10",
+            "--ipm-budget", "30", "--run-dir", str(run_dir), "--failures", str(folder)]  # fmt: skip
+    solved = _counting(monkeypatch, stop_at=2)
+    assert _main(argv) == 130
+    assert not any(folder.iterdir())  # nothing written before the end
+    solved = _counting(monkeypatch)
+    assert _main(argv) == 0 and solved == [2]
+    written = sorted(p.name for p in folder.glob("landing_*.json"))
+    assert written == ["landing_0.json", "landing_1.json", "landing_2.json"]
+    campaign = _strict((folder / "campaign.json").read_text())
+    assert campaign["failures"]["landing_0.json"]["status"] == "max_iterations"
+    capsys.readouterr()
+    assert _main([*argv[:-1], str(run_dir)]) == 2
+    assert "is the --run-dir folder" in capsys.readouterr().err

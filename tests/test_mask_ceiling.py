@@ -236,7 +236,7 @@ def test_cli_refuses_a_damaged_run_record(text, tmp_path, capsys, monkeypatch) -
             "--train-landings", "5"]  # fmt: skip
     assert main(argv) == 2
     err = capsys.readouterr().err
-    assert err.startswith(f"error: {run / 'run.json'}: not the record of a mask-ceiling run")
+    assert err.startswith(f"error: {run / 'run.json'}: not the record of a run of neighbours")
     assert f"delete the folder {run}" in err and not (tmp_path / "m.json").exists()
 
 
