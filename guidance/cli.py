@@ -15,7 +15,7 @@ import numpy as np
 
 from guidance import file_check
 from guidance.api import BACKENDS, METHODS, solve
-from guidance.argtypes import at_least
+from guidance.argtypes import add_workers_option, at_least, worker_count
 from guidance.atomic import check_folder, check_outputs
 from guidance.errors import InputError, LibraryNotBuiltError
 from guidance.guess import plan_remainder
@@ -306,7 +306,12 @@ def cmd_agreement(args: argparse.Namespace) -> int:
         if args.run_dir is not None:
             check_folder("--run-dir", args.run_dir)
         return agreement.main(
-            catalog, n, args.workers, args.scenarios, settings=settings, run_dir=args.run_dir
+            catalog,
+            n,
+            worker_count(args.workers),
+            args.scenarios,
+            settings=settings,
+            run_dir=args.run_dir,
         )
     except ValueError as exc:  # an unknown catalog name or a bad scenario file
         print(f"error: {exc}", file=sys.stderr)
@@ -541,12 +546,7 @@ def _add_agreement(sub: argparse._SubParsersAction) -> None:
     a.add_argument(
         "--landings", type=at_least(0), help="fresh sampled landings to add (default: 20)"
     )
-    a.add_argument(
-        "--workers",
-        type=at_least(1),
-        default=os.cpu_count() or 1,
-        help="landings solved at once, one process each (default: the cores, %(default)s)",
-    )
+    add_workers_option(a, "landings solved at once")
     add_prox_u(a, "on which the solvers part")
     a.add_argument(
         "--run-dir",

@@ -13,12 +13,12 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import os
 import sys
 from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from guidance.argtypes import add_workers_option, worker_count
 from guidance.atomic import check_folder, write_text_atomic
 from guidance.budget import est_instructions, fits_budget
 from guidance.errors import InputError
@@ -98,7 +98,7 @@ def _add_dataset(sub: argparse._SubParsersAction) -> None:
     d.add_argument("--seed", type=at_least(0), default=0)
     d.add_argument("--run-dir", default=DEFAULT_RUN_DIR, help="per-sample files (resumable)")
     d.add_argument("--output", default=DEFAULT_DATASET, help="packed dataset (.npz)")
-    d.add_argument("--workers", type=at_least(0), default=0, help="worker processes (0: all cores)")
+    add_workers_option(d, "samples solved at once")
     d.add_argument(
         "--backend",
         choices=_SAMPLE_BACKENDS,
@@ -230,7 +230,7 @@ def _add_mask_ceiling(sub: argparse._SubParsersAction) -> None:
     )
     c.add_argument("--models-dir", default=DEFAULT_MODELS_DIR)
     c.add_argument("--seed", type=at_least(0), default=7)
-    c.add_argument("--workers", type=at_least(0), default=0, help="worker processes (0: all cores)")
+    add_workers_option(c, "landings solved at once")
     c.add_argument(
         "--run-dir",
         default="data/runs/mask_ceiling",
@@ -259,7 +259,7 @@ def cmd_dataset(args: argparse.Namespace) -> int:
                 seed=args.seed,
                 ranges=args.ranges,
                 settings=SCvxSettings(prox_u=args.prox_u),
-                workers=args.workers or None,
+                workers=worker_count(args.workers),
                 progress=not args.no_progress,
                 backend=args.backend,
             )
@@ -735,7 +735,7 @@ def cmd_mask_ceiling(args: argparse.Namespace) -> int:
     try:
         scores = measure(
             args.landings, args.neighbours, eps, backend, args.seed, std,
-            workers=args.workers or os.cpu_count() or 1, run_dir=args.run_dir or None,
+            workers=worker_count(args.workers), run_dir=args.run_dir or None,
         )  # fmt: skip
     except KeyboardInterrupt:
         print(f"\ninterrupted: solved neighbourhoods are kept in {args.run_dir}; "

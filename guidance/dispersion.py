@@ -36,7 +36,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from guidance.argtypes import at_least
+from guidance.argtypes import add_workers_option, at_least, worker_count
 from guidance.errors import InputError
 from guidance.params import INT_SETTING_RANGES, N_MAX, N_MIN, Scenario, SCvxSettings
 from guidance.provenance import code_version
@@ -274,10 +274,7 @@ def add_arguments(ap: argparse.ArgumentParser) -> None:
         default=SCvxSettings().socp_max_iter_total,
         help="socp_max_iter_total of every call (default %(default)s: never binds)",
     )  # fmt: skip
-    ap.add_argument(
-        "--workers", type=at_least(1), default=os.cpu_count() or 1,
-        help="landings solved at once, one process each (default: the cores, %(default)s)",
-    )  # fmt: skip
+    add_workers_option(ap, "landings solved at once")
     ap.add_argument(
         "--failures", type=Path,
         help="new folder for each landing not solved or failing the open-loop check "
@@ -418,7 +415,9 @@ def _solve(
     kept = (lambda: store.count(args.landings)) if store is not None else (lambda: 0)
     bar = tqdm(total=len(jobs), disable=not progress, unit="landing", file=sys.stderr,
                desc=f"landings ({len(done)} done before)")  # fmt: skip
-    pool = pool_results(solve_landing, jobs, args.workers, kept, args.landings, run_dir)
+    pool = pool_results(
+        solve_landing, jobs, worker_count(args.workers), kept, args.landings, run_dir
+    )
     with bar, pool as rows:
         for row in rows:
             if store is not None:
@@ -447,7 +446,7 @@ def resume_command(args: argparse.Namespace) -> str:
     cmd = ["guidance", "dispersion", "--landings", str(args.landings), "--seed", str(args.seed),
            "--nodes", str(args.nodes), "--method", args.method,
            "--ipm-budget", str(args.ipm_budget)]  # fmt: skip
-    if args.workers != (os.cpu_count() or 1):
+    if args.workers != 0:
         cmd += ["--workers", str(args.workers)]
     if args.failures is not None:
         cmd += ["--failures", str(args.failures)]

@@ -144,3 +144,19 @@ def test_pinning_the_attitude_reads_the_scenario_file_once(tmp_path: Path, monke
     monkeypatch.setattr(pathlib.Path, "read_text", counted)
     assert cli._load(str(path), pin_final_attitude=True).params.final_roll_free is False
     assert reads == [path]
+
+
+@pytest.mark.parametrize("command", ["agreement", "dispersion", "dataset", "mask-ceiling"])
+def test_workers_means_the_same_in_every_command(command: str) -> None:
+    """--workers counts processes, 0 (the default) every core, in each command that solves in
+    parallel (agreement and dispersion refused 0 while dataset and mask-ceiling read it as
+    every core)."""
+    from guidance.argtypes import worker_count
+
+    ap = cli.build_parser()
+    assert ap.parse_args([command]).workers == 0
+    assert ap.parse_args([command, "--workers", "0"]).workers == 0
+    assert ap.parse_args([command, "--workers", "3"]).workers == 3
+    with pytest.raises(SystemExit):
+        ap.parse_args([command, "--workers", "-1"])
+    assert worker_count(0) == (os.cpu_count() or 1) and worker_count(3) == 3

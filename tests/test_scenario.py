@@ -130,7 +130,7 @@ def test_bad_settings_exit_2_naming_the_setting(capsys: pytest.CaptureFixture[st
 def test_counts_and_figure_format_are_checked_before_work(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    for args in (["agreement", "--landings", "-1"], ["agreement", "--workers", "0"],
+    for args in (["agreement", "--landings", "-1"], ["agreement", "--workers", "-1"],
                  ["bench", "--repeats", "0"]):  # fmt: skip
         with pytest.raises(SystemExit) as exc:
             main(args)
