@@ -239,6 +239,15 @@ def count_instructions(
     return run.instructions, parts
 
 
+def measured_files() -> dict[str, object]:
+    """The --json output's provenance: the code version, and the sha256 of what was measured
+    (the libraries, the driver, the networks' blobs), so that figures name their binaries."""
+    from guidance.provenance import provenance
+
+    files = {p.name: p for p in (*LIBS, DRIVER, NN_DRIVER, *NN_MODELS.values()) if p.exists()}
+    return provenance(files)
+
+
 def measure_networks(do_build: bool = True) -> list[NetBudget]:
     """One tscvx_nn_run of each shipped network: instructions (callgrind) and memory."""
     if do_build:
@@ -534,7 +543,8 @@ def run(args: argparse.Namespace) -> int:
     if args.nodes:
         grids = [measure(do_build=False, nodes=n) for n in args.nodes]
         if args.json:
-            print(json.dumps({"grids": [_json_row(b) for b in grids]}, indent=2))
+            out = {"grids": [_json_row(b) for b in grids], "provenance": measured_files()}
+            print(json.dumps(out, indent=2))
         else:
             print(report_grids(grids))
         return 0
@@ -550,6 +560,7 @@ def run(args: argparse.Namespace) -> int:
             for n in nets
         ]
         d["calls"] = [_json_row(c) for c in calls]
+        d["provenance"] = measured_files()
         print(json.dumps(d, indent=2))
     else:
         print(report(b))

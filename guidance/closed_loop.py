@@ -363,8 +363,10 @@ def run(args: argparse.Namespace) -> int:
         print(f"error: {exc}", file=sys.stderr)
         return 1
     if args.json:
+        from guidance.provenance import provenance
+
         out = {"disturbance": asdict(dist), "navigation": asdict(nav),
-               "settings": asdict(settings), **asdict(res)}  # fmt: skip
+               "settings": asdict(settings), **asdict(res), "provenance": provenance()}  # fmt: skip
         print(json.dumps(_plain(out), indent=1))
     else:
         print(report(res, dist, settings, nav))

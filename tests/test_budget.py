@@ -324,3 +324,23 @@ def test_a_driver_older_than_the_tool_is_named(monkeypatch: pytest.MonkeyPatch) 
     monkeypatch.setattr(budget.subprocess, "run", fake_run)
     with pytest.raises(RuntimeError, match=r"printed no result_bytes.*rebuild it"):
         budget._run_driver()
+
+
+@pytest.mark.skipif(not budget.LIBS[0].exists(), reason="make lib builds the library")
+def test_the_json_figures_name_the_binaries_measured() -> None:
+    """`guidance budget --json` carries the code version and the sha256 of the libraries, the
+    driver and the networks it measured."""
+    import hashlib
+
+    from guidance.provenance import code_version
+
+    prov = budget.measured_files()
+    assert prov["generator"] == code_version()
+    files = prov["files"]
+    assert isinstance(files, dict)
+    lib = budget.LIBS[0]
+    assert files[lib.name] == {
+        "path": str(lib),
+        "sha256": hashlib.sha256(lib.read_bytes()).hexdigest(),
+    }
+    assert {p.name for p in budget.NN_MODELS.values() if p.exists()} <= set(files)

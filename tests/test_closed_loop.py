@@ -33,6 +33,7 @@ from guidance.closed_loop import (
 )
 from guidance.errors import InputError
 from guidance.params import IM, IR, IV, Scenario
+from guidance.provenance import code_version
 from guidance.scvx import SCvxResult
 from guidance.verify import propagate
 
@@ -147,6 +148,7 @@ def test_the_command_line(capsys) -> None:
     assert main(["closed-loop", "--period", "1.5", "--thrust-error", "0.01", "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     assert out["disturbance"]["thrust_error"] == 0.01 and out["settings"]["period"] == 1.5
+    assert out["provenance"]["generator"] == code_version()
     assert out["closed"]["position_error"] < out["open"]["position_error"]
     assert [r["t"] for r in out["replans"]] == [1.5, 3.0, 4.5, 6.0]  # 0.87 U_T left at 6
     assert main(["closed-loop", "--thrust-error", "0.9"]) == 2
@@ -159,7 +161,8 @@ def test_the_command_line(capsys) -> None:
     known = [r["knowledge_error"] for r in out["replans"]]
     assert all(dr > 0.0 and dv == 0.0 for dr, dv in known)
     assert main(noisy) == 0  # the same seed, the same flight
-    assert json.loads(capsys.readouterr().out) == out
+    again = json.loads(capsys.readouterr().out)
+    assert {**again, "provenance": None} == {**out, "provenance": None}
     assert main([*noisy[:-2], "4", "--json"]) == 0
     assert [r["knowledge_error"] for r in json.loads(capsys.readouterr().out)["replans"]] != known
     assert main(["closed-loop", "--nav-error", "0.01", "-1"]) == 2
