@@ -353,10 +353,15 @@ def cmd_train(args: argparse.Namespace) -> int:
                 getattr(exc, "total", None),
             )  # TrainingInterrupted
             how_far = f" after {done} of {total} epochs" if done is not None else ""
+            kept = (
+                f"the progress is kept in {out}: run the same command again to resume"
+                if n_done or done
+                else f"nothing was finished yet: running the same command again starts {kind}-"
+                f"{size} from its first epoch"
+            )
             print(
                 f"\ninterrupted: {kind}-{size}{how_far} ({n_done} of {len(jobs)} models "
-                f"finished); the progress is kept in {out}: run the same command again to "
-                "resume",
+                f"finished); {kept}",
                 file=sys.stderr,
             )
             return 130

@@ -378,6 +378,24 @@ def test_train_command_resumes_after_ctrl_c(tmp_path: Path, monkeypatch, capsys)
     assert _train_cli(other, out, "--solution-epochs", "2", "--restart") == 0
 
 
+def test_train_interrupted_in_its_first_epoch_says_nothing_is_kept(
+    tmp_path: Path, monkeypatch, capsys
+) -> None:
+    """Ctrl-C before any epoch ends keeps no progress, and says so (it said "the progress is
+    kept")."""
+    from guidance.nn import train
+
+    def ctrl_c(*args: object, **kwargs: object) -> None:
+        raise KeyboardInterrupt
+
+    data = _write_dataset(random_dataset(n_base=12, seed=1), tmp_path / "a.npz")
+    monkeypatch.setattr(train._Trainer, "epoch", ctrl_c)
+    assert _train_cli(data, tmp_path / "train", "--solution-epochs", "2") == 130
+    err = capsys.readouterr().err
+    assert "after 0 of 6 epochs (0 of 1 models finished); nothing was finished yet" in err
+    assert "progress is kept" not in err
+
+
 def test_train_refuses_zero_epochs_and_too_few_landings(tmp_path: Path, capsys) -> None:
     data = _write_dataset(random_dataset(n_base=12, seed=1), tmp_path / "a.npz")
     with pytest.raises(SystemExit) as exc:
