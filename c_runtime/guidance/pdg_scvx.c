@@ -1692,13 +1692,20 @@ static int log_rows(const pdg_workspace *ws)
     return n > 0 ? n : 0;
 }
 
-pdg_setup_status pdg_log_length(const pdg_workspace *ws, int *rows)
+/* What every read of the record checks first: somewhere to write, and a set-up workspace. */
+static pdg_setup_status record_readable(const pdg_workspace *ws, const void *out)
 {
-    if (!ws || !rows) {
+    if (!ws || !out) {
         return PDG_SETUP_NULL_ARGUMENT;
     }
-    if (!PDG_WS_READY(ws)) {
-        return PDG_SETUP_NOT_READY;
+    return PDG_WS_READY(ws) ? PDG_SETUP_OK : PDG_SETUP_NOT_READY;
+}
+
+pdg_setup_status pdg_log_length(const pdg_workspace *ws, int *rows)
+{
+    const pdg_setup_status ready = record_readable(ws, rows);
+    if (ready != PDG_SETUP_OK) {
+        return ready;
     }
     *rows = log_rows(ws);
     return PDG_SETUP_OK;
@@ -1706,11 +1713,9 @@ pdg_setup_status pdg_log_length(const pdg_workspace *ws, int *rows)
 
 pdg_setup_status pdg_get_log(const pdg_workspace *ws, int i, pdg_log_row *row)
 {
-    if (!ws || !row) {
-        return PDG_SETUP_NULL_ARGUMENT;
-    }
-    if (!PDG_WS_READY(ws)) {
-        return PDG_SETUP_NOT_READY;
+    const pdg_setup_status ready = record_readable(ws, row);
+    if (ready != PDG_SETUP_OK) {
+        return ready;
     }
     if (i < 0 || i >= log_rows(ws)) {
         return PDG_SETUP_BAD_INDEX;
@@ -1721,11 +1726,9 @@ pdg_setup_status pdg_get_log(const pdg_workspace *ws, int i, pdg_log_row *row)
 
 pdg_setup_status pdg_get_mask(const pdg_workspace *ws, int k, unsigned char *mask)
 {
-    if (!ws || !mask) {
-        return PDG_SETUP_NULL_ARGUMENT;
-    }
-    if (!PDG_WS_READY(ws)) {
-        return PDG_SETUP_NOT_READY;
+    const pdg_setup_status ready = record_readable(ws, mask);
+    if (ready != PDG_SETUP_OK) {
+        return ready;
     }
     if (k < 0 || k >= ws->n_masks_out || k >= ws->st.iter_max) {
         return PDG_SETUP_BAD_INDEX;
@@ -1736,11 +1739,9 @@ pdg_setup_status pdg_get_mask(const pdg_workspace *ws, int k, unsigned char *mas
 
 pdg_setup_status pdg_arena_high_water(const pdg_workspace *ws, size_t *bytes)
 {
-    if (!ws || !bytes) {
-        return PDG_SETUP_NULL_ARGUMENT;
-    }
-    if (!PDG_WS_READY(ws)) {
-        return PDG_SETUP_NOT_READY;
+    const pdg_setup_status ready = record_readable(ws, bytes);
+    if (ready != PDG_SETUP_OK) {
+        return ready;
     }
     *bytes = ws->arena_high;
     return PDG_SETUP_OK;
