@@ -218,9 +218,13 @@ def test_only_the_pattern_groups_change_the_pattern() -> None:
     from guidance.model import N_PATTERNS, NP, pattern_with_zeros, transition_pattern
 
     general = transition_pattern(0)
-    assert general.sum() == 147  # position reaches no other state, mass rate only the mass
+    # Nothing depends on the position (each position row: its own entry and the 11 others),
+    # the mass rate on the mass only: 3 x 12 + 10 x 11 + 1.
+    assert general.sum() == 3 * 12 + 10 * 11 + 1 == 147
     for i in set(range(NP)) - {1, 2, 3, 7, 8, 9, 12}:
         np.testing.assert_array_equal(pattern_with_zeros(frozenset({i})), general)
     for part in ({7}, {8}, {9}, {7, 8}, {7, 9}, {8, 9}):
         np.testing.assert_array_equal(pattern_with_zeros(frozenset(part)), general)
-    assert N_PATTERNS == 2 and transition_pattern(1).sum() == 107
+    # r_cp_B = 0, no aerodynamic torque: the attitude no longer sees the velocity or the mass,
+    # so the quaternion rows reach q and w only (4 x 7), the rate rows w only (3 x 3).
+    assert N_PATTERNS == 2 and transition_pattern(1).sum() == 3 * 12 + 3 * 11 + 4 * 7 + 3 * 3 + 1
