@@ -46,7 +46,17 @@ from guidance.nn.conventions import (
     TNN_SUFFIX,
     network_file,
 )
-from guidance.params import N_MAX, N_MIN, NC, NU, NX, Params, Scenario, SCvxSettings
+from guidance.params import (
+    N_MAX,
+    N_MIN,
+    NC,
+    NU,
+    NX,
+    InitialState,
+    Params,
+    Scenario,
+    SCvxSettings,
+)
 from guidance.paths import BUILD_DIR
 from guidance.scenario import ScenarioError
 from guidance.scvx import (
@@ -178,6 +188,8 @@ def library() -> ct.CDLL:
     lib.pdg_theta_of.argtypes = [ct.POINTER(_Scenario), _dp]
     lib.pdg_plan_remainder.argtypes = [ct.POINTER(_Scenario), _dp, _dp, _d, _d, _dp, _dp, _dp,
                                        ct.c_char_p]  # fmt: skip
+    lib.pdg_scenario_at_state.argtypes = [ct.POINTER(_Scenario), _dp, ct.POINTER(_Scenario),
+                                          ct.c_char_p]  # fmt: skip
     return lib
 
 
@@ -726,6 +738,22 @@ def plan_remainder_c(
     if st != 0:
         raise InputError(msg.value.decode())
     return gx, gu, tf.value
+
+
+def scenario_at_state_c(x: np.ndarray, scenario: Scenario) -> Scenario:
+    """The landing from state x with the scenario's vehicle and targets, on board
+    (pdg_scenario_at_state; guidance.closed_loop.state_scenario in Python). InputError (a
+    ScenarioError naming the field) with the library's message."""
+    xx = np.ascontiguousarray(x, dtype=float)
+    if xx.shape != (NX,):
+        raise InputError(f"scenario at state: x must hold {NX} numbers, not shape {xx.shape}")
+    out, msg = _Scenario(), ct.create_string_buffer(MESSAGE_LEN)
+    if library().pdg_scenario_at_state(ct.byref(c_scenario(scenario)), _dptr(xx),
+                                       ct.byref(out), msg) != 0:  # fmt: skip
+        raise _refusal(msg.value.decode())
+    init = InitialState(r0=tuple(out.r0), v0=tuple(out.v0), q0=tuple(out.q0), w0=tuple(out.w0),
+                        m0=out.m0)  # fmt: skip
+    return Scenario(init, scenario.params)
 
 
 def theta_c(scenario: Scenario) -> np.ndarray:

@@ -23,6 +23,7 @@ import pytest
 from guidance import cguidance
 from guidance.cli import main
 from guidance.closed_loop import (
+    ROLL_NOISE,
     ClosedLoop,
     Disturbance,
     Navigation,
@@ -142,6 +143,30 @@ def test_a_roll_rate_beyond_rounding_is_refused() -> None:
         state_scenario(x, SCN)
     x[10] = 3e-14  # the integration's rounding: zeroed
     assert state_scenario(x, SCN).initial.w0[0] == 0.0
+
+
+def test_the_flight_library_makes_the_same_landing_from_a_state(plan: SCvxResult) -> None:
+    """pdg_scenario_at_state, what a re-plan on board starts from, against state_scenario on
+    the plan's states with a measured quaternion off unit length: the same landing to the
+    last bits, and the same roll-rate limit (ROLL_NOISE against PDG_ROLL_NOISE)."""
+    for k in (0, 12, 31, 45):
+        x = plan.x[k].copy()
+        x[6:10] *= 1.0 + 1e-4 * (k - 20)
+        x[10] = 3e-11 * (k - 20)
+        want, got = state_scenario(x, SCN), cguidance.scenario_at_state_c(x, SCN)
+        np.testing.assert_allclose(got.x0, want.x0, rtol=1e-15, atol=0)
+        assert got.params == want.params
+    x = plan.x[12].copy()
+    x[10] = ROLL_NOISE
+    assert cguidance.scenario_at_state_c(x, SCN).x0[10] == 0.0
+    x[10] = np.nextafter(ROLL_NOISE, 1.0)
+    with pytest.raises(InputError, match="roll rate"):
+        cguidance.scenario_at_state_c(x, SCN)
+    with pytest.raises(InputError, match="roll rate"):
+        state_scenario(x, SCN)
+    x[10], x[13] = 0.0, SCN.params.m_dry * 0.9  # refused by the scenario's own check
+    with pytest.raises(InputError, match="m0"):
+        cguidance.scenario_at_state_c(x, SCN)
 
 
 def test_the_command_line(capsys) -> None:

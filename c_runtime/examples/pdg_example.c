@@ -166,24 +166,14 @@ static pdg_status replan(pdg_workspace *ws, const pdg_scenario *scn, const pdg_r
     static double gx[PDG_N_MAX * PDG_NSTATE], gu[PDG_N_MAX * PDG_NCTRL];
     static double x[PDG_N_MAX * PDG_NSTATE], u[PDG_N_MAX * PDG_NCTRL];
     const int N = scn->params.N;
-    const double *xk = plan->x + PDG_NSTATE * k, t1 = plan->t_f * k / (N - 1);
-    const double nq = sqrt(xk[6] * xk[6] + xk[7] * xk[7] + xk[8] * xk[8] + xk[9] * xk[9]);
-    pdg_scenario here = *scn;
+    const double t1 = plan->t_f * k / (N - 1);
+    pdg_scenario here;
     pdg_options o = {0};
     pdg_result r;
     pdg_status status;
     double t0;
-    int i;
-    for (i = 0; i < 3; ++i) {
-        here.r0[i] = xk[i];
-        here.v0[i] = xk[3 + i];
-        here.w0[i] = i == 0 ? 0.0 : xk[10 + i];
-    }
-    for (i = 0; i < 4; ++i) {
-        here.q0[i] = xk[6 + i] / nq;
-    }
-    here.m0 = xk[13];
-    if (pdg_plan_remainder(&here, plan->x, plan->u, plan->t_f, t1, gx, gu, &o.guess_t_f,
+    if (pdg_scenario_at_state(scn, plan->x + PDG_NSTATE * k, &here, r.message) != 0 ||
+        pdg_plan_remainder(&here, plan->x, plan->u, plan->t_f, t1, gx, gu, &o.guess_t_f,
                            r.message) != 0) {
         fprintf(stderr, "re-plan refused: %s\n", r.message);
         return PDG_INVALID_INPUT;

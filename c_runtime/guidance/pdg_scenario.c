@@ -427,3 +427,45 @@ pdg_setup_status pdg_check_vehicle(const pdg_params *vehicle, char *message)
     }
     return PDG_SETUP_OK;
 }
+
+/* ---- re-planning from a measured state --------------------------------------------------- */
+
+int pdg_scenario_at_state(const pdg_scenario *base, const double *x, pdg_scenario *out,
+                          char *message)
+{
+    char text[160]; /* fail() prefixes it within PDG_MESSAGE_LEN */
+    double nq;
+    int i;
+    if (!base || !x || !out) {
+        fail(message, "x", "NULL argument");
+        return PDG_INVALID_INPUT;
+    }
+    if (!pdg_all_finite(x, PDG_NSTATE)) {
+        fail(message, "x", "a state value is NaN or infinite");
+        return PDG_INVALID_INPUT;
+    }
+    /* J2 = J3 and r_T on the body axis: the engine makes no roll torque, so a roll rate in
+     * flight is the integration's or the estimator's rounding, or a broken disturbance model. */
+    if (fabs(x[10]) > PDG_ROLL_NOISE) {
+        snprintf(text, sizeof text, "roll rate %.3g rad/U_T in flight: the vehicle cannot make "
+                 "one (above PDG_ROLL_NOISE = %g)", x[10], PDG_ROLL_NOISE);
+        fail(message, "w0", text);
+        return PDG_INVALID_INPUT;
+    }
+    nq = norm(x + 6, 4);
+    if (!(nq > 0.0)) {
+        fail(message, "q0", "the state's quaternion is zero");
+        return PDG_INVALID_INPUT;
+    }
+    *out = *base;
+    for (i = 0; i < 3; ++i) {
+        out->r0[i] = x[i];
+        out->v0[i] = x[3 + i];
+        out->w0[i] = i == 0 ? 0.0 : x[10 + i];
+    }
+    for (i = 0; i < 4; ++i) {
+        out->q0[i] = x[6 + i] / nq;
+    }
+    out->m0 = x[13];
+    return pdg_validate_scenario(out, message);
+}

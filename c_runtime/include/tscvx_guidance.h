@@ -403,6 +403,18 @@ int pdg_plan_remainder(const pdg_scenario *scenario, const double *x, const doub
                        double t_f, double t1, double *gx, double *gu, double *gt_f,
                        char *message);
 
+/* The landing from a measured state x (PDG_NSTATE numbers in DESIGN.md's order: r, v, q, w, m)
+ * with base's vehicle and targets, into `out`: what a re-plan in flight solves (with
+ * pdg_plan_remainder's guess). The quaternion is renormalized; the roll rate, which this
+ * vehicle cannot change (no roll torque), must be rounding noise, |w_x| <= PDG_ROLL_NOISE, and
+ * is set to 0. Returns 0, or PDG_INVALID_INPUT with the reason in `message` (PDG_MESSAGE_LEN
+ * bytes, may be NULL): NULL or non-finite input, a roll rate beyond noise, a zero quaternion,
+ * or a landing pdg_validate_scenario refuses (`out` then holds it, for the message's sake).
+ * guidance/closed_loop.py state_scenario is the same rule. */
+#define PDG_ROLL_NOISE 1e-9 /* rad/U_T; guidance/closed_loop.py ROLL_NOISE */
+int pdg_scenario_at_state(const pdg_scenario *base, const double *x, pdg_scenario *out,
+                          char *message);
+
 /* T-SCvx: the complete guidance call described above (both networks NULL: plain SCvx, as
  * pdg_solve). result as pdg_solve; `report` may be NULL. */
 pdg_status pdg_solve_tscvx(pdg_workspace *ws, const pdg_scenario *scenario,

@@ -788,8 +788,8 @@ static void test_plan_remainder(pdg_workspace *ws)
     pdg_scenario s, here;
     pdg_result r;
     char msg[PDG_MESSAGE_LEN];
-    double t_f, t1, gt_f, nq;
-    int i, plan_subproblems;
+    double t_f, t1, gt_f;
+    int plan_subproblems;
     pdg_default_scenario(&s);
     r.x = plan_x;
     r.u = plan_u;
@@ -797,17 +797,7 @@ static void test_plan_remainder(pdg_workspace *ws)
     t_f = r.t_f;
     t1 = t_f * 15.0 / 49.0;
     plan_subproblems = r.subproblems_solved;
-    here = s;
-    nq = sqrt(x15[6] * x15[6] + x15[7] * x15[7] + x15[8] * x15[8] + x15[9] * x15[9]);
-    for (i = 0; i < 3; ++i) {
-        here.r0[i] = x15[i];
-        here.v0[i] = x15[3 + i];
-        here.w0[i] = i == 0 ? 0.0 : x15[10 + i];
-    }
-    for (i = 0; i < 4; ++i) {
-        here.q0[i] = x15[6 + i] / nq;
-    }
-    here.m0 = x15[13];
+    CHECK(pdg_scenario_at_state(&s, x15, &here, msg) == 0);
     CHECK(pdg_plan_remainder(&here, plan_x, plan_u, t_f, t1, gx, gu, &gt_f, msg) == 0);
     CHECK(gt_f == t_f - t1 && gx[0] == here.r0[0] && gx[13] == here.m0);
     CHECK(solve_from_guess(ws, &here, gx, gu, gt_f, &r) == PDG_SOLVED);
@@ -845,6 +835,47 @@ static void test_plan_remainder(pdg_workspace *ws)
     CHECK(strstr(msg, "q0") != NULL);
 }
 
+/* pdg_scenario_at_state: a measured state becomes the landing from it (q renormalized, a
+ * roll rate within PDG_ROLL_NOISE zeroed, the vehicle and targets kept); everything else is
+ * refused with the field in the message. */
+static void test_scenario_at_state(void)
+{
+    pdg_scenario base, out;
+    double x[PDG_NSTATE] = {1.0, 2.0, 0.5, -0.1, -0.2, -1.0, 2.0, 0.0, 0.2, 0.0,
+                            0.5e-9, 0.01, -0.02, 2.7};
+    char msg[PDG_MESSAGE_LEN];
+    const double nq = sqrt(4.0 + 0.04);
+    int i;
+    pdg_default_scenario(&base);
+    base.params.T_max = 4.5; /* a vehicle field the result must keep */
+    CHECK(pdg_scenario_at_state(&base, x, &out, msg) == 0);
+    for (i = 0; i < 3; ++i) {
+        CHECK(out.r0[i] == x[i] && out.v0[i] == x[3 + i]);
+    }
+    CHECK(fabs(out.q0[0] - 2.0 / nq) < 1e-15 && fabs(out.q0[2] - 0.2 / nq) < 1e-15);
+    CHECK(out.q0[1] == 0.0 && out.q0[3] == 0.0);
+    CHECK(out.w0[0] == 0.0 && out.w0[1] == 0.01 && out.w0[2] == -0.02 && out.m0 == 2.7);
+    CHECK(memcmp(&out.params, &base.params, sizeof base.params) == 0);
+    CHECK(pdg_scenario_at_state(NULL, x, &out, msg) == PDG_INVALID_INPUT);
+    CHECK(strstr(msg, "NULL") != NULL);
+    CHECK(pdg_scenario_at_state(&base, x, NULL, NULL) == PDG_INVALID_INPUT);
+    x[10] = 2.0 * PDG_ROLL_NOISE;
+    CHECK(pdg_scenario_at_state(&base, x, &out, msg) == PDG_INVALID_INPUT);
+    CHECK(strstr(msg, "'w0'") != NULL && strstr(msg, "roll rate") != NULL);
+    x[10] = 0.0;
+    x[4] = NAN;
+    CHECK(pdg_scenario_at_state(&base, x, &out, msg) == PDG_INVALID_INPUT);
+    CHECK(strstr(msg, "NaN") != NULL);
+    x[4] = -0.2;
+    x[6] = x[8] = 0.0;
+    CHECK(pdg_scenario_at_state(&base, x, &out, msg) == PDG_INVALID_INPUT);
+    CHECK(strstr(msg, "'q0'") != NULL);
+    x[6] = 1.0;
+    x[13] = 1.5; /* below the dry mass */
+    CHECK(pdg_scenario_at_state(&base, x, &out, msg) == PDG_INVALID_INPUT);
+    CHECK(strstr(msg, "'m0'") != NULL);
+}
+
 int main(void)
 {
     pdg_settings st;
@@ -855,6 +886,7 @@ int main(void)
     test_settings_and_sizes();
     test_iteration_budget();
     test_polish();
+    test_scenario_at_state();
     memset(&st, 0, sizeof st); /* padding zero, as the workspace's copy */
     pdg_default_settings(&st);
     ws = make_ws(50, 1, &st, &arena, &bytes);
