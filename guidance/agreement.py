@@ -32,7 +32,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 from guidance.params import Scenario, SCvxSettings
 
 if TYPE_CHECKING:
-    from guidance.provenance import RunResults
+    from guidance.runs import RunResults
     from guidance.scvx import SCvxResult
 
 STRICT_REL_MF = 1e-6  # issue 3's "same trajectory": final mass within 1e-6 relative ...
@@ -218,7 +218,7 @@ def main(
     SIGTERM). With ``run_dir`` each landing's outcomes are kept there as they finish, and the
     same command again solves only the landings it does not hold."""
     from guidance.cguidance import LIB_PATH
-    from guidance.dataset import WorkerDiedError
+    from guidance.pool import WorkerDiedError
 
     st = settings or SCvxSettings()
     named = landings(catalog, n_random, files)
@@ -227,7 +227,7 @@ def main(
         return 1
     store = None
     if run_dir is not None:
-        from guidance.provenance import RunResults
+        from guidance.runs import RunResults
 
         store = RunResults(run_dir, _run_config(named, st), "landings")
     done = {} if store is None else store.kept(len(named), outcomes_of)
@@ -277,7 +277,7 @@ def _solve(
     """Solves ``jobs`` into ``done`` and the run directory, each landing as it finishes."""
     from tqdm import tqdm
 
-    from guidance.dataset import pool_results
+    from guidance.pool import pool_results
 
     kept = (lambda: store.count(total)) if store is not None else (lambda: 0)
     run_dir = store.run_dir if store is not None else None

@@ -124,8 +124,8 @@ def _solve_tscvx_onnx(
     log: Callable[[str], None] | None,
 ) -> SCvxResult:
     """T-SCvx in Python, the networks run by onnxruntime."""
-    from guidance.dataset import theta_of
     from guidance.nn.infer import ConstraintModel, SolutionModel
+    from guidance.sampling import theta_of
 
     sol_model = SolutionModel(models_dir / SOLUTION_MODEL, scenario.params)
     con_model = ConstraintModel(models_dir / CONSTRAINT_MODEL, scenario.params)

@@ -19,6 +19,7 @@ leaves nothing behind, and one that stops before writing leaves no empty folder.
 from __future__ import annotations
 
 import itertools
+import json
 import os
 import shutil
 import stat
@@ -81,6 +82,11 @@ def write_bytes_atomic(path: str | Path, data: bytes) -> None:
 
 def write_text_atomic(path: str | Path, text: str) -> None:
     write_bytes_atomic(path, text.encode())
+
+
+def write_json_atomic(path: Path, obj: dict) -> None:
+    """JSON through a temporary file: an interruption leaves the old file or the new."""
+    write_text_atomic(path, json.dumps(obj, indent=2))
 
 
 def _make_folders(folder: Path) -> list[Path]:

@@ -37,7 +37,7 @@ class Variant:
 
 
 def sample_landings(n: int, seed: int = BENCH_SEED) -> list[Scenario]:
-    from guidance.dataset import ROTATION_DEG, SamplingRanges, base_scenario
+    from guidance.sampling import ROTATION_DEG, SamplingRanges, base_scenario
     from guidance.symmetry import rotate_scenario
 
     rng = np.random.default_rng(seed)
@@ -69,10 +69,10 @@ def _solver(backend: str) -> Callable[..., SCvxResult]:
 def run(n: int, backend: str = "c", models_dir: Path | None = None, progress: bool = True):
     from tqdm import tqdm
 
-    from guidance.dataset import theta_of
     from guidance.guess import project_guess
     from guidance.nn.conventions import CONSTRAINT_MODEL, MODELS_DIR, SOLUTION_MODEL
     from guidance.nn.infer import ConstraintModel, SolutionModel
+    from guidance.sampling import theta_of
     from guidance.tscvx import REDUCED_ETA_INIT
 
     models = models_dir or MODELS_DIR

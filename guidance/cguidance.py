@@ -757,7 +757,7 @@ def scenario_at_state_c(x: np.ndarray, scenario: Scenario) -> Scenario:
 
 
 def theta_c(scenario: Scenario) -> np.ndarray:
-    """pdg_theta_of (for tests against guidance.dataset.theta_of)."""
+    """pdg_theta_of (for tests against guidance.sampling.theta_of)."""
     out = np.zeros(16)
     library().pdg_theta_of(ct.byref(c_scenario(scenario)), _dptr(out))
     return out

@@ -59,7 +59,7 @@ DEFAULT_RUN_DIR = "data/runs/default"
 DEFAULT_TRAIN_DIR = "data/train"
 DEFAULT_MODELS_DIR = str(MODELS_DIR)  # the repository's, as guidance solve's, from anywhere
 # Choices of --backend of the commands that solve sampled landings (dataset, mask-ceiling);
-# without it, dataset.default_backend().
+# without it, dataset_run.default_backend().
 _SAMPLE_BACKENDS = ["c", "clarabel", "c-socp"]
 # Largest --threads: torch takes any positive count, but crashes (segmentation fault) on the
 # first matrix product with 100,000; 1,024 runs.
@@ -86,7 +86,7 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
 def _add_dataset(sub: argparse._SubParsersAction) -> None:
     from guidance.argtypes import at_least
     from guidance.cli import add_prox_u
-    from guidance.dataset import SamplingRanges
+    from guidance.sampling import SamplingRanges
 
     d = sub.add_parser(
         "dataset",
@@ -245,8 +245,10 @@ def _add_mask_ceiling(sub: argparse._SubParsersAction) -> None:
 # ---- dataset ------------------------------------------------------------------------------
 def cmd_dataset(args: argparse.Namespace) -> int:
     from guidance.atomic import check_outputs
-    from guidance.dataset import WorkerDiedError, generate, pack, summary
+    from guidance.dataset import pack, summary
+    from guidance.dataset_run import generate
     from guidance.params import SCvxSettings
+    from guidance.pool import WorkerDiedError
 
     check_folder("--run-dir", args.run_dir)
     # before the solving, not after (the output cannot be the run's folder, made by the solve)
@@ -711,7 +713,7 @@ def _radii(text: str) -> list[float]:
 
 def cmd_mask_ceiling(args: argparse.Namespace) -> int:
     from guidance.atomic import check_outputs
-    from guidance.dataset import WorkerDiedError, default_backend
+    from guidance.dataset_run import default_backend
     from guidance.mask_ceiling import (
         data_spacing,
         format_table,
@@ -720,6 +722,7 @@ def cmd_mask_ceiling(args: argparse.Namespace) -> int:
         theta_spread,
     )
     from guidance.nn.card import card_sources, write_card
+    from guidance.pool import WorkerDiedError
 
     models = Path(args.models_dir)
     out = Path(args.json) if args.json else models / MASK_CEILING_FILE

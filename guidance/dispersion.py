@@ -2,7 +2,7 @@
 library, each trajectory flown open loop, and the spread of the work a guidance call takes.
 
 The landings are fresh draws from the networks' training distribution (the T-SCvx benchmark's
-sampler: dataset.SamplingRanges, each turned about the up axis), on N nodes. Each is solved by
+sampler: sampling.SamplingRanges, each turned about the up axis), on N nodes. Each is solved by
 the C library (SCvx, or with ``--method tscvx`` the on-board T-SCvx call with the shipped
 networks), and each solved trajectory is checked as ``guidance verify`` checks a file
 (file_check.trajectory_checks: scipy integration of independent dynamics from x[0] under its
@@ -12,7 +12,7 @@ and largest of the iterations, subproblems and IPM iterations per solved call, a
 smallest ``socp_max_iter_total`` (``--ipm-budget``) that leaves every landing of the campaign
 as it is (``untouched_budget``). ``--failures DIR`` writes each landing that was not solved,
 or failed the check, as a scenario file, with ``campaign.json`` saying how to solve it again.
-``--run-dir DIR`` keeps each landing as it finishes (provenance.RunResults: ``run.json`` with
+``--run-dir DIR`` keeps each landing as it finishes (runs.RunResults: ``run.json`` with
 the campaign's parameters and code versions, ``results/NNNNNN.json``); the same command again
 resumes, solving only the missing landings, and a campaign with other parameters is refused.
 Ctrl-C or SIGTERM stops the workers, says what is kept and exits 130.
@@ -43,7 +43,7 @@ from guidance.provenance import code_version
 from guidance.scvx import BUDGET_SPENT
 
 if TYPE_CHECKING:
-    from guidance.provenance import RunResults
+    from guidance.runs import RunResults
 
 METHODS = ("scvx", "tscvx")
 NETWORK_N = Scenario().params.N  # the grid the shipped networks are trained for
@@ -292,7 +292,7 @@ def run(args: argparse.Namespace, progress: bool = True) -> int:
     """The campaign for parsed options (add_arguments): 0, or 1 when a solved landing fails the
     open-loop check (or a worker process died); 130 when interrupted (Ctrl-C, SIGTERM)."""
     from guidance.bench_tscvx import sample_landings
-    from guidance.dataset import WorkerDiedError
+    from guidance.pool import WorkerDiedError
 
     _check_options(args)
     settings = SCvxSettings(socp_max_iter_total=args.ipm_budget)
@@ -302,7 +302,7 @@ def run(args: argparse.Namespace, progress: bool = True) -> int:
     ]
     store = None
     if args.run_dir is not None:
-        from guidance.provenance import RunResults
+        from guidance.runs import RunResults
 
         store = RunResults(args.run_dir, run_config(args, scenarios, settings), "landings")
     done = {} if store is None else store.kept(args.landings, landing_of)
@@ -409,7 +409,7 @@ def _solve(
     finishes: an interruption or a dead worker loses only the landings in flight."""
     from tqdm import tqdm
 
-    from guidance.dataset import pool_results
+    from guidance.pool import pool_results
 
     run_dir = store.run_dir if store is not None else None
     kept = (lambda: store.count(args.landings)) if store is not None else (lambda: 0)

@@ -27,19 +27,20 @@ from typing import Any
 import numpy as np
 
 from guidance.atomic import atomic_write
-from guidance.dataset import (
+from guidance.dataset_run import scvx_solver
+from guidance.errors import UNREADABLE_NPZ, InputError
+from guidance.params import Scenario, SCvxSettings
+from guidance.pool import pool_results
+from guidance.provenance import provenance
+from guidance.runs import check_run
+from guidance.sampling import (
     ROTATION_DEG,
     SamplingRanges,
     base_scenario,
-    pool_results,
     rotate_theta,
     scenario_of,
-    scvx_solver,
     theta_of,
 )
-from guidance.errors import UNREADABLE_NPZ, InputError
-from guidance.params import Scenario, SCvxSettings
-from guidance.provenance import check_run, provenance
 from guidance.scenario import ScenarioError, validate
 
 # theta components moved by a perturbation: r0, v0, the pitch and yaw rates, m0, glideslope

@@ -9,11 +9,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from guidance.atomic import atomic_write, write_text_atomic
+from guidance.atomic import atomic_write, write_json_atomic, write_text_atomic
 from guidance.catalog import SCENARIOS
 from guidance.params import Params
 from guidance.plots import landing_figure
-from guidance.provenance import write_json_atomic
 from guidance.scvx import SCvxResult, SCvxSolver
 from guidance.trajectory_io import read_trajectory, write_trajectory
 

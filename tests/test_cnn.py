@@ -88,8 +88,8 @@ def test_c_equals_onnxruntime_on_1000_inputs(kind: str, blobs: dict[str, bytes])
 @needs_lib
 def test_c_mask_equals_the_onnx_models_mask(blobs: dict[str, bytes]) -> None:
     from guidance.catalog import SCENARIOS
-    from guidance.dataset import theta_of
     from guidance.nn.infer import load_model
+    from guidance.sampling import theta_of
 
     cm = load_model(MODELS / "constraint.onnx", "constraint")
     net = flight.load_flight_model(BUILD_MODELS / "constraint.tnn", "constraint")
@@ -418,9 +418,9 @@ def test_a_constraint_mask_from_a_non_finite_output_is_the_full_problem() -> Non
     """A finite input beyond float32 (1e39) overflows in the onnxruntime network: every
     probability NaN, and the mask read every bit as "drop" (0 of 350 kept). It is now None,
     the full problem, as the flight library takes a failed mask inference."""
-    from guidance.dataset import theta_of
     from guidance.nn.infer import load_model
     from guidance.params import Scenario
+    from guidance.sampling import theta_of
 
     net = load_model(MODELS / "constraint.onnx", "constraint")
     theta = theta_of(Scenario())

@@ -17,32 +17,33 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from guidance import dataset
+from guidance import dataset_run
 from guidance.cli import main
-from guidance.dataset import (
-    N_ROTATIONS,
+from guidance.dataset import load_dataset, pack, random_dataset
+from guidance.dataset_run import (
     RK4_KEY,
-    ROTATION_DEG,
     RUN_KEYS,
-    SamplingRanges,
-    base_scenario,
     done_ids,
     generate,
-    imap_pool,
-    load_dataset,
-    pack,
     read_sample,
-    rotate_theta,
     sample_path,
-    scenario_of,
     scvx_solver,
     solve_sample,
-    theta_of,
     write_sample,
 )
 from guidance.errors import InputError
 from guidance.params import NC, Params, SCvxSettings
+from guidance.pool import imap_pool
 from guidance.provenance import code_version
+from guidance.sampling import (
+    N_ROTATIONS,
+    ROTATION_DEG,
+    SamplingRanges,
+    base_scenario,
+    rotate_theta,
+    scenario_of,
+    theta_of,
+)
 from guidance.scenario import validate
 from guidance.symmetry import rotate_scenario
 
@@ -218,7 +219,7 @@ def test_stopping_the_caller_stops_the_pool_now(deadline) -> None:
 
 
 def test_cli_reports_a_dead_worker_and_how_to_resume(tmp_path, monkeypatch, capsys, deadline):
-    monkeypatch.setattr(dataset, "solve_sample", die_on_job_1)
+    monkeypatch.setattr(dataset_run, "solve_sample", die_on_job_1)
     argv = ["dataset", "--run-dir", str(tmp_path), "--output", str(tmp_path / "d.npz")]
     assert main([*argv, "--n-base", "6", "--workers", "2", "--backend", "c", "--no-progress"]) == 1
     err = capsys.readouterr().err
@@ -364,15 +365,13 @@ def test_cli_prox_u_reaches_the_solves(tmp_path, monkeypatch) -> None:
     """`guidance dataset --prox-u 0` solves with the paper's objective (the data of the
     networks shipped until 23 Nov); the weight is part of the run's settings, so a resume with
     another is refused."""
-    import guidance.dataset as dataset
-
     seen = {}
 
     def fake_generate(*args, settings=None, **kwargs):
         seen["settings"] = settings
         raise KeyboardInterrupt  # stop before any solve
 
-    monkeypatch.setattr(dataset, "generate", fake_generate)
+    monkeypatch.setattr(dataset_run, "generate", fake_generate)
     out = ["--run-dir", str(tmp_path / "run"), "--output", str(tmp_path / "d.npz")]
     assert main(["dataset", *out, "--prox-u", "0"]) == 130
     assert seen["settings"] == SCvxSettings(prox_u=0.0)
@@ -384,7 +383,7 @@ def test_cli_prox_u_reaches_the_solves(tmp_path, monkeypatch) -> None:
 def test_constraint_pairs_number_the_iterations_from_one() -> None:
     """The flight code feeds k = 1 at the first SCvx iteration: the pair of mask row j of a
     sample has k = j + 1, and there is one pair per recorded mask."""
-    ds = dataset.random_dataset(n_base=2, iters=4)
+    ds = random_dataset(n_base=2, iters=4)
     ds.n_masks[3] = 2  # samples may record fewer iterations
     X, Y, idx = ds.constraint_pairs()
     assert len(X) == int(ds.n_masks.sum()) == 2 * N_ROTATIONS * 4 - 2
@@ -411,10 +410,10 @@ def test_a_damaged_run_record_is_refused_by_name(record: str, tmp_path) -> None:
     the run directory by naming the file (exit 2 from the CLI)."""
     (tmp_path / "samples").mkdir()
     (tmp_path / "run.json").write_text(record)
-    with pytest.raises(dataset.InputError, match=r"run\.json: not a"):
-        dataset.generate(tmp_path, 1, progress=False, workers=1)
-    with pytest.raises(dataset.InputError, match=r"run\.json: not a"):
-        dataset.pack(tmp_path, tmp_path / "d.npz")
+    with pytest.raises(InputError, match=r"run\.json: not a"):
+        generate(tmp_path, 1, progress=False, workers=1)
+    with pytest.raises(InputError, match=r"run\.json: not a"):
+        pack(tmp_path, tmp_path / "d.npz")
 
 
 # ---- samples record their run; sample ids past six digits; packed files checked whole ------

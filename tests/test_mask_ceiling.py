@@ -12,7 +12,6 @@ import pytest
 
 from guidance import cguidance, mask_ceiling
 from guidance.cli import main
-from guidance.dataset import WorkerDiedError
 from guidance.errors import InputError
 from guidance.mask_ceiling import (
     PERTURBED,
@@ -22,6 +21,7 @@ from guidance.mask_ceiling import (
     neighbour,
     theta_spread,
 )
+from guidance.pool import WorkerDiedError
 from guidance.provenance import code_version
 
 

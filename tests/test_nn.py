@@ -250,7 +250,7 @@ def test_architecture_counts() -> None:
 @pytest.mark.skipif(not (SHIPPED / "constraint.onnx").exists(), reason="no shipped models")
 def test_shipped_models_load_and_answer() -> None:
     from guidance.catalog import SCENARIOS
-    from guidance.dataset import theta_of
+    from guidance.sampling import theta_of
 
     cm = load_model(SHIPPED / "constraint.onnx", "constraint")
     sm = load_model(SHIPPED / "solution.onnx", "solution")

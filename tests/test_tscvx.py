@@ -189,7 +189,7 @@ def test_tscvx_benchmark_landings_are_fresh_and_each_variant_is_audited() -> Non
     """`guidance bench --tscvx-landings`: valid landings that no dataset seed draws, each variant
     solved with the shipped networks and checked open loop like the reference."""
     from guidance import bench_tscvx
-    from guidance.dataset import SamplingRanges, base_scenario, theta_of
+    from guidance.sampling import SamplingRanges, base_scenario, theta_of
     from guidance.scenario import validate
 
     landings = bench_tscvx.sample_landings(2)

@@ -74,8 +74,8 @@ def nets():
 def _python_tscvx(scn: Scenario, sm, cm, masks: bool):
     """Python-orchestrated T-SCvx (guidance.tscvx's steps) on the C solver, given the
     predictions of sm / cm."""
-    from guidance.dataset import theta_of
     from guidance.guess import project_guess
+    from guidance.sampling import theta_of
 
     theta = theta_of(scn)
     guess = project_guess(scn, *sm.solution(theta))
@@ -115,7 +115,7 @@ def test_threads_sharing_the_networks_get_the_sequential_answers(runs, nets) -> 
 
 @pytest.mark.parametrize("name", ["default", "tilted", "spinning", "steep_cone", "sample0"])
 def test_theta_is_the_dataset_theta(name: str) -> None:
-    from guidance.dataset import theta_of
+    from guidance.sampling import theta_of
 
     scn = _scenario(name)
     np.testing.assert_array_equal(cguidance.theta_c(scn), theta_of(scn))
@@ -125,8 +125,8 @@ def test_theta_is_the_dataset_theta(name: str) -> None:
     "name", ["default", "tilted", "spinning", "steep_cone", "sample1", "low_fuel"]
 )
 def test_projected_warm_start_is_the_python_one(name: str, nets, onnx_models) -> None:
-    from guidance.dataset import theta_of
     from guidance.guess import project_guess
+    from guidance.sampling import theta_of
 
     scn = _scenario(name)
     sol = nets[0]

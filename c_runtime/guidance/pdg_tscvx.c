@@ -18,7 +18,7 @@ pdg_setup_status pdg_theta_of(const pdg_scenario *s, double *theta)
     if (!s || !theta) {
         return PDG_SETUP_NULL_ARGUMENT;
     }
-    pdg_initial_state(s, theta); /* theta starts with x0 (guidance.dataset.theta_of) */
+    pdg_initial_state(s, theta); /* theta starts with x0 (guidance.sampling.theta_of) */
     theta[14] = s->params.glideslope_deg;
     theta[15] = s->params.tilt_max_deg;
     return PDG_SETUP_OK;

@@ -21,10 +21,10 @@ import numpy as np
 import torch
 
 from guidance.atomic import atomic_write
-from guidance.dataset import THETA_NAMES
 from guidance.nn.model import Normalized
 from guidance.nn.train import TrainResult
 from guidance.provenance import code_version
+from guidance.sampling import THETA_NAMES
 
 META_KEY = "tscvx"
 META_FORMAT = "tscvx-onnx"

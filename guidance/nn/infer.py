@@ -16,10 +16,10 @@ from typing import Any
 
 import numpy as np
 
-from guidance.dataset import N_THETA, THETA_NAMES
 from guidance.errors import InputError
 from guidance.nn.conventions import PROBE_RTOL
 from guidance.params import NC, NU, NX, PARAM_NAMES, Params, Scenario
+from guidance.sampling import N_THETA, THETA_NAMES
 
 META_KEY = "tscvx"
 META_FORMAT = "tscvx-onnx"
@@ -257,8 +257,8 @@ class SolutionModel(OnnxModel):
     def warm_start(self, scenario: Scenario) -> tuple[np.ndarray, np.ndarray, float]:
         """The ``guess`` for ``SCvxSolver.solve``: the prediction with the boundary conditions
         and the convex path constraints made exact (``guess.project_guess``, as on board)."""
-        from guidance.dataset import theta_of
         from guidance.guess import project_guess
+        from guidance.sampling import theta_of
 
         return project_guess(scenario, *self.solution(theta_of(scenario)))
 
