@@ -29,6 +29,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol
 
+from guidance.errors import Interrupted
 from guidance.params import Scenario, SCvxSettings
 
 if TYPE_CHECKING:
@@ -214,9 +215,10 @@ def main(
     settings: SCvxSettings | None = None,
     run_dir: str | Path | None = None,
 ) -> int:
-    """The comparison, printed: 0; 1 without the C library; 130 when interrupted (Ctrl-C,
-    SIGTERM). With ``run_dir`` each landing's outcomes are kept there as they finish, and the
-    same command again solves only the landings it does not hold."""
+    """The comparison, printed: 0; 1 without the C library. With ``run_dir`` each landing's
+    outcomes are kept there as they finish, and the same command again solves only the
+    landings it does not hold. Interrupted while solving (Ctrl-C, SIGTERM), it raises
+    Interrupted saying how far it got."""
     from guidance.cguidance import LIB_PATH
     from guidance.pool import WorkerDiedError
 
@@ -235,8 +237,7 @@ def main(
     try:
         _solve(jobs, done, store, len(named), workers, progress)
     except KeyboardInterrupt:
-        print(_interrupted(len(done), len(named), store), file=sys.stderr)
-        return 130
+        raise Interrupted(interrupted(run_dir, len(named), len(done))) from None
     except WorkerDiedError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 1
@@ -292,14 +293,12 @@ def _solve(
             bar.update()
 
 
-def _interrupted(finished: int, total: int, store: RunResults | None) -> str:
-    if store is None:
-        return (
-            f"\ninterrupted: {finished} of {total} landings were finished; nothing is kept "
-            "without --run-dir (with --run-dir DIR each landing is kept as it finishes, and "
-            "the same command resumes)"
-        )
-    return (
-        f"\ninterrupted: {store.count(total)} of {total} landings are kept in "
-        f"{store.run_dir}; run the same command again to resume"
-    )
+def interrupted(
+    run_dir: str | Path | None, total: int | None = None, finished: int | None = None
+) -> str:
+    """What an interrupted comparison says after "interrupted: ", at any point of it: what it
+    kept and how to go on (runs.landings_kept); ``total`` and ``finished``: its landings and
+    those this process finished, when it was solving them."""
+    from guidance.runs import landings_kept
+
+    return landings_kept(run_dir, total, finished, "run the same command again to resume")

@@ -17,7 +17,7 @@ from guidance import file_check
 from guidance.api import BACKENDS, METHODS, solve
 from guidance.argtypes import add_workers_option, at_least, worker_count
 from guidance.atomic import check_folder, check_outputs
-from guidance.errors import InputError, LibraryNotBuiltError
+from guidance.errors import InputError, Interrupted, LibraryNotBuiltError
 from guidance.guess import plan_remainder
 from guidance.nn.conventions import KINDS, MODELS_DIR, network_file
 from guidance.params import IM, Params, Scenario, SCvxSettings
@@ -32,6 +32,7 @@ EXIT_BAD_INPUT = 2
 # trajectory exits 0: an infeasible landing is a normal answer, not an error (DESIGN.md).
 EXIT_NO_TRAJECTORY = 3
 EXIT_BROKEN_PIPE = 141  # as a shell reports a command killed by SIGPIPE (128 + 13)
+EXIT_INTERRUPTED = 130  # as a shell reports a command killed by SIGINT (128 + 2)
 
 
 def _load(path: str | None, pin_final_attitude: bool) -> Scenario:
@@ -554,7 +555,13 @@ def _add_agreement(sub: argparse._SubParsersAction) -> None:
         help="folder keeping each landing's outcomes as it finishes (run.json: the run's "
         "landings and settings); the same command again resumes, solving only what is missing",
     )
-    a.set_defaults(func=cmd_agreement)
+    a.set_defaults(func=cmd_agreement, interrupted=_agreement_interrupted)
+
+
+def _agreement_interrupted(args: argparse.Namespace) -> str:
+    from guidance import agreement
+
+    return agreement.interrupted(args.run_dir)
 
 
 def _add_verify(sub: argparse._SubParsersAction) -> None:
@@ -595,7 +602,7 @@ def _add_dispersion(sub: argparse._SubParsersAction) -> None:
         description=dispersion.__doc__.split("\n\n")[0].replace("\n", " "),
     )
     dispersion.add_arguments(d)
-    d.set_defaults(func=cmd_dispersion)
+    d.set_defaults(func=cmd_dispersion, interrupted=dispersion.interrupted)
 
 
 def _add_closed_loop(sub: argparse._SubParsersAction) -> None:
@@ -617,17 +624,31 @@ def cmd_closed_loop(args: argparse.Namespace) -> int:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
+    args = None
     try:
+        args = build_parser().parse_args(argv)
         code = int(args.func(args))
         sys.stdout.flush()  # here, not at exit: a reader that left is then caught below
         return code
+    except KeyboardInterrupt as exc:  # Ctrl-C at any point (SIGTERM too, during a worker pool)
+        print(f"\ninterrupted{_what_is_kept(args, exc)}", file=sys.stderr)
+        return EXIT_INTERRUPTED
     except (InputError, LibraryNotBuiltError) as exc:  # input that cannot be used, or a C
         print(f"error: {exc}", file=sys.stderr)  # library the command needs is not built
         return EXIT_BAD_INPUT
     except BrokenPipeError:  # the reader of stdout left (`guidance solve | head`)
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # no error at exit
         return EXIT_BROKEN_PIPE
+
+
+def _what_is_kept(args: argparse.Namespace | None, exc: KeyboardInterrupt) -> str:
+    """ ": what is kept and how to go on" of an interrupted command: its Interrupted's message
+    (it knew how far it got), else what its ``interrupted`` default (a function of the
+    options) says of any point of the command; "" for a command that sets none."""
+    if isinstance(exc, Interrupted):
+        return f": {exc}"
+    note: Callable[[argparse.Namespace], str] | None = getattr(args, "interrupted", None)
+    return f": {note(args)}" if args is not None and note is not None else ""
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -107,7 +107,9 @@ def _add_dataset(sub: argparse._SubParsersAction) -> None:
     add_prox_u(d, "with which the networks shipped until 23 Nov were trained")
     d.add_argument("--pack-only", action="store_true", help="pack the samples solved so far")
     d.add_argument("--no-progress", action="store_true")
-    d.set_defaults(func=cmd_dataset, ranges=SamplingRanges())
+    d.set_defaults(
+        func=cmd_dataset, ranges=SamplingRanges(), interrupted=_kept_in_run_dir("samples")
+    )
 
 
 def _add_train(sub: argparse._SubParsersAction) -> None:
@@ -239,7 +241,19 @@ def _add_mask_ceiling(sub: argparse._SubParsersAction) -> None:
     c.add_argument(
         "--json", help=f"write the results here (default: MODELS_DIR/{MASK_CEILING_FILE})"
     )
-    c.set_defaults(func=cmd_mask_ceiling)
+    c.set_defaults(func=cmd_mask_ceiling, interrupted=_kept_in_run_dir("neighbourhoods"))
+
+
+def _kept_in_run_dir(what: str) -> Callable[[argparse.Namespace], str]:
+    """What a command that keeps each of its ``what`` in --run-dir as it is solved says when
+    interrupted, at any point of it (guidance.cli.main prints it after "interrupted: ")."""
+
+    def note(args: argparse.Namespace) -> str:
+        if not args.run_dir:
+            return "nothing is kept without a --run-dir"
+        return f"solved {what} are kept in {args.run_dir}; run the same command again to resume"
+
+    return note
 
 
 # ---- dataset ------------------------------------------------------------------------------
@@ -265,13 +279,6 @@ def cmd_dataset(args: argparse.Namespace) -> int:
                 progress=not args.no_progress,
                 backend=args.backend,
             )
-        except KeyboardInterrupt:
-            print(
-                f"\ninterrupted: solved samples are kept in {args.run_dir}; "
-                "run the same command again to resume",
-                file=sys.stderr,
-            )
-            return 130
         except WorkerDiedError as exc:
             print(f"error: {exc}", file=sys.stderr)
             return 1
@@ -745,10 +752,6 @@ def cmd_mask_ceiling(args: argparse.Namespace) -> int:
             args.landings, args.neighbours, eps, backend, args.seed, std,
             workers=worker_count(args.workers), run_dir=args.run_dir or None,
         )  # fmt: skip
-    except KeyboardInterrupt:
-        print(f"\ninterrupted: solved neighbourhoods are kept in {args.run_dir}; "
-              "run the same command again to resume", file=sys.stderr)  # fmt: skip
-        return 130
     except WorkerDiedError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 1

@@ -15,7 +15,7 @@ or failed the check, as a scenario file, with ``campaign.json`` saying how to so
 ``--run-dir DIR`` keeps each landing as it finishes (runs.RunResults: ``run.json`` with
 the campaign's parameters and code versions, ``results/NNNNNN.json``); the same command again
 resumes, solving only the missing landings, and a campaign with other parameters is refused.
-Ctrl-C or SIGTERM stops the workers, says what is kept and exits 130.
+Ctrl-C or SIGTERM stops the workers, says what is kept and exits 130 (``interrupted``).
 Exit 1 when a solved landing fails the open-loop check (as ``guidance verify`` does).
 """
 
@@ -37,7 +37,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from guidance.argtypes import add_workers_option, at_least, worker_count
-from guidance.errors import InputError
+from guidance.errors import InputError, Interrupted
 from guidance.params import INT_SETTING_RANGES, N_MAX, N_MIN, Scenario, SCvxSettings
 from guidance.provenance import code_version
 from guidance.scvx import BUDGET_SPENT
@@ -290,7 +290,8 @@ def add_arguments(ap: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace, progress: bool = True) -> int:
     """The campaign for parsed options (add_arguments): 0, or 1 when a solved landing fails the
-    open-loop check (or a worker process died); 130 when interrupted (Ctrl-C, SIGTERM)."""
+    open-loop check (or a worker process died). Interrupted while solving (Ctrl-C, SIGTERM),
+    it raises Interrupted saying how far it got."""
     from guidance.bench_tscvx import sample_landings
     from guidance.pool import WorkerDiedError
 
@@ -310,8 +311,7 @@ def run(args: argparse.Namespace, progress: bool = True) -> int:
     try:
         _solve(jobs, done, store, args, progress)
     except KeyboardInterrupt:
-        print(_interrupted(args, len(done), store), file=sys.stderr)
-        return 130
+        raise Interrupted(interrupted(args, len(done))) from None
     except WorkerDiedError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 1
@@ -426,19 +426,14 @@ def _solve(
             bar.update()
 
 
-def _interrupted(args: argparse.Namespace, finished: int, store: RunResults | None) -> str:
-    """What an interrupted campaign says: what it kept, and how to go on."""
-    if store is None:
-        return (
-            f"\ninterrupted: {finished} of {args.landings} landings were finished; nothing is "
-            "kept without --run-dir (with --run-dir DIR a campaign keeps each landing as it "
-            "finishes, and the same command resumes it)"
-        )
-    kept = store.count(args.landings)
-    return (
-        f"\ninterrupted: {kept} of {args.landings} landings are kept in {store.run_dir}; "
-        f"to resume: {resume_command(args)}"
-    )
+def interrupted(args: argparse.Namespace, finished: int | None = None) -> str:
+    """What an interrupted campaign says after "interrupted: ", at any point of it: what it
+    kept and how to go on (runs.landings_kept); ``finished``: the landings this process
+    finished, when it was solving them."""
+    from guidance.runs import landings_kept
+
+    resume = f"to resume: {resume_command(args)}"
+    return landings_kept(args.run_dir, args.landings, finished, resume)
 
 
 def resume_command(args: argparse.Namespace) -> str:

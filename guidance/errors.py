@@ -19,6 +19,12 @@ class InputError(ValueError):
     """Input that cannot be used as given; the message names it and says why."""
 
 
+class Interrupted(KeyboardInterrupt):
+    """Ctrl-C (or SIGTERM during a worker pool) that stopped a command that knows how far it
+    got: the message says what is kept and how to go on. The command line prints it after
+    "interrupted: " and exits with code 130, as for any other interruption of a command."""
+
+
 class LibraryNotBuiltError(RuntimeError):
     """A flight library or C driver the call needs is not built; the message names the file
     and the make target that builds it. The command line prints it and exits with code 2."""

@@ -64,7 +64,8 @@ def imap_pool(fn: Callable[[Any], Any], jobs: Sequence, workers: int) -> Generat
             running.add(pool.submit(fn, job))
 
     try:
-        submit(2 * workers)  # a few queued per worker, not every job at once
+        with _ctrl_c_held():  # the workers start here, on the first submits
+            submit(2 * workers)  # a few queued per worker, not every job at once
         while running:
             done, running = wait(running, return_when=FIRST_COMPLETED)
             submit(len(done))
@@ -105,11 +106,24 @@ def pool_results(
         signal.signal(signal.SIGTERM, previous)
 
 
+@contextmanager
+def _ctrl_c_held() -> Iterator[None]:
+    """SIGINT blocked in this thread for the block: the workers started in it inherit the
+    mask, so a Ctrl-C while they start stays pending in them until _worker_init ignores it
+    (which discards it); this process gets its own as soon as the block ends."""
+    held = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, held)
+
+
 def _worker_init() -> None:
     limit_threads()
     # Ctrl-C reaches the whole process group: the parent stops the workers, which would
-    # otherwise each print a KeyboardInterrupt traceback.
+    # otherwise each print a KeyboardInterrupt traceback. Ignored, it can be let through.
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
 
 
 def _stop(pool: Any) -> None:

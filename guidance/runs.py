@@ -68,6 +68,38 @@ def check_run(run_dir: Path, config: dict, what: str) -> list[str]:
 T = TypeVar("T")
 
 
+def result_path(run_dir: str | Path, i: int) -> Path:
+    """Where a run folder keeps item ``i``'s result (RunResults)."""
+    return Path(run_dir) / "results" / f"{i:06d}.json"
+
+
+def results_kept(run_dir: str | Path, n: int) -> int:
+    """How many of items 0..n-1 a run folder holds (RunResults), read at any time: before
+    the run's record is checked too."""
+    return sum(result_path(run_dir, i).exists() for i in range(n))
+
+
+def landings_kept(
+    run_dir: str | Path | None, total: int | None, finished: int | None, resume: str
+) -> str:
+    """What an interrupted run of landings solved one by one kept, and how to go on (said
+    after "interrupted: "): with a run folder, how many of the ``total`` it holds (None: not
+    known yet) and ``resume``; without, how many of them this process ``finished`` (None:
+    not solving) and that nothing is kept."""
+    if run_dir is None:
+        done = "" if finished is None else f"{finished} of {total} landings were finished; "
+        return (
+            f"{done}nothing is kept without --run-dir (with --run-dir DIR each landing is kept "
+            "as it finishes, and the same command resumes)"
+        )
+    kept = (
+        "the landings finished are"
+        if total is None
+        else f"{results_kept(run_dir, total)} of {total} landings are"
+    )
+    return f"{kept} kept in {run_dir}; {resume}"
+
+
 class RunResults:
     """A resumable run's folder (``--run-dir``) of items solved one by one: its record,
     ``run.json`` (check_run: the run's options and the code versions that worked on it), and
@@ -82,7 +114,7 @@ class RunResults:
         self.version = code_version()
 
     def path(self, i: int) -> Path:
-        return self.run_dir / "results" / f"{i:06d}.json"
+        return result_path(self.run_dir, i)
 
     def keep(self, i: int, result: dict) -> None:
         """Item ``i``'s result (strict JSON: no NaN), written whole or not at all."""
@@ -111,4 +143,4 @@ class RunResults:
 
     def count(self, n: int) -> int:
         """How many of items 0..n-1 the folder holds."""
-        return sum(self.path(i).exists() for i in range(n))
+        return results_kept(self.run_dir, n)
