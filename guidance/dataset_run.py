@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from guidance.atomic import atomic_write, set_aside
-from guidance.errors import UNREADABLE_NPZ, InputError
+from guidance.errors import UNREADABLE_NPZ, InputError, npz_damage
 from guidance.json_files import ANY, read_json_object
 from guidance.params import (
     NC,
@@ -135,8 +135,9 @@ class SampleError(InputError):
 
     def __init__(self, path: Path, problem: str) -> None:
         super().__init__(
-            f"sample file {path} {problem}: run `guidance dataset` with the same settings "
-            "again, which solves it again"
+            f"sample file {path} {problem}: run `guidance dataset` again with the run's options "
+            "and without --pack-only, which sets the file aside (as .unreadable) and solves "
+            "its sample again, then packs"
         )
         self.problem = problem
 
@@ -149,7 +150,7 @@ def read_sample(path: Path, run: dict | None = None) -> dict[str, Any]:
         with np.load(path, allow_pickle=False) as f:
             rec = {k: f[k] for k in f.files}
     except UNREADABLE_NPZ as exc:
-        raise SampleError(path, f"is unreadable ({exc})") from None
+        raise SampleError(path, f"is {npz_damage(exc)}") from None
     if run is not None:
         i = _sample_id(path)
         misfit = "its name is no sample id" if i is None else _sample_misfit(rec, run, i)

@@ -46,6 +46,16 @@ UNREADABLE_NPZ = (
 )  # fmt: skip
 
 
+def npz_damage(exc: BaseException) -> str:
+    """What a reader says of a file np.load failed on (one of UNREADABLE_NPZ): the system's
+    reason when there is one (permission denied, an I/O error), else that it is damaged. Not
+    numpy's message, which for a file that is no .npz tells of pickled data and allow_pickle:
+    nothing the user should do."""
+    if isinstance(exc, OSError) and exc.errno is not None:
+        return f"unreadable ({exc.strerror})"
+    return "damaged (not an .npz numpy can read)"
+
+
 class DuplicateKeyError(ValueError):
     """A JSON object with a key given twice (``unique_keys``); ``key`` names it."""
 

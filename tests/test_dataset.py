@@ -109,17 +109,48 @@ def test_generation_resumes_without_redoing_samples(tiny_run) -> None:
         generate(run, 2, seed=11, ranges=EASY, workers=1, progress=False, backend="c")
 
 
-def test_a_damaged_sample_is_named_by_pack_and_solved_again_on_resume(tiny_run, tmp_path) -> None:
+@pytest.mark.parametrize(
+    "damage",
+    [
+        lambda data: data[:100],  # a copy cut short: zipfile's "File is not a zip file"
+        lambda data: b"junk " + data,  # no .npz: numpy's "contains pickled (object) data"
+        lambda data: b"",  # an empty file: numpy's "No data left in file"
+    ],
+    ids=["cut short", "junk", "empty"],
+)
+def test_a_damaged_sample_is_named_by_pack_and_solved_again_on_resume(
+    damage, tiny_run, tmp_path, capsys
+) -> None:
+    """`guidance dataset --pack-only` named the file but passed on numpy's reason, which for
+    most damage tells of pickled data and allow_pickle, and said to rerun "with the same
+    settings" (--pack-only again fails again). It now says the file is damaged and that a
+    run without --pack-only sets it aside and solves its sample again, which it does."""
     run = tmp_path / "run"
     shutil.copytree(tiny_run[0], run)
     damaged = sample_path(run, 1)
-    damaged.write_bytes(damaged.read_bytes()[:100])  # a copy cut short
-    with pytest.raises(InputError, match=f"sample file {damaged} is unreadable"):
-        pack(run, tmp_path / "d.npz")
+    damaged.write_bytes(damage(damaged.read_bytes()))
+    argv = ["dataset", "--pack-only", "--run-dir", str(run), "--output", str(tmp_path / "d.npz")]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"error: sample file {damaged} is damaged (not an .npz numpy can read)")
+    assert "without --pack-only, which sets the file aside (as .unreadable)" in err
+    assert "pickle" not in err.lower() and len(err.splitlines()) == 1, err
     again = generate(run, 2, seed=11, ranges=EASY, workers=1, progress=False, backend="clarabel")
     assert sum(again.values()) == 1  # id 1 alone
     assert damaged.with_suffix(".unreadable").exists()
     assert pack(run, tmp_path / "d.npz")["n_base"] == 2
+
+
+def test_a_sample_the_system_cannot_read_is_not_called_damaged(tiny_run, tmp_path) -> None:
+    """An error of the system (here a folder where the file should be) is said as the system
+    says it, not as damage."""
+    run = tmp_path / "run"
+    shutil.copytree(tiny_run[0], run)
+    path = sample_path(run, 1)
+    path.unlink()
+    path.mkdir()
+    with pytest.raises(InputError, match=rf"sample file {path} is unreadable \(Is a directory\):"):
+        pack(run, tmp_path / "d.npz")
 
 
 @pytest.mark.parametrize("misfit", ["another N", "no masks", "another id"])
