@@ -537,7 +537,7 @@ def cmd_export(args: argparse.Namespace) -> int:
     from guidance.nn.card import measure_onnx, write_card
     from guidance.nn.export import export_onnx
     from guidance.nn.train import dataset_digest
-    from guidance.provenance import provenance
+    from guidance.provenance import LEARNING_PACKAGES, SOLVER_PACKAGES, provenance
 
     train_dir, models = Path(args.train_dir), Path(args.models_dir)
     if not train_dir.is_dir():
@@ -556,7 +556,9 @@ def cmd_export(args: argparse.Namespace) -> int:
         _check_trained_on(report[name], name, ds, args.dataset, digest)
     nets = {kind: (name, _best_checkpoint(train_dir, name, kind)) for kind, name in best.items()}
     metrics: dict = {
-        "provenance": provenance(),  # the export's code, solver versions and time
+        # the export's code, solver and torch/onnx versions and time (each network's
+        # training's: its entry's "provenance")
+        "provenance": provenance(packages=SOLVER_PACKAGES + LEARNING_PACKAGES),
         "sweep": report,
         "shipped": {},
         "dataset_header": ds.header,
@@ -660,7 +662,7 @@ def _check_trained_on(entry: dict, name: str, dataset: Dataset, path: str, diges
 
 
 def _brief(m: dict) -> dict:
-    keep = ("threshold", "test", "test_mse", "ood_mse", "n_params", "macs")
+    keep = ("threshold", "test", "test_mse", "ood_mse", "n_params", "macs", "provenance")
     return {k: m[k] for k in keep if k in m}
 
 

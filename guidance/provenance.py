@@ -17,6 +17,11 @@ from guidance.paths import ROOT
 CODE_PATHS = ("guidance", "c_runtime", "codegen", "Makefile", "pyproject.toml")
 # The libraries whose arithmetic a trajectory depends on.
 SOLVER_PACKAGES = ("numpy", "scipy", "casadi", "clarabel", "onnxruntime")
+# The libraries a network's weights (guidance train) and its ONNX file (guidance export,
+# torch's exporter writes through onnxscript) depend on.
+LEARNING_PACKAGES = ("numpy", "torch", "onnx", "onnxscript")
+# What a file made before its writer recorded a version says of it.
+UNKNOWN = "unknown"
 
 
 def _version(package: str) -> str | None:
@@ -49,15 +54,18 @@ def file_digest(path: Path) -> str:
     return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
-def provenance(files: dict[str, Path] | None = None) -> dict[str, object]:
-    """The code, the solver versions, the machine and the time; with ``files`` (a name for
-    each input file, such as the networks of a T-SCvx solve) their paths and sha256."""
+def provenance(
+    files: dict[str, Path] | None = None, packages: tuple[str, ...] = SOLVER_PACKAGES
+) -> dict[str, object]:
+    """The code, the versions of ``packages`` (default the solvers; those installed), the
+    machine and the time; with ``files`` (a name for each input file, such as the networks of
+    a T-SCvx solve) their paths and sha256."""
     out: dict[str, object] = {
         "generator": code_version(),
         "created_utc": datetime.now(timezone.utc).isoformat(timespec="seconds"),
         "python": platform.python_version(),
         "host": platform.machine(),
-        "packages": {name: v for name in SOLVER_PACKAGES if (v := _version(name))},
+        "packages": {name: v for name in packages if (v := _version(name))},
     }
     if files:
         out["files"] = {

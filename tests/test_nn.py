@@ -330,6 +330,84 @@ def test_interrupted_training_resumes_to_the_same_weights(tmp_path: Path) -> Non
         train(other, "solution", TINY, cfg, print, state, dataset_digest(other))
 
 
+def test_a_resumed_run_records_every_code_version_that_trained_it(
+    tmp_path: Path, monkeypatch
+) -> None:
+    """The run state and the network record the code (and torch) versions that trained them;
+    a run resumed by other code records both (they recorded none: audit)."""
+    from guidance.nn import train as train_module
+    from guidance.nn.train import TrainingInterrupted, dataset_digest, load_plain
+
+    ds = random_dataset(n_base=12, seed=1)
+    cfg = TrainConfig(epochs=1, batch_size=64, threads=1)
+    state = tmp_path / "solution.state.pt"
+    monkeypatch.setattr(
+        train_module, "code_version", lambda: "guidance 0.1.0 git aaaaaaa", raising=False
+    )
+    with pytest.raises(TrainingInterrupted):
+        train(ds, "solution", TINY, cfg, _interrupt_after(1), state, dataset_digest(ds))
+    saved = load_plain(state)
+    assert saved["code_versions"] == ["guidance 0.1.0 git aaaaaaa"]
+    assert saved["saved_by"]["packages"]["torch"] == torch.__version__
+    monkeypatch.setattr(
+        train_module, "code_version", lambda: "guidance 0.1.0 git bbbbbbb", raising=False
+    )
+    lines: list[str] = []
+    res = train(ds, "solution", TINY, cfg, lines.append, state, dataset_digest(ds))
+    made = res.metrics["provenance"]
+    assert made["code_versions"] == ["guidance 0.1.0 git aaaaaaa", "guidance 0.1.0 git bbbbbbb"]
+    assert made["packages"]["torch"] == torch.__version__
+    assert made["packages"]["onnx"] == onnx.__version__
+    assert any("trained by guidance 0.1.0 git aaaaaaa; this code is" in line for line in lines)
+
+
+def test_train_and_export_record_the_code_and_torch_versions(tmp_path: Path) -> None:
+    """`guidance train`'s checkpoint and report carry the code version and the torch and onnx
+    versions, and export carries them into metrics.json, the ONNX metadata and the card (the
+    checkpoints recorded neither: audit). A checkpoint and report from before still export,
+    the card saying "unknown"."""
+    from guidance.cli import main
+    from guidance.nn.train import load_checkpoint
+    from guidance.provenance import code_version
+
+    a = _write_dataset(random_dataset(n_base=12, seed=1), tmp_path / "a.npz")
+    out = tmp_path / "train"
+    assert _train_cli(a, out, "--solution-epochs", "1") == 0
+    checkpoint, report = out / "solution-flight-s.pt", out / "solution-flight-s.json"
+    recorded = [
+        load_checkpoint(checkpoint).metrics["provenance"],
+        json.loads(report.read_text())["provenance"],
+    ]
+    for made in recorded:
+        assert made["generator"] == code_version() and made["code_versions"] == [code_version()]
+        assert made["packages"]["torch"] == torch.__version__
+        assert made["packages"]["onnx"] == onnx.__version__
+
+    def export(models: Path) -> str:
+        assert main(["export", "--train-dir", str(out), "--dataset", str(a),
+                     "--models-dir", str(models)]) == 0  # fmt: skip
+        return (models / "MODEL_CARD.md").read_text()
+
+    card = export(tmp_path / "models")
+    metrics = json.loads((tmp_path / "models" / "metrics.json").read_text())
+    assert metrics["shipped"]["solution"]["provenance"] == recorded[1]
+    assert metrics["provenance"]["packages"]["torch"] == torch.__version__
+    meta = load_model(tmp_path / "models" / "solution.onnx", "solution").meta
+    assert meta["metrics"]["provenance"] == recorded[1]
+    versions = f"(torch {torch.__version__}, onnx {onnx.__version__})"
+    assert f"- solution network trained by {code_version()} {versions}." in card
+    assert f"- Exported by {code_version()} {versions}." in card
+    # as written before the versions were recorded
+    ck = torch.load(checkpoint, weights_only=True)
+    ck["metrics"].pop("provenance")
+    torch.save(ck, checkpoint)
+    entry = json.loads(report.read_text())
+    entry.pop("provenance")
+    report.write_text(json.dumps(entry))
+    card = export(tmp_path / "old")
+    assert "- solution network trained by unknown (torch unknown, onnx unknown)." in card
+
+
 def _write_dataset(ds, path: Path, **header) -> Path:
     """``ds`` as a dataset file of ``guidance dataset``'s layout."""
     head = {**ds.header, "n_samples": len(ds.theta), "created_utc": "2026-01-01T00:00:00Z"}

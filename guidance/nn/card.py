@@ -28,6 +28,7 @@ from guidance.nn.conventions import (
     TNN_SUFFIX,
     network_file,
 )
+from guidance.provenance import UNKNOWN
 
 # The card is written line by line: each section hands its lines to ``add``.
 _Add = Callable[[str], object]
@@ -212,7 +213,7 @@ def _card_lines(models: Path, metrics: dict[str, Any], baselines: Any, ceiling: 
     measured = callgrind_instructions(models)
     _inference_section(add, shipped, measured)
     _sweep_section(add, metrics["sweep"])
-    _training_section(add, shipped)
+    _training_section(add, shipped, metrics.get("provenance"))
     if baselines:
         _baselines_section(add, baselines)
     if ceiling:
@@ -445,7 +446,7 @@ def _sweep_test_metric(r: dict) -> str:
     return f"MSE {_f(r.get('test_mse'))}, OOD {_f(r.get('ood_mse'))}"
 
 
-def _training_section(add: _Add, shipped: dict) -> None:
+def _training_section(add: _Add, shipped: dict, exported: Any) -> None:
     add("## Training")
     add("")
     tc = next(iter(shipped.values()))["train_config"]
@@ -459,6 +460,26 @@ def _training_section(add: _Add, shipped: dict) -> None:
         "`metrics.json`. A model marked (capped) stopped at the wall-clock cap of its run."
     )
     add("")
+    for kind, s in sorted(shipped.items()):
+        made = _made_by(s.get("provenance"))
+        add(f"- {kind} network trained by {made['code']} (torch {made['torch']}, onnx "
+            f"{made['onnx']}).")  # fmt: skip
+    made = _made_by(exported)
+    add(f"- Exported by {made['code']} (torch {made['torch']}, onnx {made['onnx']}).")
+    add("")
+
+
+def _made_by(record: Any) -> dict[str, str]:
+    """The code version(s) and the torch and onnx versions a provenance record (of `guidance
+    train`: every version that trained epochs of the run; of `guidance export`) names;
+    "unknown" for files written before they were recorded (27 Nov 2026)."""
+    record = record if isinstance(record, dict) else {}
+    packages = record.get("packages") if isinstance(record.get("packages"), dict) else {}
+    versions = record.get("code_versions") or [record.get("generator", UNKNOWN)]
+    return {
+        "code": ", ".join(map(str, versions)),
+        **{name: str(packages.get(name, UNKNOWN)) for name in ("torch", "onnx")},
+    }
 
 
 def _baselines_section(add: _Add, baselines: dict) -> None:

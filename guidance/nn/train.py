@@ -54,6 +54,7 @@ from guidance.errors import InputError
 from guidance.nn.conventions import KINDS, LEARNING_RATE, TEST_FRACTION, default_epochs
 from guidance.nn.model import ArchConfig, Transformer, n_params
 from guidance.params import CONSTRAINT_NAMES
+from guidance.provenance import LEARNING_PACKAGES, code_version, provenance
 
 STD_FLOOR = 1e-9
 
@@ -395,6 +396,7 @@ def train(
     identity = run_identity(kind, arch, cfg, dataset)
     saved = trainer.run_state(Path(state_path), identity) if state_path else None
     run = _resume(saved, kind, trainer.n_epochs, log)
+    _record_code_version(run, kind, log)
     t_start = time.perf_counter() - run.seconds  # the wall-clock cap spans the resumes
     _train_epochs(trainer, run, saved, t_start, log, progress)
     if run.stopped_early:
@@ -411,12 +413,26 @@ def train(
     )
 
 
+def _record_code_version(run: _Progress, kind: str, log: Callable[[str], object]) -> None:
+    """Adds this code's version to the run's, saved with its next epoch; a resume by another
+    version is not refused (each epoch is sound) but said: the network then mixes them."""
+    version = code_version()
+    if version not in run.code_versions:
+        if run.code_versions:
+            log(f"[{kind}] warning: epochs of this run were trained by "
+                f"{', '.join(run.code_versions)}; this code is {version}")  # fmt: skip
+        run.code_versions.append(version)
+
+
 def _run_record(
     trainer: _Trainer, run: _Progress, identity: dict[str, Any], seconds: float
 ) -> dict[str, Any]:
-    """What the metrics record of the run beside the test-split numbers."""
+    """What the metrics record of the run beside the test-split numbers: among them the code
+    and library versions that trained it (``provenance``; ``code_versions``: every version
+    that trained epochs of it)."""
     split = trainer.data.split
     return dict(
+        provenance={**provenance(packages=LEARNING_PACKAGES), "code_versions": run.code_versions},
         history=run.history,
         train_seconds=seconds,
         stopped_early=run.stopped_early,
@@ -561,6 +577,8 @@ class _Progress:
     history: list[dict[str, Any]] = dataclasses.field(default_factory=list)  # one per epoch
     seconds: float = 0.0  # of training, over all resumes (as of the last checkpoint)
     stopped_early: bool = False  # at the wall-clock cap
+    # every code version that trained epochs of the run (a resume may be by another one)
+    code_versions: list[str] = dataclasses.field(default_factory=list)
 
 
 @dataclass
@@ -677,8 +695,9 @@ def _resume(
     state = saved.load()
     log(f"[{kind}] resumed from {saved.path}: {state['epochs_done']} of {n_epochs} epochs done")
     return _Progress(
-        state["epochs_done"], state["history"], state["seconds"], state["stopped_early"]
-    )
+        state["epochs_done"], state["history"], state["seconds"], state["stopped_early"],
+        list(state.get("code_versions", [])),  # run states before 27 Nov 2026 record none
+    )  # fmt: skip
 
 
 def _train_epochs(
@@ -754,6 +773,7 @@ class _RunState:
             "sched": self.sched.state_dict(),
             "numpy_rng": plain(self.rng.bit_generator.state),
             "torch_rng": torch.get_rng_state(),
+            "saved_by": provenance(packages=LEARNING_PACKAGES),  # this session's code, torch
             **plain(dataclasses.asdict(progress)),
         }
         save_atomic(state, self.path)
