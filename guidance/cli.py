@@ -151,6 +151,10 @@ def _check_method_options(args: argparse.Namespace) -> None:
         )
     if args.method == "tscvx" and not Path(args.models).is_dir():  # before anything is printed
         raise InputError(f"--models {args.models}: no such folder")
+    if args.method == "tscvx":  # the networks its metrics.json records, not stale blobs
+        from guidance.nn.model_files import check_model_files
+
+        check_model_files(Path(args.models))
 
 
 def _read_guess(path: str | None, p: Params) -> tuple[np.ndarray, np.ndarray, float] | None:

@@ -536,6 +536,7 @@ def cmd_export(args: argparse.Namespace) -> int:
     from guidance.dataset import load_dataset
     from guidance.nn.card import measure_onnx, write_card
     from guidance.nn.export import export_onnx
+    from guidance.nn.model_files import network_record
     from guidance.nn.train import dataset_digest
     from guidance.provenance import LEARNING_PACKAGES, SOLVER_PACKAGES, provenance
 
@@ -586,6 +587,7 @@ def cmd_export(args: argparse.Namespace) -> int:
                 "checkpoint": name,
                 "file": path.name,
                 "bytes": path.stat().st_size,
+                **network_record(path),  # its sha256 and its flight blob's
                 "onnxruntime": ort,
                 **{k: v for k, v in res.metrics.items() if k != "test_bases"},
                 "arch": res.arch.to_dict(),

@@ -108,6 +108,9 @@ def test_c_mask_equals_the_onnx_models_mask(blobs: dict[str, bytes]) -> None:
 
 @needs_shipped
 def test_weight_files_are_reproducible(blobs: dict[str, bytes]) -> None:
+    from guidance.nn.model_files import check_model_files
+
+    check_model_files(MODELS, BUILD_MODELS)  # the files metrics.json records, when it does
     for kind in KINDS:
         again = flight.tnn_bytes(MODELS / f"{kind}.onnx")
         assert again == blobs[kind]

@@ -700,6 +700,67 @@ def test_export_refuses_to_leave_an_old_network_beside_the_new(trained_dir, tmp_
     assert {p.name: p.read_bytes() for p in models.iterdir()} == before
 
 
+def test_export_records_the_sha256_of_each_network_and_of_its_flight_blob(
+    trained_dir, tmp_path, capsys
+) -> None:
+    """metrics.json and the card record each ONNX file's sha256 and that of the flight blob
+    converted from it (neither was recorded: audit). A blob that is not the recorded one (in
+    the models folder, or in a folder of blobs as build/models) and an ONNX file replaced after
+    the export are named, and `guidance solve --method tscvx` and the card refuse the folder."""
+    import hashlib
+    import shutil
+
+    from guidance.cli import main
+    from guidance.nn import flight
+    from guidance.nn.card import write_card
+
+    def sha256(path: Path) -> str:
+        return hashlib.sha256(path.read_bytes()).hexdigest()
+
+    data, train_dir = trained_dir
+    models, blobs = tmp_path / "models", tmp_path / "blobs"
+    assert _export(data, train_dir, models) == 0
+    metrics = json.loads((models / "metrics.json").read_text())
+    card = (models / "MODEL_CARD.md").read_text()
+    for kind in ("constraint", "solution"):
+        entry, onnx_file, blob = (
+            metrics["shipped"][kind],
+            models / f"{kind}.onnx",
+            blobs / f"{kind}.tnn",
+        )
+        flight.write_tnn(onnx_file, blob)  # as `make lib` writes build/models
+        assert entry["sha256"] == sha256(onnx_file)
+        assert entry["flight_blob"] == {
+            "file": blob.name,
+            "bytes": blob.stat().st_size,
+            "sha256": sha256(blob),
+        }
+        assert f"sha256 `{sha256(onnx_file)}`" in card and f"sha256 `{sha256(blob)}`" in card
+    from guidance.nn.model_files import check_model_files  # (new with the digests)
+
+    check_model_files(models, blobs)
+    solve = ["solve", "--method", "tscvx", "--models", str(models)]
+    # the other network's blob: rebuilt from the wrong file, and left in the models folder
+    shutil.copy(blobs / "constraint.tnn", blobs / "solution.tnn")
+    shutil.copy(blobs / "constraint.tnn", models / "solution.tnn")
+    with pytest.raises(InputError) as exc:
+        check_model_files(models, blobs)
+    message = str(exc.value)
+    assert message.count(": sha256 ") == 2 and "constraint.tnn:" not in message
+    assert f"{models / 'solution.tnn'}: sha256 " in message
+    assert f"{blobs / 'solution.tnn'}: sha256 " in message and "make lib" in message
+    assert main(solve) == 2
+    assert f"{models / 'solution.tnn'}: sha256 " in capsys.readouterr().err
+    (models / "solution.tnn").unlink()
+    # an ONNX file replaced after the export: not the network the card describes
+    shutil.copy(models / "constraint.onnx", models / "solution.onnx")
+    with pytest.raises(
+        InputError, match=f"{models / 'solution.onnx'}: sha256 .*: re-run .guidance export."
+    ):
+        write_card(models)
+    assert main(solve) == 2
+
+
 def test_a_damaged_checkpoint_is_bad_input(trained_dir, tmp_path, capsys) -> None:
     import shutil
 

@@ -28,6 +28,7 @@ from guidance.nn.conventions import (
     TNN_SUFFIX,
     network_file,
 )
+from guidance.nn.model_files import check_model_files
 from guidance.provenance import UNKNOWN
 
 # The card is written line by line: each section hands its lines to ``add``.
@@ -193,6 +194,7 @@ def card_sources(
     named in ``skip``: a command checks, before its work, the ones it does not rewrite)."""
     results = models if results is None else results
     metrics = read_metrics(models)
+    check_model_files(models)  # the networks the metrics describe, not others
     baselines = ceiling = None
     if BASELINES_FILE not in skip:
         baselines = _read_if_present(results / BASELINES_FILE, "baselines", {"results": dict})
@@ -274,6 +276,21 @@ def _files_section(add: _Add, shipped: dict) -> None:
             f"| `{s['file']}` | {kind} ({s['checkpoint']}) | {inputs} | {outputs} | "
             f"{s['n_params']:,} | {s['bytes']:,} |"
         )
+    add("")
+    for _, s in sorted(shipped.items()):
+        blob = s.get("flight_blob")
+        if "sha256" in s and isinstance(blob, dict):
+            add(
+                f"- `{s['file']}` sha256 `{s['sha256']}`; the flight blob converted from it "
+                f"(`{blob['file']}`, {blob['bytes']:,} bytes) sha256 `{blob['sha256']}`"
+            )
+        else:
+            add(f"- `{s['file']}`: sha256 not recorded (exported before 27 Nov 2026)")
+    add("")
+    add("The flight blob is what `make lib` writes to `build/models` (`guidance.nn.flight`: the")
+    add("same ONNX file, the same bytes). `guidance solve --method tscvx`, `guidance baselines`")
+    add("and `guidance mask-ceiling` refuse a folder whose ONNX file or `.tnn` blob is not the")
+    add("recorded one (`guidance.nn.model_files`).")
     add("")
     add("One self-contained ONNX file per network (weights inside, opset 18). The graph maps raw")
     add("inputs to raw outputs: the input standardization and, for the solution network, the")
