@@ -54,12 +54,15 @@ def atomic_write(path: str | Path) -> Iterator[BinaryIO]:
 
 
 @contextmanager
-def staged_files(folder: str | Path) -> Iterator[Path]:
+def staged_files(folder: str | Path, first: str | None = None) -> Iterator[Path]:
     """``with staged_files(models) as stage: write files into stage``: a set of files that
-    replaces its namesakes in ``folder`` as a set or not at all. The block writes them into
-    ``stage``, a new hidden folder beside ``folder``; only when the block has finished are
-    they moved into ``folder`` (each through atomic_write, in name order). An exception in the
-    block leaves ``folder`` as it was (not even made), and the stage is removed either way."""
+    replaces its namesakes in ``folder``. The block writes them into ``stage``, a new hidden
+    folder beside ``folder``; only when the block has finished are they moved into ``folder``
+    (each through atomic_write: the file named ``first``, then the others in name order). An
+    exception in the block leaves ``folder`` as it was (not even made), and the stage is
+    removed either way. The moves are one file at a time: one interrupted between two of them
+    (a killed process, a full disk) leaves new files beside old ones, which a manifest of the
+    new set moved ``first`` (names and sha256) makes detectable."""
     folder = Path(folder)
     near = _first_existing(folder.parent)
     try:
@@ -68,7 +71,7 @@ def staged_files(folder: str | Path) -> Iterator[Path]:
         raise InputError(f"{folder}: cannot write beside it in {near} ({exc.strerror})") from None
     try:
         yield stage
-        for staged in sorted(stage.iterdir()):
+        for staged in sorted(stage.iterdir(), key=lambda p: (p.name != first, p.name)):
             with open(staged, "rb") as src, atomic_write(folder / staged.name) as dst:
                 shutil.copyfileobj(src, dst)
     finally:

@@ -11,6 +11,7 @@ Heavy imports (torch, onnx) happen inside the commands.
 from __future__ import annotations
 
 import argparse
+import itertools
 import json
 import math
 import sys
@@ -29,12 +30,15 @@ from guidance.nn.conventions import (
     EPOCHS,
     KINDS,
     LEARNING_RATE,
+    MANIFEST_FILE,
     MASK_CEILING_FILE,
     METRICS_FILE,
     MODEL_CARD_FILE,
     MODELS_DIR,
+    ONNX_SUFFIX,
     REFERENCE_EPOCHS,
     SOLUTION,
+    TNN_SUFFIX,
     network_file,
 )
 
@@ -530,13 +534,16 @@ def cmd_export(args: argparse.Namespace) -> int:
     """All or nothing: every input (the reports, the dataset, the checkpoints) is read and
     checked before anything is written, and the new networks, metrics and card replace the
     old ones in MODELS_DIR only once all of them are written (atomic.staged_files): a failure
-    leaves the folder's set as it was, never new networks beside the old card."""
+    leaves the folder's set as it was, never new networks beside the old card. A flight blob
+    (KIND.tnn) in the folder is written again from the new network. The manifest of the new
+    set moves in first: a folder left between two moves says which files do not belong."""
     from guidance.atomic import staged_files
     from guidance.baselines import task_data
     from guidance.dataset import load_dataset
     from guidance.nn.card import measure_onnx, write_card
     from guidance.nn.export import export_onnx
-    from guidance.nn.model_files import network_record
+    from guidance.nn.flight import write_tnn
+    from guidance.nn.model_files import network_record, write_manifest
     from guidance.nn.train import dataset_digest
     from guidance.provenance import LEARNING_PACKAGES, SOLVER_PACKAGES, provenance
 
@@ -566,7 +573,7 @@ def cmd_export(args: argparse.Namespace) -> int:
         "dataset_content_sha256": digest,
     }
     written = []
-    with staged_files(models) as stage:
+    with staged_files(models, first=MANIFEST_FILE) as stage:
         for kind, (name, res) in sorted(nets.items()):
             path = stage / network_file(kind)
             split_seed = int(res.metrics["train_config"]["split_seed"])
@@ -581,6 +588,10 @@ def cmd_export(args: argparse.Namespace) -> int:
                     "split_seed": split_seed,
                 },
             )
+            blob = network_file(kind, TNN_SUFFIX)
+            if (models / blob).exists():  # not left converted from the old network
+                write_tnn(path, stage / blob)
+                written.append(f"{models / blob} (the flight blob of {path.name}, written again)")
             td = task_data(ds, kind, seed=split_seed)
             ort = measure_onnx(path, kind, td.X_te_raw[:500], ds.header["params"])
             metrics["shipped"][kind] = {
@@ -595,17 +606,19 @@ def cmd_export(args: argparse.Namespace) -> int:
             written.append(f"{models / path.name} ({name}, {path.stat().st_size:,} bytes): {ort}")
         write_text_atomic(stage / METRICS_FILE, json.dumps(metrics, indent=1, default=float))
         write_card(stage, results=models)  # with the baselines and ceiling already in MODELS_DIR
+        write_manifest(stage)
     for line in written:
         print(f"wrote {line}")
-    print(f"wrote {models / METRICS_FILE} and {models / MODEL_CARD_FILE}")
+    print(f"wrote {models / METRICS_FILE}, {models / MODEL_CARD_FILE} and {models / MANIFEST_FILE}")
     return 0
 
 
 def _check_no_stale_network(models: Path, best: dict[str, str]) -> None:
-    """Refuses to export beside a network of a kind not exported: the folder would hold the
-    old one next to the new, described by no card (guidance solve would use the pair)."""
-    for kind in KINDS:
-        old = models / network_file(kind)
+    """Refuses to export beside a network (or its flight blob) of a kind not exported: the
+    folder would hold the old one next to the new, described by no card (guidance solve would
+    use the pair)."""
+    for kind, suffix in itertools.product(KINDS, (ONNX_SUFFIX, TNN_SUFFIX)):
+        old = models / network_file(kind, suffix)
         if kind not in best and old.exists():
             raise InputError(
                 f"--models-dir {models}: holds {old.name}, and the train folder has no "

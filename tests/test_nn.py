@@ -761,6 +761,62 @@ def test_export_records_the_sha256_of_each_network_and_of_its_flight_blob(
     assert main(solve) == 2
 
 
+@pytest.mark.parametrize("stops_before", ["metrics.json", "solution.onnx"])
+def test_an_export_stopped_between_its_moves_leaves_a_set_that_names_its_odd_files(
+    trained_dir, tmp_path, monkeypatch, capsys, stops_before: str
+) -> None:
+    """The new set moves into the folder one file at a time: an export killed between two
+    moves left new files beside old ones, and nothing told (audit). Into a folder exported
+    before the digests were recorded (the shipped models/: a metrics.json without them, no
+    manifest) and holding a stale flight blob, an export stopped before moving
+    ``stops_before`` leaves a folder whose check names exactly the old files, and which
+    `guidance solve` refuses; the export run again leaves a whole set with the blob written
+    again from the new network (it was left as it was)."""
+    import shutil
+
+    from guidance import atomic
+    from guidance.cli import main
+    from guidance.nn import card, flight
+    from guidance.nn.model_files import model_file_problems
+
+    data, train_dir = trained_dir
+    models = tmp_path / "models"
+    before = _old_set(models)
+    shutil.copy(SHIPPED / "metrics.json", models / "metrics.json")
+    (models / "constraint.tnn").write_bytes(b"old constraint.tnn")  # left from an earlier one
+    monkeypatch.setattr(card, "callgrind_instructions", lambda models: {})  # (quicker)
+    real_atomic_write, moved = atomic.atomic_write, []
+
+    def killed_before_it(path):
+        if Path(path).parent == models:  # a move of the set, not a write into the stage
+            if Path(path).name == stops_before:
+                raise KeyboardInterrupt  # as a kill would stop it: between two moves
+            moved.append(Path(path).name)
+        return real_atomic_write(path)
+
+    monkeypatch.setattr(atomic, "atomic_write", killed_before_it)
+    with pytest.raises(KeyboardInterrupt):
+        _export(data, train_dir, models)
+    monkeypatch.setattr(atomic, "atomic_write", real_atomic_write)
+    old = sorted(n for n in [*before, "constraint.tnn"] if n not in moved)
+    named = sorted(Path(p.split(":")[0]).name for p in model_file_problems(models))
+    assert named == old and old  # the old files, none of the new
+    assert moved[:2] == ["manifest.json", "MODEL_CARD.md"]  # the card: not in the manifest
+    assert main(["solve", "--method", "tscvx", "--models", str(models)]) == 2
+    assert f"{models / old[0]}: " in capsys.readouterr().err
+    assert _export(data, train_dir, models) == 0
+    assert model_file_problems(models) == []
+    blob = flight.tnn_bytes(models / "constraint.onnx")
+    assert (models / "constraint.tnn").read_bytes() == blob
+    manifest = json.loads((models / "manifest.json").read_text())
+    assert sorted(manifest["files"]) == [
+        "constraint.onnx",
+        "constraint.tnn",
+        "metrics.json",
+        "solution.onnx",
+    ]
+
+
 def test_a_damaged_checkpoint_is_bad_input(trained_dir, tmp_path, capsys) -> None:
     import shutil
 

@@ -43,6 +43,8 @@ METRICS_FILE = "metrics.json"
 BASELINES_FILE = "baselines.json"
 MASK_CEILING_FILE = "mask_ceiling.json"
 MODEL_CARD_FILE = "MODEL_CARD.md"
+# The set `guidance export` wrote: each file's sha256 (guidance.nn.model_files).
+MANIFEST_FILE = "manifest.json"
 
 # ---- the default training run (guidance train; guidance.nn.train.TrainConfig) -------------
 # Epochs per fold. The constraint task has one row per (landing, iteration), about 14 times
