@@ -23,6 +23,7 @@ import hashlib
 from pathlib import Path
 from typing import Any
 
+from guidance.atomic import write_json_atomic
 from guidance.errors import InputError
 from guidance.json_files import read_json_object
 from guidance.nn.conventions import (
@@ -34,7 +35,7 @@ from guidance.nn.conventions import (
     TNN_SUFFIX,
     network_file,
 )
-from guidance.provenance import code_version, file_digest, write_json_atomic
+from guidance.provenance import code_version, file_digest
 
 MANIFEST_FORMAT = "tscvx-models-manifest"
 _REEXPORT = "re-run `guidance export`"
