@@ -162,7 +162,7 @@ typedef struct {
     tscvx_float tol_gap_abs;     /* |pcost - dcost| <= tol_gap_abs, or ... */
     tscvx_float tol_gap_rel;     /* ... <= tol_gap_rel * max(1, min(|pcost|, |dcost|)) */
     tscvx_float tol_feas;        /* |Ax-b|,|Gx+s-h| <= tol_feas (1 + |b,h|); dual same with c */
-    tscvx_float tol_infeas;      /* certificate residual / certificate objective */
+    tscvx_float tol_infeas;      /* certificate residual / certificate objective, (0, 1) */
     tscvx_float tol_gap_abs_inacc; /* reduced tolerances for SOLVED_INACCURATE */
     tscvx_float tol_gap_rel_inacc;
     tscvx_float tol_feas_inacc;

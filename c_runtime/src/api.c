@@ -112,6 +112,9 @@ static tscvx_setup_status check_settings(const tscvx_settings *st) {
         !pos_finite(st->tol_gap_abs_inacc) || !pos_finite(st->tol_gap_rel_inacc) ||
         !pos_finite(st->tol_feas_inacc))
         return TSCVX_SETUP_BAD_SETTINGS;
+    /* a certificate whose residual may reach its objective certifies nothing: with
+     * tol_infeas = 10 an early iterate of a bounded problem passed as DUAL_INFEASIBLE */
+    if (!(st->tol_infeas < 1.0)) return TSCVX_SETUP_BAD_SETTINGS;
     if (!(st->step_fraction > 0.0 && st->step_fraction < 1.0)) return TSCVX_SETUP_BAD_SETTINGS;
     if (!(st->static_reg > 0.0 && st->static_reg < 1.0)) return TSCVX_SETUP_BAD_SETTINGS;
     if (st->refine_iters < 0 || st->refine_iters > 20) return TSCVX_SETUP_BAD_SETTINGS;

@@ -344,6 +344,37 @@ static void test_update_settings(void) {
     CHECK(tscvx_update_settings(ws, NULL) == TSCVX_SETUP_NULL_ARGUMENT, "NULL settings");
 }
 
+/* Fuzzing (27 Nov): tol_infeas = 10 was accepted, and the first iterate of a strictly convex
+ * problem bounded by its cones passed as a certificate: DUAL_INFEASIBLE after 1 iteration on
+ * every KKT method. A certificate residual as large as its objective certifies nothing:
+ * tol_infeas lies in (0, 1), at setup and in tscvx_update_settings. */
+static void test_tol_infeas_range(void) {
+    /* the fuzzer's case, rounded: min 0.51 x s.t. -5 <= x <= 5, three more orthant rows and a
+     * 2-row cone: bounded, solved at x = -5 */
+    tscvx_int Gp[] = {0, 4}, Gi[] = {0, 1, 3, 4}, q[] = {2};
+    tscvx_float c[] = {0.51}, Gx[] = {1, -1, 0.52, -0.0076};
+    tscvx_float h[] = {5, 5, 0.12, 1.64, 0.61, 1.65, -0.77};
+    const tscvx_data d = {1, 0, 7, NULL, NULL, NULL, c, NULL, NULL, NULL, NULL, Gp, Gi, Gx, h, 5, 1,
+                          q};
+    const tscvx_float bad[] = {10.0, 1.0, 1e200};
+    tscvx_settings st;
+    tscvx_workspace *ws = NULL;
+    for (int k = 0; k < 3; k++) {
+        tscvx_default_settings(&st);
+        st.tol_infeas = bad[k];
+        const tscvx_setup_status r = tscvx_setup(&ws, arena2, sizeof arena2, &d, &st);
+        CHECK(r == TSCVX_SETUP_BAD_SETTINGS, "tol_infeas = %g: setup %d, then %s", bad[k],
+              (int)r, r == TSCVX_SETUP_OK ? tscvx_solve_status_message(tscvx_solve(ws)) : "-");
+    }
+    tscvx_default_settings(&st);
+    st.tol_infeas = 0.5;
+    CHECK(tscvx_setup(&ws, arena2, sizeof arena2, &d, &st) == TSCVX_SETUP_OK, "tol_infeas 0.5");
+    CHECK(tscvx_solve(ws) == TSCVX_SOLVED, "solved with tol_infeas 0.5");
+    st.tol_infeas = 10.0;
+    CHECK(tscvx_update_settings(ws, &st) == TSCVX_SETUP_BAD_SETTINGS, "update to tol_infeas 10");
+    CHECK(tscvx_solve(ws) == TSCVX_SOLVED, "still solved: the settings in force kept");
+}
+
 /* Every call on a stale workspace (arena overwritten after setup, or cleaned up) is refused
  * before any of its pointers is followed; so is one whose KKT method pointer is not ours. */
 static void test_stale_workspace(void) {
@@ -916,6 +947,7 @@ int main(void) {
     test_update();
     test_stale_workspace();
     test_update_settings();
+    test_tol_infeas_range();
     test_psd_check();
     test_indefinite_p_every_method();
     test_ill_conditioned_p_every_method();
