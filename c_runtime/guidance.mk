@@ -49,7 +49,7 @@ $(BUILD)/pdg_budget_driver: c_runtime/examples/pdg_budget_driver.c c_runtime/exa
 $(BUILD)/ctest/%: c_runtime/guidance/tests/%.c c_runtime/guidance/tests/gnc_test.h c_runtime/include/tscvx_guidance.h c_runtime/examples/host_io.h $(BUILD)/libtscvx_gnc.a $(BUILD)/libtscvx.a
 	@mkdir -p $(BUILD)/ctest
 	$(CC) -std=c99 -Wall -Wextra -Werror -O1 -g -Ic_runtime/include -Ic_runtime/examples \
-	  -Ic_runtime/guidance -I$(GEN_DIR) $< -o $@ $(GNC_LINK)
+	  -Ic_runtime/guidance -Ic_runtime/src -I$(GEN_DIR) $< -o $@ $(GNC_LINK)
 
 gnc: $(BUILD)/libtscvx_gnc.a $(BUILD)/libtscvx_gnc.so
 lib: gnc
@@ -77,7 +77,7 @@ ctest-asan-gnc: lib
 	@set -e; for t in $(GNC_TESTS); do \
 	  $(CC) -std=c99 -g -O1 -fno-var-tracking-assignments -fsanitize=address,undefined \
 	    -fno-sanitize-recover=undefined -Ic_runtime/include -Ic_runtime/examples \
-	    -Ic_runtime/guidance -I$(GEN_DIR) -I/usr/include/suitesparse \
+	    -Ic_runtime/guidance -Ic_runtime/src -I$(GEN_DIR) -I/usr/include/suitesparse \
 	    c_runtime/guidance/tests/$$t.c $(GNC_SRCS) $(GEN_DIR)/tscvx_model.c $(NN_SRCS) \
 	    $(CRT_SRCS) -o $(BUILD)/ctest-asan/$$t -lamd -lldl -lsuitesparseconfig -lm; \
 	  echo "== $$t (ASan/UBSan)"; $(BUILD)/ctest-asan/$$t; done

@@ -1510,11 +1510,19 @@ static int scvx_iteration(pdg_workspace *ws, const pdg_options *opt, scvx_state 
         return 0;
     }
     if (sst != TSCVX_SOLVED && sst != TSCVX_SOLVED_INACCURATE) {
+        char why[TSCVX_MESSAGE_LEN];
         failed_row(r, s->J);
         *status = PDG_SOLVER_ERROR;
-        snprintf(res->message, PDG_MESSAGE_LEN,
-                 "subproblem at iteration %d: conic solver returned %s", s->k + 1,
-                 socp_status_name(sst));
+        if (sst == TSCVX_INVALID_INPUT &&
+            tscvx_check_workspace(ws->socp, why) != TSCVX_SETUP_OK) { /* refused: why */
+            snprintf(res->message, PDG_MESSAGE_LEN,
+                     "subproblem at iteration %d: conic solver returned %s: %s", s->k + 1,
+                     socp_status_name(sst), why);
+        } else {
+            snprintf(res->message, PDG_MESSAGE_LEN,
+                     "subproblem at iteration %d: conic solver returned %s", s->k + 1,
+                     socp_status_name(sst));
+        }
         return 0;
     }
     /* step 3: the candidate on the full nonlinear problem */

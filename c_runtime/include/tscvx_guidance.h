@@ -34,7 +34,10 @@
  * entries into its matrices): a workspace whose arena was
  * reused, or where one of those took a bit flip, is refused (PDG_SETUP_NOT_READY,
  * PDG_INVALID_INPUT from the solves), never followed. The SOCP workspace inside it checks
- * its mark only (tscvx_socp.h).
+ * its own mark and set-up checksum on each of its calls (tscvx_socp.h): a flip there ends
+ * the solve at that subproblem with PDG_SOLVER_ERROR and the SOCP runtime's reason in the
+ * message ("conic solver returned invalid_input: workspace damaged: ..."), and so does every
+ * later solve until the workspace is set up again.
  *
  * Each SCvx iteration writes new numbers into the fixed pattern: FOH discretization of the
  * N-1 intervals from the CasADi-generated model, the subproblem data (equalities A z = b:

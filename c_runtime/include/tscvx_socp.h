@@ -57,11 +57,28 @@
  * that setup writes last and cleanup clears (and that the KKT method pointer is one of the
  * library's), so a workspace whose arena was reused or overwritten is refused
  * (TSCVX_SETUP_NOT_READY; tscvx_solve: TSCVX_INVALID_INPUT) before any of its pointers is
- * followed. This workspace is not checksummed (the guidance workspace and the networks are:
- * tscvx_guidance.h, tscvx_nn.h): a bit flipped inside it with the mark intact (a single-event
- * upset) is not detected, and can make a call read or write out of bounds; flight memory
- * needs EDAC for that, as for any code. The library never calls malloc, has no
- * recursion and no global mutable state. Every public function returns a status code.
+ * followed. Then it checks a checksum of what setup fixed and the call relies on, so that a
+ * bit flipped there with the mark intact (a single-event upset) is refused the same way,
+ * nothing written, instead of sending a loop out of bounds; tscvx_check_workspace says
+ * which check failed. Two 64-bit sums, taken at setup:
+ *   - head: the workspace's settings, sizes, counts and every pointer into the arena (a few
+ *     hundred bytes; tscvx_update_settings takes it again). Checked by every call but
+ *     tscvx_cleanup (which follows no pointer and ends a damaged workspace too);
+ *   - body: the index arrays: the patterns of P, A and G, the cone sizes and offsets, and
+ *     the chosen KKT method's maps, ordering and symbolic factor (sparse: the permuted KKT
+ *     pattern, its inverse permutation and row blocks, the maps of the data and cone block,
+ *     L's pattern with the row patterns, or SuiteSparse LDL's elimination tree; banded: the
+ *     groups, cones by group, G by rows, the groups' row lists, the band order, Y's profile
+ *     and the value blocks' offsets). Checked by tscvx_update_data and tscvx_solve, the
+ *     calls that follow them; the other calls index only by the head.
+ * A change within any one 8-byte word of either is detected for certain (a word-wise hash,
+ * each step a bijection), others with probability 1 - 2^-64. Not covered: the numbers, which
+ * every update, solve or iteration writes again (the scaled data, iterates, NT scaling,
+ * factors' values, work vectors, results and the log), so a flip there can spoil an answer
+ * (the IPM's residual and finiteness checks catch much of it) but not send a loop out of
+ * bounds; an upset during a call is seen by the next call, not by the one running; and the
+ * caller's arrays. The library never calls malloc, has no recursion and no global mutable
+ * state. Every public function returns a status code.
  */
 #ifndef TSCVX_SOCP_H
 #define TSCVX_SOCP_H
@@ -89,8 +106,9 @@ typedef enum {
     TSCVX_SETUP_SCRATCH_TOO_SMALL, /* scratch smaller than tscvx_scratch_size() */
     TSCVX_SETUP_ARENA_TOO_SMALL, /* arena smaller than tscvx_workspace_size() */
     TSCVX_SETUP_TOO_LARGE,       /* sizes overflow the index type */
-    TSCVX_SETUP_NOT_READY,       /* workspace not set up, cleaned up or overwritten, or
-                                    invalidated by a failed update */
+    TSCVX_SETUP_NOT_READY,       /* workspace not set up, cleaned up or overwritten,
+                                    damaged (set-up checksum mismatch), or invalidated by a
+                                    failed update (tscvx_check_workspace says which) */
     TSCVX_SETUP_BAD_INDEX,       /* iteration-log index out of range */
     TSCVX_SETUP_NOT_BANDED,      /* kkt_backend TSCVX_KKT_BANDED, but no banded structure */
     TSCVX_SETUP_P_NOT_PSD,       /* P fails the semidefiniteness check (see the problem form) */
@@ -108,8 +126,8 @@ typedef enum {
     TSCVX_DUAL_INFEASIBLE,       /* certificate (x, s): Px = 0, Ax = 0, Gx + s = 0, s in K, c'x < 0 */
     TSCVX_MAX_ITER,              /* iteration limit reached */
     TSCVX_NUMERICAL_ERROR,       /* factorization or step failure, no acceptable iterate */
-    TSCVX_INVALID_INPUT,         /* workspace not ready (setup or update failed, cleaned up
-                                    or overwritten) */
+    TSCVX_INVALID_INPUT,         /* workspace not ready (setup or update failed, cleaned up,
+                                    overwritten or damaged: tscvx_check_workspace) */
     TSCVX_NSTATUS
 } tscvx_solve_status;
 
@@ -295,8 +313,16 @@ tscvx_setup_status tscvx_get_iter_log(const tscvx_workspace *ws, tscvx_int k,
                                       tscvx_iter_log *row);
 
 /* Ends the workspace: every later call with it returns TSCVX_SETUP_NOT_READY (tscvx_solve:
- * TSCVX_INVALID_INPUT). Frees nothing: the arena is the caller's. */
+ * TSCVX_INVALID_INPUT). Frees nothing: the arena is the caller's. Checks the mark only: a
+ * workspace whose checksum no longer matches can be ended too. */
 tscvx_setup_status tscvx_cleanup(tscvx_workspace *ws);
+
+/* Why the calls would refuse `ws` (TSCVX_SETUP_NOT_READY; tscvx_solve: TSCVX_INVALID_INPUT),
+ * in `message` (TSCVX_MESSAGE_LEN bytes; may be NULL): no set-up mark (not set up, cleaned
+ * up, arena overwritten), the workspace damaged (its head or body checksum does not match:
+ * set it up again), or the last data update refused; TSCVX_SETUP_OK and "" for a workspace
+ * ready to solve. Checks the mark, head and body as tscvx_solve does, and writes nothing. */
+tscvx_setup_status tscvx_check_workspace(const tscvx_workspace *ws, char *message);
 
 #ifdef __cplusplus
 }

@@ -22,7 +22,8 @@ static const char *const setup_messages[TSCVX_SETUP_NSTATUS] = {
     "scratch smaller than tscvx_scratch_size()",
     "arena smaller than tscvx_workspace_size()",
     "problem too large for the index type",
-    "workspace not ready (not set up, cleaned up or overwritten, or a data update failed)",
+    "workspace not ready (not set up, cleaned up or overwritten; damaged: its set-up checksum "
+    "does not match; or a data update failed); tscvx_check_workspace says which",
     "iteration-log index out of range",
     "the problem has no structure for the banded KKT method (variable groups larger than 32, "
     "more than 8 border variables, a variable in no cone and not on P's diagonal, an equality "
@@ -41,7 +42,9 @@ static const char *const solve_messages[TSCVX_NSTATUS] = {
     "dual infeasible (unbounded)",
     "iteration limit reached",
     "numerical error",
-    "invalid input",
+    "invalid input: the workspace is not ready (not set up, cleaned up or overwritten; damaged: "
+    "its set-up checksum does not match; or a data update failed); tscvx_check_workspace says "
+    "which",
 };
 
 const char *tscvx_setup_status_message(tscvx_setup_status status) {
@@ -577,6 +580,8 @@ static tscvx_setup_status build(const tscvx_data *d, const tscvx_settings *st, t
     ws->arena_used = a->top, ws->arena_high = a->high;
     report_setup(ws, banded);
     ws->ready = 1;
+    ws->head_sum = tscvx_ws_head_sum(ws);
+    ws->body_sum = tscvx_ws_body_sum(ws);
     ws->magic = TSCVX_WS_MAGIC;
     *out = ws;
     return TSCVX_SETUP_OK;
@@ -620,6 +625,51 @@ static int ws_live(const tscvx_workspace *ws) {
            (ws->kkt.backend == &tscvx_backend_static || ws->kkt.backend == &tscvx_backend_ldl);
 }
 
+/* How a workspace stands, in the order checked: each check reads only what the ones before
+ * it vouched for (the body's lengths and pointers are in the head). */
+enum { WS_INTACT, WS_NO_MARK, WS_HEAD_DAMAGED, WS_BODY_DAMAGED };
+
+/* The mark, then the head checksum (sizes, settings, pointers), then with `body` the index
+ * arrays'. A call follows only what it checked: the body's arrays only after the body. */
+static int ws_state(const tscvx_workspace *ws, int body) {
+    if (!ws_live(ws)) return WS_NO_MARK;
+    if (ws->head_sum != tscvx_ws_head_sum(ws)) return WS_HEAD_DAMAGED;
+    if (body && ws->body_sum != tscvx_ws_body_sum(ws)) return WS_BODY_DAMAGED;
+    return WS_INTACT;
+}
+
+/* For the calls that index only by the head's sizes and pointers (warm start, getters,
+ * settings) */
+static int ws_head_intact(const tscvx_workspace *ws) { return ws_state(ws, 0) == WS_INTACT; }
+
+/* For the calls that follow the index arrays (data updates, solves) */
+static int ws_intact(const tscvx_workspace *ws) { return ws_state(ws, 1) == WS_INTACT; }
+
+tscvx_setup_status tscvx_check_workspace(const tscvx_workspace *ws, char *message) {
+    if (ws == NULL) return refuse(message, TSCVX_SETUP_NULL_ARGUMENT, "workspace is NULL");
+    switch (ws_state(ws, 1)) {
+    case WS_NO_MARK:
+        return refuse(message, TSCVX_SETUP_NOT_READY, "no set-up mark: the workspace was not "
+                      "set up, was cleaned up, or its arena was overwritten");
+    case WS_HEAD_DAMAGED:
+        return refuse(message, TSCVX_SETUP_NOT_READY, "workspace damaged: set-up checksum "
+                      "mismatch in its sizes, settings or pointers; set it up again");
+    case WS_BODY_DAMAGED:
+        return refuse(message, TSCVX_SETUP_NOT_READY, "workspace damaged: set-up checksum "
+                      "mismatch in its index arrays (patterns, cones, KKT maps, ordering, "
+                      "symbolic factor); set it up again");
+    default:
+        break;
+    }
+    if (!ws->ready)
+        return refuse(message, TSCVX_SETUP_NOT_READY, "the last data update was refused (a "
+                      "non-finite number or a P not positive semidefinite): the workspace "
+                      "waits for a valid update");
+    if (message) message[0] = '\0';
+    return TSCVX_SETUP_OK;
+}
+
+/* Ends a workspace that carries the mark, damaged or not: it follows no pointer. */
 tscvx_setup_status tscvx_cleanup(tscvx_workspace *ws) {
     if (ws == NULL) return TSCVX_SETUP_NULL_ARGUMENT;
     if (!ws_live(ws)) return TSCVX_SETUP_NOT_READY;
@@ -634,7 +684,7 @@ tscvx_setup_status tscvx_update_data(tscvx_workspace *ws, const tscvx_float *Px,
                                      const tscvx_float *b, const tscvx_float *Gx,
                                      const tscvx_float *h) {
     if (ws == NULL) return TSCVX_SETUP_NULL_ARGUMENT;
-    if (!ws_live(ws)) return TSCVX_SETUP_NOT_READY;
+    if (!ws_intact(ws)) return TSCVX_SETUP_NOT_READY; /* nothing written */
     tscvx_setup_status s = TSCVX_SETUP_OK;
     if ((Px && !all_finite(Px, ws->P.nnz)) || (c && !all_finite(c, ws->n)) ||
         (Ax && !all_finite(Ax, ws->A.nnz)) || (b && !all_finite(b, ws->p)) ||
@@ -664,13 +714,14 @@ tscvx_setup_status tscvx_update_data(tscvx_workspace *ws, const tscvx_float *Px,
 
 tscvx_setup_status tscvx_update_settings(tscvx_workspace *ws, const tscvx_settings *st) {
     if (ws == NULL || st == NULL) return TSCVX_SETUP_NULL_ARGUMENT;
-    if (!ws_live(ws)) return TSCVX_SETUP_NOT_READY;
+    if (!ws_head_intact(ws)) return TSCVX_SETUP_NOT_READY;
     const tscvx_setup_status s = check_settings(st);
     if (s != TSCVX_SETUP_OK) return s;
     if (st->max_iter > ws->log_cap - 1 || st->soc_dense_max != ws->st.soc_dense_max ||
         st->ruiz_iters != ws->st.ruiz_iters || st->kkt_backend != ws->st.kkt_backend)
         return TSCVX_SETUP_BAD_SETTINGS; /* structural: fixed at setup */
     ws->st = *st;
+    ws->head_sum = tscvx_ws_head_sum(ws); /* the settings are in it */
     return TSCVX_SETUP_OK;
 }
 
@@ -680,7 +731,7 @@ tscvx_setup_status tscvx_warm_start(tscvx_workspace *ws, const tscvx_float *x,
                                     const tscvx_float *y, const tscvx_float *z,
                                     const tscvx_float *s) {
     if (ws == NULL) return TSCVX_SETUP_NULL_ARGUMENT;
-    if (!ws_live(ws)) return TSCVX_SETUP_NOT_READY;
+    if (!ws_head_intact(ws)) return TSCVX_SETUP_NOT_READY;
     ws->warm = 0; /* a refused point also drops the one given before */
     if (x == NULL || (y == NULL && ws->p > 0) || ((z == NULL || s == NULL) && ws->m > 0))
         return TSCVX_SETUP_NULL_ARGUMENT;
@@ -696,7 +747,7 @@ tscvx_setup_status tscvx_warm_start(tscvx_workspace *ws, const tscvx_float *x,
 }
 
 tscvx_solve_status tscvx_solve(tscvx_workspace *ws) {
-    if (ws == NULL || !ws_live(ws)) return TSCVX_INVALID_INPUT;
+    if (ws == NULL || !ws_intact(ws)) return TSCVX_INVALID_INPUT; /* nothing written */
     if (!ws->ready) {
         ws->warm = 0; /* only the next solve may use the point */
         ws->info.status = TSCVX_INVALID_INPUT;
@@ -708,7 +759,7 @@ tscvx_solve_status tscvx_solve(tscvx_workspace *ws) {
 tscvx_setup_status tscvx_get_solution(const tscvx_workspace *ws, tscvx_float *x, tscvx_float *y,
                                       tscvx_float *z, tscvx_float *s) {
     if (ws == NULL) return TSCVX_SETUP_NULL_ARGUMENT;
-    if (!ws_live(ws) || !ws->ready) return TSCVX_SETUP_NOT_READY;
+    if (!ws_head_intact(ws) || !ws->ready) return TSCVX_SETUP_NOT_READY;
     if (ws->info.status == TSCVX_UNSOLVED || ws->info.status == TSCVX_NUMERICAL_ERROR)
         return TSCVX_SETUP_NO_SOLUTION; /* nothing solved since the data, or no point kept */
     tscvx_unscale_solution(ws, x, y, z, s);
@@ -717,7 +768,7 @@ tscvx_setup_status tscvx_get_solution(const tscvx_workspace *ws, tscvx_float *x,
 
 tscvx_setup_status tscvx_get_info(const tscvx_workspace *ws, tscvx_info *info) {
     if (ws == NULL || info == NULL) return TSCVX_SETUP_NULL_ARGUMENT;
-    if (!ws_live(ws)) return TSCVX_SETUP_NOT_READY;
+    if (!ws_head_intact(ws)) return TSCVX_SETUP_NOT_READY;
     *info = ws->info;
     return TSCVX_SETUP_OK;
 }
@@ -725,7 +776,7 @@ tscvx_setup_status tscvx_get_info(const tscvx_workspace *ws, tscvx_info *info) {
 tscvx_setup_status tscvx_get_iter_log(const tscvx_workspace *ws, tscvx_int k,
                                       tscvx_iter_log *row) {
     if (ws == NULL || row == NULL) return TSCVX_SETUP_NULL_ARGUMENT;
-    if (!ws_live(ws) || !ws->ready) return TSCVX_SETUP_NOT_READY;
+    if (!ws_head_intact(ws) || !ws->ready) return TSCVX_SETUP_NOT_READY;
     if (ws->info.status == TSCVX_UNSOLVED) return TSCVX_SETUP_NO_SOLUTION; /* no log since the data */
     if (k < 0 || k >= ws->log_cap || k > ws->info.iterations) return TSCVX_SETUP_BAD_INDEX;
     *row = ws->log[k];

@@ -515,6 +515,7 @@ static int find_groups(tscvx_workspace *ws, analysis_tmp *t) {
         }
     for (tscvx_int e = 0; e < ws->G.nnz; e++) bd->Gr_loc[e] = bd->loc[t->Grc[e]];
     for (tscvx_int g = 0; g <= ng; g++) bd->gcp[g] = 0;
+    for (tscvx_int c = 0; c < ncone; c++) bd->gcone[c] = -1; /* all set: the checksum reads it */
     for (tscvx_int c = 0; c < ncone; c++) {
         tscvx_int r0, r1;
         cone_rows(K, c, &r0, &r1);
@@ -538,6 +539,7 @@ static int group_rows(tscvx_workspace *ws, analysis_tmp *t) {
     const tscvx_int p = ws->p, ng = bd->ngroup;
     tscvx_int *mark = t->seen, *rgp = t->rgp;
     for (tscvx_int i = 0; i < p; i++) mark[i] = -1;
+    for (tscvx_int k = 0; k < ws->A.nnz; k++) bd->rrow[k] = -1; /* all set: the checksum reads it */
     bd->nb = 0;
     bd->rp[0] = 0;
     for (tscvx_int g = 0; g < ng; g++) {

@@ -288,6 +288,11 @@ void tscvx_spmv_sym(const tscvx_csc *P, const tscvx_float *x, tscvx_float *y);
 
 struct tscvx_workspace {
     uint32_t magic; /* TSCVX_WS_MAGIC while set up */
+    /* set-up checksum (wssum.c): head_sum of the fixed fields of this struct (settings,
+     * sizes, counts, pointers), body_sum of the index arrays set-up fixed (patterns, cones,
+     * the KKT method's maps, ordering and symbolic factor); written by setup (head_sum again
+     * by tscvx_update_settings) and checked by every call that follows them */
+    uint64_t head_sum, body_sum;
     tscvx_settings st;
     tscvx_int n, p, m;
     tscvx_cones K;
@@ -331,6 +336,11 @@ struct tscvx_workspace {
     int p_refused; /* the stored P failed the factorization test (tscvx_update_data) */
     size_t arena_used, arena_high;
 };
+
+/* The set-up checksum (wssum.c): head over the struct's fixed fields, body over the index
+ * arrays (lengths and pointers from the head: check the head first). */
+uint64_t tscvx_ws_head_sum(const tscvx_workspace *ws);
+uint64_t tscvx_ws_body_sum(const tscvx_workspace *ws);
 
 /* Ruiz equilibration in place (setup), and again with updated numbers (NULL = unchanged). */
 void tscvx_equilibrate(tscvx_workspace *ws);

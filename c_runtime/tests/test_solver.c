@@ -938,6 +938,225 @@ static void test_fuzz_structure(void) {
     printf("fuzzed structure: %d mutants refused, %d still valid and solved\n", refused, solved);
 }
 
+
+/* ---- single-event upsets in the workspace: the set-up checksum ---------------------------
+ * A stage problem (T stages of x_k in R^2, u_k in R: x_{k+1} = A x_k + B u_k, x_0 given;
+ * x_k <= 5, |x_k| <= 10, |u_k| <= 2; cost sum 0.1 |x_k|^2 + u_k^2 + c'z) that every KKT method
+ * takes: the banded one finds the stages (groups {x_k}, {u_k}), the sparse ones expand its
+ * Q3 cones with soc_dense_max = 2. */
+#define UP_T 12
+#define UP_N (3 * UP_T)
+#define UP_P (2 * UP_T)
+#define UP_M (2 * UP_T + 5 * UP_T) /* orthant 2T, then per stage Q3 (10, x_k) and Q2 (2, u_k) */
+#define UP_GUARD 4096
+
+typedef struct {
+    tscvx_int Pp[UP_N + 1], Pi[UP_N], Ap[UP_N + 1], Ai[4 * UP_N], Gp[UP_N + 1], Gi[2 * UP_N];
+    tscvx_int q[2 * UP_T];
+    tscvx_float Px[UP_N], c[UP_N], Ax[4 * UP_N], b[UP_P], Gx[2 * UP_N], h[UP_M];
+} stage_problem;
+
+static tscvx_data stage_data(stage_problem *sp) {
+    const tscvx_float Ad[2][2] = {{1.0, 0.1}, {0.0, 1.0}}, Bd[2] = {0.005, 0.1};
+    const int l = 2 * UP_T;
+    int na = 0, ng = 0;
+    for (int k = 0; k < UP_T; k++)
+        for (int v = 0; v < 3; v++) { /* column 3k + v: x_k0, x_k1, u_k */
+            const int j = 3 * k + v;
+            sp->Pp[j] = j, sp->Pi[j] = j, sp->Px[j] = v < 2 ? 0.1 : 1.0;
+            sp->c[j] = 0.05 * ct_randn();
+            sp->Ap[j] = na; /* rows: x_0 = x0 (0, 1), then 2 + 2k + i: x_{k+1} - A x_k - B u_k */
+            if (k == 0 && v < 2) sp->Ai[na] = v, sp->Ax[na++] = 1.0;
+            if (k > 0 && v < 2) sp->Ai[na] = 2 * k + v, sp->Ax[na++] = 1.0;
+            for (int i = 0; k + 1 < UP_T && i < 2; i++) {
+                const tscvx_float a = v < 2 ? -Ad[i][v] : -Bd[i];
+                if (a != 0.0) sp->Ai[na] = 2 + 2 * k + i, sp->Ax[na++] = a;
+            }
+            sp->Gp[j] = ng; /* rows: orthant 2k + v (x only), Q3 at l + 5k (head 10), Q2 at l + 5k + 3 */
+            if (v < 2) sp->Gi[ng] = 2 * k + v, sp->Gx[ng++] = 1.0;
+            sp->Gi[ng] = v < 2 ? l + 5 * k + 1 + v : l + 5 * k + 4, sp->Gx[ng++] = -1.0;
+        }
+    sp->Pp[UP_N] = UP_N, sp->Ap[UP_N] = na, sp->Gp[UP_N] = ng;
+    sp->b[0] = 1.0, sp->b[1] = 0.5;
+    for (int i = 2; i < UP_P; i++) sp->b[i] = 0.0;
+    for (int i = 0; i < l; i++) sp->h[i] = 5.0;
+    for (int k = 0; k < UP_T; k++) {
+        const int o = l + 5 * k;
+        sp->h[o] = 10.0, sp->h[o + 1] = sp->h[o + 2] = 0.0, sp->h[o + 3] = 2.0, sp->h[o + 4] = 0.0;
+        sp->q[2 * k] = 3, sp->q[2 * k + 1] = 2;
+    }
+    const tscvx_data d = {UP_N, UP_P, UP_M, sp->Pp, sp->Pi, sp->Px, sp->c, sp->Ap, sp->Ai,
+                          sp->Ax, sp->b, sp->Gp, sp->Gi, sp->Gx, sp->h, l, 2 * UP_T, sp->q};
+    return d;
+}
+
+/* One bit of the workspace to flip: an int, a byte or a pointer; head: in the struct (every
+ * call but cleanup refuses it), else in an index array (update and solve refuse it). */
+typedef struct {
+    const char *name;
+    void *at;
+    int kind; /* 0: tscvx_int, 1: signed char, 2: pointer */
+    int head;
+} upset_site;
+
+static void flip(const upset_site *u) {
+    if (u->kind == 0) {
+        tscvx_int v;
+        memcpy(&v, u->at, sizeof v);
+        v ^= 1 << 20; /* an index a million entries away */
+        memcpy(u->at, &v, sizeof v);
+    } else if (u->kind == 1) {
+        *(signed char *)u->at ^= 0x40;
+    } else {
+        uintptr_t v;
+        memcpy(&v, u->at, sizeof v);
+        v ^= (uintptr_t)1 << 24; /* 16 MiB away */
+        memcpy(u->at, &v, sizeof v);
+    }
+}
+
+#define SITE(name, lvalue, kind, head) {name, (void *)(uintptr_t)&(lvalue), kind, head}
+
+static unsigned char up_buf[UP_GUARD + (1 << 18) + UP_GUARD], up_copy[1 << 18];
+
+/* Each site flipped in turn between solves: every call that would follow it refuses the
+ * workspace (solve: INVALID_INPUT; the others: NOT_READY), tscvx_check_workspace says it is
+ * damaged, and the refused calls write nothing (the arena compared byte for byte, the guard
+ * bytes around it intact: valgrind and ASan watch the rest). Flipped back, the workspace
+ * solves to the same bits. The sites: pattern indices and pointers, cone sizes and offsets,
+ * the permutation, the KKT maps, L's pattern, the banded groups, row lists, band order and
+ * profile; in the struct: sizes, counts, settings and pointers. */
+static void test_upsets(int backend, tscvx_int dense_max) {
+    static stage_problem sp;
+    const tscvx_data d = stage_data(&sp);
+    tscvx_settings st;
+    memset(&st, 0, sizeof st); /* its padding too: setup copies it into the arena compared */
+    tscvx_default_settings(&st);
+    st.kkt_backend = backend;
+    st.soc_dense_max = dense_max;
+    unsigned char *arena3 = up_buf + UP_GUARD;
+    size_t narena = 0;
+    memset(up_buf, 0xA5, sizeof up_buf);
+    CHECK(tscvx_workspace_size(&d, &st, arena3, sizeof up_copy, &narena) == TSCVX_SETUP_OK &&
+              narena <= sizeof up_copy, "stage problem: size %zu", narena);
+    memset(up_buf, 0xA5, sizeof up_buf);
+    tscvx_workspace *ws = NULL;
+    CHECK(tscvx_setup(&ws, arena3, narena, &d, &st) == TSCVX_SETUP_OK, "stage setup");
+    if (ws == NULL) return;
+    const tscvx_int expect = backend == TSCVX_KKT_AUTO ? TSCVX_KKT_BANDED : backend;
+    tscvx_info info;
+    tscvx_get_info(ws, &info);
+    CHECK(info.kkt_backend == expect, "method %d, not %d", (int)info.kkt_backend, (int)expect);
+    CHECK(tscvx_solve(ws) == TSCVX_SOLVED, "stage problem unsolved (method %d)", (int)expect);
+    tscvx_float x0[UP_N], x1[UP_N], y[UP_P], z[UP_M], s[UP_M];
+    CHECK(tscvx_get_solution(ws, x0, y, z, s) == TSCVX_SETUP_OK, "solution");
+    tscvx_kkt *k = &ws->kkt;
+    tscvx_banded *bd = &ws->bd;
+    upset_site sites[64];
+    int ns = 0;
+    const upset_site common[] = {
+        SITE("P.i[3]", ws->P.i[3], 0, 0),      SITE("A.p[4]", ws->A.p[4], 0, 0),
+        SITE("A.i[6]", ws->A.i[6], 0, 0),      SITE("G.p[5]", ws->G.p[5], 0, 0),
+        SITE("G.i[7]", ws->G.i[7], 0, 0),      SITE("K.q[1]", ws->K.q[1], 0, 0),
+        SITE("K.off[2]", ws->K.off[2], 0, 0),  SITE("n", ws->n, 0, 1),
+        SITE("m", ws->m, 0, 1),                SITE("K.nsoc", ws->K.nsoc, 0, 1),
+        SITE("K.l", ws->K.l, 0, 1),            SITE("G.nnz", ws->G.nnz, 0, 1),
+        SITE("log_cap", ws->log_cap, 0, 1),    SITE("st.max_iter", ws->st.max_iter, 0, 1),
+        SITE("pointer G.i", ws->G.i, 2, 1),    SITE("pointer x", ws->x, 2, 1),
+        SITE("pointer log", ws->log, 2, 1),    SITE("kkt.nexp", k->nexp, 0, 1)};
+    for (size_t t = 0; t < sizeof common / sizeof common[0]; t++) sites[ns++] = common[t];
+    if (expect == TSCVX_KKT_BANDED) {
+        const upset_site banded[] = {
+            SITE("bd.gp[2]", bd->gp[2], 0, 0),         SITE("bd.gvar[5]", bd->gvar[5], 0, 0),
+            SITE("bd.loc[4]", bd->loc[4], 0, 0),       SITE("bd.hp[3]", bd->hp[3], 0, 0),
+            SITE("bd.mapP[2]", bd->mapP[2], 0, 0),     SITE("bd.gcp[1]", bd->gcp[1], 0, 0),
+            SITE("bd.gcone[3]", bd->gcone[3], 0, 0),   SITE("bd.Grp[4]", bd->Grp[4], 0, 0),
+            SITE("bd.Gr_k[5]", bd->Gr_k[5], 0, 0),     SITE("bd.Gr_loc[2]", bd->Gr_loc[2], 0, 0),
+            SITE("bd.cgroup[6]", bd->cgroup[6], 0, 0), SITE("bd.rp[2]", bd->rp[2], 0, 0),
+            SITE("bd.rrow[3]", bd->rrow[3], 0, 0),     SITE("bd.posA[4]", bd->posA[4], 0, 0),
+            SITE("bd.cp[2]", bd->cp[2], 0, 0),         SITE("bd.perm[5]", bd->perm[5], 0, 0),
+            SITE("bd.iperm[6]", bd->iperm[6], 0, 0),   SITE("bd.yfirst[7]", bd->yfirst[7], 0, 0),
+            SITE("bd.yp[8]", bd->yp[8], 0, 0),         SITE("bd.bp[2]", bd->bp[2], 0, 0),
+            SITE("bd.ga0[1]", bd->ga0[1], 0, 0),       SITE("bd.border[1]", bd->border[1], 1, 0),
+            SITE("bd.hasP[2]", bd->hasP[2], 1, 0),     SITE("bd.ngroup", bd->ngroup, 0, 1),
+            SITE("bd.nb", bd->nb, 0, 1),               SITE("pointer bd.yp", bd->yp, 2, 1),
+            SITE("pointer bd.Y", bd->Y, 2, 1)};
+        for (size_t t = 0; t < sizeof banded / sizeof banded[0]; t++) sites[ns++] = banded[t];
+    } else {
+        const upset_site sparse[] = {
+            SITE("kkt.Kp[5]", k->Kp[5], 0, 0),           SITE("kkt.Ki[7]", k->Ki[7], 0, 0),
+            SITE("kkt.rowblk[2]", k->rowblk[2], 1, 0),   SITE("kkt.pinv[3]", k->pinv[3], 0, 0),
+            SITE("kkt.mapP[1]", k->mapP[1], 0, 0),       SITE("kkt.mapA[2]", k->mapA[2], 0, 0),
+            SITE("kkt.mapG[3]", k->mapG[3], 0, 0),       SITE("kkt.mapDiag[4]", k->mapDiag[4], 0, 0),
+            SITE("kkt.mapCone[5]", k->mapCone[5], 0, 0), SITE("kkt.expanded[1]", k->expanded[1], 0, 0),
+            SITE("kkt.Lp[6]", k->Lp[6], 0, 0),           SITE("kkt.dim", k->dim, 0, 1),
+            SITE("kkt.lnz", k->lnz, 0, 1),               SITE("pointer kkt.Kx", k->Kx, 2, 1)};
+        for (size_t t = 0; t < sizeof sparse / sizeof sparse[0]; t++) sites[ns++] = sparse[t];
+        if (k->backend == &tscvx_backend_static) {
+            sites[ns++] = (upset_site)SITE("kkt.Li[9]", k->Li[9], 0, 0);
+            sites[ns++] = (upset_site)SITE("kkt.Rp[4]", k->Rp[4], 0, 0);
+            sites[ns++] = (upset_site)SITE("kkt.Rj[8]", k->Rj[8], 0, 0);
+        } else {
+            sites[ns++] = (upset_site)SITE("kkt.Parent[3]", k->Parent[3], 0, 0);
+        }
+    }
+    char msg[TSCVX_MESSAGE_LEN];
+    int refused = 0;
+    for (int t = 0; t < ns; t++) {
+        const upset_site *u = &sites[t];
+        flip(u);
+        memcpy(up_copy, arena3, narena);
+        tscvx_iter_log row;
+        const int solve_refused = tscvx_solve(ws) == TSCVX_INVALID_INPUT;
+        const int update_refused =
+            tscvx_update_data(ws, NULL, sp.c, NULL, NULL, NULL, NULL) == TSCVX_SETUP_NOT_READY;
+        CHECK(solve_refused && update_refused, "method %d, %s flipped: solve %s, update %s",
+              (int)expect, u->name, solve_refused ? "refused" : "ran",
+              update_refused ? "refused" : "ran");
+        CHECK(tscvx_check_workspace(ws, msg) == TSCVX_SETUP_NOT_READY &&
+                  strstr(msg, "workspace damaged") != NULL,
+              "method %d, %s flipped: check says \"%s\"", (int)expect, u->name, msg);
+        if (u->head) { /* every call reads the struct: all refuse */
+            CHECK(tscvx_warm_start(ws, x0, y, z, s) == TSCVX_SETUP_NOT_READY &&
+                      tscvx_get_solution(ws, x1, NULL, NULL, NULL) == TSCVX_SETUP_NOT_READY &&
+                      tscvx_get_info(ws, &info) == TSCVX_SETUP_NOT_READY &&
+                      tscvx_get_iter_log(ws, 1, &row) == TSCVX_SETUP_NOT_READY &&
+                      tscvx_update_settings(ws, &st) == TSCVX_SETUP_NOT_READY,
+                  "method %d, %s flipped: a call taking the struct was not refused",
+                  (int)expect, u->name);
+        }
+        CHECK(memcmp(up_copy, arena3, narena) == 0, "method %d, %s flipped: a refused call "
+              "wrote into the workspace", (int)expect, u->name);
+        flip(u);
+        refused += solve_refused;
+    }
+    for (size_t i = 0; i < UP_GUARD; i++)
+        CHECK(up_buf[i] == 0xA5 && arena3[sizeof up_copy + i] == 0xA5, "guard byte %zu", i);
+    /* restored: intact, and the same answer to the last bit */
+    CHECK(tscvx_check_workspace(ws, msg) == TSCVX_SETUP_OK && msg[0] == '\0', "restored: %s",
+          msg);
+    CHECK(tscvx_solve(ws) == TSCVX_SOLVED && tscvx_get_solution(ws, x1, NULL, NULL, NULL) ==
+              TSCVX_SETUP_OK && memcmp(x0, x1, sizeof x0) == 0,
+          "method %d: not the same answer after the upsets", (int)expect);
+    /* numbers are not covered: an iterate, rewritten at every solve, flipped between solves
+     * changes nothing; the checks stay quiet */
+    ws->x[3] = -ws->x[3];
+    CHECK(tscvx_check_workspace(ws, msg) == TSCVX_SETUP_OK, "iterate flipped: %s", msg);
+    CHECK(tscvx_solve(ws) == TSCVX_SOLVED && tscvx_get_solution(ws, x1, NULL, NULL, NULL) ==
+              TSCVX_SETUP_OK && memcmp(x0, x1, sizeof x0) == 0, "iterate flipped: answer");
+    /* settings changed through tscvx_update_settings are sealed again, not taken for damage */
+    st.max_iter = 40, st.tol_feas = 1e-7;
+    CHECK(tscvx_update_settings(ws, &st) == TSCVX_SETUP_OK && tscvx_solve(ws) == TSCVX_SOLVED,
+          "method %d: solve after new settings", (int)expect);
+    /* a damaged workspace can still be ended (cleanup follows no pointer) */
+    ws->n ^= 1 << 20;
+    CHECK(tscvx_cleanup(ws) == TSCVX_SETUP_OK, "cleanup of a damaged workspace");
+    CHECK(tscvx_check_workspace(ws, msg) == TSCVX_SETUP_NOT_READY && strstr(msg, "mark"),
+          "after cleanup: %s", msg);
+    printf("method %d: %d bit flips in the workspace, each refused before it was followed\n",
+           (int)expect, refused);
+}
+
 int main(void) {
     test_soc();
     test_qp();
@@ -954,5 +1173,9 @@ int main(void) {
     test_equilibration_reference();
     test_warm_start();
     test_fuzz_structure();
+    test_upsets(TSCVX_KKT_AUTO, 16);
+    test_upsets(TSCVX_KKT_STATIC, 16);
+    test_upsets(TSCVX_KKT_STATIC, 2);
+    test_upsets(TSCVX_KKT_LDL, 2);
     return ct_report("test_solver");
 }

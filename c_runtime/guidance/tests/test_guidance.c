@@ -16,6 +16,7 @@
 
 #include "gnc_test.h"
 #include "pdg_internal.h" /* the workspace's set-up constants (layout checksum) */
+#include "socp_internal.h" /* the SOCP workspace inside it (its set-up checksum) */
 #include "tscvx_guidance.h"
 
 static pdg_workspace *make_ws(int N, int roll_free, const pdg_settings *st, void **arena,
@@ -482,6 +483,22 @@ static int upset_map(void *ctx, int k, unsigned char *mask, int n)
     return 0;
 }
 
+/* Mask callback standing for an upset inside the SOCP workspace during a solve: at
+ * iteration 2 it flips a high bit of an entry of its equality pattern (ctx: the workspace;
+ * the bit flipped back by the test). */
+static tscvx_int *socp_upset_at;
+
+static int upset_socp(void *ctx, int k, unsigned char *mask, int n)
+{
+    pdg_workspace *ws = (pdg_workspace *)ctx;
+    (void)mask, (void)n;
+    if (k == 2) {
+        socp_upset_at = &ws->socp->A.i[7];
+        *socp_upset_at ^= 1 << 20;
+    }
+    return 0;
+}
+
 static void test_solve(pdg_workspace *ws, int with_masks)
 {
     pdg_scenario s;
@@ -560,6 +577,25 @@ static void test_solve(pdg_workspace *ws, int with_masks)
         CHECK(pdg_solve(ws, &s, NULL, &r) == PDG_INVALID_INPUT); /* and then by the checksum */
         ws->dest[5] ^= 1 << 20;
         CHECK(pdg_solve(ws, &s, NULL, &r) == PDG_SOLVED);
+        /* the SOCP workspace's equality pattern upset within the solve: the next subproblem's
+         * data update and solve refuse it by its checksum (nothing followed: valgrind and
+         * ASan), the solve ends with the SOCP runtime's reason, and so does the next one
+         * until the bit is back */
+        o.mask_fn = upset_socp;
+        socp_upset_at = NULL;
+        CHECK(pdg_solve(ws, &s, &o, &r) == PDG_SOLVER_ERROR);
+        CHECK(strstr(r.message, "iteration 2: conic solver returned invalid_input: workspace "
+                                "damaged") != NULL);
+        printf("SOCP upset at iteration 2: %s\n", r.message);
+        CHECK(pdg_solve(ws, &s, NULL, &r) == PDG_SOLVER_ERROR);
+        CHECK(strstr(r.message, "iteration 1: conic solver returned invalid_input: workspace "
+                                "damaged") != NULL);
+        CHECK(socp_upset_at != NULL);
+        if (socp_upset_at) {
+            *socp_upset_at ^= 1 << 20;
+        }
+        CHECK(pdg_solve(ws, &s, NULL, &r) == PDG_SOLVED);
+        CHECK(x[PDG_NSTATE * 49 + 13] == mf); /* the same landing, to the last bit */
     }
     /* boundary conditions hold exactly enough */
     CHECK(fabs(x[0] - 4.0) < 1e-7 && fabs(x[PDG_NSTATE * 49 + 3] + 0.1) < 1e-7);
