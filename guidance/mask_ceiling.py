@@ -28,7 +28,7 @@ import numpy as np
 
 from guidance.atomic import atomic_write
 from guidance.dataset_run import scvx_solver
-from guidance.errors import UNREADABLE_NPZ, InputError
+from guidance.errors import UNREADABLE_NPZ, InputError, npz_damage
 from guidance.params import Scenario, SCvxSettings
 from guidance.pool import pool_results
 from guidance.provenance import provenance
@@ -210,7 +210,7 @@ def _read_masks(path: Path) -> list[np.ndarray]:
             names = sorted(f.files, key=lambda k: int(k.removeprefix("arr_")))
             masks = [f[k] for k in names]
     except UNREADABLE_NPZ as exc:
-        problem = f"not readable ({type(exc).__name__}: {exc})"
+        problem = npz_damage(exc)
     else:
         bad = [m for m in masks if m.ndim != 2 or m.dtype != np.uint8 or m.max(initial=0) > 1]
         if not bad and len({m.shape[1] for m in masks}) <= 1:

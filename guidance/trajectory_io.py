@@ -17,7 +17,13 @@ from pathlib import Path
 import numpy as np
 
 from guidance.atomic import atomic_write
-from guidance.errors import UNREADABLE_NPZ, DuplicateKeyError, InputError, unique_keys
+from guidance.errors import (
+    UNREADABLE_NPZ,
+    DuplicateKeyError,
+    InputError,
+    npz_damage,
+    unique_keys,
+)
 from guidance.params import Params, Scenario, SCvxSettings, rk4_steps_per_interval
 from guidance.provenance import provenance
 from guidance.scenario import scenario_to_dict
@@ -116,7 +122,7 @@ def _load(path: str | Path) -> dict[str, object]:
     except InputError:
         raise  # already names the file and says what is wrong
     except UNREADABLE_NPZ as exc:
-        raise InputError(f"{path}: not a readable trajectory file ({exc})") from exc
+        raise InputError(f"{path}: not a readable trajectory file: {npz_damage(exc)}") from exc
     return out
 
 

@@ -338,10 +338,11 @@ def test_a_file_without_its_scenario_says_what_is_not_checked(
     assert "initial state vs scenario" not in out
 
 
-def test_damaged_or_crafted_archives_are_refused_with_exit_2(tmp_path: Path) -> None:
+def test_damaged_or_crafted_archives_are_refused_with_exit_2(tmp_path: Path, capsys) -> None:
     """A compressed member with a bad CRC (zlib.error), deeply nested JSON in an entry
     (RecursionError) and a member whose header claims 10^12 values (MemoryError) escaped
-    read_trajectory as tracebacks (exit 1); all three are now 'not a readable trajectory file'."""
+    read_trajectory as tracebacks (exit 1); all three are now 'not a readable trajectory file'.
+    The damaged one is said to be damaged, not with zlib's words (until 27 Nov)."""
     import zipfile
 
     import numpy as np
@@ -374,3 +375,8 @@ def test_damaged_or_crafted_archives_are_refused_with_exit_2(tmp_path: Path) -> 
     cases["huge"] = huge
     for name, path in cases.items():
         assert main(["verify", str(path)]) == 2, name
+        err = capsys.readouterr().err
+        assert f"{path}: not a readable trajectory file" in err, name
+    assert main(["verify", str(damaged)]) == 2
+    err = capsys.readouterr().err
+    assert "damaged (not an .npz numpy can read)" in err and "decompress" not in err
