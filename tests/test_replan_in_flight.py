@@ -25,6 +25,7 @@ from guidance.cli import main
 from guidance.errors import InputError
 from guidance.guess import plan_remainder
 from guidance.params import InitialState, Scenario
+from guidance.paths import BUILD_DIR
 from guidance.scenario import scenario_to_dict
 from guidance.scvx import SCvxResult
 from guidance.trajectory_io import read_trajectory
@@ -121,7 +122,7 @@ def test_the_plain_c_example_replans(plan: SCvxResult) -> None:
     import re
     import subprocess
 
-    example = cguidance.LIB_PATH.parent / "pdg_example"
+    example = BUILD_DIR / "pdg_example"  # not beside the library: `make coverage` moves that
     run = subprocess.run([str(example)], capture_output=True, text=True, check=False, timeout=120)
     assert run.returncode == 0, run.stdout[-2000:] + run.stderr
     summary = re.search(r"subproblems (\d+), t_f [\d.]+, m_f ([\d.]+)", run.stdout)
