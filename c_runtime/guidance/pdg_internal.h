@@ -118,6 +118,9 @@ struct pdg_workspace {
     /* 1 while a solve runs: a callback calling back into this workspace (another solve, a
      * T-SCvx guess) would overwrite the running solve's buffers, so it is refused */
     int busy;
+    /* the running solve's result: a refused call from its callback leaves it untouched (its
+     * IPM iteration count is the call's budget) */
+    const pdg_result *running;
     /* the SOCP runtime's iteration limit now: socp_max_iter, or less where the call's
      * budget (socp_max_iter_total) binds */
     int socp_cap;

@@ -657,6 +657,7 @@ static pdg_setup_status build(void *mem, size_t bytes, const pdg_params *vehicle
     }
     ws->arena_bytes = bytes;
     ws->busy = 0;
+    ws->running = NULL;
     ws->socp_cap = st->socp_max_iter;
     ws->socp_polish = 0;
     ws->layout_sum = pdg_layout_sum(ws);
@@ -1089,7 +1090,8 @@ static pdg_status diagnose(pdg_workspace *ws, double vc, double defect, double v
 }
 
 /* 1: ws->mask holds iteration k's mask; 0: the full problem; -1: the callback answered
- * neither (its answer in *answer), which stops the solve. */
+ * neither (its answer in *answer), which stops the solve; -2: the callback set the workspace
+ * up again or wrote over it (no longer set up, or no longer busy), which stops it too. */
 static int mask_for(pdg_workspace *ws, const pdg_options *o, int k, int *answer)
 {
     const int n = NC * ws->N;
@@ -1103,6 +1105,9 @@ static int mask_for(pdg_workspace *ws, const pdg_options *o, int k, int *answer)
     }
     if (o->mask_fn) {
         *answer = o->mask_fn(o->mask_ctx, k, ws->mask, n);
+        if (ws->magic != PDG_WS_MAGIC || !ws->busy) { /* (the checksum is the next call's) */
+            return -2; /* the callback set this arena up again or wrote over it */
+        }
         if (*answer != 0 && *answer != 1) {
             return -1; /* an error code, not a mask: whatever the buffer holds is not used */
         }
@@ -1277,6 +1282,7 @@ typedef struct {
     int stalled;       /* rejected at the smallest radius: the same subproblem forever */
     int spent;         /* the IPM iteration budget (socp_max_iter_total) is spent */
     int polishing;     /* the next subproblem is the polish (pdg_settings.polish) */
+    int lost;          /* a callback set the workspace up again or wrote over it */
 } scvx_state;
 
 /* Step 1 (T-SCvx): the caller's mask for iteration k + 1 plus what the full-constraint guard
@@ -1287,6 +1293,13 @@ static int iteration_mask(pdg_workspace *ws, const pdg_options *opt, const scvx_
 {
     int answer = 0, i;
     const int has_mask = s->have_masks ? mask_for(ws, opt, s->k + 1, &answer) : 0;
+    if (has_mask == -2) {
+        snprintf(msg, PDG_MESSAGE_LEN,
+                 "masks: the mask callback of iteration %d set the workspace up again or wrote "
+                 "over its arena: the solve stops, its record lost (set the workspace up again)",
+                 s->k + 1);
+        return -2;
+    }
     if (has_mask < 0) {
         snprintf(msg, PDG_MESSAGE_LEN,
                  "masks: the mask callback answered %d for iteration %d (1: it wrote a "
@@ -1489,6 +1502,11 @@ static int scvx_iteration(pdg_workspace *ws, const pdg_options *opt, scvx_state 
         return 0;
     }
     const int has_mask = iteration_mask(ws, opt, s, &tau_r, res->message);
+    if (has_mask == -2) { /* nothing of the workspace is this solve's any more */
+        s->lost = 1;
+        *status = PDG_INVALID_INPUT;
+        return 0;
+    }
     if (has_mask < 0) {
         ws->n_log--;
         *status = PDG_INVALID_INPUT;
@@ -1616,7 +1634,13 @@ pdg_status pdg_solve(pdg_workspace *ws, const pdg_scenario *scenario, const pdg_
 int pdg_result_begin(pdg_workspace *ws, pdg_result *res)
 {
     if (!res) {
+        if (pdg_ws_idle(ws)) { /* refused like any other call: no stale record left */
+            ws->n_log = ws->n_masks_out = 0;
+        }
         return -1;
+    }
+    if (PDG_WS_READY(ws) && ws->busy && res == ws->running) {
+        return -1; /* from a callback, with the running solve's own result: left as it is */
     }
     res->status = PDG_INVALID_INPUT;
     res->message[0] = '\0';
@@ -1643,7 +1667,7 @@ static pdg_status run_scvx(pdg_workspace *ws, const pdg_scenario *scenario,
                            const pdg_options *opt, pdg_result *res, double eta_init)
 {
     pdg_status status;
-    scvx_state s = {0, 0.0, NAN, NAN, NAN, INFINITY, 0, 0, 0, 0, 0, 0};
+    scvx_state s = {0, 0.0, NAN, NAN, NAN, INFINITY, 0, 0, 0, 0, 0, 0, 0};
     int it;
 
     status = start(ws, scenario, opt, res, &s.J, &s.defect, &s.viol);
@@ -1667,10 +1691,12 @@ static pdg_status run_scvx(pdg_workspace *ws, const pdg_scenario *scenario,
         res->m_f_before_polish = ws->x[(size_t)(ws->N - 1) * NX + IM];
         res->polish = polish(ws, opt, &s, res);
     }
-    to_physical(ws, ws->z, res->x, res->u, &res->t_f);
+    if (status != PDG_INVALID_INPUT) { /* a stopped call returns no trajectory (t_f NaN) */
+        to_physical(ws, ws->z, res->x, res->u, &res->t_f);
+    }
     res->status = status;
     res->iterations = s.k;
-    res->subproblems_solved = ws->n_log;
+    res->subproblems_solved = s.lost ? 0 : ws->n_log;
     res->max_defect = s.defect;
     res->max_violation = s.viol;
     return status;
@@ -1685,8 +1711,12 @@ pdg_status pdg_solve_from(pdg_workspace *ws, const pdg_scenario *scenario,
         return PDG_INVALID_INPUT;
     }
     ws->busy = 1; /* pdg_result_begin and pdg_ws_idle refuse calls from its callbacks */
+    ws->running = res;
     status = run_scvx(ws, scenario, opt ? opt : &no_options, res, eta_init);
-    ws->busy = 0;
+    if (ws->running == res) { /* not when a callback set it up again (running NULL) */
+        ws->busy = 0;
+        ws->running = NULL;
+    }
     return status;
 }
 
@@ -1758,6 +1788,9 @@ pdg_setup_status pdg_arena_high_water(const pdg_workspace *ws, size_t *bytes)
 pdg_setup_status pdg_problem_size(const pdg_workspace *ws, int *n, int *p, int *m, int *nnz_A,
                                   int *nnz_G)
 {
+    if (!ws) {
+        return PDG_SETUP_NULL_ARGUMENT; /* as the record's getters */
+    }
     if (!PDG_WS_READY(ws)) {
         return PDG_SETUP_NOT_READY;
     }

@@ -188,17 +188,12 @@ typedef struct {
     double *logits; /* 7N, in the guidance arena */
     int last_k;     /* k of the logits (0: none) */
     int predicted, failures;
-    tscvx_nn_status refused; /* TSCVX_NN_BAD_BUFFER: the buffers overlap, the call stops */
 } mask_ctx;
 
-/* A failed inference falls back to the full subproblem (always safe); overlapping buffers
- * are a configuration error that would recur at every k: the call stops (-1). */
-static int mask_failed(mask_ctx *c, tscvx_nn_status st)
+/* A failed inference falls back to the full subproblem (always safe). Overlapping buffers,
+ * a configuration error that would recur at every k, are refused before the call starts. */
+static int mask_failed(mask_ctx *c)
 {
-    if (st == TSCVX_NN_BAD_BUFFER) {
-        c->refused = st;
-        return -1;
-    }
     c->failures++;
     return 0;
 }
@@ -212,22 +207,52 @@ static int network_mask(void *ctx, int k, unsigned char *mask, int n)
         c->last_k = 0;
         st = tscvx_nn_run(c->net, c->input, THETA + 1, c->logits, n);
         if (st != TSCVX_NN_OK) {
-            return mask_failed(c, st);
+            return mask_failed(c);
         }
         c->last_k = k;
     }
     st = tscvx_nn_tight_mask(c->net, c->logits, n, mask);
     if (st != TSCVX_NN_OK) {
-        return mask_failed(c, st);
+        return mask_failed(c);
     }
     c->predicted++;
     return 1;
 }
 
+/* The buffers a network reads and writes in the call (input: theta [+ k] at `input`; the
+ * outputs in the guidance arena) apart from its arena and blob: a network arena that holds
+ * the guidance workspace is a configuration error, refused before anything runs. */
+static int buffers_refused(const pdg_workspace *ws, tscvx_nn *net, int kind,
+                           const double *input, char *msg)
+{
+    const size_t n7 = (size_t)NC * (size_t)ws->N;
+    tscvx_nn_status st;
+    if (kind == TSCVX_NN_KIND_SOLUTION) {
+        st = tscvx_nn_check_buffers(net, input, sizeof(double) * THETA, ws->nn_out,
+                                    sizeof(double) * ((size_t)ws->N * (NX + NU) + 1));
+    } else {
+        st = tscvx_nn_check_buffers(net, input, sizeof(double) * (THETA + 1), ws->nn_logits,
+                                    sizeof(double) * n7);
+        if (st == TSCVX_NN_OK) {
+            st = tscvx_nn_check_buffers(net, ws->nn_logits, sizeof(double) * n7, ws->mask, n7);
+        }
+    }
+    if (st == TSCVX_NN_OK) {
+        return 0;
+    }
+    snprintf(msg, PDG_MESSAGE_LEN,
+             "nets: the %s network: %s (its arena as given to tscvx_nn_init must not hold the "
+             "guidance workspace)",
+             kind == TSCVX_NN_KIND_SOLUTION ? "solution" : "constraint",
+             tscvx_nn_status_message(st));
+    return 1;
+}
+
 /* Every input of pdg_solve_tscvx, checked before any inference; the warm start's radius into
- * *warm_eta. 0, or -1 with the message in res. */
+ * *warm_eta. 0, or -1 with the message in res. `input`: the call's network input buffer. */
 static int check_tscvx_call(const pdg_workspace *ws, const pdg_scenario *s,
-                            const pdg_tscvx_options *o, pdg_result *res, double *warm_eta)
+                            const pdg_tscvx_options *o, const double *input, pdg_result *res,
+                            double *warm_eta)
 {
     if (!o) {
         snprintf(res->message, PDG_MESSAGE_LEN, "nets: the T-SCvx options must be given");
@@ -240,7 +265,11 @@ static int check_tscvx_call(const pdg_workspace *ws, const pdg_scenario *s,
     if (pdg_check_workspace_scenario(ws, s, res->message) ||
         (o->solution && check_net(o->solution, TSCVX_NN_KIND_SOLUTION, &s->params, res->message)) ||
         (o->constraint &&
-         check_net(o->constraint, TSCVX_NN_KIND_CONSTRAINT, &s->params, res->message))) {
+         check_net(o->constraint, TSCVX_NN_KIND_CONSTRAINT, &s->params, res->message)) ||
+        (o->solution &&
+         buffers_refused(ws, o->solution, TSCVX_NN_KIND_SOLUTION, input, res->message)) ||
+        (o->constraint &&
+         buffers_refused(ws, o->constraint, TSCVX_NN_KIND_CONSTRAINT, input, res->message))) {
         return -1;
     }
     /* 0 stands for Table 1's radius, which the settings' bounds must admit when it is used */
@@ -275,13 +304,13 @@ pdg_status pdg_solve_tscvx(pdg_workspace *ws, const pdg_scenario *s,
     if (pdg_result_begin(ws, res) != 0) {
         return PDG_INVALID_INPUT;
     }
-    if (check_tscvx_call(ws, s, o, res, &warm_eta) != 0) {
+    memset(&mc, 0, sizeof mc);
+    if (check_tscvx_call(ws, s, o, mc.input, res, &warm_eta) != 0) {
         return PDG_INVALID_INPUT;
     }
     N = ws->N;
     memset(&opt, 0, sizeof opt);
     opt.clock_s = o->clock_s;
-    memset(&mc, 0, sizeof mc);
     pdg_theta_of(s, mc.input);
     eta = ws->st.eta_init; /* the reduced radius goes with the warm start only */
     if (o->solution) {
@@ -301,12 +330,6 @@ pdg_status pdg_solve_tscvx(pdg_workspace *ws, const pdg_scenario *s,
         opt.mask_ctx = &mc;
     }
     status = pdg_solve_from(ws, s, &opt, res, eta);
-    if (mc.refused) { /* the loop's "mask callback answered -1", said as what it is */
-        snprintf(res->message, PDG_MESSAGE_LEN,
-                 "nets: the constraint network: %s (its arena as given to tscvx_nn_init must "
-                 "not hold the guidance workspace)",
-                 tscvx_nn_status_message(mc.refused));
-    }
     if (rep) {
         rep->warm_started = o->solution != NULL;
         rep->masks_predicted = mc.predicted;

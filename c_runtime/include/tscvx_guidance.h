@@ -18,7 +18,8 @@
  *        scratch. If the scratch is too small it returns PDG_SETUP_SCRATCH_TOO_SMALL with
  *        `need` = a larger scratch size to retry with (at most two retries: the first learns
  *        the pattern size, the second the analysis size). On success `need` = arena bytes.
- *        The scratch may be the arena that will be given to pdg_setup.
+ *        The scratch may be the arena that will be given to pdg_setup; its contents are
+ *        overwritten (a workspace set up in it is gone).
  *   3. pdg_setup(&ws, arena, bytes, &scn.params, &st)
  *        builds the subproblem's sparsity (CSC, fixed from now on), the SOCP workspace and
  *        every buffer (discretization, iterates, log, masks) inside the arena.
@@ -28,6 +29,13 @@
  *        the message in result.message, and nothing is solved.
  *   5. pdg_get_log / pdg_get_mask / pdg_arena_high_water  -- the last solve's record.
  *   6. cleanup is trivial: the caller owns the arena.
+ *
+ * Callbacks (pdg_options.mask_fn, clock_s) may read the running solve's record and solve on
+ * other workspaces. A call that would write the running workspace (pdg_solve,
+ * pdg_solve_tscvx, pdg_tscvx_guess, pdg_debug_guess on it) is refused as busy, and leaves a
+ * result it was given that is the running solve's own untouched. pdg_setup or
+ * pdg_workspace_size over the running workspace's arena ends the solve when the mask
+ * callback returns (PDG_INVALID_INPUT, "set the workspace up again or wrote over its arena").
  *
  * Every call taking the workspace checks its mark and a checksum of what pdg_setup fixed (the
  * sizes, settings and layout, the pointers into the arena, the map of the subproblem's
@@ -110,7 +118,11 @@ typedef enum {
                               accepted iterate */
     PDG_SOLVER_ERROR,      /* a subproblem could not be solved (or the model failed) */
     PDG_INVALID_INPUT,     /* bad scenario, guess (NaN/inf, t_f <= 0, one of x, u alone),
-                              mask or workspace: nothing was solved. A finite guess where
+                              mask or workspace: nothing was solved. A running solve stopped
+                              by its mask callback (an error answer, or the workspace set up
+                              again from it) or by its workspace damaged ends so too: the log
+                              keeps the subproblems solved before. Either way nothing is
+                              returned (t_f NaN, x and u untouched). A finite guess where
                               the model cannot be evaluated (m = 0 at a node, far outside
                               the model's range) is PDG_SOLVER_ERROR, "model evaluation
                               failed at the initial guess"; one it evaluates but no landing
@@ -218,8 +230,8 @@ typedef struct {
 
 /* Returns k-th mask (7N bytes, nonzero = keep) into `mask` for SCvx iteration k = 1, 2, ...;
  * returns 1 when it wrote a mask, 0 to solve the full problem at that iteration. Any other
- * answer (an error code) stops the solve with PDG_INVALID_INPUT and a "masks:" message; the
- * result holds the last accepted iterate. A solve with masks (table or callback) is T-SCvx
+ * answer (an error code) stops the solve with PDG_INVALID_INPUT and a "masks:" message;
+ * nothing is returned (t_f NaN, x and u untouched). A solve with masks (table or callback) is T-SCvx
  * even where a mask is full: its trust radius follows Algorithm 2 (pdg_settings.tau_r_update). */
 typedef int (*pdg_mask_fn)(void *ctx, int k, unsigned char *mask, int n_entries);
 
@@ -246,8 +258,8 @@ typedef struct {
                                       error as "scenario field 'q0': ..." */
     double *x;                /* caller array N x 14 (node-major): the trajectory */
     double *u;                /* caller array N x 3: thrust T_B at the nodes (FOH) */
-    double t_f;               /* NaN, x and u untouched: the solve stopped before its first
-                                 subproblem (invalid input, the model failing at the guess) */
+    double t_f;               /* NaN, x and u untouched: nothing returned (PDG_INVALID_INPUT,
+                                 or the model failing at the guess) */
     int iterations;           /* accepted steps */
     int subproblems_solved;   /* convex subproblems solved, rejections included */
     double max_defect;        /* max |x_{k+1} - F(x_k, u_k, u_k+1, t_f)|, physical units */
@@ -327,7 +339,8 @@ pdg_setup_status pdg_get_mask(const pdg_workspace *ws, int k, unsigned char *mas
 
 /* Most bytes of the arena ever used, setup scratch included (statuses as above), and the size
  * of the subproblem: variables n, equality rows p, cone rows m, nonzeros of A and G (any
- * output may be NULL; PDG_SETUP_NOT_READY, outputs untouched, when not set up). */
+ * output may be NULL; PDG_SETUP_NULL_ARGUMENT for a NULL workspace, PDG_SETUP_NOT_READY,
+ * outputs untouched, when not set up). */
 pdg_setup_status pdg_arena_high_water(const pdg_workspace *ws, size_t *bytes);
 pdg_setup_status pdg_problem_size(const pdg_workspace *ws, int *n, int *p, int *m, int *nnz_A,
                                   int *nnz_G);

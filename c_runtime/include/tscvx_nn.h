@@ -171,6 +171,14 @@ tscvx_nn_status tscvx_nn_tight_mask(const tscvx_nn *net, const double *logits, i
 
 tscvx_nn_status tscvx_nn_get_info(const tscvx_nn *net, tscvx_nn_info *info);
 
+/* The buffer rule of tscvx_nn_run and tscvx_nn_tight_mask alone, in bytes: TSCVX_NN_OK when
+ * an inference reading `input` and writing `output` would take them, TSCVX_NN_BAD_BUFFER when
+ * they overlap as those calls refuse. For a caller that fixes its buffers once and wants the
+ * refusal before it starts (pdg_solve_tscvx checks its own this way). */
+tscvx_nn_status tscvx_nn_check_buffers(const tscvx_nn *net, const void *input,
+                                       size_t input_bytes, const void *output,
+                                       size_t output_bytes);
+
 /* Runs the probes recorded in the blob; *max_rel_err (may be NULL) = max |y - y_rec| /
  * max(1, |y_rec|). TSCVX_NN_SELF_TEST_FAILED above 1e-4 (the exporter's probe tolerance), and
  * for a blob that records no probe (max_rel_err NaN): nothing tested is not a pass. */

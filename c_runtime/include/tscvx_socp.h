@@ -57,7 +57,9 @@
  * that setup writes last and cleanup clears (and that the KKT method pointer is one of the
  * library's), so a workspace whose arena was reused or overwritten is refused
  * (TSCVX_SETUP_NOT_READY; tscvx_solve: TSCVX_INVALID_INPUT) before any of its pointers is
- * followed. Then it checks a checksum of what setup fixed and the call relies on, so that a
+ * followed, when the reuse reached the mark or (below) what the checksums cover; the numbers
+ * (data, iterates, the solution the getters copy) are covered by neither: the arena is the
+ * workspace's alone until tscvx_cleanup. Then it checks a checksum of what setup fixed and the call relies on, so that a
  * bit flipped there with the mark intact (a single-event upset) is refused the same way,
  * nothing written, instead of sending a loop out of bounds; tscvx_check_workspace says
  * which check failed. Two 64-bit sums, taken at setup:
@@ -203,6 +205,10 @@ typedef struct {
 } tscvx_settings;
 
 /* ---- information after a solve ----------------------------------------------------------- */
+/* After setup or a data update (before the next solve): status TSCVX_UNSOLVED
+ * (TSCVX_INVALID_INPUT for a refused update), iterations, factorizations, warm_started and
+ * restart_iterations 0, the costs, gaps, residuals and mu NaN; the method, sizes, arena and
+ * Ruiz fields those of the set-up and current data. */
 
 typedef struct {
     tscvx_solve_status status;

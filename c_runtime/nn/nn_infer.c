@@ -212,6 +212,20 @@ int nn_buffers_apart(const tscvx_nn *net, const void *input, size_t n_in, const 
     return net->weights_in_arena || !nn_overlap(out, n_out, blob, blob_len);
 }
 
+tscvx_nn_status tscvx_nn_check_buffers(const tscvx_nn *net, const void *input,
+                                       size_t input_bytes, const void *output,
+                                       size_t output_bytes)
+{
+    if (!net || !input || !output) {
+        return TSCVX_NN_NULL_ARGUMENT;
+    }
+    if (!nn_live(net)) {
+        return TSCVX_NN_NOT_READY;
+    }
+    return nn_buffers_apart(net, input, input_bytes, output, output_bytes) ? TSCVX_NN_OK
+                                                                            : TSCVX_NN_BAD_BUFFER;
+}
+
 tscvx_nn_status tscvx_nn_run(tscvx_nn *net, const double *input, int n_in, double *output,
                              int n_out)
 {

@@ -244,9 +244,11 @@ static tscvx_setup_status check_sizes(const tscvx_data *d, char *msg) {
 
 /* The cones: l >= 0 orthant rows, then nsoc cones of q[k] >= 1 rows, m rows in all. */
 static tscvx_setup_status check_cones(const tscvx_data *d, char *msg) {
-    if (d->l < 0 || d->nsoc < 0 || (d->nsoc > 0 && d->q == NULL))
-        return refuse(msg, TSCVX_SETUP_BAD_CONES, "l = %d, nsoc = %d%s: need l, nsoc >= 0",
-                      d->l, d->nsoc, d->nsoc > 0 && d->q == NULL ? ", q NULL" : "");
+    if (d->l < 0 || d->nsoc < 0)
+        return refuse(msg, TSCVX_SETUP_BAD_CONES, "l = %d, nsoc = %d: need l, nsoc >= 0",
+                      d->l, d->nsoc);
+    if (d->nsoc > 0 && d->q == NULL)
+        return refuse(msg, TSCVX_SETUP_NULL_ARGUMENT, "nsoc = %d, q NULL", d->nsoc);
     long long rows = d->l;
     for (tscvx_int k = 0; k < d->nsoc; k++) {
         if (d->q[k] < 1)
@@ -488,9 +490,19 @@ static void copy_problem(tscvx_workspace *ws, const tscvx_data *d, tscvx_int *q,
     if (d->m > 0) copy_floats(ws->h, d->h, d->m);
 }
 
+/* New data (set up, taken or refused): info's status says so and no figure of the last solve is left
+ * to be read as this data's. */
+static void forget_solve(tscvx_workspace *ws, tscvx_solve_status status) {
+    tscvx_info *in = &ws->info;
+    in->status = status;
+    in->iterations = in->factorizations = in->warm_started = in->restart_iterations = 0;
+    in->pcost = in->dcost = in->gap_abs = in->gap_rel = NAN;
+    in->pres = in->dres = in->mu = NAN;
+}
+
 /* What set-up reports in info: the method and the size of what it factors */
 static void report_setup(tscvx_workspace *ws, int banded) {
-    ws->info.status = TSCVX_UNSOLVED;
+    forget_solve(ws, TSCVX_UNSOLVED);
     ws->info.kkt_backend = ws->method->id == TSCVX_KKT_BANDED ? TSCVX_KKT_BANDED
                            : ws->kkt.backend == &tscvx_backend_ldl ? TSCVX_KKT_LDL
                                                                    : TSCVX_KKT_STATIC;
@@ -694,7 +706,7 @@ tscvx_setup_status tscvx_update_data(tscvx_workspace *ws, const tscvx_float *Px,
         s = TSCVX_SETUP_P_NOT_PSD;
     if (s != TSCVX_SETUP_OK) { /* not ready until a valid update */
         ws->ready = 0;
-        ws->info.status = TSCVX_INVALID_INPUT;
+        forget_solve(ws, TSCVX_INVALID_INPUT);
         return s;
     }
     data_norms(ws, Px, c, Ax, b, Gx, h);
@@ -704,11 +716,11 @@ tscvx_setup_status tscvx_update_data(tscvx_workspace *ws, const tscvx_float *Px,
     if ((Px || ws->p_refused) && ws->P.nnz > 0) ws->p_refused = ws->method->check_p(ws) != 0;
     if (ws->p_refused) { /* not ready, as above */
         ws->ready = 0;
-        ws->info.status = TSCVX_INVALID_INPUT;
+        forget_solve(ws, TSCVX_INVALID_INPUT);
         return TSCVX_SETUP_P_NOT_PSD;
     }
     ws->ready = 1;
-    ws->info.status = TSCVX_UNSOLVED;
+    forget_solve(ws, TSCVX_UNSOLVED);
     return TSCVX_SETUP_OK;
 }
 

@@ -229,6 +229,9 @@ static void test_bad_input(void) {
     CHECK(try_setup(&d) == TSCVX_SETUP_NULL_ARGUMENT, "NULL row indices accepted");
     NAMES(d, TSCVX_SETUP_NULL_ARGUMENT, "Gp, Gi, Gx or h is NULL with m = 3");
     CHECK(tscvx_check_data(NULL, msg) == TSCVX_SETUP_NULL_ARGUMENT, "check_data(NULL)");
+    d = ok;
+    d.q = NULL; /* a NULL pointer, as the others (it was BAD_CONES) */
+    NAMES(d, TSCVX_SETUP_NULL_ARGUMENT, "nsoc = 1, q NULL");
 #undef NAMES
     tscvx_default_settings(&st);
     CHECK(tscvx_setup(&ws, arena, 64, &ok, &st) == TSCVX_SETUP_ARENA_TOO_SMALL, "tiny arena");
@@ -255,19 +258,33 @@ static void test_update(void) {
     CHECK(tscvx_get_iter_log(ws, 0, &row) == TSCVX_SETUP_NO_SOLUTION, "log before a solve");
     CHECK(tscvx_get_solution(ws, x, NULL, NULL, NULL) == TSCVX_SETUP_NO_SOLUTION,
           "solution before a solve");
+    tscvx_info info, fresh_info;
+    tscvx_get_info(ws, &info);
+    CHECK(info.status == TSCVX_UNSOLVED && info.iterations == 0 && isnan(info.pcost) &&
+              isnan(info.mu), "info after setup: %d iterations, pcost %g", (int)info.iterations,
+          info.pcost);
     CHECK(tscvx_solve(ws) == TSCVX_SOLVED, "first solve");
     CHECK(tscvx_get_iter_log(ws, 0, &row) == TSCVX_SETUP_OK, "log after a solve");
     tscvx_float h2[] = {2, 0, 0}, bad[] = {NAN, 0, 0};
     CHECK(tscvx_update_data(ws, NULL, NULL, NULL, NULL, NULL, bad) == TSCVX_SETUP_NONFINITE_DATA,
           "NaN update accepted");
+    /* review of 27 Nov: info kept the last solve's figures beside the new status */
+    tscvx_get_info(ws, &info);
+    CHECK(info.status == TSCVX_INVALID_INPUT && info.iterations == 0 &&
+              info.factorizations == 0 && isnan(info.pcost) && isnan(info.pres),
+          "info after a refused update: %d iterations, pcost %g", (int)info.iterations,
+          info.pcost);
     CHECK(tscvx_get_iter_log(ws, 0, &row) == TSCVX_SETUP_NOT_READY, "log after a bad update");
     CHECK(tscvx_solve(ws) == TSCVX_INVALID_INPUT, "solve after bad update");
     CHECK(tscvx_update_data(ws, NULL, NULL, NULL, NULL, NULL, h2) == TSCVX_SETUP_OK, "update");
     CHECK(tscvx_get_iter_log(ws, 0, &row) == TSCVX_SETUP_NO_SOLUTION, "log after an update");
+    tscvx_get_info(ws, &info);
+    CHECK(info.status == TSCVX_UNSOLVED && info.iterations == 0 && isnan(info.gap_abs) &&
+              isnan(info.dres), "info after an update: %d iterations, gap %g",
+          (int)info.iterations, info.gap_abs);
     CHECK(tscvx_solve(ws) == TSCVX_SOLVED, "second solve");
     tscvx_get_solution(ws, x, NULL, NULL, NULL);
     CHECK(fabs(x[0] - sqrt(2.0)) < 1e-7, "updated x %g", x[0]);
-    tscvx_info info, fresh_info;
     tscvx_get_info(ws, &info);
     tscvx_float Gx2[] = {-3, -0.5}; /* |(3 x1, x2 / 2)| <= 2: another equilibration */
     CHECK(tscvx_update_data(ws, NULL, NULL, NULL, NULL, Gx2, NULL) == TSCVX_SETUP_OK, "G update");

@@ -685,6 +685,112 @@ static void test_iteration_budget(void)
     free(arena);
 }
 
+/* What a mask callback of test_callbacks does into its own solve, from iteration `at` on. */
+typedef struct {
+    pdg_workspace *ws;
+    const pdg_scenario *s;
+    pdg_result *running; /* the result the solve was given */
+    void *arena;
+    size_t bytes;
+    const pdg_settings *st;
+    int mode; /* 0: pdg_solve with the running result; 1: pdg_setup over the arena */
+    int at, refused;
+} misuse_ctx;
+
+static int misuse(void *ctx, int k, unsigned char *mask, int n)
+{
+    misuse_ctx *c = (misuse_ctx *)ctx;
+    pdg_workspace *again = NULL;
+    (void)mask, (void)n;
+    if (k < c->at) {
+        return 0;
+    }
+    if (c->mode == 0) {
+        c->refused += pdg_solve(c->ws, c->s, NULL, c->running) == PDG_INVALID_INPUT;
+    } else if (k == c->at) {
+        CHECK(pdg_setup(&again, c->arena, c->bytes, &c->s->params, c->st) == PDG_SETUP_OK);
+        CHECK(again == c->ws);
+    }
+    return 0;
+}
+
+/* Review of 27 Nov (an integrator's misuse of the callbacks and the result), on N = 12:
+ * - a solve called from its own mask callback with the running solve's result is refused and
+ *   leaves that result as it is: it used to zero its IPM iteration count, which is the
+ *   call's budget, so a call bounded at 80 IPM iterations ran 120 and more;
+ * - a mask callback's error answer returns no trajectory (t_f NaN, x untouched): it used to
+ *   return the last iterate, the unsolved guess at iteration 1, under PDG_INVALID_INPUT;
+ * - pdg_setup from a mask callback over the running workspace's arena stops the solve with
+ *   that reason (it used to run on, ending "conic solver returned invalid_input" with t_f 0);
+ * - a solve refused for a NULL result leaves no record of the solve before it (it used to
+ *   leave its log and masks), and pdg_problem_size takes a NULL workspace as the getters. */
+static void test_callbacks(void)
+{
+    static double x1[PDG_NSTATE * 12], u1[PDG_NCTRL * 12];
+    pdg_settings st;
+    pdg_scenario s;
+    pdg_result r;
+    pdg_options o;
+    pdg_log_row row;
+    misuse_ctx c;
+    void *arena = NULL;
+    size_t bytes = 0;
+    pdg_workspace *ws;
+    int i, rows = -1, sum = 0, n = -1;
+    pdg_default_settings(&st);
+    st.socp_max_iter_total = 80;
+    st.socp_max_iter = 30;
+    pdg_default_scenario(&s);
+    s.params.N = 12;
+    ws = make_ws(12, 1, &st, &arena, &bytes);
+    if (!ws) {
+        free(arena);
+        return;
+    }
+    memset(&o, 0, sizeof o);
+    memset(&c, 0, sizeof c);
+    c.ws = ws, c.s = &s, c.running = &r, c.arena = arena, c.bytes = bytes, c.st = &st;
+    c.at = 1;
+    o.mask_fn = misuse;
+    o.mask_ctx = &c;
+    r.x = x1;
+    r.u = u1;
+    CHECK(pdg_solve(ws, &s, &o, &r) == PDG_MAX_ITERATIONS);
+    for (i = 0; i < log_rows(ws); ++i) {
+        CHECK(pdg_get_log(ws, i, &row) == PDG_SETUP_OK);
+        sum += row.solver_iterations;
+    }
+    printf("callback re-entering with the running result: %d refused, %d IPM iterations "
+           "(budget 80), logged %d\n", c.refused, r.socp_iterations, sum);
+    CHECK(c.refused == r.subproblems_solved && c.refused > 0);
+    CHECK(sum == r.socp_iterations && sum <= 80);
+    CHECK(strstr(r.message, "IPM iteration budget spent (") == r.message);
+
+    for (i = 0; i < PDG_NSTATE * 12; ++i) {
+        x1[i] = -7.0;
+    }
+    o.mask_fn = fail_second;
+    CHECK(pdg_solve(ws, &s, &o, &r) == PDG_INVALID_INPUT);
+    CHECK(isnan(r.t_f) && x1[0] == -7.0 && x1[PDG_NSTATE * 12 - 1] == -7.0);
+    CHECK(r.subproblems_solved >= 1 && log_rows(ws) == r.subproblems_solved);
+
+    c.mode = 1;
+    c.at = 2;
+    o.mask_fn = misuse;
+    CHECK(pdg_solve(ws, &s, &o, &r) == PDG_INVALID_INPUT);
+    printf("pdg_setup from the mask callback: %s\n", r.message);
+    CHECK(strstr(r.message, "set the workspace up again or wrote over its arena") != NULL);
+    CHECK(isnan(r.t_f) && x1[0] == -7.0);
+    CHECK(pdg_solve(ws, &s, NULL, &r) == PDG_MAX_ITERATIONS); /* set up, and idle */
+
+    CHECK(pdg_log_length(ws, &rows) == PDG_SETUP_OK && rows > 0);
+    CHECK(pdg_solve(ws, &s, NULL, NULL) == PDG_INVALID_INPUT);
+    CHECK(pdg_log_length(ws, &rows) == PDG_SETUP_OK && rows == 0);
+    CHECK(pdg_problem_size(NULL, &n, NULL, NULL, NULL, NULL) == PDG_SETUP_NULL_ARGUMENT &&
+          n == -1);
+    free(arena);
+}
+
 /* The polish (pdg_settings.polish): the default landing's defects removed, the final mass
  * moved by what they had bought, its IPM iterations counted in the call's; with the budget
  * spent at convergence it is not run, and with prox_u = 0 it is off. */
@@ -921,6 +1027,7 @@ int main(void)
     const int full = getenv("PDG_TEST_QUICK") == NULL;
     test_settings_and_sizes();
     test_iteration_budget();
+    test_callbacks();
     test_polish();
     test_scenario_at_state();
     memset(&st, 0, sizeof st); /* padding zero, as the workspace's copy */

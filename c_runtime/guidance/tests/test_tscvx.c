@@ -75,12 +75,15 @@ static int guess_inside(void *ctx, int k, unsigned char *mask, int n)
     return 0;
 }
 
-/* One buffer for both (a caller sharing its memory): the constraint network's arena, as given
- * to tscvx_nn_init, spans the guidance workspace set up in its unused tail. The logits the
- * workspace holds would land in the network's arena: the call stops before any subproblem,
- * naming the network and the overlap (it used to fall back to the full problem at every k,
- * counted as mask failures only). */
-static void shared_buffer_refused(const pdg_scenario *s, const unsigned char *blob, size_t len)
+/* One buffer for both (a caller sharing its memory): a network's arena, as given to
+ * tscvx_nn_init, spans the guidance workspace set up in its unused tail. What the network
+ * would write there (the logits, the warm start) would land in its arena: the call is refused
+ * before anything runs, naming the network and the overlap, with PDG_INVALID_INPUT for either
+ * network. (The constraint network's used to fall back to the full problem at every k,
+ * counted as mask failures only; then it stopped at the first subproblem, returning the
+ * unsolved guess; the solution network's ended PDG_SOLVER_ERROR.) */
+static void shared_buffer_refused(const pdg_scenario *s, const unsigned char *blob, size_t len,
+                                  int constraint)
 {
     pdg_tscvx_options o = {0};
     pdg_tscvx_report rep;
@@ -103,10 +106,16 @@ static void shared_buffer_refused(const pdg_scenario *s, const unsigned char *bl
           PDG_SETUP_OK);
     r.x = x;
     r.u = u;
-    o.constraint = net;
+    x[0] = -7.0;
+    if (constraint) {
+        o.constraint = net;
+    } else {
+        o.solution = net;
+    }
     CHECK(pdg_solve_tscvx(ws, s, &o, &r, &rep) == PDG_INVALID_INPUT);
-    CHECK(r.subproblems_solved == 0 && rep.mask_failures == 0);
-    if (!strstr(r.message, "constraint network: overlapping buffers")) {
+    CHECK(r.subproblems_solved == 0 && rep.mask_failures == 0 && isnan(r.t_f) && x[0] == -7.0);
+    if (!strstr(r.message, constraint ? "nets: the constraint network: overlapping buffers"
+                                      : "nets: the solution network: overlapping buffers")) {
         fprintf(stderr, "message '%s' does not name the overlap\n", r.message);
         failures++;
     }
@@ -165,7 +174,8 @@ int main(int argc, char **argv)
     CHECK(strstr(r.message, "options") != NULL);
     expect_refused(ws, &s, con, NULL, "solution network given is a constraint network");
     expect_refused(ws, &s, sol, sol, "constraint network given is a solution network");
-    shared_buffer_refused(&s, blob[1], len[1]);
+    shared_buffer_refused(&s, blob[0], len[0], 0);
+    shared_buffer_refused(&s, blob[1], len[1], 1);
     bad = s;
     bad.m0 = 1.0;
     expect_refused(ws, &bad, sol, con, "scenario field 'm0'");

@@ -903,6 +903,17 @@ static void test_buffers(void)
         CHECK_ST(tscvx_nn_tight_mask(net, y, 7, (unsigned char *)bl + 200), BUF);
         CHECK(memcmp(bl, blob, len) == 0);
         CHECK_ST(tscvx_nn_tight_mask(net, bl + 16 + n_weights_of(&a) + 17, 7, m), OK);
+        /* the same rule alone, in bytes (pdg_solve_tscvx checks its buffers with it) */
+        CHECK_ST(tscvx_nn_check_buffers(net, x, sizeof x, y, sizeof y), OK);
+        CHECK_ST(tscvx_nn_check_buffers(net, x, sizeof x, arena - 7, 56), OK);
+        CHECK_ST(tscvx_nn_check_buffers(net, x, sizeof x, arena - 7, 57), BUF);
+        CHECK_ST(tscvx_nn_check_buffers(net, arena + nd / 2, 8, y, sizeof y), BUF);
+        CHECK_ST(tscvx_nn_check_buffers(net, y, sizeof y, m, 7), OK);
+        CHECK_ST(tscvx_nn_check_buffers(net, y, sizeof y, (unsigned char *)y + 55, 7), BUF);
+        CHECK_ST(tscvx_nn_check_buffers(net, x, sizeof x, bl + 20, 8), BUF);
+        CHECK_ST(tscvx_nn_check_buffers(NULL, x, sizeof x, y, sizeof y),
+                 TSCVX_NN_NULL_ARGUMENT);
+        CHECK_ST(tscvx_nn_check_buffers(net, x, sizeof x, NULL, 0), TSCVX_NN_NULL_ARGUMENT);
     }
     /* the self-test runs on buffers of its own in the arena: still runs (and fails, the
      * synthetic probes recording zeros) */
