@@ -218,9 +218,9 @@ def main(
     """The comparison, printed: 0; 1 without the C library. With ``run_dir`` each landing's
     outcomes are kept there as they finish, and the same command again solves only the
     landings it does not hold. Interrupted while solving (Ctrl-C, SIGTERM), it raises
-    Interrupted saying how far it got."""
+    Interrupted saying how far it got; a worker process that died, WorkerDiedError saying
+    what is kept."""
     from guidance.cguidance import LIB_PATH
-    from guidance.pool import WorkerDiedError
 
     st = settings or SCvxSettings()
     named = landings(catalog, n_random, files)
@@ -238,9 +238,6 @@ def main(
         _solve(jobs, done, store, len(named), workers, progress)
     except KeyboardInterrupt:
         raise Interrupted(interrupted(run_dir, len(named), len(done))) from None
-    except WorkerDiedError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 1
     names = [name for name, _ in named]
     results = [done[i] for i in range(len(named))]
     plural = "" if len(results) == 1 else "s"

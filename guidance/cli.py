@@ -17,7 +17,7 @@ from guidance import file_check
 from guidance.api import BACKENDS, METHODS, solve
 from guidance.argtypes import add_workers_option, at_least, worker_count
 from guidance.atomic import check_folder, check_outputs
-from guidance.errors import InputError, Interrupted, LibraryNotBuiltError
+from guidance.errors import InputError, Interrupted, LibraryNotBuiltError, WorkerDiedError
 from guidance.guess import plan_remainder
 from guidance.nn.conventions import KINDS, MODELS_DIR, network_file
 from guidance.params import IM, Params, Scenario, SCvxSettings
@@ -27,6 +27,7 @@ from guidance.tscvx import REDUCED_ETA_INIT
 if TYPE_CHECKING:
     from guidance.scvx import SCvxResult
 
+EXIT_FAILED = 1  # the command ran and failed (a worker process of its run died)
 EXIT_BAD_INPUT = 2
 # No trajectory to write (the solve stopped before its first subproblem). Any status with a
 # trajectory exits 0: an infeasible landing is a normal answer, not an error (DESIGN.md).
@@ -640,6 +641,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (InputError, LibraryNotBuiltError) as exc:  # input that cannot be used, or a C
         print(f"error: {exc}", file=sys.stderr)  # library the command needs is not built
         return EXIT_BAD_INPUT
+    except WorkerDiedError as exc:  # the message says what the run kept and how to go on
+        print(f"error: {exc}", file=sys.stderr)
+        return EXIT_FAILED
     except BrokenPipeError:  # the reader of stdout left (`guidance solve | head`)
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # no error at exit
         return EXIT_BROKEN_PIPE

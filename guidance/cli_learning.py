@@ -266,26 +266,21 @@ def cmd_dataset(args: argparse.Namespace) -> int:
     from guidance.dataset import pack, summary
     from guidance.dataset_run import generate
     from guidance.params import SCvxSettings
-    from guidance.pool import WorkerDiedError
 
     check_folder("--run-dir", args.run_dir)
     # before the solving, not after (the output cannot be the run's folder, made by the solve)
     check_outputs(("--output", args.output), inputs=(("--run-dir folder", args.run_dir),))
     if not args.pack_only:
-        try:
-            counts = generate(
-                args.run_dir,
-                args.n_base,
-                seed=args.seed,
-                ranges=args.ranges,
-                settings=SCvxSettings(prox_u=args.prox_u),
-                workers=worker_count(args.workers),
-                progress=not args.no_progress,
-                backend=args.backend,
-            )
-        except WorkerDiedError as exc:
-            print(f"error: {exc}", file=sys.stderr)
-            return 1
+        counts = generate(
+            args.run_dir,
+            args.n_base,
+            seed=args.seed,
+            ranges=args.ranges,
+            settings=SCvxSettings(prox_u=args.prox_u),
+            workers=worker_count(args.workers),
+            progress=not args.no_progress,
+            backend=args.backend,
+        )
         done = ", ".join(f"{n} {status}" for status, n in sorted(counts.items())) or "none"
         print(f"solved this run: {done}")
     header = pack(args.run_dir, args.output, n_base=args.n_base)
@@ -746,7 +741,6 @@ def cmd_mask_ceiling(args: argparse.Namespace) -> int:
         theta_spread,
     )
     from guidance.nn.card import card_sources, write_card
-    from guidance.pool import WorkerDiedError
 
     models = Path(args.models_dir)
     out = Path(args.json) if args.json else models / MASK_CEILING_FILE
@@ -764,14 +758,10 @@ def cmd_mask_ceiling(args: argparse.Namespace) -> int:
         n_train = _shipped_training_landings(metrics)
     std = theta_spread()
     backend = args.backend or default_backend()
-    try:
-        scores = measure(
-            args.landings, args.neighbours, eps, backend, args.seed, std,
-            workers=worker_count(args.workers), run_dir=args.run_dir or None,
-        )  # fmt: skip
-    except WorkerDiedError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 1
+    scores = measure(
+        args.landings, args.neighbours, eps, backend, args.seed, std,
+        workers=worker_count(args.workers), run_dir=args.run_dir or None,
+    )  # fmt: skip
     spacing = data_spacing(n_train, std) if n_train else None
     print(format_table(scores, args.neighbours, spacing, n_train))
     run = dict(landings=args.landings, neighbours=args.neighbours, backend=backend, seed=args.seed)

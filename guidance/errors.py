@@ -4,8 +4,10 @@ Bad user input (a scenario, setting, model or data file that must not be used) i
 :class:`InputError` (a ``ValueError``) whose message says what is wrong; the command line prints
 it and exits with code 2, before anything is written. A trajectory at which the dynamics cannot
 be evaluated is a :class:`ModelEvaluationError`; the SCvx loop turns it into a solver_error
-status, as the C library does. (``atomic.check_outputs`` refuses an output file that cannot
-be written, before the work that would fill it.)
+status, as the C library does. A resumable run whose worker process died stops with a
+:class:`WorkerDiedError`; the command line prints it and exits with code 1.
+(``atomic.check_outputs`` refuses an output file that cannot be written, before the work that
+would fill it.)
 """
 
 from __future__ import annotations
@@ -28,6 +30,12 @@ class Interrupted(KeyboardInterrupt):
 class LibraryNotBuiltError(RuntimeError):
     """A flight library or C driver the call needs is not built; the message names the file
     and the make target that builds it. The command line prints it and exits with code 2."""
+
+
+class WorkerDiedError(RuntimeError):
+    """A worker process of a resumable run died (killed by a signal: a crash in a C solver,
+    out of memory); the message (guidance.pool.worker_died) says what is kept and how to go
+    on. The command line prints it after "error: " and exits with code 1."""
 
 
 class ModelEvaluationError(ArithmeticError):

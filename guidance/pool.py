@@ -14,15 +14,13 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
+from guidance.errors import WorkerDiedError
+
 
 def limit_threads() -> None:
     """One thread per process for the numerical libraries (set before they start)."""
     for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "RAYON_NUM_THREADS"):
         os.environ[var] = "1"
-
-
-class WorkerDiedError(RuntimeError):
-    """A worker process died (killed by a signal: a crash in a C solver, out of memory)."""
 
 
 def worker_died(kept: int, total: int, run_dir: Path | None) -> WorkerDiedError:

@@ -1,19 +1,25 @@
 """What the command line does with a missing C library, an output name that is not a
 trajectory file's, a folder given as a file and a reader that leaves: one `error:` line and
-exit 2 (or the shell's 141 for the pipe), never a traceback (CLI review, 26 Nov)."""
+exit 2 (or the shell's 141 for the pipe; 1 for a worker process that died), never a
+traceback (CLI review, 26 Nov)."""
 
 from __future__ import annotations
 
+import importlib
 import os
 import subprocess
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
 
-from guidance import budget, cli
+from guidance import budget, cli, pool
+from guidance.cgnc import LIB_PATH
+from guidance.pool import WorkerDiedError
 
 ROOT = Path(__file__).resolve().parent.parent
+needs_lib = pytest.mark.skipif(not LIB_PATH.exists(), reason="libtscvx_gnc.so not built")
 
 
 def _guidance(args: list[str], env: dict[str, str] | None = None) -> subprocess.CompletedProcess:
@@ -160,3 +166,79 @@ def test_workers_means_the_same_in_every_command(command: str) -> None:
     with pytest.raises(SystemExit):
         ap.parse_args([command, "--workers", "-1"])
     assert worker_count(0) == (os.cpu_count() or 1) and worker_count(3) == 3
+
+
+def _worker_dies(run: Path) -> Callable[..., None]:
+    def solve(*args: object, **kwargs: object) -> None:
+        raise pool.worker_died(2, 6, run)  # as pool_results raises it for a dead worker
+
+    return solve
+
+
+# (the step whose pool loses a worker, the command after its run folder)
+DEAD_WORKER: dict[str, tuple[tuple[str, str], Callable[[Path], list[str]]]] = {
+    "dataset": (
+        ("guidance.dataset_run", "generate"),
+        lambda run: ["dataset", "--run-dir", str(run), "--output", f"{run}.npz"],
+    ),
+    "mask-ceiling": (
+        ("guidance.mask_ceiling", "measure"),
+        lambda run: [
+            "mask-ceiling",
+            "--run-dir",
+            str(run),
+            "--json",
+            f"{run}.json",
+            "--models-dir",
+            f"{run}.models",
+        ],
+    ),
+    "dispersion": (
+        ("guidance.dispersion", "_solve"),
+        lambda run: ["dispersion", "--landings", "6", "--run-dir", str(run)],
+    ),
+    "agreement": (
+        ("guidance.agreement", "_solve"),
+        lambda run: ["agreement", "--catalog", "default", "--landings", "5", "--run-dir", str(run)],
+    ),
+}
+
+
+@pytest.mark.parametrize("command", list(DEAD_WORKER))
+def test_a_dead_worker_is_one_error_line_saying_what_is_kept(
+    command: str, tmp_path: Path, monkeypatch, capsys
+) -> None:
+    """Each resumable command: exit 1 and pool.worker_died's line, what is kept and how to go
+    on (guidance.cli.main says it for all four; each used to catch it itself)."""
+    (module, name), argv = DEAD_WORKER[command]
+    if command in ("dispersion", "agreement") and not LIB_PATH.exists():
+        pytest.skip("libtscvx_gnc.so not built")
+    run = tmp_path / "run"
+    monkeypatch.setattr(importlib.import_module(module), name, _worker_dies(run))
+    assert cli.main(argv(run)) == 1
+    out, err = capsys.readouterr()
+    assert err == (
+        "error: a worker process died (killed by a signal: a crash in the solver or out of "
+        f"memory); 2 of 6 are kept in {run}; run the same command again to resume\n"
+    )
+    assert "solved this run" not in out and "wrote" not in out
+
+
+def test_main_reports_a_dead_worker_of_any_command(tmp_path: Path, monkeypatch, capsys) -> None:
+    """The one place a dead worker is reported: guidance.cli.main, whatever the command (a
+    command that did not catch WorkerDiedError itself ended in a traceback)."""
+    monkeypatch.setattr(cli, "cmd_solve", _worker_dies(tmp_path))
+    assert cli.main(["solve"]) == 1
+    assert capsys.readouterr().err.startswith("error: a worker process died")
+
+
+@needs_lib
+def test_dispersion_run_raises_a_dead_worker_for_its_caller(tmp_path: Path, monkeypatch) -> None:
+    """dispersion.run leaves a dead worker to its caller, as mask_ceiling.measure and
+    dataset_run.generate do (it printed the error itself and returned 1)."""
+    from guidance import dispersion
+
+    monkeypatch.setattr(dispersion, "_solve", _worker_dies(tmp_path))
+    args = cli.build_parser().parse_args(["dispersion", "--landings", "6"])
+    with pytest.raises(WorkerDiedError, match=r"2 of 6 are kept in .*run the same command"):
+        dispersion.run(args)
