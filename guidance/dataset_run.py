@@ -39,8 +39,6 @@ from guidance.runs import record_code_version
 from guidance.sampling import N_THETA, SamplingRanges, base_scenario, theta_of
 from guidance.scenario import params_from_dict
 
-STATUSES = ("solved", "infeasible", "max_iterations", "solver_error", "error")
-
 
 def solve_sample(job: tuple[int, int, dict, dict, dict, str]) -> dict[str, Any]:
     """Worker: draw base sample ``i``, solve it, return the record (never raises)."""
