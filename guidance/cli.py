@@ -13,12 +13,13 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from guidance import file_check
+from guidance import file_check, interrupts
 from guidance.api import BACKENDS, METHODS, solve
 from guidance.argtypes import add_workers_option, at_least, worker_count
 from guidance.atomic import check_folder, check_outputs
 from guidance.errors import InputError, Interrupted, LibraryNotBuiltError, WorkerDiedError
 from guidance.guess import plan_remainder
+from guidance.interrupts import exit_code, sigterm_as_interrupt
 from guidance.nn.conventions import KINDS, MODELS_DIR, network_file
 from guidance.params import IM, Params, Scenario, SCvxSettings
 from guidance.scenario import read_scenario_data, scenario_from_dict, scenario_to_dict
@@ -33,7 +34,8 @@ EXIT_BAD_INPUT = 2
 # trajectory exits 0: an infeasible landing is a normal answer, not an error (DESIGN.md).
 EXIT_NO_TRAJECTORY = 3
 EXIT_BROKEN_PIPE = 141  # as a shell reports a command killed by SIGPIPE (128 + 13)
-EXIT_INTERRUPTED = 130  # as a shell reports a command killed by SIGINT (128 + 2)
+EXIT_INTERRUPTED = interrupts.EXIT_INTERRUPTED  # 130: Ctrl-C (128 + SIGINT)
+EXIT_TERMINATED = interrupts.EXIT_TERMINATED  # 143: SIGTERM (128 + SIGTERM), stopped as Ctrl-C
 
 
 def _load(path: str | None, pin_final_attitude: bool) -> Scenario:
@@ -631,13 +633,14 @@ def cmd_closed_loop(args: argparse.Namespace) -> int:
 def main(argv: Sequence[str] | None = None) -> int:
     args = None
     try:
-        args = build_parser().parse_args(argv)
-        code = int(args.func(args))
-        sys.stdout.flush()  # here, not at exit: a reader that left is then caught below
+        with sigterm_as_interrupt():  # SIGTERM stops the command as Ctrl-C does
+            args = build_parser().parse_args(argv)
+            code = int(args.func(args))
+            sys.stdout.flush()  # here, not at exit: a reader that left is then caught below
         return code
-    except KeyboardInterrupt as exc:  # Ctrl-C at any point (SIGTERM too, during a worker pool)
+    except KeyboardInterrupt as exc:  # Ctrl-C or SIGTERM at any point: exit 130 or 143
         print(f"\ninterrupted{_what_is_kept(args, exc)}", file=sys.stderr)
-        return EXIT_INTERRUPTED
+        return exit_code(exc)
     except (InputError, LibraryNotBuiltError) as exc:  # input that cannot be used, or a C
         print(f"error: {exc}", file=sys.stderr)  # library the command needs is not built
         return EXIT_BAD_INPUT

@@ -22,9 +22,10 @@ class InputError(ValueError):
 
 
 class Interrupted(KeyboardInterrupt):
-    """Ctrl-C (or SIGTERM during a worker pool) that stopped a command that knows how far it
+    """Ctrl-C or SIGTERM (guidance.interrupts) that stopped a command that knows how far it
     got: the message says what is kept and how to go on. The command line prints it after
-    "interrupted: " and exits with code 130, as for any other interruption of a command."""
+    "interrupted: " and exits with code 130 (143 for SIGTERM), as for any other interruption
+    of a command."""
 
 
 class LibraryNotBuiltError(RuntimeError):

@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from guidance.errors import WorkerDiedError
+from guidance.interrupts import sigterm_as_interrupt
 
 
 def limit_threads() -> None:
@@ -34,10 +35,6 @@ def worker_died(kept: int, total: int, run_dir: Path | None) -> WorkerDiedError:
         "a worker process died (killed by a signal: a crash in the solver or out of memory); "
         + where
     )
-
-
-def _raise_interrupt(signum: int, frame: object) -> None:
-    raise KeyboardInterrupt  # SIGTERM stops the pool like Ctrl-C: finished results are kept
 
 
 def imap_pool(fn: Callable[[Any], Any], jobs: Sequence, workers: int) -> Generator[Any, None, None]:
@@ -90,18 +87,18 @@ def pool_results(
 ) -> Iterator[Generator[Any, None, None]]:
     """``with pool_results(...) as results: for r in results: keep(r)``: imap_pool's results
     for a resumable run that keeps each one as it comes (in ``run_dir``; None: nowhere).
-    SIGTERM (a killed job) stops the run as Ctrl-C does, with KeyboardInterrupt in the loop;
+    SIGTERM (a killed job) stops the run as Ctrl-C does, with interrupts.Terminated (a
+    KeyboardInterrupt) in the loop, also when the pool is used outside guidance.cli.main;
     leaving the block stops the pool now, also when the loop fails; a dead worker raises
     WorkerDiedError saying how many of ``total`` are kept (``kept()``) and how to go on."""
-    previous = signal.signal(signal.SIGTERM, _raise_interrupt)
-    results = imap_pool(fn, jobs, workers)
-    try:
-        yield results
-    except BrokenProcessPool as exc:
-        raise worker_died(kept(), total, run_dir) from exc
-    finally:
-        results.close()  # stops the pool now, also when the loop fails
-        signal.signal(signal.SIGTERM, previous)
+    with sigterm_as_interrupt():
+        results = imap_pool(fn, jobs, workers)
+        try:
+            yield results
+        except BrokenProcessPool as exc:
+            raise worker_died(kept(), total, run_dir) from exc
+        finally:
+            results.close()  # stops the pool now, also when the loop fails
 
 
 @contextmanager

@@ -34,17 +34,18 @@ def _main(argv: list[str]) -> int:
         pytest.fail("KeyboardInterrupt escaped guidance's main: a traceback, not exit 130")
 
 
+DATASET_KEPT = "solved samples are kept in {run}; run the same command again to resume"
 # (the step Ctrl-C stops, the command after its run folder, the line it prints)
 CASES: dict[str, tuple[tuple[object, str], Callable[[str], list[str]], str]] = {
     "dataset, checking its options": (
         (atomic, "check_outputs"),
         lambda run: ["dataset", "--run-dir", run, "--output", run + ".npz"],
-        "solved samples are kept in {run}; run the same command again to resume",
+        DATASET_KEPT,
     ),
     "dataset, packing": (
         (dataset, "pack"),
         lambda run: ["dataset", "--pack-only", "--run-dir", run, "--output", run + ".npz"],
-        "solved samples are kept in {run}; run the same command again to resume",
+        DATASET_KEPT,
     ),
     "mask-ceiling, drawing the landings": (
         (mask_ceiling, "theta_spread"),
@@ -157,12 +158,80 @@ def _start(argv: list[str]) -> subprocess.Popen[str]:
     )
 
 
-def _interrupt_when(proc: subprocess.Popen[str], ready: Path) -> tuple[str, str]:
-    """SIGINT to ``proc``'s group once ``ready`` exists; its stdout and stderr."""
+def _interrupt_when(
+    proc: subprocess.Popen[str],
+    ready: Path,
+    signum: int = signal.SIGINT,
+    send: Callable[[int, int], None] = os.killpg,
+) -> tuple[str, str]:
+    """``signum`` to ``proc``'s group (``send=os.kill``: to it alone) once ``ready`` exists;
+    its stdout and stderr."""
     t0 = time.monotonic()
     while not ready.exists() and proc.poll() is None:
         assert time.monotonic() - t0 < 120, "never got there"
         time.sleep(0.01)
     assert proc.poll() is None, proc.communicate()[1]
-    os.killpg(proc.pid, signal.SIGINT)
+    send(proc.pid, signum)
     return proc.communicate(timeout=60)
+
+
+def _holding(tmp_path: Path, module: str, name: str, ready: Path) -> Path:
+    """A script running `guidance` (its argv) with ``module.name`` held for 60 s after it
+    touches ``ready`` (in the worker processes too, which import the script)."""
+    script = tmp_path / "held.py"
+    script.write_text(
+        "import os, sys, time\n"
+        "from pathlib import Path\n"
+        "def held(*args, **kwargs):\n"
+        f"    Path({str(tmp_path)!r}, f'solving{{os.getpid()}}.pid').touch()\n"
+        f"    Path({str(ready)!r}).touch()\n"
+        "    time.sleep(60)\n"
+        "if __name__ == '__main__':\n"
+        f"    import {module}\n"
+        f"    {module}.{name} = held\n"
+        "    from guidance.cli import main\n"
+        "    sys.exit(main(sys.argv[1:]))\n"
+    )
+    return script
+
+
+def test_a_real_sigterm_stops_a_command_as_ctrl_c_does(tmp_path: Path) -> None:
+    """SIGTERM (a job killed) to `guidance dataset` while it checks its options, outside any
+    worker pool: the one `interrupted:` line Ctrl-C prints and exit 143 = 128 + 15. Until 29
+    Nov only a worker pool caught SIGTERM: here the process died of it, silently."""
+    ready, run = tmp_path / "checking", tmp_path / "run"
+    script = _holding(tmp_path, "guidance.atomic", "check_outputs", ready)
+    proc = _start([str(script), "dataset", "--run-dir", str(run), "--output", f"{run}.npz"])
+    out, err = _interrupt_when(proc, ready, signal.SIGTERM, os.kill)
+    assert proc.returncode == 143, err  # cli.EXIT_TERMINATED
+    assert "Traceback" not in err and out == ""
+    assert err == f"\ninterrupted: {DATASET_KEPT.format(run=run)}\n"
+
+
+@pytest.mark.parametrize("to", ["the group", "the command alone"])
+def test_a_real_sigterm_while_workers_solve_stops_them_and_exits_143(
+    to: str, tmp_path: Path
+) -> None:
+    """SIGTERM to the whole process group (as a batch system ends a job) or to the command
+    alone (`kill PID`) while two worker processes solve: the workers end (killed by the
+    signal, or stopped by the command), it says what is kept, exit 143 (the pool's own
+    SIGTERM handler raised a plain KeyboardInterrupt: exit 130, as for Ctrl-C)."""
+    ready, run = tmp_path / "solving", tmp_path / "run"
+    script = _holding(tmp_path, "guidance.dataset_run", "solve_sample", ready)
+    argv = ["dataset", "--run-dir", str(run), "--output", f"{run}.npz", "--n-base", "4"]
+    proc = _start([str(script), *argv, "--workers", "2", "--no-progress"])
+    send = os.killpg if to == "the group" else os.kill
+    out, err = _interrupt_when(proc, ready, signal.SIGTERM, send)
+    assert proc.returncode == 143, err
+    assert "Traceback" not in err and out == ""
+    assert err.endswith(f"\ninterrupted: {DATASET_KEPT.format(run=run)}\n")
+    workers = [int(p.stem.removeprefix("solving")) for p in tmp_path.glob("solving*.pid")]
+    assert workers and not any(_running(pid) for pid in workers)
+
+
+def _running(pid: int) -> bool:
+    """Whether process ``pid`` still runs (not gone, nor a zombie)."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().split(") ")[1][0] != "Z"
+    except (FileNotFoundError, ProcessLookupError):
+        return False
