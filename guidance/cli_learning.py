@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING
 from guidance.argtypes import add_workers_option, worker_count
 from guidance.atomic import check_folder, write_text_atomic
 from guidance.budget import est_instructions, fits_budget
-from guidance.errors import InputError
+from guidance.errors import InputError, Interrupted
 from guidance.json_files import missing_or_mistyped, read_json_object
 from guidance.nn.conventions import (
     BASELINES_FILE,
@@ -355,26 +355,27 @@ def cmd_train(args: argparse.Namespace) -> int:
     for n_done, (kind, size) in enumerate(jobs):
         try:
             _train_one(ds, kind, size, args, out, digest)
-        except KeyboardInterrupt as exc:  # Ctrl-C: the finished epochs are checkpointed
-            done, total = (
-                getattr(exc, "done", None),
-                getattr(exc, "total", None),
-            )  # TrainingInterrupted
-            how_far = f" after {done} of {total} epochs" if done is not None else ""
-            kept = (
-                f"the progress is kept in {out}: run the same command again to resume"
-                if n_done or done
-                else f"nothing was finished yet: running the same command again starts {kind}-"
-                f"{size} from its first epoch"
-            )
-            print(
-                f"\ninterrupted: {kind}-{size}{how_far} ({n_done} of {len(jobs)} models "
-                f"finished); {kept}",
-                file=sys.stderr,
-            )
-            return 130
+        except KeyboardInterrupt as exc:  # Ctrl-C, SIGTERM: the finished epochs are checkpointed
+            raise Interrupted(_training_kept(exc, kind, size, n_done, len(jobs), out)) from None
     print(f"wrote checkpoints and reports to {out}")
     return 0
+
+
+def _training_kept(
+    exc: KeyboardInterrupt, kind: str, size: str, n_done: int, n_jobs: int, out: Path
+) -> str:
+    """What interrupted training says after "interrupted: " (guidance.cli.main prints it): the
+    network it was training and how far (a TrainingInterrupted knows its epochs), the networks
+    finished, and what is kept."""
+    done, total = getattr(exc, "done", None), getattr(exc, "total", None)  # TrainingInterrupted
+    how_far = f" after {done} of {total} epochs" if done is not None else ""
+    kept = (
+        f"the progress is kept in {out}: run the same command again to resume"
+        if n_done or done
+        else f"nothing was finished yet: running the same command again starts {kind}-{size} "
+        "from its first epoch"
+    )
+    return f"{kind}-{size}{how_far} ({n_done} of {n_jobs} models finished); {kept}"
 
 
 TRAIN_DATASET_FILE = "dataset.json"  # in the train dir: the data all its checkpoints are from

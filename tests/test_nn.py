@@ -475,6 +475,57 @@ def test_train_interrupted_in_its_first_epoch_says_nothing_is_kept(
     assert "progress is kept" not in err
 
 
+def test_train_stopped_by_sigterm_says_what_is_kept_and_exits_143(tmp_path: Path) -> None:
+    """A real SIGTERM in the second epoch (held there): the checkpoint of the first is kept,
+    the line Ctrl-C prints, exit 143 by guidance.cli.main's shared path (cmd_train printed
+    its line itself and returned Ctrl-C's 130; before SIGTERM stopped commands as Ctrl-C
+    does, the process died of it, silently)."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    data = _write_dataset(random_dataset(n_base=12, seed=1), tmp_path / "a.npz")
+    out, ready = tmp_path / "train", tmp_path / "second-epoch"
+    script = tmp_path / "held.py"
+    script.write_text(
+        "import sys, time\n"
+        "from pathlib import Path\n"
+        "from guidance.nn import train\n"
+        "epoch = train._Trainer.epoch\n"
+        "def held(self, k, *args, **kwargs):\n"
+        "    if k == 1:\n"
+        f"        Path({str(ready)!r}).touch()\n"
+        "        time.sleep(60)\n"
+        "    return epoch(self, k, *args, **kwargs)\n"
+        "train._Trainer.epoch = held\n"
+        "from guidance.cli import main\n"
+        "sys.exit(main(sys.argv[1:]))\n"
+    )
+    argv = ["train", "--dataset", str(data), "--train-dir", str(out), "--kind", "solution"]
+    argv += ["--sizes", "flight-s", "--threads", "1", "--no-progress", "--solution-epochs", "2"]
+    root = Path(__file__).resolve().parent.parent
+    proc = subprocess.Popen(
+        [sys.executable, str(script), *argv], cwd=root, env={**os.environ, "PYTHONPATH": str(root)},
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    t0 = time.monotonic()
+    while not ready.exists() and proc.poll() is None:
+        assert time.monotonic() - t0 < 120, "never got to the second epoch"
+        time.sleep(0.01)
+    assert proc.poll() is None, proc.communicate()[1]
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 143, err
+    assert "Traceback" not in err
+    assert err.endswith(
+        "\ninterrupted: solution-flight-s after 1 of 6 epochs (0 of 1 models finished); the "
+        f"progress is kept in {out}: run the same command again to resume\n"
+    )
+    assert (out / "solution-flight-s.state.pt").exists()
+
+
 def test_train_refuses_zero_epochs_and_too_few_landings(tmp_path: Path, capsys) -> None:
     data = _write_dataset(random_dataset(n_base=12, seed=1), tmp_path / "a.npz")
     with pytest.raises(SystemExit) as exc:
