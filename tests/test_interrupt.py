@@ -7,6 +7,7 @@ was handled; one elsewhere escaped guidance's main as a traceback."""
 from __future__ import annotations
 
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -143,6 +144,41 @@ def test_a_worker_still_starting_survives_ctrl_c(tmp_path: Path) -> None:
     out, err = proc.communicate(timeout=60)
     assert "Traceback" not in err and "KeyboardInterrupt" not in err, err
     assert proc.returncode == 0 and out == "10\n", err
+
+
+@pytest.mark.parametrize(
+    ("signum", "code"), [(signal.SIGINT, 130), (signal.SIGTERM, 143)], ids=["Ctrl-C", "SIGTERM"]
+)
+def test_a_signal_while_guidance_starts_ends_it_quietly(
+    signum: int, code: int, tmp_path: Path
+) -> None:
+    """Ctrl-C (SIGINT to the process group, as a terminal sends it) or SIGTERM while the
+    `guidance` console script imports its command line (about a second, held here): one
+    `interrupted` line and exit 130 or 143, as anywhere in a command. The script imported
+    guidance.cli itself: a KeyboardInterrupt traceback, or death by SIGTERM, before 29 Nov."""
+    pyproject = (ROOT / "pyproject.toml").read_text()
+    entry = re.search(r'^guidance = "([\w.]+):(\w+)"$', pyproject, re.MULTILINE)
+    assert entry is not None, "no guidance entry in [project.scripts]"
+    module, func = entry.groups()
+    ready = tmp_path / "importing"
+    script = tmp_path / "guidance_script.py"
+    script.write_text(
+        "import sys, time\n"
+        "from pathlib import Path\n"
+        "class Held:  # the import of guidance.cli, held as if it were slow\n"
+        "    def find_spec(self, name, path=None, target=None):\n"
+        "        if name == 'guidance.cli':\n"
+        f"            Path({str(ready)!r}).touch()\n"
+        "            time.sleep(60)\n"
+        "        return None\n"
+        "sys.meta_path.insert(0, Held())\n"
+        f"from {module} import {func}  # what pip's console script does\n"
+        f"sys.exit({func}())\n"
+    )
+    proc = _start([str(script), "scenario"])
+    out, err = _interrupt_when(proc, ready, signum)
+    assert proc.returncode == code, err
+    assert out == "" and err == "\ninterrupted\n"
 
 
 def _start(argv: list[str]) -> subprocess.Popen[str]:
