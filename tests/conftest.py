@@ -6,6 +6,7 @@ import signal
 from collections.abc import Iterator
 
 import pytest
+from dataset_runs import solve_tiny_run
 
 from guidance.catalog import SCENARIOS
 from guidance.scvx import SCvxResult, SCvxSolver, solve_scvx
@@ -26,6 +27,13 @@ def catalog_solved() -> dict[str, SCvxResult]:
     """Every catalog landing solved by the reference SCvx (Clarabel, default settings), once
     for the modules that check it (test_scvx) or compare against it (test_cguidance)."""
     return {name: solve_scvx(s) for name, s in SCENARIOS.items()}
+
+
+@pytest.fixture(scope="session")
+def tiny_run(tmp_path_factory: pytest.TempPathFactory):
+    """A tiny dataset run, solved and packed (dataset_runs.solve_tiny_run), once for the
+    modules of the dataset pipeline, which change only copies of it."""
+    return solve_tiny_run(tmp_path_factory)
 
 
 @pytest.fixture
