@@ -213,9 +213,13 @@ def _print_landing(result: SCvxResult, scenario: Scenario, at: float | None = No
               f"{at + result.t_f:.6f} U_T of the plan's clock)")  # fmt: skip
     print(f"final mass    {result.m_f:.6f} U_M")
     print(f"fuel          {fuel:.6f} U_M ({100 * fuel / propellant:.1f} % of the propellant)")
+    print(  # the defect of the subproblems' own model: guidance verify integrates the dynamics
+        f"max defect    {result.max_defect:.2e} (x_k+1 against the RK4 discretization of "
+        f"interval k; the RK4 error comes on top)"
+    )
     print(  # the largest h: <= 0 when every path constraint holds
-        f"max defect    {result.max_defect:.2e}   largest path-constraint value "
-        f"{result.max_violation:.2e}"
+        f"max path h    {result.max_violation:.2e} (largest path-constraint value at the nodes; "
+        f"<= 0: all met)"
     )
     if result.settings is not None and result.settings.polish and result.status == "solved":
         print(f"polish        {result.polish.describe(result.max_defect, result.m_f)}")

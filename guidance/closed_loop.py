@@ -28,7 +28,7 @@ import numpy as np
 from guidance.constraints import path_constraint_values
 from guidance.errors import InputError
 from guidance.guess import hold_at, plan_remainder
-from guidance.params import IM, IQ, IR, IV, IW, InitialState, Scenario
+from guidance.params import CONSTRAINT_NAMES, IM, IQ, IR, IV, IW, NC, InitialState, Scenario
 from guidance.verify import PropagationError, fly_interval
 from guidance.verify import final_attitude_error as attitude_error
 
@@ -124,8 +124,9 @@ class Flight:
     rate_error: float  # |omega - omega_f|
     m_f: float
     # largest path-constraint value in flight, of the true states and of the commands
-    # (<= 0: all met)
+    # (<= 0: all met), and the constraint it is (params.CONSTRAINT_NAMES; "" with no path)
     max_path_value: float
+    max_path_constraint: str = ""
 
 
 @dataclass
@@ -177,7 +178,11 @@ def _fly(
 
 def _landing(x: np.ndarray, t: float, scn: Scenario, path: list[np.ndarray]) -> Flight:
     p = scn.params
-    worst = max((float(v.max()) for v in path if v.size), default=-math.inf)
+    worst, which = -math.inf, ""
+    for h in (v.reshape(-1, NC) for v in path if v.size):
+        row, col = np.unravel_index(int(np.argmax(h)), h.shape)
+        if h[row, col] > worst:
+            worst, which = float(h[row, col]), CONSTRAINT_NAMES[col]
     return Flight(
         touchdown=t,
         position_error=float(np.linalg.norm(x[IR] - np.array(p.r_f))),
@@ -186,6 +191,7 @@ def _landing(x: np.ndarray, t: float, scn: Scenario, path: list[np.ndarray]) -> 
         rate_error=float(np.linalg.norm(x[IW] - np.array(p.omega_f))),
         m_f=float(x[IM]),
         max_path_value=worst,
+        max_path_constraint=which,
     )
 
 
@@ -270,7 +276,7 @@ def _row(name: str, f: Flight) -> str:
     errors = (f.position_error, f.velocity_error, f.attitude_error, f.rate_error)
     return (
         f"  {name:<12} {f.touchdown:9.4f} " + " ".join(f"{e:10.2e}" for e in errors)
-        + f" {f.m_f:9.6f} {f.max_path_value:10.2e}"
+        + f" {f.m_f:9.6f} {f.max_path_value:10.2e} {f.max_path_constraint}"
     )  # fmt: skip
 
 
@@ -298,7 +304,8 @@ def report(
         lines.append(f"  {r.t:5.2f}  {dr:10.2e}  {dv:10.2e}  {r.outcome[:60]:<20} "
                      f"{r.subproblems:10d} {r.touchdown:10.4f} {r.m_f:10.6f}")  # fmt: skip
     lines += [
-        "  flight       touchdown  |r - r_f|  |v - v_f|   attitude  |w - w_f|       m_f  max path",
+        "  flight       touchdown  |r - r_f|  |v - v_f|   attitude  |w - w_f|       m_f  max path"
+        " (constraint)",
         _row("open loop", res.open),
         _row("closed loop", res.closed),
     ]

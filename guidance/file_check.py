@@ -144,10 +144,23 @@ def verify_file(path: str | Path, tol: Tolerances = Tolerances()) -> FileVerdict
     return FileVerdict(path, header, checks, a, engine)
 
 
+def tolerance_text(tol: float) -> str:
+    """The tolerance as given, in the fewest digits that are exactly it (2.4e-04, not 2e-04: a
+    rounded tolerance could print a value above it marked ok)."""
+    for digits in range(7):
+        text = f"{tol:.{digits}e}"
+        if float(text) == tol:
+            return text
+    return f"{tol:.6e}"
+
+
 def format_verdict(v: FileVerdict) -> str:
     lines = [f"{v.path}: {v.header}", f"  {'check':<36} {'value':>10} {'tolerance':>10}"]
     for c in v.checks:
-        lines.append(f"  {c.name:<36} {c.value:>10.2e} {c.tol:>10.0e}  {'ok' if c.ok else 'FAIL'}")
+        lines.append(
+            f"  {c.name:<36} {c.value:>10.2e} {tolerance_text(c.tol):>10}  "
+            f"{'ok' if c.ok else 'FAIL'}"
+        )
     between = dict(zip(CONSTRAINT_NAMES, v.audit.path_between_nodes, strict=True))
     lines.append(
         f"  between the nodes ({SAMPLES_BETWEEN_NODES} samples per interval), max h: "

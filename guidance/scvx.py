@@ -99,8 +99,8 @@ class Polish:
         """What became of it, in a line; ``defect`` and ``m_f`` are the answer's."""
         if self.outcome == "kept":
             return (
-                f"largest defect {self.defect_before:.2e} -> {defect:.2e}, final mass "
-                f"{m_f - self.m_f_before:+.2e} U_M, {self.ipm_iterations} IPM iterations"
+                f"largest defect {self.defect_before:.2e} -> {defect:.2e}, final mass changed "
+                f"by {m_f - self.m_f_before:+.2e} U_M, {self.ipm_iterations} IPM iterations"
             )
         return POLISH_MEANINGS[POLISH_OUTCOMES.index(self.outcome)]
 

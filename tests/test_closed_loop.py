@@ -249,3 +249,22 @@ def test_the_report_says_what_was_flown() -> None:
     text = report(res, Disturbance(), SETTINGS)
     assert "navigation: perfect" in text
     assert text.endswith("landing error: closed loop 5.0x smaller than open loop")
+
+
+def test_the_worst_path_value_names_its_constraint() -> None:
+    """Review of 27 Nov: "max path" was the largest value over all seven constraints, in their
+    mixed units, without saying which; the flight names it (open loop through a 2 % thrust
+    error, the glideslope; closed loop, the commanded thrust dipping below T_min)."""
+    from guidance.closed_loop import Flight, _landing, report
+
+    first = np.full((3, 7), -1.0)
+    first[1, 4] = 0.5  # thrust_max
+    worst = np.full((2, 7), -1.0)
+    worst[0, 1] = 0.7  # glideslope, the largest
+    f = _landing(SCN.x0, 1.0, SCN, [first, np.empty((0, 7)), worst])
+    assert f.max_path_value == 0.7 and f.max_path_constraint == "glideslope"
+    none = _landing(SCN.x0, 1.0, SCN, [])
+    assert none.max_path_value == -np.inf and none.max_path_constraint == ""
+    flown = Flight(6.0, 0.01, 0.0, 0.0, 0.0, 2.2, 2.15e-3, "thrust_min")
+    text = report(ClosedLoop("solved", 2.24, flown, flown, []), Disturbance(), SETTINGS)
+    assert "max path (constraint)" in text and "2.15e-03 thrust_min" in text

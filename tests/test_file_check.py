@@ -205,6 +205,21 @@ def test_the_tolerances_come_from_the_command_line(written: Path, tmp_path: Path
     assert main(["verify", str(over), "--tol-path", "1e-8"]) == 0
 
 
+def test_a_tolerance_is_printed_as_given(written: Path, capsys) -> None:
+    """Review of 27 Nov: the tolerance column was rounded to one digit, so a landing 2.3e-4 off
+    printed "2.28e-04  2e-04  ok" under --tol-landing 2.4e-4 (a value above its printed
+    tolerance, marked ok). The value is checked against an independent integration."""
+    assert main(["verify", str(written), "--tol-landing", "2.4e-4", "--tol-path", "1.25e-6"]) == 0
+    out = capsys.readouterr().out
+    printed = re.search(r"landing position \|r\(t_f\) - r_f\| +(\S+) +2\.4e-04  ok", out)
+    assert printed, out
+    with np.load(written) as f:
+        ref = reference_propagation(f["x"][0], f["u"], float(f["t_f"]))
+    miss = float(np.linalg.norm(ref[-1, IR] - np.array(P.r_f)))
+    assert float(printed.group(1)) == pytest.approx(miss, rel=5e-3) and miss < 2.4e-4
+    assert re.search(r"path constraints at the nodes +\S+ +1\.25e-06  ok", out), out
+
+
 def test_a_pinned_attitude_is_measured_against_q_f_either_sign() -> None:
     pinned = P.replace(final_roll_free=False, q_f=(0.0, 1.0, 0.0, 0.0))  # 180 deg of roll
     q = np.array([0.0, -1.0, 0.0, 0.0])  # the same attitude

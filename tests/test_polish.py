@@ -4,6 +4,7 @@ an independent open-loop integration (scipy, numpy dynamics) and across the thre
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import pytest
@@ -138,6 +139,9 @@ def test_solve_polish_prints_and_records_it(tmp_path: Path, capsys) -> None:
     assert main(["solve", "--backend", "c", "--polish", "--out", str(out)]) == 0
     text = capsys.readouterr().out
     assert "polish        largest defect " in text and " IPM iterations" in text
+    # a change of final mass, not a (negative) final mass (review of 27 Nov)
+    assert re.search(r"final mass changed by -\d\.\d\de-0\d U_M", text), text
+    assert "max defect    " in text and "against the RK4 discretization" in text
     data = read_trajectory(out)
     assert str(data["polish"]) == "kept"
     assert data["settings"]["polish"] is True  # type: ignore[index]
