@@ -68,6 +68,7 @@ P_double = ct.POINTER(ct.c_double)
 
 
 MESSAGE_LEN = 160  # TSCVX_MESSAGE_LEN (tscvx_socp.h)
+SETUP_NOT_READY = 11  # TSCVX_SETUP_NOT_READY (tscvx_socp.h)
 
 
 class _Data(ct.Structure):
@@ -226,6 +227,7 @@ def load_library() -> ct.CDLL:
         "tscvx_setup_status_message": (ct.c_char_p, [c_int]),
         "tscvx_check_data": (c_int, [ct.POINTER(_Data), ct.c_char_p]),
         "tscvx_solve_status_message": (ct.c_char_p, [c_int]),
+        "tscvx_check_workspace": (c_int, [ws_p, ct.c_char_p]),
     }
     for name, (res, args) in sigs.items():
         fn = getattr(lib, name)
@@ -668,6 +670,19 @@ class Solver:
         return int(self.lib.tscvx_warm_start(self.ws, _dptr(x), _dptr(y), _dptr(z), _dptr(s)))
 
     @_one_at_a_time
+    def check_workspace(self) -> tuple[int, str]:
+        """Whether the C calls would take this solver's workspace (tscvx_check_workspace):
+        the C setup status (0 = ready, SETUP_NOT_READY = refused) and why ("" when ready):
+        no set-up mark, the workspace damaged (its set-up checksum does not match; "during a
+        solve" when a solve's end check found it), or the last data update refused. A solver
+        whose set-up failed has no workspace: its set-up status and message."""
+        if not self.ready:
+            return self.setup_status, self.message
+        why = ct.create_string_buffer(MESSAGE_LEN)
+        st = int(self.lib.tscvx_check_workspace(self.ws, why))
+        return st, why.value.decode()
+
+    @_one_at_a_time
     def info(self) -> dict[str, float]:
         inf = _Info()
         if self.ready:
@@ -697,8 +712,9 @@ class Solver:
         st = int(self.lib.tscvx_solve(self.ws))
         elapsed = time.perf_counter() - t0
         status = SOLVE_STATUS[st] if 0 <= st < len(SOLVE_STATUS) else "numerical_error"
-        if status == "invalid_input":
-            return invalid_solution(n, m, self.message)
+        if status == "invalid_input":  # a refused update's message, else the workspace's why
+            why = self.check_workspace()[1] if self.message == "ok" else ""
+            return invalid_solution(n, m, why or self.message)
         p, mg = self._Aeq.shape[0], self._G.shape[0]
         # NaN where the runtime keeps no point (TSCVX_SETUP_NO_SOLUTION after a numerical error)
         x, y = np.full(n, np.nan), np.full(p, np.nan)

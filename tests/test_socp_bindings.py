@@ -825,3 +825,39 @@ def test_a_limit_above_the_setup_one_is_refused_by_name() -> None:
             sol = session.solve(random_feasible(7, n=30), max_iter=limit)
             assert sol.status == "invalid_input" and f"max_iter {limit}" in sol.info["message"]
         assert session.solve(random_feasible(7, n=30), max_iter=50).status == "solved"
+
+
+def test_check_workspace_says_why_the_workspace_is_refused() -> None:
+    """Solver.check_workspace binds tscvx_check_workspace: (0, "") for a ready workspace; a
+    bit flipped in the workspace struct (the arena is the solver's array) is refused with the
+    reason (the set-up mark, or the set-up checksum of its sizes, settings and pointers),
+    which a solve's invalid_input answer carries too; restored, ready again and the same
+    answer; a refused update and a failed set-up say so."""
+    prob = random_feasible(3, n=10, with_P=True)
+    solver = csocp.Solver(prob)
+    assert solver.check_workspace() == (0, "")
+    first = solver.solve()
+    assert first.status == "solved"
+    arena = solver.arena
+    start = (-arena.ctypes.data) % 16  # the struct at the arena's first 16-byte aligned byte
+    reasons = set()
+    for offset in range(start, start + 64):
+        arena[offset] ^= 0x10
+        status, why = solver.check_workspace()
+        sol = solver.solve()
+        arena[offset] ^= 0x10
+        if status != 0:
+            assert status == csocp.SETUP_NOT_READY
+            assert sol.status == "invalid_input" and sol.info["message"] == why
+            reasons.add(why.split(":")[0])
+        assert solver.check_workspace() == (0, "")
+    assert reasons == {"no set-up mark", "workspace damaged"}
+    again = solver.solve()
+    assert again.status == "solved" and np.array_equal(again.x, first.x)
+    assert solver.update(q=np.full(prob.n, np.nan)) != 0
+    status, why = solver.check_workspace()
+    assert status == csocp.SETUP_NOT_READY and "last data update was refused" in why
+    assert solver.update(q=prob.q) == 0 and solver.check_workspace() == (0, "")
+    refused = csocp.Solver(prob, max_iter=0)  # no workspace: the set-up's status and message
+    assert not refused.ready and refused.setup_status != 0
+    assert refused.check_workspace() == (refused.setup_status, refused.message)

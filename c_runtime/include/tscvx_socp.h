@@ -73,14 +73,23 @@
  *     groups, cones by group, G by rows, the groups' row lists, the band order, Y's profile
  *     and the value blocks' offsets). Checked by tscvx_update_data and tscvx_solve, the
  *     calls that follow them; the other calls index only by the head.
+ * tscvx_solve checks the head and body again at its end, whatever the IPM's outcome: a bit
+ * flipped in either during the solve (whose iterations may have followed it since) makes it
+ * return TSCVX_INVALID_INPUT instead of its outcome, info.status says so, tscvx_get_solution
+ * gives no iterate (TSCVX_SETUP_NO_SOLUTION) and tscvx_check_workspace says the workspace was
+ * damaged "during a solve". Such a flip is thus reported by the solve it hit, not by the
+ * next call; it may still have been followed before the end (the start check keeps a call
+ * from following damage that was there when it began, the end check from answering with
+ * damage that came during it).
  * A change within any one 8-byte word of either is detected for certain (a word-wise hash,
  * each step a bijection), others with probability 1 - 2^-64. Not covered: the numbers, which
  * every update, solve or iteration writes again (the scaled data, iterates, NT scaling,
  * factors' values, work vectors, results and the log), so a flip there can spoil an answer
  * (the IPM's residual and finiteness checks catch much of it) but not send a loop out of
- * bounds; an upset during a call is seen by the next call, not by the one running; and the
- * caller's arrays. The library never calls malloc, has no recursion and no global mutable
- * state. Every public function returns a status code.
+ * bounds; an upset during the other calls (tscvx_update_data, the getters) is seen by the
+ * next call that checks, not by the one running; and the caller's arrays. The library never
+ * calls malloc, has no recursion and no global mutable state. Every public function returns
+ * a status code.
  */
 #ifndef TSCVX_SOCP_H
 #define TSCVX_SOCP_H
@@ -115,7 +124,8 @@ typedef enum {
     TSCVX_SETUP_NOT_BANDED,      /* kkt_backend TSCVX_KKT_BANDED, but no banded structure */
     TSCVX_SETUP_P_NOT_PSD,       /* P fails the semidefiniteness check (see the problem form) */
     TSCVX_SETUP_NO_SOLUTION,     /* getters: no solve since setup or the last data update, or
-                                    (tscvx_get_solution) the last one ended in NUMERICAL_ERROR */
+                                    (tscvx_get_solution) the last one ended in NUMERICAL_ERROR
+                                    or found the workspace damaged at its end */
     TSCVX_SETUP_NSTATUS
 } tscvx_setup_status;
 
@@ -129,7 +139,9 @@ typedef enum {
     TSCVX_MAX_ITER,              /* iteration limit reached */
     TSCVX_NUMERICAL_ERROR,       /* factorization or step failure, no acceptable iterate */
     TSCVX_INVALID_INPUT,         /* workspace not ready (setup or update failed, cleaned up,
-                                    overwritten or damaged: tscvx_check_workspace) */
+                                    overwritten or damaged: tscvx_check_workspace), found at
+                                    the start of the solve or, damaged during it, at its end
+                                    (then no answer: the iterate is not returned) */
     TSCVX_NSTATUS
 } tscvx_solve_status;
 
@@ -299,6 +311,9 @@ tscvx_setup_status tscvx_warm_start(tscvx_workspace *ws, const tscvx_float *x,
                                     const tscvx_float *y, const tscvx_float *z,
                                     const tscvx_float *s);
 
+/* Solves from the current data. Checks the mark, head and body first (TSCVX_INVALID_INPUT,
+ * nothing written) and the head and body again at its end (TSCVX_INVALID_INPUT, no answer:
+ * the workspace was damaged during the solve; see above). */
 tscvx_solve_status tscvx_solve(tscvx_workspace *ws);
 
 /* Copies the last solution (original units) into caller arrays; any may be NULL.
@@ -307,7 +322,8 @@ tscvx_solve_status tscvx_solve(tscvx_workspace *ws);
  * for PRIMAL_INFEASIBLE, y and z for DUAL_INFEASIBLE: no number there to be taken for a
  * solution); for SOLVED_INACCURATE and MAX_ITER the best or last iterate.
  * TSCVX_SETUP_NO_SOLUTION (arrays untouched) before a solve since the last setup or data
- * update, and after NUMERICAL_ERROR. */
+ * update, after NUMERICAL_ERROR, and after a solve whose end check found the workspace
+ * damaged (TSCVX_INVALID_INPUT). */
 tscvx_setup_status tscvx_get_solution(const tscvx_workspace *ws, tscvx_float *x, tscvx_float *y,
                                       tscvx_float *z, tscvx_float *s);
 
@@ -326,8 +342,9 @@ tscvx_setup_status tscvx_cleanup(tscvx_workspace *ws);
 /* Why the calls would refuse `ws` (TSCVX_SETUP_NOT_READY; tscvx_solve: TSCVX_INVALID_INPUT),
  * in `message` (TSCVX_MESSAGE_LEN bytes; may be NULL): no set-up mark (not set up, cleaned
  * up, arena overwritten), the workspace damaged (its head or body checksum does not match:
- * set it up again), or the last data update refused; TSCVX_SETUP_OK and "" for a workspace
- * ready to solve. Checks the mark, head and body as tscvx_solve does, and writes nothing. */
+ * set it up again; "workspace damaged during a solve: ..." when the last solve's end check
+ * found it), or the last data update refused; TSCVX_SETUP_OK and "" for a workspace ready
+ * to solve. Checks the mark, head and body as tscvx_solve does, and writes nothing. */
 tscvx_setup_status tscvx_check_workspace(const tscvx_workspace *ws, char *message);
 
 #ifdef __cplusplus

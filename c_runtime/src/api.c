@@ -31,7 +31,7 @@ static const char *const setup_messages[TSCVX_SETUP_NSTATUS] = {
     "P is not positive semidefinite (a negative diagonal entry, an entry with "
     "P_ij^2 > P_ii P_jj, or a factorization of P that shows a negative eigenvalue)",
     "no solution to return: no solve since setup or the last data update, or the last solve "
-    "ended in a numerical error",
+    "ended in a numerical error or found the workspace damaged during it",
 };
 
 static const char *const solve_messages[TSCVX_NSTATUS] = {
@@ -43,8 +43,8 @@ static const char *const solve_messages[TSCVX_NSTATUS] = {
     "iteration limit reached",
     "numerical error",
     "invalid input: the workspace is not ready (not set up, cleaned up or overwritten; damaged: "
-    "its set-up checksum does not match; or a data update failed); tscvx_check_workspace says "
-    "which",
+    "its set-up checksum does not match, at the start of the solve or at its end, when damaged "
+    "during it: no answer; or a data update failed); tscvx_check_workspace says which",
 };
 
 const char *tscvx_setup_status_message(tscvx_setup_status status) {
@@ -659,17 +659,21 @@ static int ws_intact(const tscvx_workspace *ws) { return ws_state(ws, 1) == WS_I
 
 tscvx_setup_status tscvx_check_workspace(const tscvx_workspace *ws, char *message) {
     if (ws == NULL) return refuse(message, TSCVX_SETUP_NULL_ARGUMENT, "workspace is NULL");
+    /* found by the last solve's end check: the damage came during that solve */
+    const int in_solve = ws->damaged_in_solve;
+    const char *when = in_solve ? " during a solve" : "";
     switch (ws_state(ws, 1)) {
     case WS_NO_MARK:
-        return refuse(message, TSCVX_SETUP_NOT_READY, "no set-up mark: the workspace was not "
-                      "set up, was cleaned up, or its arena was overwritten");
+        return refuse(message, TSCVX_SETUP_NOT_READY, "no set-up mark%s: the workspace was "
+                      "not set up, was cleaned up, or its arena was overwritten",
+                      in_solve ? " (lost during a solve)" : "");
     case WS_HEAD_DAMAGED:
-        return refuse(message, TSCVX_SETUP_NOT_READY, "workspace damaged: set-up checksum "
-                      "mismatch in its sizes, settings or pointers; set it up again");
+        return refuse(message, TSCVX_SETUP_NOT_READY, "workspace damaged%s: set-up checksum "
+                      "mismatch in its sizes, settings or pointers; set it up again", when);
     case WS_BODY_DAMAGED:
-        return refuse(message, TSCVX_SETUP_NOT_READY, "workspace damaged: set-up checksum "
+        return refuse(message, TSCVX_SETUP_NOT_READY, "workspace damaged%s: set-up checksum "
                       "mismatch in its index arrays (patterns, cones, KKT maps, ordering, "
-                      "symbolic factor); set it up again");
+                      "symbolic factor); set it up again", when);
     default:
         break;
     }
@@ -765,15 +769,29 @@ tscvx_solve_status tscvx_solve(tscvx_workspace *ws) {
         ws->info.status = TSCVX_INVALID_INPUT;
         return TSCVX_INVALID_INPUT;
     }
-    return tscvx_ipm(ws);
+    ws->damaged_in_solve = 0;
+    const tscvx_solve_status status = tscvx_ipm(ws);
+    /* The end check: the same sums again, so that a bit flipped during the solve (after the
+     * start check, in what the iterations index by) is said by this solve, not the next.
+     * No answer then: the status and info say invalid input, tscvx_get_solution gives no
+     * iterate (TSCVX_SETUP_NO_SOLUTION), tscvx_check_workspace says it came during a solve.
+     * The writes are to the struct's own fields, outside the sums: no pointer followed. */
+    if (!ws_intact(ws)) {
+        ws->damaged_in_solve = 1;
+        ws->info.status = TSCVX_INVALID_INPUT;
+        return TSCVX_INVALID_INPUT;
+    }
+    return status;
 }
 
 tscvx_setup_status tscvx_get_solution(const tscvx_workspace *ws, tscvx_float *x, tscvx_float *y,
                                       tscvx_float *z, tscvx_float *s) {
     if (ws == NULL) return TSCVX_SETUP_NULL_ARGUMENT;
     if (!ws_head_intact(ws) || !ws->ready) return TSCVX_SETUP_NOT_READY;
-    if (ws->info.status == TSCVX_UNSOLVED || ws->info.status == TSCVX_NUMERICAL_ERROR)
-        return TSCVX_SETUP_NO_SOLUTION; /* nothing solved since the data, or no point kept */
+    if (ws->info.status == TSCVX_UNSOLVED || ws->info.status == TSCVX_NUMERICAL_ERROR ||
+        ws->info.status == TSCVX_INVALID_INPUT)
+        return TSCVX_SETUP_NO_SOLUTION; /* nothing solved since the data, no point kept, or
+                                           the workspace damaged during the last solve */
     tscvx_unscale_solution(ws, x, y, z, s);
     return TSCVX_SETUP_OK;
 }

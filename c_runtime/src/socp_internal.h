@@ -334,6 +334,8 @@ struct tscvx_workspace {
     tscvx_int log_cap;
     int ready;     /* data valid and set up */
     int p_refused; /* the stored P failed the factorization test (tscvx_update_data) */
+    int damaged_in_solve; /* the last tscvx_solve's end check found a checksum broken (for
+                             tscvx_check_workspace's message; outside the sums) */
     size_t arena_used, arena_high;
 };
 

@@ -1,5 +1,9 @@
 /* End-to-end solves with known answers, infeasibility, bad input, data updates, log. */
+#define _POSIX_C_SOURCE 200809L /* sigaction, mprotect, sysconf: test_upset_during_solve */
+#include <signal.h>
 #include <string.h>
+#include <sys/mman.h>
+#include <unistd.h>
 
 #include "ctest_util.h"
 #include "socp_internal.h"
@@ -1174,6 +1178,125 @@ static void test_upsets(int backend, tscvx_int dense_max) {
            (int)expect, refused);
 }
 
+/* ---- an upset during a solve: tscvx_solve's end check ------------------------------------
+ * The library has no hook inside a solve, and none is added for the test: the moment of the
+ * upset is the solve's own write of its last log row. A first solve gives that row (its
+ * iteration count; the solve is deterministic from the cold start), the workspace is set up
+ * again with the arena shifted so that the row begins a page, and the page is made
+ * read-only: the solve's write of the row traps into a handler that flips a high bit of
+ * set-up data the solve follows (an index of A's pattern: the body; the log's length: the
+ * head), lets the page be written and returns, and the write completes. The solve has converged at that row:
+ * without the end check it reports SOLVED with the answer (as it did before the check); with
+ * it, TSCVX_INVALID_INPUT, no answer from tscvx_get_solution, and tscvx_check_workspace says
+ * the workspace was damaged during a solve. Nothing follows the flipped index after the trap,
+ * so valgrind and ASan stay quiet either way. Flipped back, the workspace solves to the same
+ * bits as before. */
+static unsigned char *trap_page;
+static size_t trap_len;
+static const upset_site *trap_site;
+static volatile sig_atomic_t trap_hits;
+
+static void on_trap(int sig, siginfo_t *si, void *uc) {
+    (void)uc;
+    const unsigned char *at = (const unsigned char *)si->si_addr;
+    if (trap_page == NULL || at < trap_page || at >= trap_page + trap_len) {
+        signal(sig, SIG_DFL); /* not ours: the fault happens again, unhandled */
+        return;
+    }
+    flip(trap_site);
+    mprotect(trap_page, trap_len, PROT_READ | PROT_WRITE);
+    trap_page = NULL;
+    trap_hits++;
+}
+
+static unsigned char dur_buf[(1 << 18) + 2 * 65536];
+
+static void test_upset_during_solve(int backend, tscvx_int dense_max) {
+    static stage_problem sp;
+    const tscvx_data d = stage_data(&sp);
+    const long page = sysconf(_SC_PAGESIZE);
+    CHECK(page > 0 && page <= 65536, "page size %ld", page);
+    if (page <= 0 || page > 65536) return;
+    tscvx_settings st;
+    tscvx_default_settings(&st);
+    st.kkt_backend = backend;
+    st.soc_dense_max = dense_max;
+    st.max_iter = 500; /* a log long enough that the page from the last row holds log rows only */
+    unsigned char *base = dur_buf + ((size_t)page - (uintptr_t)dur_buf % (size_t)page) % (size_t)page;
+    size_t narena = 0;
+    CHECK(tscvx_workspace_size(&d, &st, base, 1 << 18, &narena) == TSCVX_SETUP_OK &&
+              narena + (size_t)page <= (1 << 18) + 65536, "size %zu", narena);
+    tscvx_workspace *ws = NULL;
+    CHECK(tscvx_setup(&ws, base, narena, &d, &st) == TSCVX_SETUP_OK, "setup");
+    if (ws == NULL) return;
+    tscvx_info info;
+    tscvx_float x0[UP_N], x1[UP_N];
+    CHECK(tscvx_solve(ws) == TSCVX_SOLVED && tscvx_get_info(ws, &info) == TSCVX_SETUP_OK &&
+              tscvx_get_solution(ws, x0, NULL, NULL, NULL) == TSCVX_SETUP_OK, "first solve");
+    const tscvx_int last = info.iterations, method = info.kkt_backend;
+    CHECK((size_t)(ws->log_cap - last) * sizeof(tscvx_iter_log) >= (size_t)page,
+          "log too short for the page: %d rows from row %d", (int)ws->log_cap, (int)last);
+    /* the same problem again, the arena shifted so that the last row begins a page */
+    const size_t shift = ((size_t)page - (uintptr_t)&ws->log[last] % (size_t)page) % (size_t)page;
+    CHECK(tscvx_setup(&ws, base + shift, narena, &d, &st) == TSCVX_SETUP_OK, "setup shifted");
+    if (ws == NULL) return;
+    CHECK((uintptr_t)&ws->log[last] % (size_t)page == 0, "row %d not at a page", (int)last);
+    /* what the solve no longer follows after that row (n is: the best iterate is saved) */
+    const upset_site sites[] = {SITE("A.i[6]", ws->A.i[6], 0, 0),
+                                SITE("log_cap", ws->log_cap, 0, 1)};
+    struct sigaction on, old;
+    memset(&on, 0, sizeof on);
+    on.sa_sigaction = on_trap;
+    on.sa_flags = SA_SIGINFO;
+    sigemptyset(&on.sa_mask);
+    char msg[TSCVX_MESSAGE_LEN];
+    int said = 0;
+    for (size_t t = 0; t < sizeof sites / sizeof sites[0]; t++) {
+        const upset_site *u = &sites[t];
+        trap_site = u;
+        trap_hits = 0;
+        trap_len = (size_t)page;
+        trap_page = (unsigned char *)&ws->log[last];
+        CHECK(sigaction(SIGSEGV, &on, &old) == 0, "sigaction");
+        CHECK(mprotect(trap_page, trap_len, PROT_READ) == 0, "mprotect");
+        const tscvx_solve_status got = tscvx_solve(ws);
+        mprotect((unsigned char *)&ws->log[last], (size_t)page, PROT_READ | PROT_WRITE);
+        trap_page = NULL;
+        sigaction(SIGSEGV, &old, NULL);
+        CHECK(trap_hits == 1, "method %d, %s: the upset did not come during the solve (%d)",
+              (int)method, u->name, (int)trap_hits);
+        said += trap_hits == 1 && got == TSCVX_INVALID_INPUT;
+        CHECK(got == TSCVX_INVALID_INPUT, "method %d, %s flipped during the solve (at its last "
+              "iteration, %d): it returned \"%s\", not invalid input", (int)method, u->name,
+              (int)last, tscvx_solve_status_message(got));
+        CHECK(tscvx_check_workspace(ws, msg) == TSCVX_SETUP_NOT_READY &&
+                  strstr(msg, "workspace damaged during a solve: set-up checksum mismatch in "
+                              "its ") != NULL &&
+                  strstr(msg, u->head ? "sizes, settings or pointers" : "index arrays") != NULL,
+              "method %d, %s flipped during the solve: check says \"%s\"", (int)method,
+              u->name, msg);
+        if (!u->head) { /* the struct intact: its info read, the iterate withheld */
+            CHECK(tscvx_get_info(ws, &info) == TSCVX_SETUP_OK &&
+                      info.status == TSCVX_INVALID_INPUT,
+                  "method %d, %s: info.status %d", (int)method, u->name, (int)info.status);
+            CHECK(tscvx_get_solution(ws, x1, NULL, NULL, NULL) == TSCVX_SETUP_NO_SOLUTION,
+                  "method %d, %s: the iterate of a damaged solve was returned", (int)method,
+                  u->name);
+        }
+        CHECK(tscvx_solve(ws) == TSCVX_INVALID_INPUT, "method %d, %s: the next solve ran",
+              (int)method, u->name);
+        flip(u);
+        CHECK(tscvx_check_workspace(ws, msg) == TSCVX_SETUP_OK && msg[0] == '\0',
+              "restored: %s", msg);
+        CHECK(tscvx_solve(ws) == TSCVX_SOLVED &&
+                  tscvx_get_solution(ws, x1, NULL, NULL, NULL) == TSCVX_SETUP_OK &&
+                  memcmp(x0, x1, sizeof x0) == 0,
+              "method %d, %s: not the same answer once restored", (int)method, u->name);
+    }
+    printf("method %d: %d of %d upsets during the solve (at its last iteration, %d) said by "
+           "that solve\n", (int)method, said, (int)(sizeof sites / sizeof sites[0]), (int)last);
+}
+
 int main(void) {
     test_soc();
     test_qp();
@@ -1194,5 +1317,8 @@ int main(void) {
     test_upsets(TSCVX_KKT_STATIC, 16);
     test_upsets(TSCVX_KKT_STATIC, 2);
     test_upsets(TSCVX_KKT_LDL, 2);
+    test_upset_during_solve(TSCVX_KKT_AUTO, 16);
+    test_upset_during_solve(TSCVX_KKT_STATIC, 2);
+    test_upset_during_solve(TSCVX_KKT_LDL, 2);
     return ct_report("test_solver");
 }
