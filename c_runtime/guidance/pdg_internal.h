@@ -139,7 +139,11 @@ int pdg_ws_idle(const pdg_workspace *ws);
  * and masks: a refused call leaves none to read): 0 to go on, -1 (message set) if not set up. */
 int pdg_result_begin(pdg_workspace *ws, pdg_result *res);
 int pdg_check_workspace_scenario(const pdg_workspace *ws, const pdg_scenario *s, char *msg);
-/* pdg_solve from the trust radius eta_init (> 0) instead of the settings' (0: theirs) */
+/* 1 for the outcomes that report an answer (solved, and the last accepted iterate of
+ * infeasible and max_iterations): what the end check of a solve guards */
+int pdg_reports_answer(pdg_status status);
+/* pdg_solve from the trust radius eta_init (> 0) instead of the settings' (0: theirs); the
+ * end check of the guidance and SOCP workspaces included (pdg_solve_tscvx adds the nets') */
 pdg_status pdg_solve_from(pdg_workspace *ws, const pdg_scenario *scenario,
                           const pdg_options *opt, pdg_result *res, double eta_init);
 

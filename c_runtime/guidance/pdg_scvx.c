@@ -29,7 +29,7 @@ static const char *const status_messages[PDG_NSTATUS] = {
     "converged",
     "virtual control could not be driven to zero: no feasible landing found",
     "iteration limit reached with zero virtual control",
-    "a convex subproblem could not be solved",
+    "a convex subproblem could not be solved, or a workspace was damaged during the call",
     "invalid input: nothing was solved",
 };
 
@@ -1283,6 +1283,7 @@ typedef struct {
     int spent;         /* the IPM iteration budget (socp_max_iter_total) is spent */
     int polishing;     /* the next subproblem is the polish (pdg_settings.polish) */
     int lost;          /* a callback set the workspace up again or wrote over it */
+    int damaged;       /* what set-up fixed changed during the call: no answer */
 } scvx_state;
 
 /* Step 1 (T-SCvx): the caller's mask for iteration k + 1 plus what the full-constraint guard
@@ -1515,7 +1516,8 @@ static int scvx_iteration(pdg_workspace *ws, const pdg_options *opt, scvx_state 
     sst = solve_subproblem(ws, opt, has_mask ? ws->keep : NULL, s, r, res);
     if (sst == SST_MAP_DAMAGED) { /* nothing of this workspace can be trusted any more */
         failed_row(r, s->J);
-        *status = PDG_INVALID_INPUT;
+        s->damaged = 1;
+        *status = PDG_SOLVER_ERROR;
         snprintf(res->message, PDG_MESSAGE_LEN,
                  "subproblem at iteration %d: the workspace was damaged during the solve (its "
                  "map of the subproblem into A and G points outside them): set it up again",
@@ -1661,13 +1663,43 @@ int pdg_result_begin(pdg_workspace *ws, pdg_result *res)
     return 0;
 }
 
+int pdg_reports_answer(pdg_status status)
+{
+    return status == PDG_SOLVED || status == PDG_INFEASIBLE || status == PDG_MAX_ITERATIONS;
+}
+
+/* The end check of a solve (pdg_solve, pdg_solve_tscvx): the checksums its start checked,
+ * again, the guidance workspace's first (the SOCP workspace's pointer is among what it
+ * covers). The SOCP workspace's were checked at the end of each subproblem's solve too
+ * (tscvx_solve), but the call goes on after the last one. 0 when intact; 1 with the
+ * reason in msg (PDG_MESSAGE_LEN bytes) when a bit flipped during the call. */
+static int damaged_during_call(const pdg_workspace *ws, char *msg)
+{
+    char why[TSCVX_MESSAGE_LEN];
+    if (!PDG_WS_READY(ws)) {
+        snprintf(msg, PDG_MESSAGE_LEN,
+                 "workspace damaged during the call (the end check: set-up checksum mismatch "
+                 "in the guidance workspace's sizes, settings, layout or map of the subproblem "
+                 "into A and G): no answer; set it up again");
+        return 1;
+    }
+    if (tscvx_check_workspace(ws->socp, why) != TSCVX_SETUP_OK) {
+        snprintf(msg, PDG_MESSAGE_LEN,
+                 "workspace damaged during the call (the end check, SOCP workspace: %s): no "
+                 "answer",
+                 why);
+        return 1;
+    }
+    return 0;
+}
+
 /* Paper Algorithm 1 (Algorithm 2 when the options carry masks): subproblems until
  * convergence on the full constraint set, a stall, a failure or the settings' limits. */
 static pdg_status run_scvx(pdg_workspace *ws, const pdg_scenario *scenario,
                            const pdg_options *opt, pdg_result *res, double eta_init)
 {
     pdg_status status;
-    scvx_state s = {0, 0.0, NAN, NAN, NAN, INFINITY, 0, 0, 0, 0, 0, 0, 0};
+    scvx_state s = {0, 0.0, NAN, NAN, NAN, INFINITY, 0, 0, 0, 0, 0, 0, 0, 0};
     int it;
 
     status = start(ws, scenario, opt, res, &s.J, &s.defect, &s.viol);
@@ -1691,7 +1723,13 @@ static pdg_status run_scvx(pdg_workspace *ws, const pdg_scenario *scenario,
         res->m_f_before_polish = ws->x[(size_t)(ws->N - 1) * NX + IM];
         res->polish = polish(ws, opt, &s, res);
     }
-    if (status != PDG_INVALID_INPUT) { /* a stopped call returns no trajectory (t_f NaN) */
+    /* an answer computed through set-up data that changed during the call is not reported
+     * (the failures before keep their own reason) */
+    if (pdg_reports_answer(status) && damaged_during_call(ws, res->message)) {
+        status = PDG_SOLVER_ERROR;
+        s.damaged = 1;
+    }
+    if (status != PDG_INVALID_INPUT && !s.damaged) { /* else no trajectory (t_f NaN) */
         to_physical(ws, ws->z, res->x, res->u, &res->t_f);
     }
     res->status = status;
@@ -1714,7 +1752,7 @@ pdg_status pdg_solve_from(pdg_workspace *ws, const pdg_scenario *scenario,
     ws->running = res;
     status = run_scvx(ws, scenario, opt ? opt : &no_options, res, eta_init);
     if (ws->running == res) { /* not when a callback set it up again (running NULL) */
-        ws->busy = 0;
+        ws->busy = 0; /* the struct's own fields, outside the checksum: written if damaged */
         ws->running = NULL;
     }
     return status;

@@ -286,6 +286,29 @@ static int check_tscvx_call(const pdg_workspace *ws, const pdg_scenario *s,
     return 0;
 }
 
+/* The networks' part of the end check (pdg_solve_from checked the workspaces): their
+ * checksums, checked by every call taking them (tscvx_nn_get_info at the start, each mask
+ * inference), again. 0 when intact; 1 with the reason in msg when one changed during the
+ * call. */
+static int nets_damaged_during_call(const pdg_tscvx_options *o, char *msg)
+{
+    const char *const names[2] = {"solution", "constraint"};
+    tscvx_nn *const nets[2] = {o->solution, o->constraint};
+    tscvx_nn_info info;
+    int i;
+    for (i = 0; i < 2; ++i) {
+        const tscvx_nn_status st = nets[i] ? tscvx_nn_get_info(nets[i], &info) : TSCVX_NN_OK;
+        if (st != TSCVX_NN_OK) {
+            snprintf(msg, PDG_MESSAGE_LEN,
+                     "nets: the %s network was damaged during the call (the end check: %s): "
+                     "no answer; initialize it again",
+                     names[i], tscvx_nn_status_message(st));
+            return 1;
+        }
+    }
+    return 0;
+}
+
 /* Paper Algorithm 2 on board: the solution network's warm start (with the reduced radius),
  * the constraint network's mask at every iteration, and the SCvx loop with its
  * full-constraint guard. */
@@ -330,6 +353,9 @@ pdg_status pdg_solve_tscvx(pdg_workspace *ws, const pdg_scenario *s,
         opt.mask_ctx = &mc;
     }
     status = pdg_solve_from(ws, s, &opt, res, eta);
+    if (pdg_reports_answer(status) && nets_damaged_during_call(o, res->message)) {
+        status = res->status = PDG_SOLVER_ERROR;
+    }
     if (rep) {
         rep->warm_started = o->solution != NULL;
         rep->masks_predicted = mc.predicted;

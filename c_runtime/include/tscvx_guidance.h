@@ -42,10 +42,22 @@
  * entries into its matrices): a workspace whose arena was
  * reused, or where one of those took a bit flip, is refused (PDG_SETUP_NOT_READY,
  * PDG_INVALID_INPUT from the solves), never followed. The SOCP workspace inside it checks
- * its own mark and set-up checksum on each of its calls (tscvx_socp.h): a flip there ends
- * the solve at that subproblem with PDG_SOLVER_ERROR and the SOCP runtime's reason in the
- * message ("conic solver returned invalid_input: workspace damaged: ..."), and so does every
- * later solve until the workspace is set up again.
+ * its own mark and set-up checksum on each of its calls (tscvx_socp.h), and each
+ * tscvx_solve again at its end: a flip there ends the solve at that subproblem with
+ * PDG_SOLVER_ERROR and the SOCP runtime's reason in the message ("conic solver returned
+ * invalid_input: workspace damaged: ...", "... damaged during a solve: ..." when it came
+ * during that subproblem's solve), and so does every later solve until the workspace is set
+ * up again.
+ * The solves (pdg_solve, pdg_solve_tscvx) check again at their end, before reporting an
+ * answer (PDG_SOLVED, and the iterate of PDG_INFEASIBLE and PDG_MAX_ITERATIONS): the
+ * guidance workspace's checksum, then the SOCP workspace's (tscvx_check_workspace), then
+ * for pdg_solve_tscvx each network's (tscvx_nn_get_info). A bit flipped in any of them
+ * during the call (after the start checks, or in the SOCP workspace after its last solve)
+ * makes the call PDG_SOLVER_ERROR with "workspace damaged during the call (the end check:
+ * ...)" or "nets: the ... network was damaged during the call (the end check: ...)" in the
+ * message, naming the check that failed (the SOCP runtime's reason); result.x, u and t_f
+ * then hold what the call computed, which is not an answer. A call that fails before its
+ * end keeps its own status and reason.
  *
  * Each SCvx iteration writes new numbers into the fixed pattern: FOH discretization of the
  * N-1 intervals from the CasADi-generated model, the subproblem data (equalities A z = b:
@@ -116,13 +128,17 @@ typedef enum {
     PDG_MAX_ITERATIONS,    /* virtual control zero but not converged, or the IPM iteration
                               budget (socp_max_iter_total) spent: the result is the last
                               accepted iterate */
-    PDG_SOLVER_ERROR,      /* a subproblem could not be solved (or the model failed) */
+    PDG_SOLVER_ERROR,      /* a subproblem could not be solved (or the model failed): x
+                              and u hold the last accepted iterate; or the guidance
+                              workspace's map, or the end check, found a workspace damaged
+                              during the call (see above): nothing returned (t_f NaN, x and
+                              u untouched); or the end check found a network damaged */
     PDG_INVALID_INPUT,     /* bad scenario, guess (NaN/inf, t_f <= 0, one of x, u alone),
                               mask or workspace: nothing was solved. A running solve stopped
                               by its mask callback (an error answer, or the workspace set up
-                              again from it) or by its workspace damaged ends so too: the log
-                              keeps the subproblems solved before. Either way nothing is
-                              returned (t_f NaN, x and u untouched). A finite guess where
+                              again from it) ends so too: the log keeps the subproblems
+                              solved before. Either way nothing is returned (t_f NaN, x and
+                              u untouched). A finite guess where
                               the model cannot be evaluated (m = 0 at a node, far outside
                               the model's range) is PDG_SOLVER_ERROR, "model evaluation
                               failed at the initial guess"; one it evaluates but no landing
@@ -259,7 +275,8 @@ typedef struct {
     double *x;                /* caller array N x 14 (node-major): the trajectory */
     double *u;                /* caller array N x 3: thrust T_B at the nodes (FOH) */
     double t_f;               /* NaN, x and u untouched: nothing returned (PDG_INVALID_INPUT,
-                                 or the model failing at the guess) */
+                                 the model failing at the guess, a workspace damaged during
+                                 the call) */
     int iterations;           /* accepted steps */
     int subproblems_solved;   /* convex subproblems solved, rejections included */
     double max_defect;        /* max |x_{k+1} - F(x_k, u_k, u_k+1, t_f)|, physical units */

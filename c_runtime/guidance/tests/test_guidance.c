@@ -499,6 +499,55 @@ static int upset_socp(void *ctx, int k, unsigned char *mask, int n)
     return 0;
 }
 
+/* Clock standing for an upset after the last subproblem's solve: a solve reads the clock
+ * before and after each subproblem's conic solve (reads 2i - 1 and 2i of subproblem i), so at
+ * read clock_upset_read = 2 x the subproblems it flips a high bit of *clock_upset_at, after
+ * the SOCP runtime's own end check, and the call goes on (the candidate's evaluation, the
+ * acceptance and convergence tests, the answer). 0: counts the reads only. */
+static int clock_reads, clock_upset_read;
+static int *clock_upset_at;
+
+static double upset_clock(void)
+{
+    if (++clock_reads == clock_upset_read && clock_upset_at) {
+        *clock_upset_at ^= 1 << 20;
+    }
+    return 0.0;
+}
+
+/* A bit of *at flipped after the last subproblem's solve (subproblems: the call's count
+ * without the upset): the call says the workspace was damaged during it, with `text` in its
+ * message, instead of "solved"; the next call is refused by the start checks (next_status);
+ * with the bit back, the same landing to the last bit (m_f). */
+static void upset_after_last_solve(pdg_workspace *ws, const pdg_scenario *s, int *at,
+                                   int subproblems, const char *text, pdg_status next_status,
+                                   double m_f)
+{
+    pdg_options o;
+    pdg_result r;
+    pdg_status got;
+    memset(&o, 0, sizeof o);
+    o.clock_s = upset_clock;
+    r.x = x;
+    r.u = u;
+    x[0] = -7.0;
+    clock_reads = 0;
+    clock_upset_read = 2 * subproblems;
+    clock_upset_at = at;
+    got = pdg_solve(ws, s, &o, &r);
+    clock_upset_at = NULL;
+    CHECK(clock_reads == 2 * subproblems); /* the flip came after the last conic solve */
+    CHECK(got == PDG_SOLVER_ERROR && r.status == PDG_SOLVER_ERROR);
+    CHECK(isnan(r.t_f) && x[0] == -7.0); /* no trajectory through damaged set-up data */
+    CHECK(strstr(r.message, text) != NULL);
+    printf("upset after the last subproblem's solve: %s (%s)\n", pdg_status_name(got),
+           r.message);
+    CHECK(pdg_solve(ws, s, NULL, &r) == next_status);
+    *at ^= 1 << 20;
+    CHECK(pdg_solve(ws, s, NULL, &r) == PDG_SOLVED);
+    CHECK(x[PDG_NSTATE * 49 + 13] == m_f);
+}
+
 static void test_solve(pdg_workspace *ws, int with_masks)
 {
     pdg_scenario s;
@@ -571,7 +620,9 @@ static void test_solve(pdg_workspace *ws, int with_masks)
         memset(&o, 0, sizeof o);
         o.mask_fn = upset_map;
         o.mask_ctx = ws;
-        CHECK(pdg_solve(ws, &s, &o, &r) == PDG_INVALID_INPUT);
+        x[0] = -7.0;
+        CHECK(pdg_solve(ws, &s, &o, &r) == PDG_SOLVER_ERROR); /* the call ran: no answer */
+        CHECK(isnan(r.t_f) && x[0] == -7.0);
         CHECK(strstr(r.message, "iteration 2: the workspace was damaged") != NULL);
         printf("map upset at iteration 2: %d subproblems solved\n", r.subproblems_solved);
         CHECK(pdg_solve(ws, &s, NULL, &r) == PDG_INVALID_INPUT); /* and then by the checksum */
@@ -596,6 +647,23 @@ static void test_solve(pdg_workspace *ws, int with_masks)
         }
         CHECK(pdg_solve(ws, &s, NULL, &r) == PDG_SOLVED);
         CHECK(x[PDG_NSTATE * 49 + 13] == mf); /* the same landing, to the last bit */
+        /* upsets after the last subproblem's solve, when the checks of the subproblems are
+         * behind: the solve's end check says so (before it, the solve returned "solved"). The
+         * clock alone changes nothing: the same subproblems, reads and landing */
+        memset(&o, 0, sizeof o);
+        o.clock_s = upset_clock;
+        clock_reads = clock_upset_read = 0;
+        CHECK(pdg_solve(ws, &s, &o, &r) == PDG_SOLVED);
+        CHECK(clock_reads == 2 * r.subproblems_solved && x[PDG_NSTATE * 49 + 13] == mf);
+        upset_after_last_solve(ws, &s, &ws->dest[5], r.subproblems_solved,
+                               "workspace damaged during the call (the end check: set-up "
+                               "checksum mismatch in the guidance workspace's",
+                               PDG_INVALID_INPUT, mf);
+        upset_after_last_solve(ws, &s, &ws->socp->A.i[7], r.subproblems_solved,
+                               "workspace damaged during the call (the end check, SOCP "
+                               "workspace: workspace damaged: set-up checksum mismatch in its "
+                               "index arrays",
+                               PDG_SOLVER_ERROR, mf);
     }
     /* boundary conditions hold exactly enough */
     CHECK(fabs(x[0] - 4.0) < 1e-7 && fabs(x[PDG_NSTATE * 49 + 3] + 0.1) < 1e-7);

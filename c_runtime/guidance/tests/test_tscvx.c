@@ -15,6 +15,8 @@
 
 #include "gnc_test.h"
 #include "host_io.h"
+#include "pdg_internal.h"       /* the guidance workspace's map (an upset's site) */
+#include "../../nn/nn_internal.h" /* a network's fields (an upset's site) */
 #include "tscvx_guidance.h"
 #include "tscvx_nn.h"
 
@@ -120,6 +122,61 @@ static void shared_buffer_refused(const pdg_scenario *s, const unsigned char *bl
         failures++;
     }
     free(shared);
+}
+
+/* Clock standing for an upset after the last subproblem's solve (test_guidance.c has the
+ * same for pdg_solve): at read clock_upset_read (2 x the subproblems: the read after the
+ * last conic solve) it flips a high bit of *clock_upset_at; 0 counts the reads only. */
+static int clock_reads, clock_upset_read;
+static int *clock_upset_at;
+
+static double upset_clock(void)
+{
+    if (++clock_reads == clock_upset_read && clock_upset_at) {
+        *clock_upset_at ^= 1 << 20;
+    }
+    return 0.0;
+}
+
+/* T-SCvx with both networks, a bit of *at flipped after the last subproblem's solve (when
+ * no network runs any more): the call's end check says so (`text` in the message) instead of
+ * "solved" (which it returned before the end check); with the bit back, the same landing. */
+static void upset_after_last_solve(pdg_workspace *ws, const pdg_scenario *s, tscvx_nn *sol,
+                                   tscvx_nn *con, int *at, const char *text)
+{
+    pdg_tscvx_options o = {0};
+    pdg_result r;
+    pdg_status got;
+    double m_f;
+    int subproblems;
+    const int N = s->params.N;
+    o.solution = sol;
+    o.constraint = con;
+    o.clock_s = upset_clock;
+    r.x = x;
+    r.u = u;
+    clock_reads = clock_upset_read = 0;
+    CHECK(pdg_solve_tscvx(ws, s, &o, &r, NULL) == PDG_SOLVED);
+    subproblems = r.subproblems_solved;
+    m_f = x[PDG_NSTATE * (N - 1) + 13];
+    CHECK(clock_reads == 2 * subproblems);
+    clock_reads = 0;
+    clock_upset_read = 2 * subproblems;
+    clock_upset_at = at;
+    got = pdg_solve_tscvx(ws, s, &o, &r, NULL);
+    clock_upset_at = NULL;
+    CHECK(clock_reads == 2 * subproblems);
+    CHECK(got == PDG_SOLVER_ERROR && r.status == PDG_SOLVER_ERROR);
+    if (!strstr(r.message, text)) {
+        fprintf(stderr, "upset after the last solve: %s, message '%s' lacks '%s'\n",
+                pdg_status_name(got), r.message, text);
+        failures++;
+    }
+    printf("T-SCvx, upset after the last subproblem's solve: %s (%s)\n", pdg_status_name(got),
+           r.message);
+    *at ^= 1 << 20;
+    CHECK(pdg_solve_tscvx(ws, s, &o, &r, NULL) == PDG_SOLVED);
+    CHECK(x[PDG_NSTATE * (N - 1) + 13] == m_f);
 }
 
 int main(int argc, char **argv)
@@ -275,6 +332,17 @@ int main(int argc, char **argv)
     printf("T-SCvx: %d iterations, %d subproblems, m_f %.6f (SCvx %d iterations, m_f %.6f)\n",
            r.iterations, r.subproblems_solved, x[PDG_NSTATE * (N - 1) + 13], iters_scvx,
            m_scvx);
+
+    /* the end check of pdg_solve_tscvx: each network, and the guidance workspace */
+    upset_after_last_solve(ws, &s, sol, con, &con->ff,
+                           "nets: the constraint network was damaged during the call (the end "
+                           "check: ");
+    upset_after_last_solve(ws, &s, sol, con, &sol->d_in,
+                           "nets: the solution network was damaged during the call (the end "
+                           "check: ");
+    upset_after_last_solve(ws, &s, sol, con, &ws->dest[3],
+                           "workspace damaged during the call (the end check: set-up checksum "
+                           "mismatch in the guidance workspace's");
 
     free(arena);
     free(arena30);
