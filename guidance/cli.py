@@ -245,13 +245,23 @@ def _write_trajectory(args: argparse.Namespace, result: SCvxResult, scenario: Sc
 
 
 def _solve_inputs(args: argparse.Namespace) -> dict[str, Path] | None:
-    """The files the solve started from, for the trajectory file's provenance."""
+    """The files the solve started from, for the trajectory file's provenance, and the C
+    library that solved it (which build exactly: its sha256 beside the code version)."""
+    files: dict[str, Path] = {}
     if args.guess:  # SCvx only (_check_method_options)
         name = "initial_guess" if args.at is None else f"initial_guess from t = {args.at:g}"
-        return {name: Path(args.guess)}
-    if args.method == "tscvx":  # the files the networks were read from
-        return _network_files(Path(args.models), args.backend)
-    return None
+        files[name] = Path(args.guess)
+    elif args.method == "tscvx":  # the files the networks were read from
+        files.update(_network_files(Path(args.models), args.backend))
+    if args.backend == "c":
+        from guidance.cgnc import LIB_PATH
+
+        files["c_library"] = LIB_PATH
+    elif args.backend == "c-socp":
+        from guidance.csocp import library_path
+
+        files["c_library"] = library_path()
+    return files or None
 
 
 def _write_figure(args: argparse.Namespace, result: SCvxResult, p: Params) -> None:

@@ -84,6 +84,7 @@ def test_a_neighbours_plan_replans_the_landing_in_both_loops(
     assert check.landing_position_error <= 1e-3 and check.max_path_violation <= 1e-6
     recorded = written["provenance"]["files"]["initial_guess"]
     assert recorded["sha256"] == hashlib.sha256(default_plan.read_bytes()).hexdigest()
+    assert "c_library" in written["provenance"]["files"]  # the build that solved it
 
 
 def test_a_guess_that_does_not_fit_is_refused(default_plan: Path, tmp_path: Path, capsys) -> None:

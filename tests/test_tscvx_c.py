@@ -243,7 +243,7 @@ def test_cli_trust_update_reaches_the_c_loop(tmp_path: Path, nets) -> None:
     from guidance.provenance import file_digest
 
     files = written["provenance"]["files"]
-    assert set(files) == {"constraint", "solution"}
+    assert set(files) == {"constraint", "solution", "c_library"}
     onnx = MODELS_DIR / "solution.onnx"
     assert files["solution"] == {"path": str(onnx), "sha256": file_digest(onnx)}
     np.testing.assert_allclose(written["x"][-1], alg1.x[-1], rtol=1e-12, atol=0)
