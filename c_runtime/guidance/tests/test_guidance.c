@@ -499,22 +499,6 @@ static int upset_socp(void *ctx, int k, unsigned char *mask, int n)
     return 0;
 }
 
-/* Clock standing for an upset after the last subproblem's solve: a solve reads the clock
- * before and after each subproblem's conic solve (reads 2i - 1 and 2i of subproblem i), so at
- * read clock_upset_read = 2 x the subproblems it flips a high bit of *clock_upset_at, after
- * the SOCP runtime's own end check, and the call goes on (the candidate's evaluation, the
- * acceptance and convergence tests, the answer). 0: counts the reads only. */
-static int clock_reads, clock_upset_read;
-static int *clock_upset_at;
-
-static double upset_clock(void)
-{
-    if (++clock_reads == clock_upset_read && clock_upset_at) {
-        *clock_upset_at ^= 1 << 20;
-    }
-    return 0.0;
-}
-
 /* A bit of *at flipped after the last subproblem's solve (subproblems: the call's count
  * without the upset): the call says the workspace was damaged during it, with `text` in its
  * message, instead of "solved"; the next call is refused by the start checks (next_status);
@@ -708,6 +692,23 @@ static void test_solve(pdg_workspace *ws, int with_masks)
     }
 }
 
+/* The default landing at N = 12 on a workspace whose call budget is 80 IPM iterations (30 a
+ * subproblem): it ends PDG_MAX_ITERATIONS. NULL (the arena freed) if set-up failed. */
+static pdg_workspace *budget_ws(pdg_settings *st, pdg_scenario *s, void **arena, size_t *bytes)
+{
+    pdg_workspace *ws;
+    pdg_default_settings(st);
+    st->socp_max_iter_total = 80;
+    st->socp_max_iter = 30;
+    pdg_default_scenario(s);
+    s->params.N = 12;
+    ws = make_ws(12, 1, st, arena, bytes);
+    if (!ws) {
+        free(*arena);
+    }
+    return ws;
+}
+
 /* The call's IPM iteration budget (socp_max_iter_total): the call ends at it with
  * PDG_MAX_ITERATIONS and the last accepted iterate, having spent no more than it; the next
  * call on the workspace has the whole budget again (the runtime's limit, lowered where the
@@ -723,14 +724,8 @@ static void test_iteration_budget(void)
     size_t bytes = 0;
     pdg_workspace *ws;
     int i, sum = 0, first_total;
-    pdg_default_settings(&st);
-    st.socp_max_iter_total = 80;
-    st.socp_max_iter = 30;
-    pdg_default_scenario(&s);
-    s.params.N = 12;
-    ws = make_ws(12, 1, &st, &arena, &bytes);
+    ws = budget_ws(&st, &s, &arena, &bytes);
     if (!ws) {
-        free(arena);
         return;
     }
     r.x = x1;
@@ -805,14 +800,8 @@ static void test_callbacks(void)
     size_t bytes = 0;
     pdg_workspace *ws;
     int i, rows = -1, sum = 0, n = -1;
-    pdg_default_settings(&st);
-    st.socp_max_iter_total = 80;
-    st.socp_max_iter = 30;
-    pdg_default_scenario(&s);
-    s.params.N = 12;
-    ws = make_ws(12, 1, &st, &arena, &bytes);
+    ws = budget_ws(&st, &s, &arena, &bytes);
     if (!ws) {
-        free(arena);
         return;
     }
     memset(&o, 0, sizeof o);

@@ -124,20 +124,6 @@ static void shared_buffer_refused(const pdg_scenario *s, const unsigned char *bl
     free(shared);
 }
 
-/* Clock standing for an upset after the last subproblem's solve (test_guidance.c has the
- * same for pdg_solve): at read clock_upset_read (2 x the subproblems: the read after the
- * last conic solve) it flips a high bit of *clock_upset_at; 0 counts the reads only. */
-static int clock_reads, clock_upset_read;
-static int *clock_upset_at;
-
-static double upset_clock(void)
-{
-    if (++clock_reads == clock_upset_read && clock_upset_at) {
-        *clock_upset_at ^= 1 << 20;
-    }
-    return 0.0;
-}
-
 /* T-SCvx with both networks, a bit of *at flipped after the last subproblem's solve (when
  * no network runs any more): the call's end check says so (`text` in the message) instead of
  * "solved" (which it returned before the end check); with the bit back, the same landing. */
