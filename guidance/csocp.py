@@ -226,6 +226,7 @@ def load_library() -> ct.CDLL:
         "tscvx_get_iter_log": (c_int, [ws_p, c_int, ct.POINTER(_IterLog)]),
         "tscvx_setup_status_message": (ct.c_char_p, [c_int]),
         "tscvx_check_data": (c_int, [ct.POINTER(_Data), ct.c_char_p]),
+        "tscvx_check_settings": (c_int, [ct.POINTER(_Settings), ct.c_char_p]),
         "tscvx_solve_status_message": (ct.c_char_p, [c_int]),
         "tscvx_check_workspace": (c_int, [ws_p, ct.c_char_p]),
     }
@@ -547,7 +548,9 @@ class Solver:
 
     def _setup_message(self, st: int) -> str:
         message = self.lib.tscvx_setup_status_message(st).decode()
-        detail = ct.create_string_buffer(MESSAGE_LEN)  # the array and entry at fault
+        detail = ct.create_string_buffer(MESSAGE_LEN)  # the setting, or array and entry, at fault
+        if self.lib.tscvx_check_settings(ct.byref(self._settings), detail) == st and detail.value:
+            return f"{message}: {detail.value.decode()}"
         if self.lib.tscvx_check_data(ct.byref(self._data), detail) == st and detail.value:
             message += f" ({detail.value.decode()}; in the C runtime's terms: c is q, "
             message += "A and b the zero-cone rows, G and h the other rows)"

@@ -157,6 +157,51 @@ def test_unknown_setting_is_an_error() -> None:
         csocp.Solver(small_soc(), tolerance=1)
 
 
+def _lp_stopped_early() -> ConicProblem:
+    """min -x1 - x2 over x >= 0, x1 + x2 <= 10, |x| <= 8: optimum -10 at (5, 5)."""
+    A = sp.csc_matrix(np.array([[-1, 0], [0, -1], [1, 1], [0, 0], [-1, 0], [0, -1]], float))
+    b = np.array([0.0, 0.0, 10.0, 8.0, 0.0, 0.0])
+    return ConicProblem(None, np.array([-1.0, -1.0]), A, b, [("nonneg", 3), ("soc", 3)])
+
+
+@pytest.mark.parametrize("name", ["tol_gap_abs", "tol_gap_rel", "tol_feas"])
+@pytest.mark.parametrize("value", [1.0, 100.0])
+def test_a_tolerance_of_one_or_more_is_refused_naming_it(name: str, value: float) -> None:
+    """A gap or residual as large as its data certifies nothing (tol_infeas was bounded so
+    before): with tol_gap_abs = tol_gap_rel = 1 the runtime stopped this problem at its first
+    iterate, objective -7.3, and called it solved (Clarabel: -10)."""
+    prob = _lp_stopped_early()
+    ref = solve_clarabel(prob)
+    assert ref.status == "solved" and ref.obj == pytest.approx(-10.0, abs=1e-6)
+    sol = csocp.solve(prob, **{name: value})
+    assert sol.status == "invalid_input", (sol.status, sol.obj)
+    assert f"{name} must lie within (0, 1), got {value:g}" in sol.info["message"]
+    loose = csocp.solve(prob, tol_gap_abs=0.999, tol_gap_rel=0.999, tol_feas=0.999)
+    assert loose.status == "solved"  # values below 1 are still taken
+
+
+@pytest.mark.parametrize(
+    ("setting", "value", "named"),
+    [("max_iter", 0, "max_iter must lie within 1..500, got 0"),
+     ("tol_infeas", 5.0, "tol_infeas must lie within (0, 1), got 5"),
+     ("tol_feas_inacc", -1.0, "tol_feas_inacc must be finite and > 0, got -1"),
+     ("tol_gap_abs", float("nan"), "tol_gap_abs must be finite and > 0, got nan"),
+     ("step_fraction", 1.0, "step_fraction must lie within (0, 1), got 1"),
+     ("static_reg", 2.0, "static_reg must lie within (0, 1), got 2"),
+     ("refine_iters", 21, "refine_iters must lie within 0..20, got 21"),
+     ("ruiz_iters", -1, "ruiz_iters must lie within 0..50, got -1"),
+     ("soc_dense_max", 0, "soc_dense_max must be >= 1, got 0"),
+     ("kkt_backend", 7,
+      "kkt_backend must be TSCVX_KKT_AUTO, _LDL, _STATIC or _BANDED (0..3), got 7")],
+)  # fmt: skip
+def test_a_bad_setting_is_named_with_its_range(setting: str, value: float, named: str) -> None:
+    """The runtime's refusal said only "a setting is out of range", not which one
+    (tscvx_check_settings names it; the bindings pass it on)."""
+    sol = csocp.solve(random_feasible(3), **{setting: value})
+    assert sol.status == "invalid_input"
+    assert sol.info["message"] == f"a setting is out of range: {named}"
+
+
 def test_missing_library_message(monkeypatch, tmp_path) -> None:
     monkeypatch.setenv("TSCVX_LIB", str(tmp_path / "nope.so"))
     monkeypatch.setattr(csocp, "_lib_cache", None)

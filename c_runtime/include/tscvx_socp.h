@@ -191,11 +191,12 @@ typedef struct {
     tscvx_int max_iter;          /* IPM iteration limit, 1..500 (fixes the log size at setup);
                                     per run: a warm-started solve that fails runs again cold,
                                     so one tscvx_solve takes at most 2 max_iter */
-    tscvx_float tol_gap_abs;     /* |pcost - dcost| <= tol_gap_abs, or ... */
-    tscvx_float tol_gap_rel;     /* ... <= tol_gap_rel * max(1, min(|pcost|, |dcost|)) */
-    tscvx_float tol_feas;        /* |Ax-b|,|Gx+s-h| <= tol_feas (1 + |b,h|); dual same with c */
+    tscvx_float tol_gap_abs;     /* |pcost - dcost| <= tol_gap_abs, or ..., (0, 1) */
+    tscvx_float tol_gap_rel;     /* ... <= tol_gap_rel * max(1, min(|pcost|, |dcost|)), (0, 1) */
+    tscvx_float tol_feas;        /* |Ax-b|,|Gx+s-h| <= tol_feas (1 + |b,h|); dual same with c,
+                                    (0, 1) */
     tscvx_float tol_infeas;      /* certificate residual / certificate objective, (0, 1) */
-    tscvx_float tol_gap_abs_inacc; /* reduced tolerances for SOLVED_INACCURATE */
+    tscvx_float tol_gap_abs_inacc; /* reduced tolerances for SOLVED_INACCURATE, > 0 */
     tscvx_float tol_gap_rel_inacc;
     tscvx_float tol_feas_inacc;
     tscvx_float step_fraction;   /* fraction of the step to the cone boundary, (0, 1) */
@@ -260,6 +261,13 @@ typedef struct tscvx_workspace tscvx_workspace; /* opaque, lives in the arena */
 /* ---- API --------------------------------------------------------------------------------- */
 
 tscvx_setup_status tscvx_default_settings(tscvx_settings *settings);
+
+/* Why setup, the size queries and tscvx_update_settings would refuse `settings`
+ * (TSCVX_SETUP_BAD_SETTINGS, the ranges documented in tscvx_settings): in `message`
+ * (TSCVX_MESSAGE_LEN bytes; may be NULL) the first setting out of range, its range and its
+ * value, e.g. "tol_gap_abs must lie within (0, 1), got 10"; TSCVX_SETUP_OK and "" for settings
+ * they accept. */
+tscvx_setup_status tscvx_check_settings(const tscvx_settings *settings, char *message);
 
 /* Bytes of scratch that tscvx_workspace_size needs: the data and settings are validated as
  * by setup (the same statuses), then the size is arithmetic on the dimensions. */

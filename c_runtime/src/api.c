@@ -106,28 +106,6 @@ tscvx_setup_status tscvx_default_settings(tscvx_settings *st) {
     return TSCVX_SETUP_OK;
 }
 
-static int pos_finite(tscvx_float v) { return isfinite(v) && v > 0.0; }
-
-static tscvx_setup_status check_settings(const tscvx_settings *st) {
-    if (st->max_iter < 1 || st->max_iter > 500) return TSCVX_SETUP_BAD_SETTINGS;
-    if (!pos_finite(st->tol_gap_abs) || !pos_finite(st->tol_gap_rel) ||
-        !pos_finite(st->tol_feas) || !pos_finite(st->tol_infeas) ||
-        !pos_finite(st->tol_gap_abs_inacc) || !pos_finite(st->tol_gap_rel_inacc) ||
-        !pos_finite(st->tol_feas_inacc))
-        return TSCVX_SETUP_BAD_SETTINGS;
-    /* a certificate whose residual may reach its objective certifies nothing: with
-     * tol_infeas = 10 an early iterate of a bounded problem passed as DUAL_INFEASIBLE */
-    if (!(st->tol_infeas < 1.0)) return TSCVX_SETUP_BAD_SETTINGS;
-    if (!(st->step_fraction > 0.0 && st->step_fraction < 1.0)) return TSCVX_SETUP_BAD_SETTINGS;
-    if (!(st->static_reg > 0.0 && st->static_reg < 1.0)) return TSCVX_SETUP_BAD_SETTINGS;
-    if (st->refine_iters < 0 || st->refine_iters > 20) return TSCVX_SETUP_BAD_SETTINGS;
-    if (st->ruiz_iters < 0 || st->ruiz_iters > 50) return TSCVX_SETUP_BAD_SETTINGS;
-    if (st->soc_dense_max < 1) return TSCVX_SETUP_BAD_SETTINGS;
-    if (st->kkt_backend < TSCVX_KKT_AUTO || st->kkt_backend > TSCVX_KKT_BANDED)
-        return TSCVX_SETUP_BAD_SETTINGS;
-    return TSCVX_SETUP_OK;
-}
-
 /* ---- data validation --------------------------------------------------------------------- */
 
 /* Index of the first entry of v that is NaN or infinite, or -1. */
@@ -149,6 +127,62 @@ static tscvx_setup_status refuse(char *msg, tscvx_setup_status st, const char *f
         va_end(ap);
     }
     return st;
+}
+
+/* The settings' ranges, in the order of the struct; the first one out of range is named with
+ * its range and value in `msg` (TSCVX_MESSAGE_LEN bytes; may be NULL). */
+static tscvx_setup_status check_settings(const tscvx_settings *st, char *msg) {
+    const struct {
+        const char *name;
+        tscvx_float v;
+    } tol[] = {{"tol_gap_abs", st->tol_gap_abs}, {"tol_gap_rel", st->tol_gap_rel},
+               {"tol_feas", st->tol_feas},       {"tol_infeas", st->tol_infeas},
+               {"tol_gap_abs_inacc", st->tol_gap_abs_inacc},
+               {"tol_gap_rel_inacc", st->tol_gap_rel_inacc},
+               {"tol_feas_inacc", st->tol_feas_inacc}};
+    /* The first four bound a residual, gap or certificate relative to its data (the absolute
+     * gap to an objective of order 1): at 1 or more they accept anything. tol_infeas = 10 passed
+     * an early iterate of a bounded problem as DUAL_INFEASIBLE; tol_gap_* = 1 stopped a
+     * problem whose optimum is -10 at its first iterate, -7.3, as SOLVED. The reduced
+     * (_inacc) bars only label a best iterate SOLVED_INACCURATE: any positive value. */
+    const int below_one = 4;
+    if (msg) msg[0] = '\0';
+    if (st->max_iter < 1 || st->max_iter > 500)
+        return refuse(msg, TSCVX_SETUP_BAD_SETTINGS, "max_iter must lie within 1..500, got %d",
+                      (int)st->max_iter);
+    for (int i = 0; i < (int)(sizeof tol / sizeof tol[0]); i++) {
+        if (!(isfinite(tol[i].v) && tol[i].v > 0.0))
+            return refuse(msg, TSCVX_SETUP_BAD_SETTINGS, "%s must be finite and > 0, got %g",
+                          tol[i].name, (double)tol[i].v);
+        if (i < below_one && !(tol[i].v < 1.0))
+            return refuse(msg, TSCVX_SETUP_BAD_SETTINGS, "%s must lie within (0, 1), got %g",
+                          tol[i].name, (double)tol[i].v);
+    }
+    if (!(st->step_fraction > 0.0 && st->step_fraction < 1.0))
+        return refuse(msg, TSCVX_SETUP_BAD_SETTINGS, "step_fraction must lie within (0, 1), got %g",
+                      (double)st->step_fraction);
+    if (!(st->static_reg > 0.0 && st->static_reg < 1.0))
+        return refuse(msg, TSCVX_SETUP_BAD_SETTINGS, "static_reg must lie within (0, 1), got %g",
+                      (double)st->static_reg);
+    if (st->refine_iters < 0 || st->refine_iters > 20)
+        return refuse(msg, TSCVX_SETUP_BAD_SETTINGS, "refine_iters must lie within 0..20, got %d",
+                      (int)st->refine_iters);
+    if (st->ruiz_iters < 0 || st->ruiz_iters > 50)
+        return refuse(msg, TSCVX_SETUP_BAD_SETTINGS, "ruiz_iters must lie within 0..50, got %d",
+                      (int)st->ruiz_iters);
+    if (st->soc_dense_max < 1)
+        return refuse(msg, TSCVX_SETUP_BAD_SETTINGS, "soc_dense_max must be >= 1, got %d",
+                      (int)st->soc_dense_max);
+    if (st->kkt_backend < TSCVX_KKT_AUTO || st->kkt_backend > TSCVX_KKT_BANDED)
+        return refuse(msg, TSCVX_SETUP_BAD_SETTINGS,
+                      "kkt_backend must be TSCVX_KKT_AUTO, _LDL, _STATIC or _BANDED (0..3), got %d",
+                      (int)st->kkt_backend);
+    return TSCVX_SETUP_OK;
+}
+
+tscvx_setup_status tscvx_check_settings(const tscvx_settings *settings, char *message) {
+    if (settings == NULL) return refuse(message, TSCVX_SETUP_NULL_ARGUMENT, "settings is NULL");
+    return check_settings(settings, message);
 }
 
 /* CSC of nrow x ncol: pointers monotone from 0, indices in range, strictly increasing.
@@ -548,7 +582,7 @@ static tscvx_setup_status choose_method(tscvx_workspace *ws, const tscvx_setting
 static tscvx_setup_status build(const tscvx_data *d, const tscvx_settings *st, tscvx_arena *a,
                                 int mode, tscvx_workspace **out, size_t *need) {
     if (d == NULL || st == NULL) return TSCVX_SETUP_NULL_ARGUMENT;
-    tscvx_setup_status status = check_settings(st);
+    tscvx_setup_status status = check_settings(st, NULL);
     if (status == TSCVX_SETUP_OK) status = check_data(d, NULL);
     if (status != TSCVX_SETUP_OK) return status;
     const tscvx_setup_status short_memory =
@@ -731,7 +765,7 @@ tscvx_setup_status tscvx_update_data(tscvx_workspace *ws, const tscvx_float *Px,
 tscvx_setup_status tscvx_update_settings(tscvx_workspace *ws, const tscvx_settings *st) {
     if (ws == NULL || st == NULL) return TSCVX_SETUP_NULL_ARGUMENT;
     if (!ws_head_intact(ws)) return TSCVX_SETUP_NOT_READY;
-    const tscvx_setup_status s = check_settings(st);
+    const tscvx_setup_status s = check_settings(st, NULL);
     if (s != TSCVX_SETUP_OK) return s;
     if (st->max_iter > ws->log_cap - 1 || st->soc_dense_max != ws->st.soc_dense_max ||
         st->ruiz_iters != ws->st.ruiz_iters || st->kkt_backend != ws->st.kkt_backend)

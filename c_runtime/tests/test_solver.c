@@ -396,6 +396,46 @@ static void test_tol_infeas_range(void) {
     CHECK(tscvx_solve(ws) == TSCVX_SOLVED, "still solved: the settings in force kept");
 }
 
+/* The gap and feasibility tolerances lie in (0, 1) as tol_infeas does (a gap or a residual as
+ * large as its data accepts anything: with tol_gap_* = 1 the runtime stopped min -x1 - x2 over
+ * x >= 0, x1 + x2 <= 10, |x| <= 8 at its first iterate, -7.3 against -10, as SOLVED);
+ * tscvx_check_settings names the setting, its range and its value. */
+static void test_tolerance_ranges(void) {
+    const char *names[] = {"tol_gap_abs", "tol_gap_rel", "tol_feas"};
+    const tscvx_float bad[] = {1.0, 10.0, 1e200, 0.0, NAN};
+    char msg[TSCVX_MESSAGE_LEN], want[TSCVX_MESSAGE_LEN];
+    tscvx_settings st;
+    for (int f = 0; f < 3; f++) {
+        for (int k = 0; k < 5; k++) {
+            tscvx_default_settings(&st);
+            tscvx_float *v = f == 0 ? &st.tol_gap_abs : f == 1 ? &st.tol_gap_rel : &st.tol_feas;
+            *v = bad[k];
+            snprintf(want, sizeof want, "%s must ", names[f]);
+            CHECK(tscvx_check_settings(&st, msg) == TSCVX_SETUP_BAD_SETTINGS &&
+                      strncmp(msg, want, strlen(want)) == 0,
+                  "%s = %g: '%s'", names[f], (double)bad[k], msg);
+        }
+        tscvx_default_settings(&st);
+        *(f == 0 ? &st.tol_gap_abs : f == 1 ? &st.tol_gap_rel : &st.tol_feas) = 0.5;
+        CHECK(tscvx_check_settings(&st, msg) == TSCVX_SETUP_OK && msg[0] == '\0',
+              "%s = 0.5 refused: '%s'", names[f], msg);
+    }
+    tscvx_default_settings(&st);
+    st.tol_gap_rel = 1.0;
+    CHECK(tscvx_check_settings(&st, msg) == TSCVX_SETUP_BAD_SETTINGS &&
+              strcmp(msg, "tol_gap_rel must lie within (0, 1), got 1") == 0,
+          "message '%s'", msg);
+    /* the reduced bars only label a best iterate: any positive value */
+    tscvx_default_settings(&st);
+    st.tol_gap_abs_inacc = st.tol_gap_rel_inacc = st.tol_feas_inacc = 1e3;
+    CHECK(tscvx_check_settings(&st, msg) == TSCVX_SETUP_OK, "reduced bars 1e3: '%s'", msg);
+    st.tol_feas_inacc = -1.0;
+    CHECK(tscvx_check_settings(&st, msg) == TSCVX_SETUP_BAD_SETTINGS &&
+              strstr(msg, "tol_feas_inacc") == msg,
+          "tol_feas_inacc -1: '%s'", msg);
+    CHECK(tscvx_check_settings(NULL, msg) == TSCVX_SETUP_NULL_ARGUMENT, "NULL settings");
+}
+
 /* Every call on a stale workspace (arena overwritten after setup, or cleaned up) is refused
  * before any of its pointers is followed; so is one whose KKT method pointer is not ours. */
 static void test_stale_workspace(void) {
@@ -1307,6 +1347,7 @@ int main(void) {
     test_stale_workspace();
     test_update_settings();
     test_tol_infeas_range();
+    test_tolerance_ranges();
     test_psd_check();
     test_indefinite_p_every_method();
     test_ill_conditioned_p_every_method();
