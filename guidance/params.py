@@ -137,6 +137,13 @@ INT_SETTING_RANGES = {
 }
 
 
+# Largest penalty weight lambda (C: PDG_LAM_MAX). The exact penalty needs lambda above the
+# subproblems' multipliers (Table 1: 500); 1e8 solves as the Clarabel reference does
+# (tests/test_cguidance.py), while at 1e12 Clarabel called the first subproblem of the default
+# landing dual infeasible where the C runtime solved it, and at 1e300 every backend failed there.
+LAM_MAX = 1e8
+
+
 # RK4 steps over the whole normalized time [0, 1] at least: 2 per interval at N = 50, the grid
 # whose discretization error rk4_substeps = 2 was chosen for. With a fixed count per interval
 # the error grew with the interval (a step's error like its length^5): at N = 10 the default
@@ -255,7 +262,10 @@ class SCvxSettings:
             self.eta_lb <= self.eta_init <= self.eta_ub,
             "lie within [eta_lb, eta_ub] = [{eta_lb:g}, {eta_ub:g}]",
         )
-        yield "lam", self.lam > 0.0, "be > 0"
+        yield "lam", 0.0 < self.lam <= LAM_MAX, f"lie within (0, {LAM_MAX:g}]"
+        # rho0 < 0 accepts steps that raise the penalty J: SCvx then no longer descends
+        # (rho0 = -1e300 ended the default landing at max_iterations, not solved)
+        yield "rho0", self.rho0 >= 0.0, "be >= 0 (a step that raises the penalty is refused)"
         yield "rho1", self.rho0 <= self.rho1, "satisfy rho0 <= rho1 (rho0 = {rho0:g})"
         yield "rho2", self.rho1 <= self.rho2, "satisfy rho1 <= rho2 (rho1 = {rho1:g})"
         for name in ("alpha", "beta"):

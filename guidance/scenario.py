@@ -34,6 +34,15 @@ UNIT_QUATERNION_TOL = 1e-6
 # the same one on every backend. Far beyond it the initial guess and the networks' float32
 # inputs overflow (r0 = 1e9 raised inside numpy), so such input is refused, not solved.
 MAGNITUDE_MAX = 1e4
+# Floors of two scales the solve divides by (C: PDG_INERTIA_MIN, PDG_OMEGA_MAX_DEG_MIN). The
+# rotational dynamics divide by J_B: at 1e-11 the first subproblem failed numerically on every
+# backend (1e-300: the same), while the catalog's smallest vehicle, J_B = (1e-9, 1e-8, 1e-8)
+# (tests/test_extreme_landings.py), solves. The scaled rates are omega / omega_max: below
+# 1e-3 deg/U_T (a rate limit that turns the vehicle by under 0.01 deg in a landing) Clarabel
+# failed numerically where the C runtime called the landing infeasible (1e-5), and at 1e-300
+# every backend failed at the first subproblem.
+INERTIA_MIN = 1e-9
+OMEGA_MAX_DEG_MIN = 1e-3
 INT_PARAMS = {"N"}
 BOOL_PARAMS = {"final_roll_free"}
 # The keys DESIGN.md's scenario format always has; a missing one is an error, not a default.
@@ -307,6 +316,16 @@ def _param_rules(p: Params) -> Iterator[tuple[str, bool, str]]:
         yield name, getattr(p, name) <= 0.0, "must be positive, got {value!r}"
     yield "beta_mdot", p.beta_mdot < 0.0, "must be non-negative, got {value!r}"
     yield "J_B", any(j <= 0.0 for j in p.J_B), "inertia diagonal must be positive, got {J_B}"
+    yield (
+        "J_B",
+        any(j < INERTIA_MIN for j in p.J_B),
+        f"inertia diagonal must be at least {INERTIA_MIN:g}, got {{J_B}}",
+    )
+    yield (
+        "omega_max_deg",
+        p.omega_max_deg < OMEGA_MAX_DEG_MIN,
+        f"must be at least {OMEGA_MAX_DEG_MIN:g} deg/U_T, got {{value:g}}",
+    )
     yield "T_min", p.T_min >= p.T_max, "T_min = {T_min:g} must be below T_max = {T_max:g}"
     yield (  # the gimbal's lever arm; the guess divides by it
         "r_T_B",

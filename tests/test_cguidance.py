@@ -488,7 +488,8 @@ def test_a_penalty_weight_of_1e8_solves_as_the_clarabel_reference() -> None:
 @pytest.mark.parametrize(
     ("field", "value"),
     [("eta_lb", 0.0), ("eta_ub", 5e-4), ("lam", 0.0), ("rho1", -0.1), ("rho2", 0.05),
-     ("alpha", 0.5), ("beta", 0.5), ("step_tol", -1.0), ("vc_tol", -1.0),
+     ("alpha", 0.5), ("beta", 0.5), ("step_tol", -1.0), ("vc_tol", -1.0), ("lam", 2e8),
+     ("lam", 1e300), ("rho0", -0.1), ("rho0", -1e300),
      ("defect_tol", -1.0), ("tight_tol", -1.0), ("prox_u", -1.0)],
 )  # fmt: skip
 def test_a_bad_setting_is_named_alike_in_python_and_c(field: str, value: float) -> None:
@@ -690,7 +691,38 @@ BAD_DICTS = [
     ({"aero_coeff": 1e5}, "aero_coeff"),
     ({"m0": 1e300, "T_max": 2e4}, "m0"),  # the initial state's fields first
     ({"J_B": [0.001, 0.01, 1e5], "r_cp_B": [1e5, 0.0, 0.0]}, "J_B"),  # then Params' order
+    # below the floors of the scales the solve divides by (scenario.INERTIA_MIN,
+    # OMEGA_MAX_DEG_MIN): accepted before 27 Nov, then a numerical error at the first subproblem
+    ({"J_B": [1e-11, 1e-11, 1e-11]}, "J_B"),
+    ({"J_B": [0.001, 0.01, 1e-300]}, "J_B"),
+    ({"omega_max_deg": 1e-5}, "omega_max_deg"),
+    ({"omega_max_deg": 1e-300}, "omega_max_deg"),
 ]
+
+
+@pytest.mark.parametrize(
+    "data",
+    [{"J_B": [1e-11, 1e-11, 1e-11]}, {"omega_max_deg": 1e-5}, {"omega_max_deg": 5e-4}],
+)
+def test_a_scale_below_its_floor_is_refused_with_the_same_message(data: dict) -> None:
+    """J_B = 1e-11 (every backend: the first subproblem failed numerically) and
+    omega_max_deg = 1e-5 (Clarabel failed numerically, the C runtime said infeasible) were
+    accepted by both validations; now both refuse them in the same words, and a solve in C
+    refuses them before anything runs."""
+    with pytest.raises(ScenarioError) as py:
+        scenario_from_dict({**scenario_to_dict(Scenario()), **data})
+    assert cguidance.validate_c(_unchecked(data)) == str(py.value)
+    assert "must be at least" in str(py.value)
+    with pytest.raises(ScenarioError, match="must be at least"):
+        cguidance.solve_c(_unchecked(data))
+
+
+def test_the_smallest_scales_in_use_are_accepted() -> None:
+    """The floors refuse nothing the catalog of extreme landings uses: J_B = (1e-9, 1e-8, 1e-8)
+    (tests/test_extreme_landings.py 'tiny inertia') and omega_max_deg at its floor."""
+    for data in ({"J_B": [1e-9, 1e-8, 1e-8]}, {"omega_max_deg": 1e-3}):
+        scenario_from_dict({**scenario_to_dict(Scenario()), **data})
+        assert cguidance.validate_c(_unchecked(data)) is None
 
 
 def _unchecked(d: dict) -> Scenario:

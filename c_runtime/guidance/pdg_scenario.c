@@ -279,7 +279,7 @@ static int check_terminal(const pdg_params *p, char *msg)
 }
 
 /* The vehicle's rates, masses, inertia and thrust limits: positive (beta_mdot non-negative),
- * T_min below T_max. */
+ * J_B and omega_max_deg above their floors, T_min below T_max. */
 static int check_vehicle_sizes(const pdg_params *p, char *msg)
 {
     char text[200];
@@ -304,6 +304,17 @@ static int check_vehicle_sizes(const pdg_params *p, char *msg)
         snprintf(text, sizeof text, "inertia diagonal must be positive, got (%g, %g, %g)",
                  p->J_B[0], p->J_B[1], p->J_B[2]);
         return fail(msg, "J_B", text);
+    }
+    if (p->J_B[0] < PDG_INERTIA_MIN || p->J_B[1] < PDG_INERTIA_MIN ||
+        p->J_B[2] < PDG_INERTIA_MIN) {
+        snprintf(text, sizeof text, "inertia diagonal must be at least %g, got (%g, %g, %g)",
+                 PDG_INERTIA_MIN, p->J_B[0], p->J_B[1], p->J_B[2]);
+        return fail(msg, "J_B", text);
+    }
+    if (p->omega_max_deg < PDG_OMEGA_MAX_DEG_MIN) {
+        snprintf(text, sizeof text, "must be at least %g deg/U_T, got %g",
+                 PDG_OMEGA_MAX_DEG_MIN, p->omega_max_deg);
+        return fail(msg, "omega_max_deg", text);
     }
     if (p->T_min >= p->T_max) {
         snprintf(text, sizeof text, "T_min = %g must be below T_max = %g", p->T_min, p->T_max);

@@ -162,7 +162,7 @@ static int numbers_fault(const pdg_settings *s, char *text)
 }
 
 /* The trust region's radii (eta_lb <= eta_init <= eta_ub), the penalty weight and the ratio
- * thresholds of Algorithm 1 (rho0 <= rho1 <= rho2). */
+ * thresholds of Algorithm 1 (0 <= rho0 <= rho1 <= rho2). */
 static int trust_region_fault(const pdg_settings *s, char *text)
 {
     if (!(s->eta_lb > 0)) {
@@ -180,8 +180,15 @@ static int trust_region_fault(const pdg_settings *s, char *text)
                  s->eta_ub, s->eta_init);
         return 1;
     }
-    if (!(s->lam > 0)) {
-        snprintf(text, SETTING_TEXT, "lam: must be > 0, got %g", s->lam);
+    if (!(s->lam > 0 && s->lam <= PDG_LAM_MAX)) {
+        snprintf(text, SETTING_TEXT, "lam: must lie within (0, %g], got %g", PDG_LAM_MAX,
+                 s->lam);
+        return 1;
+    }
+    if (!(s->rho0 >= 0)) { /* rho0 < 0 accepts steps that raise the penalty J */
+        snprintf(text, SETTING_TEXT,
+                 "rho0: must be >= 0 (a step that raises the penalty is refused), got %g",
+                 s->rho0);
         return 1;
     }
     if (!(s->rho0 <= s->rho1)) {

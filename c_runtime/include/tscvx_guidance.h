@@ -95,6 +95,10 @@ extern "C" {
 /* Largest magnitude of any real number in a scenario (guidance/scenario.py MAGNITUDE_MAX):
  * Table 1's landing is O(1) in these nondimensional units; beyond this input is refused. */
 #define PDG_MAGNITUDE_MAX 1e4
+/* Floors of two scales the solve divides by (guidance/scenario.py INERTIA_MIN,
+ * OMEGA_MAX_DEG_MIN, which say why): each entry of J_B, and omega_max_deg in deg / U_T. */
+#define PDG_INERTIA_MIN 1e-9
+#define PDG_OMEGA_MAX_DEG_MIN 1e-3
 /* A plan pdg_plan_remainder takes is checked as a trajectory file is (guidance/verify.py
  * VALUE_LIMIT and T_F_RANGE): its values at most PDG_PLAN_VALUE_MAX in magnitude, its t_f
  * within [PDG_PLAN_T_F_MIN, PDG_PLAN_T_F_MAX] U_T (a landing takes a few U_T). */
@@ -196,8 +200,9 @@ typedef struct {
 
 /* Paper Table 1 and the tolerances of guidance/params.py SCvxSettings. */
 typedef struct {
-    double lam;             /* penalty weight on virtual control and buffers, > 0 */
-    double rho0, rho1, rho2;/* acceptance / shrink / grow thresholds, rho0 <= rho1 <= rho2 */
+    double lam;             /* penalty weight on virtual control and buffers, (0, PDG_LAM_MAX] */
+    double rho0, rho1, rho2;/* acceptance / shrink / grow thresholds,
+                               0 <= rho0 <= rho1 <= rho2 */
     double alpha, beta;     /* trust-region shrink and growth factors, >= 1 */
     double eta_init;        /* initial trust radius (scaled units), in [eta_lb, eta_ub] */
     double eta_lb, eta_ub;  /* trust-radius bounds, 0 < eta_lb <= eta_ub */
@@ -240,6 +245,9 @@ typedef struct {
      * 6.8 % more instructions on the default landing; docs/scvx.md). */
     int polish;
 } pdg_settings;
+
+/* pdg_settings.lam at most (guidance/params.py LAM_MAX, which says why) */
+#define PDG_LAM_MAX 1e8
 
 #define PDG_POLISH_WEIGHT 1.0     /* guidance/scvx.py POLISH_WEIGHT */
 #define PDG_POLISH_TOL_FACTOR 1e-2 /* guidance/scvx.py POLISH_TOL_FACTOR */

@@ -87,6 +87,8 @@ static void test_bad_input(pdg_workspace *ws)
     BAD(s.params.glideslope_deg = 90.0, "glideslope_deg");
     BAD(s.params.g_I[1] = 0.1, "g_I");
     BAD(s.params.J_B[2] = 0.0, "J_B");
+    BAD(s.params.J_B[1] = 0.1 * PDG_INERTIA_MIN, "J_B");   /* below the floors the solve */
+    BAD(s.params.omega_max_deg = 1e-5, "omega_max_deg");  /* divides by */
     BAD(s.params.N = 2, "N");
     BAD(s.params.N = 40, "N");                        /* workspace is for N = 50 */
     BAD(s.params.final_roll_free = 0, "final_roll_free"); /* workspace is roll-free */
@@ -139,6 +141,14 @@ static void test_settings_and_sizes(void)
     CHECK(pdg_workspace_size(vehicle(50, 1), &st, NULL, 0, &need) == PDG_SETUP_BAD_SETTINGS);
     pdg_default_settings(&st);
     st.iter_max = 0;
+    CHECK(pdg_workspace_size(vehicle(50, 1), &st, NULL, 0, &need) == PDG_SETUP_BAD_SETTINGS);
+    pdg_default_settings(&st);
+    st.lam = 2.0 * PDG_LAM_MAX; /* SCvxSettings: lam within (0, LAM_MAX] */
+    CHECK(pdg_workspace_size(vehicle(50, 1), &st, NULL, 0, &need) == PDG_SETUP_BAD_SETTINGS);
+    st.lam = PDG_LAM_MAX;
+    CHECK(pdg_check_settings(&st, NULL) == PDG_SETUP_OK);
+    pdg_default_settings(&st);
+    st.rho0 = -0.1; /* accepts steps that raise the penalty */
     CHECK(pdg_workspace_size(vehicle(50, 1), &st, NULL, 0, &need) == PDG_SETUP_BAD_SETTINGS);
     pdg_default_settings(&st);
     CHECK(st.tau_r_update == 1); /* Algorithm 2's radius rule unless asked otherwise */
