@@ -80,14 +80,20 @@
  * damaged "during a solve". Such a flip is thus reported by the solve it hit, not by the
  * next call; it may still have been followed before the end (the start check keeps a call
  * from following damage that was there when it began, the end check from answering with
- * damage that came during it).
+ * damage that came during it). tscvx_update_data checks them again at its end in the same
+ * way (28 Nov): a flip during the data intake makes it return TSCVX_SETUP_NOT_READY instead
+ * of OK, info.status says invalid input, tscvx_check_workspace says the workspace was
+ * damaged "during a data update", and, the numbers taken having gone through the damage,
+ * the workspace waits for a valid update once the damage is repaired (as after a refused
+ * update).
  * A change within any one 8-byte word of either is detected for certain (a word-wise hash,
  * each step a bijection), others with probability 1 - 2^-64. Not covered: the numbers, which
  * every update, solve or iteration writes again (the scaled data, iterates, NT scaling,
  * factors' values, work vectors, results and the log), so a flip there can spoil an answer
  * (the IPM's residual and finiteness checks catch much of it) but not send a loop out of
- * bounds; an upset during the other calls (tscvx_update_data, the getters) is seen by the
- * next call that checks, not by the one running; and the caller's arrays. The library never
+ * bounds; an upset during the other calls (tscvx_warm_start, tscvx_update_settings, the
+ * getters) is seen by the next call that checks, not by the one running; and the caller's
+ * arrays. The library never
  * calls malloc, has no recursion and no global mutable state. Every public function returns
  * a status code.
  */
@@ -292,7 +298,9 @@ tscvx_setup_status tscvx_setup(tscvx_workspace **ws, void *arena, size_t arena_b
  * gives. A part left NULL is recovered from its scaled copy to rounding (about an ulp per
  * update), so the solve then depends slightly on the updates before it.
  * Non-finite values or a P that fails its check make the workspace not ready
- * (solve returns TSCVX_INVALID_INPUT) until a valid update. */
+ * (solve returns TSCVX_INVALID_INPUT) until a valid update. Checks the mark, head and body
+ * first (TSCVX_SETUP_NOT_READY, nothing written) and again at its end (TSCVX_SETUP_NOT_READY:
+ * damaged during the update; not ready until a valid update; see above). */
 tscvx_setup_status tscvx_update_data(tscvx_workspace *ws, const tscvx_float *Px,
                                      const tscvx_float *c, const tscvx_float *Ax,
                                      const tscvx_float *b, const tscvx_float *Gx,
@@ -350,8 +358,9 @@ tscvx_setup_status tscvx_cleanup(tscvx_workspace *ws);
 /* Why the calls would refuse `ws` (TSCVX_SETUP_NOT_READY; tscvx_solve: TSCVX_INVALID_INPUT),
  * in `message` (TSCVX_MESSAGE_LEN bytes; may be NULL): no set-up mark (not set up, cleaned
  * up, arena overwritten), the workspace damaged (its head or body checksum does not match:
- * set it up again; "workspace damaged during a solve: ..." when the last solve's end check
- * found it), or the last data update refused; TSCVX_SETUP_OK and "" for a workspace ready
+ * set it up again; "workspace damaged during a solve: ..." or "... during a data update: ..."
+ * when the end check of the last solve or data update found it), or the last data update
+ * refused (or damaged during it); TSCVX_SETUP_OK and "" for a workspace ready
  * to solve. Checks the mark, head and body as tscvx_solve does, and writes nothing. */
 tscvx_setup_status tscvx_check_workspace(const tscvx_workspace *ws, char *message);
 

@@ -693,14 +693,15 @@ static int ws_intact(const tscvx_workspace *ws) { return ws_state(ws, 1) == WS_I
 
 tscvx_setup_status tscvx_check_workspace(const tscvx_workspace *ws, char *message) {
     if (ws == NULL) return refuse(message, TSCVX_SETUP_NULL_ARGUMENT, "workspace is NULL");
-    /* found by the last solve's end check: the damage came during that solve */
-    const int in_solve = ws->damaged_in_solve;
-    const char *when = in_solve ? " during a solve" : "";
+    /* found by the end check of the last solve or data update: the damage came during it */
+    const char *when = ws->damaged_during == TSCVX_DAMAGED_IN_SOLVE    ? " during a solve"
+                       : ws->damaged_during == TSCVX_DAMAGED_IN_UPDATE ? " during a data update"
+                                                                        : "";
     switch (ws_state(ws, 1)) {
     case WS_NO_MARK:
-        return refuse(message, TSCVX_SETUP_NOT_READY, "no set-up mark%s: the workspace was "
+        return refuse(message, TSCVX_SETUP_NOT_READY, "no set-up mark%s%s%s: the workspace was "
                       "not set up, was cleaned up, or its arena was overwritten",
-                      in_solve ? " (lost during a solve)" : "");
+                      when[0] ? " (lost" : "", when, when[0] ? ")" : "");
     case WS_HEAD_DAMAGED:
         return refuse(message, TSCVX_SETUP_NOT_READY, "workspace damaged%s: set-up checksum "
                       "mismatch in its sizes, settings or pointers; set it up again", when);
@@ -713,8 +714,8 @@ tscvx_setup_status tscvx_check_workspace(const tscvx_workspace *ws, char *messag
     }
     if (!ws->ready)
         return refuse(message, TSCVX_SETUP_NOT_READY, "the last data update was refused (a "
-                      "non-finite number or a P not positive semidefinite): the workspace "
-                      "waits for a valid update");
+                      "non-finite number, a P not positive semidefinite, or damage during "
+                      "it): the workspace waits for a valid update");
     if (message) message[0] = '\0';
     return TSCVX_SETUP_OK;
 }
@@ -735,6 +736,7 @@ tscvx_setup_status tscvx_update_data(tscvx_workspace *ws, const tscvx_float *Px,
                                      const tscvx_float *h) {
     if (ws == NULL) return TSCVX_SETUP_NULL_ARGUMENT;
     if (!ws_intact(ws)) return TSCVX_SETUP_NOT_READY; /* nothing written */
+    ws->damaged_during = 0;
     tscvx_setup_status s = TSCVX_SETUP_OK;
     if ((Px && !all_finite(Px, ws->P.nnz)) || (c && !all_finite(c, ws->n)) ||
         (Ax && !all_finite(Ax, ws->A.nnz)) || (b && !all_finite(b, ws->p)) ||
@@ -752,6 +754,17 @@ tscvx_setup_status tscvx_update_data(tscvx_workspace *ws, const tscvx_float *Px,
     /* the factorization test sees P only once it is stored: a P it refused stays refused, and
      * is tested again, until an update replaces it */
     if ((Px || ws->p_refused) && ws->P.nnz > 0) ws->p_refused = ws->method->check_p(ws) != 0;
+    /* The end check, as tscvx_solve's: a bit flipped during the intake (after the start
+     * check, in what it indexes by) is said by this call, not the next. The numbers taken
+     * went through it: not ready until a valid update, as a refused one, and
+     * tscvx_check_workspace says the damage came during a data update. The writes are to
+     * the struct's own fields, outside the sums. */
+    if (!ws_intact(ws)) {
+        ws->damaged_during = TSCVX_DAMAGED_IN_UPDATE;
+        ws->ready = 0;
+        forget_solve(ws, TSCVX_INVALID_INPUT);
+        return TSCVX_SETUP_NOT_READY;
+    }
     if (ws->p_refused) { /* not ready, as above */
         ws->ready = 0;
         forget_solve(ws, TSCVX_INVALID_INPUT);
@@ -803,7 +816,7 @@ tscvx_solve_status tscvx_solve(tscvx_workspace *ws) {
         ws->info.status = TSCVX_INVALID_INPUT;
         return TSCVX_INVALID_INPUT;
     }
-    ws->damaged_in_solve = 0;
+    ws->damaged_during = 0;
     const tscvx_solve_status status = tscvx_ipm(ws);
     /* The end check: the same sums again, so that a bit flipped during the solve (after the
      * start check, in what the iterations index by) is said by this solve, not the next.
@@ -811,7 +824,7 @@ tscvx_solve_status tscvx_solve(tscvx_workspace *ws) {
      * iterate (TSCVX_SETUP_NO_SOLUTION), tscvx_check_workspace says it came during a solve.
      * The writes are to the struct's own fields, outside the sums: no pointer followed. */
     if (!ws_intact(ws)) {
-        ws->damaged_in_solve = 1;
+        ws->damaged_during = TSCVX_DAMAGED_IN_SOLVE;
         ws->info.status = TSCVX_INVALID_INPUT;
         return TSCVX_INVALID_INPUT;
     }

@@ -334,10 +334,13 @@ struct tscvx_workspace {
     tscvx_int log_cap;
     int ready;     /* data valid and set up */
     int p_refused; /* the stored P failed the factorization test (tscvx_update_data) */
-    int damaged_in_solve; /* the last tscvx_solve's end check found a checksum broken (for
-                             tscvx_check_workspace's message; outside the sums) */
+    int damaged_during; /* TSCVX_DAMAGED_IN_SOLVE or _IN_UPDATE: the end check of the last
+                           tscvx_solve or tscvx_update_data found a checksum broken; 0: neither
+                           (for tscvx_check_workspace's message; outside the sums) */
     size_t arena_used, arena_high;
 };
+
+enum { TSCVX_DAMAGED_IN_SOLVE = 1, TSCVX_DAMAGED_IN_UPDATE = 2 }; /* damaged_during */
 
 /* The set-up checksum (wssum.c): head over the struct's fixed fields, body over the index
  * arrays (lengths and pointers from the head: check the head first). */

@@ -1,5 +1,6 @@
 /* End-to-end solves with known answers, infeasibility, bad input, data updates, log. */
 #define _POSIX_C_SOURCE 200809L /* sigaction, mprotect, sysconf: test_upset_during_solve */
+                                /* and test_upset_during_update */
 #include <signal.h>
 #include <string.h>
 #include <sys/mman.h>
@@ -1056,15 +1057,15 @@ static tscvx_data stage_data(stage_problem *sp) {
 typedef struct {
     const char *name;
     void *at;
-    int kind; /* 0: tscvx_int, 1: signed char, 2: pointer */
+    int kind; /* 0: tscvx_int, 1: signed char, 2: pointer, 3: tscvx_int's lowest bit */
     int head;
 } upset_site;
 
 static void flip(const upset_site *u) {
-    if (u->kind == 0) {
+    if (u->kind == 0 || u->kind == 3) {
         tscvx_int v;
         memcpy(&v, u->at, sizeof v);
-        v ^= 1 << 20; /* an index a million entries away */
+        v ^= u->kind == 0 ? 1 << 20 : 1; /* an index a million entries away, or the next */
         memcpy(u->at, &v, sizeof v);
     } else if (u->kind == 1) {
         *(signed char *)u->at ^= 0x40;
@@ -1337,6 +1338,103 @@ static void test_upset_during_solve(int backend, tscvx_int dense_max) {
            "that solve\n", (int)method, said, (int)(sizeof sites / sizeof sites[0]), (int)last);
 }
 
+/* ---- an upset during a data update: tscvx_update_data's end check ------------------------
+ * As above, without a hook: the moment of the upset is the update's first write into the page
+ * of the scaled h (the intake writes every entry of the data's scaled copies), made
+ * read-only. The handler flips a bit the rest of the update may follow without leaving its
+ * arrays (the lowest bit of an even row index of A's pattern: the body; nothing else than
+ * the range it stays in) or does not follow (the log's length: the head). Without the end
+ * check the update returns OK and only the next call says the workspace is damaged; with it,
+ * TSCVX_SETUP_NOT_READY, tscvx_check_workspace says the damage came during a data update,
+ * the solve is refused, and once the bit is back the workspace waits for a valid update,
+ * after which it solves to the bits of a fresh setup. */
+static void test_upset_during_update(int backend, tscvx_int dense_max) {
+    static stage_problem sp;
+    const tscvx_data d = stage_data(&sp);
+    const long page = sysconf(_SC_PAGESIZE);
+    CHECK(page > 0 && page <= 65536, "page size %ld", page);
+    if (page <= 0 || page > 65536) return;
+    tscvx_settings st;
+    tscvx_default_settings(&st);
+    st.kkt_backend = backend;
+    st.soc_dense_max = dense_max;
+    unsigned char *base = dur_buf + ((size_t)page - (uintptr_t)dur_buf % (size_t)page) % (size_t)page;
+    size_t narena = 0;
+    CHECK(tscvx_workspace_size(&d, &st, base, 1 << 18, &narena) == TSCVX_SETUP_OK &&
+              narena <= (1 << 18), "size %zu", narena);
+    tscvx_workspace *ws = NULL;
+    CHECK(tscvx_setup(&ws, base, narena, &d, &st) == TSCVX_SETUP_OK, "setup");
+    if (ws == NULL) return;
+    tscvx_info info;
+    tscvx_float x0[UP_N], x1[UP_N];
+    CHECK(tscvx_solve(ws) == TSCVX_SOLVED && tscvx_get_info(ws, &info) == TSCVX_SETUP_OK &&
+              tscvx_get_solution(ws, x0, NULL, NULL, NULL) == TSCVX_SETUP_OK, "first solve");
+    const tscvx_int method = info.kkt_backend;
+    tscvx_int k = 0;
+    while (k < ws->A.nnz && !(ws->A.i[k] % 2 == 0 && ws->A.i[k] + 1 < ws->p)) k++;
+    CHECK(k < ws->A.nnz, "no even row index in A");
+    if (k == ws->A.nnz) return;
+    const upset_site sites[] = {SITE("A.i (lowest bit)", ws->A.i[k], 3, 0),
+                                SITE("log_cap", ws->log_cap, 0, 1)};
+    unsigned char *const h_page =
+        (unsigned char *)((uintptr_t)ws->h - (uintptr_t)ws->h % (size_t)page);
+    CHECK(h_page >= base, "the page of h begins before the arena");
+    struct sigaction on, old;
+    memset(&on, 0, sizeof on);
+    on.sa_sigaction = on_trap;
+    on.sa_flags = SA_SIGINFO;
+    sigemptyset(&on.sa_mask);
+    char msg[TSCVX_MESSAGE_LEN];
+    int said = 0;
+    for (size_t t = 0; t < sizeof sites / sizeof sites[0]; t++) {
+        const upset_site *u = &sites[t];
+        trap_site = u;
+        trap_hits = 0;
+        trap_len = (size_t)page;
+        trap_page = h_page;
+        CHECK(sigaction(SIGSEGV, &on, &old) == 0, "sigaction");
+        CHECK(mprotect(trap_page, trap_len, PROT_READ) == 0, "mprotect");
+        const tscvx_setup_status got = tscvx_update_data(ws, NULL, sp.c, NULL, NULL, NULL, NULL);
+        mprotect(h_page, (size_t)page, PROT_READ | PROT_WRITE);
+        trap_page = NULL;
+        sigaction(SIGSEGV, &old, NULL);
+        CHECK(trap_hits == 1, "method %d, %s: the upset did not come during the update (%d)",
+              (int)method, u->name, (int)trap_hits);
+        said += trap_hits == 1 && got == TSCVX_SETUP_NOT_READY;
+        CHECK(got == TSCVX_SETUP_NOT_READY, "method %d, %s flipped during a data update: it "
+              "returned \"%s\", not not-ready", (int)method, u->name,
+              tscvx_setup_status_message(got));
+        CHECK(tscvx_check_workspace(ws, msg) == TSCVX_SETUP_NOT_READY &&
+                  strstr(msg, "workspace damaged during a data update: set-up checksum "
+                              "mismatch in its ") != NULL &&
+                  strstr(msg, u->head ? "sizes, settings or pointers" : "index arrays") != NULL,
+              "method %d, %s flipped during a data update: check says \"%s\"", (int)method,
+              u->name, msg);
+        if (!u->head) { /* the struct intact: its info read, no solution of the last data */
+            CHECK(tscvx_get_info(ws, &info) == TSCVX_SETUP_OK &&
+                      info.status == TSCVX_INVALID_INPUT && info.iterations == 0,
+                  "method %d, %s: info.status %d", (int)method, u->name, (int)info.status);
+        }
+        CHECK(tscvx_solve(ws) == TSCVX_INVALID_INPUT, "method %d, %s: the solve ran",
+              (int)method, u->name);
+        flip(u);
+        /* intact again, but the numbers went through the damage: a valid update first */
+        CHECK(tscvx_check_workspace(ws, msg) == TSCVX_SETUP_NOT_READY &&
+                  strstr(msg, "waits for a valid update") != NULL,
+              "method %d, %s restored: check says \"%s\"", (int)method, u->name, msg);
+        CHECK(tscvx_solve(ws) == TSCVX_INVALID_INPUT, "method %d, %s restored: solve ran",
+              (int)method, u->name);
+        CHECK(tscvx_update_data(ws, sp.Px, sp.c, sp.Ax, sp.b, sp.Gx, sp.h) == TSCVX_SETUP_OK &&
+                  tscvx_solve(ws) == TSCVX_SOLVED &&
+                  tscvx_get_solution(ws, x1, NULL, NULL, NULL) == TSCVX_SETUP_OK &&
+                  memcmp(x0, x1, sizeof x0) == 0,
+              "method %d, %s: not a fresh setup's answer once restored and updated",
+              (int)method, u->name);
+    }
+    printf("method %d: %d of %d upsets during a data update said by that update\n",
+           (int)method, said, (int)(sizeof sites / sizeof sites[0]));
+}
+
 int main(void) {
     test_soc();
     test_qp();
@@ -1361,5 +1459,8 @@ int main(void) {
     test_upset_during_solve(TSCVX_KKT_AUTO, 16);
     test_upset_during_solve(TSCVX_KKT_STATIC, 2);
     test_upset_during_solve(TSCVX_KKT_LDL, 2);
+    test_upset_during_update(TSCVX_KKT_AUTO, 16);
+    test_upset_during_update(TSCVX_KKT_STATIC, 2);
+    test_upset_during_update(TSCVX_KKT_LDL, 2);
     return ct_report("test_solver");
 }
