@@ -125,10 +125,13 @@ struct pdg_workspace {
      * budget (socp_max_iter_total) binds */
     int socp_cap;
     int socp_polish; /* 1: the SOCP runtime's tolerances are now the polish's */
-    uint64_t layout_sum; /* FNV-1a of the set-up constants above (pdg_layout_sum) */
+    uint64_t layout_sum; /* word-wise sum of the set-up constants above (pdg_layout_sum) */
+    uint64_t map_sum;    /* of the map dest, read once layout_sum vouched for its pointer and
+                            length (pdg_map_sum) */
 };
 
 uint64_t pdg_layout_sum(const pdg_workspace *ws);
+uint64_t pdg_map_sum(const pdg_workspace *ws);
 int pdg_ws_ready(const pdg_workspace *ws);
 /* Set up (pdg_ws_ready) and no solve running on it: the calls that write its buffers. */
 int pdg_ws_idle(const pdg_workspace *ws);

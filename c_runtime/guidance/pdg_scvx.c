@@ -668,6 +668,7 @@ static pdg_setup_status build(void *mem, size_t bytes, const pdg_params *vehicle
     ws->socp_cap = st->socp_max_iter;
     ws->socp_polish = 0;
     ws->layout_sum = pdg_layout_sum(ws);
+    ws->map_sum = pdg_map_sum(ws);
     ws->magic = PDG_WS_MAGIC;
     *out = ws;
     return PDG_SETUP_OK;
@@ -676,31 +677,40 @@ static pdg_setup_status build(void *mem, size_t bytes, const pdg_params *vehicle
 /* The fields pdg_setup fixes and no call changes: from N to the SOCP workspace pointer
  * (sizes, settings, layout, the pattern and data pointers), the buffer pointers from z to
  * log but the two discretization buffers (swapped on acceptance, as a pair: checked for
- * being the pair), the masks pointer and the arena size; and the map of the subproblem's
- * entries into A and G (dest), whose every entry is written on every iteration. About 1 KB
- * and 4 nnz bytes (62 KB at N = 50): with assemble's range check on dest, 1.6 M more host
- * instructions in the default landing's call (0.08 %, make budget, 27 Nov). */
+ * being the pair), the masks pointer and the arena size (about 1 KB); pdg_map_sum covers
+ * the map of the subproblem's entries into A and G (dest), whose every entry is written on
+ * every iteration (4 nnz bytes, 62 KB at N = 50). The map's pointer and length are among
+ * the fields: the map is summed only once they match (pdg_ws_ready), so a flip in them is
+ * refused, never followed (it used to send the sum itself out of bounds: 28 Nov).
+ * Word-wise (tscvx_wordsum): any single bit flip is found for certain, as by the bytewise
+ * FNV-1a before, in about an eighth of the instructions (make budget, 28 Nov: the default
+ * landing's SCvx call 0.56 M fewer host instructions, T-SCvx's 0.93 M). */
 uint64_t pdg_layout_sum(const pdg_workspace *ws)
 {
     const char *base = (const char *)ws;
     const uintptr_t a = (uintptr_t)ws->disc, b = (uintptr_t)ws->disc_new;
     const uintptr_t pair[2] = {a < b ? a : b, a < b ? b : a};
     uint64_t h = TSCVX_FNV1A_START;
-    h = tscvx_fnv1a(h, base + offsetof(pdg_workspace, N),
-              offsetof(pdg_workspace, scn) - offsetof(pdg_workspace, N));
-    h = tscvx_fnv1a(h, base + offsetof(pdg_workspace, z),
-              offsetof(pdg_workspace, disc) - offsetof(pdg_workspace, z));
-    h = tscvx_fnv1a(h, pair, sizeof pair);
-    h = tscvx_fnv1a(h, base + offsetof(pdg_workspace, aug),
-              offsetof(pdg_workspace, n_log) - offsetof(pdg_workspace, aug));
-    h = tscvx_fnv1a(h, &ws->masks_out, sizeof ws->masks_out);
-    h = tscvx_fnv1a(h, ws->dest, sizeof(int) * (size_t)ws->nnz);
-    return tscvx_fnv1a(h, &ws->arena_bytes, sizeof ws->arena_bytes);
+    h = tscvx_wordsum(h, base + offsetof(pdg_workspace, N),
+                      offsetof(pdg_workspace, scn) - offsetof(pdg_workspace, N));
+    h = tscvx_wordsum(h, base + offsetof(pdg_workspace, z),
+                      offsetof(pdg_workspace, disc) - offsetof(pdg_workspace, z));
+    h = tscvx_wordsum(h, pair, sizeof pair);
+    h = tscvx_wordsum(h, base + offsetof(pdg_workspace, aug),
+                      offsetof(pdg_workspace, n_log) - offsetof(pdg_workspace, aug));
+    h = tscvx_wordsum(h, &ws->masks_out, sizeof ws->masks_out);
+    return tscvx_wordsum(h, &ws->arena_bytes, sizeof ws->arena_bytes);
+}
+
+uint64_t pdg_map_sum(const pdg_workspace *ws)
+{
+    return tscvx_wordsum(TSCVX_FNV1A_START, ws->dest, sizeof(int) * (size_t)ws->nnz);
 }
 
 int pdg_ws_ready(const pdg_workspace *ws)
 {
-    return ws && ws->magic == PDG_WS_MAGIC && ws->layout_sum == pdg_layout_sum(ws);
+    return ws && ws->magic == PDG_WS_MAGIC && ws->layout_sum == pdg_layout_sum(ws) &&
+           ws->map_sum == pdg_map_sum(ws);
 }
 
 int pdg_ws_idle(const pdg_workspace *ws) { return pdg_ws_ready(ws) && !ws->busy; }
@@ -948,6 +958,9 @@ static double trust_update(const pdg_settings *st, double eta, double rho, int a
 #define ASSEMBLE_MAP_DAMAGED (-2)
 /* solve_subproblem's answer for it: no SOCP status */
 #define SST_MAP_DAMAGED (-1000)
+/* solve_subproblem's answer when the clock callback set the workspace up again or wrote over
+ * it (callback_kept): no SOCP status, nothing read or written after */
+#define SST_LOST (-1001)
 
 /* Assembles the subproblem about the scaled iterate z and hands its numbers to the SOCP;
  * polish: the polish's objective (no fuel term, P = PDG_POLISH_WEIGHT I; needs prox_u > 0).
@@ -1096,9 +1109,28 @@ static pdg_status diagnose(pdg_workspace *ws, double vc, double defect, double v
     return PDG_INFEASIBLE;
 }
 
+/* After every return from a callback (mask_fn, clock_s): 1 when the running solve still
+ * holds the workspace, 0 when the callback set it up again (pdg_setup over its arena) or
+ * wrote over it: no mark, or no longer busy. Two loads and two compares; the checksum is the
+ * end check's and the next call's. After 0, the solve writes nothing more into the arena (it
+ * is no longer this solve's) and stops (callback_lost). */
+static int callback_kept(const pdg_workspace *ws)
+{
+    return ws->magic == PDG_WS_MAGIC && ws->busy;
+}
+
+/* The reason of a solve stopped by callback_kept: `which` callback, at iteration k. */
+static void callback_lost(char *msg, const char *which, int k)
+{
+    snprintf(msg, PDG_MESSAGE_LEN,
+             "%s of iteration %d set the workspace up again or wrote over its arena: the "
+             "solve stops, its record lost (set the workspace up again)",
+             which, k);
+}
+
 /* 1: ws->mask holds iteration k's mask; 0: the full problem; -1: the callback answered
  * neither (its answer in *answer), which stops the solve; -2: the callback set the workspace
- * up again or wrote over it (no longer set up, or no longer busy), which stops it too. */
+ * up again or wrote over it (callback_kept), which stops it too. */
 static int mask_for(pdg_workspace *ws, const pdg_options *o, int k, int *answer)
 {
     const int n = NC * ws->N;
@@ -1112,8 +1144,8 @@ static int mask_for(pdg_workspace *ws, const pdg_options *o, int k, int *answer)
     }
     if (o->mask_fn) {
         *answer = o->mask_fn(o->mask_ctx, k, ws->mask, n);
-        if (ws->magic != PDG_WS_MAGIC || !ws->busy) { /* (the checksum is the next call's) */
-            return -2; /* the callback set this arena up again or wrote over it */
+        if (!callback_kept(ws)) {
+            return -2;
         }
         if (*answer != 0 && *answer != 1) {
             return -1; /* an error code, not a mask: whatever the buffer holds is not used */
@@ -1302,10 +1334,7 @@ static int iteration_mask(pdg_workspace *ws, const pdg_options *opt, const scvx_
     int answer = 0, i;
     const int has_mask = s->have_masks ? mask_for(ws, opt, s->k + 1, &answer) : 0;
     if (has_mask == -2) {
-        snprintf(msg, PDG_MESSAGE_LEN,
-                 "masks: the mask callback of iteration %d set the workspace up again or wrote "
-                 "over its arena: the solve stops, its record lost (set the workspace up again)",
-                 s->k + 1);
+        callback_lost(msg, "masks: the mask callback", s->k + 1);
         return -2;
     }
     if (has_mask < 0) {
@@ -1370,10 +1399,24 @@ static int set_socp_limits(pdg_workspace *ws, int cap, int polish)
     return 0;
 }
 
+/* The clock's reading (0 without options.clock_s); *kept cleared when the callback set the
+ * workspace up again or wrote over it (callback_kept). */
+static double read_clock(const pdg_workspace *ws, const pdg_options *opt, int *kept)
+{
+    double t;
+    if (!opt->clock_s) {
+        return 0.0;
+    }
+    t = opt->clock_s();
+    *kept = *kept && callback_kept(ws);
+    return t;
+}
+
 /* Step 2: the convex subproblem about z with radius eta, solved by the SOCP runtime into
  * ws->znew and its duals, in at most cap IPM iterations (iteration_cap). Starts the log row
  * (the time is the conic solve's alone, as in the Python reference's log). Returns the SOCP
- * status (TSCVX_INVALID_INPUT if assembly failed, SST_MAP_DAMAGED if the map was). */
+ * status (TSCVX_INVALID_INPUT if assembly failed, SST_MAP_DAMAGED if the map was, SST_LOST
+ * with s->lost set if the clock callback took the workspace). */
 static int solve_subproblem(pdg_workspace *ws, const pdg_options *opt,
                             const unsigned char *keep, scvx_state *s, pdg_log_row *r,
                             pdg_result *res)
@@ -1385,15 +1428,21 @@ static int solve_subproblem(pdg_workspace *ws, const pdg_options *opt,
      * differ by one linearization or one radius (tscvx_warm_start) */
     int warm = s->have_solution && ws->st.socp_warm_start;
     const int cap = iteration_cap(&ws->st, res->socp_iterations, &warm);
-    int assembled = -1;
+    int assembled = -1, kept = 1;
     if (set_socp_limits(ws, cap, s->polishing) == 0 &&
         (assembled = assemble(ws, ws->z, ws->disc, keep, s->eta, s->polishing)) == 0) {
-        const double t0 = opt->clock_s ? opt->clock_s() : 0.0;
-        if (warm) { /* a start the runtime refuses leaves its cold start: nothing lost */
-            (void)tscvx_warm_start(ws->socp, ws->znew, ws->ydual, ws->zdual, ws->slack);
+        const double t0 = read_clock(ws, opt, &kept);
+        if (kept) {
+            if (warm) { /* a start the runtime refuses leaves its cold start: nothing lost */
+                (void)tscvx_warm_start(ws->socp, ws->znew, ws->ydual, ws->zdual, ws->slack);
+            }
+            sst = (int)tscvx_solve(ws->socp);
+            t_solve = read_clock(ws, opt, &kept) - t0;
         }
-        sst = (int)tscvx_solve(ws->socp);
-        t_solve = opt->clock_s ? opt->clock_s() - t0 : 0.0;
+        if (!kept) {
+            s->lost = 1;
+            return SST_LOST;
+        }
     }
     if (tscvx_get_info(ws->socp, &info) != TSCVX_SETUP_OK) { /* the SOCP workspace damaged */
         memset(&info, 0, sizeof info);
@@ -1404,9 +1453,11 @@ static int solve_subproblem(pdg_workspace *ws, const pdg_options *opt,
     r->k = s->k + 1;
     r->eta = s->eta;
     r->solver_status = sst;
-    /* a warm start that failed and was run again cold counts both runs */
-    r->solver_iterations =
-        sst == TSCVX_INVALID_INPUT ? 0 : info.iterations + info.restart_iterations;
+    /* The IPM iterations the solve ran, whatever its outcome: assemble's data update zeroed
+     * the count, so a solve refused at its start counts none, and one whose end check found
+     * the SOCP workspace damaged (TSCVX_INVALID_INPUT, its head intact) counts those it ran.
+     * A warm start that failed and was run again cold counts both runs. */
+    r->solver_iterations = assembled == 0 ? info.iterations + info.restart_iterations : 0;
     res->socp_iterations += r->solver_iterations;
     if ((sst == TSCVX_SOLVED || sst == TSCVX_SOLVED_INACCURATE) &&
         tscvx_get_solution(ws->socp, ws->znew, ws->ydual, ws->zdual, ws->slack) !=
@@ -1521,6 +1572,11 @@ static int scvx_iteration(pdg_workspace *ws, const pdg_options *opt, scvx_state 
         return 0;
     }
     sst = solve_subproblem(ws, opt, has_mask ? ws->keep : NULL, s, r, res);
+    if (sst == SST_LOST) { /* as the mask callback's (has_mask == -2) */
+        callback_lost(res->message, "the clock callback", s->k + 1);
+        *status = PDG_INVALID_INPUT;
+        return 0;
+    }
     if (sst == SST_MAP_DAMAGED) { /* nothing of this workspace can be trusted any more */
         failed_row(r, s->J);
         s->damaged = 1;
@@ -1616,6 +1672,9 @@ static pdg_polish_status polish(pdg_workspace *ws, const pdg_options *opt, scvx_
     s->eta = st->eta_ub;
     sst = solve_subproblem(ws, opt, NULL, s, &row, res);
     s->polishing = 0;
+    if (sst == SST_LOST) { /* run_scvx stops the solve */
+        return PDG_POLISH_FAILED;
+    }
     res->polish_iterations = row.solver_iterations;
     if (sst != TSCVX_SOLVED && sst != TSCVX_SOLVED_INACCURATE) {
         return sst == TSCVX_MAX_ITER && ws->socp_cap < st->socp_max_iter ? PDG_POLISH_NO_BUDGET
@@ -1729,6 +1788,10 @@ static pdg_status run_scvx(pdg_workspace *ws, const pdg_scenario *scenario,
         res->defect_before_polish = s.defect;
         res->m_f_before_polish = ws->x[(size_t)(ws->N - 1) * NX + IM];
         res->polish = polish(ws, opt, &s, res);
+        if (s.lost) { /* the polish's clock callback took the workspace */
+            callback_lost(res->message, "the clock callback", s.k + 1);
+            status = PDG_INVALID_INPUT;
+        }
     }
     /* an answer computed through set-up data that changed during the call is not reported
      * (the failures before keep their own reason) */

@@ -34,20 +34,24 @@
  * other workspaces. A call that would write the running workspace (pdg_solve,
  * pdg_solve_tscvx, pdg_tscvx_guess, pdg_debug_guess on it) is refused as busy, and leaves a
  * result it was given that is the running solve's own untouched. pdg_setup or
- * pdg_workspace_size over the running workspace's arena ends the solve when the mask
- * callback returns (PDG_INVALID_INPUT, "set the workspace up again or wrote over its arena").
+ * pdg_workspace_size over the running workspace's arena ends the solve when the callback
+ * returns, whichever it is (the mask callback, or the clock before or after a subproblem's
+ * conic solve): PDG_INVALID_INPUT, "... callback of iteration k set the workspace up again
+ * or wrote over its arena", no trajectory, and nothing more written into the arena.
  *
  * Every call taking the workspace checks its mark and a checksum of what pdg_setup fixed (the
- * sizes, settings and layout, the pointers into the arena, the map of the subproblem's
- * entries into its matrices): a workspace whose arena was
- * reused, or where one of those took a bit flip, is refused (PDG_SETUP_NOT_READY,
- * PDG_INVALID_INPUT from the solves), never followed. The SOCP workspace inside it checks
- * its own mark and set-up checksum on each of its calls (tscvx_socp.h), and each
- * tscvx_solve again at its end: a flip there ends the solve at that subproblem with
- * PDG_SOLVER_ERROR and the SOCP runtime's reason in the message ("conic solver returned
- * invalid_input: workspace damaged: ...", "... damaged during a solve: ..." when it came
- * during that subproblem's solve), and so does every later solve until the workspace is set
- * up again.
+ * sizes, settings and layout, the pointers into the arena; then, through the pointer and
+ * length they vouched for, the map of the subproblem's entries into its matrices): a
+ * workspace whose arena was reused, or where one of those took a bit flip, is refused
+ * (PDG_SETUP_NOT_READY, PDG_INVALID_INPUT from the solves), never followed. The SOCP
+ * workspace inside it checks its own mark and set-up checksum on each of its calls
+ * (tscvx_socp.h), and each tscvx_update_data and tscvx_solve again at its end: a flip there
+ * ends the solve at that subproblem with PDG_SOLVER_ERROR and the SOCP runtime's reason in
+ * the message ("conic solver returned invalid_input: workspace damaged: ...", "... damaged
+ * during a solve: ..." or "... during a data update: ..." when it came during that
+ * subproblem's), and so does every later solve until the workspace is set up again. The IPM
+ * iterations of a conic solve whose end check failed count in the record (log row, result)
+ * and the budget socp_max_iter_total all the same.
  * The solves (pdg_solve, pdg_solve_tscvx) check again at their end, before reporting an
  * answer (PDG_SOLVED, and the iterate of PDG_INFEASIBLE and PDG_MAX_ITERATIONS): the
  * guidance workspace's checksum, then the SOCP workspace's (tscvx_check_workspace), then
@@ -308,7 +312,8 @@ typedef struct {
     double subproblem_time_s; /* the conic solve (tscvx_solve) alone; 0 without options.clock_s */
     int accepted;
     int solver_status;        /* tscvx_solve_status of the subproblem */
-    int solver_iterations;
+    int solver_iterations;    /* IPM iterations the conic solve ran (a cold rerun of a failed
+                                 warm start included), whatever its outcome */
     int restored;             /* T-SCvx: dropped constraints the full-constraint guard put
                                  back (the step is then rejected at the same radius) */
 } pdg_log_row;

@@ -13,25 +13,22 @@
  * never reads out of bounds. Numbers that change per update, solve or iteration (values,
  * iterates, scalings, factors, work) are not covered.
  *
- * The hash works a 64-bit word at a time: h = rotl(h ^ w, 29) * FNV prime. Each step is a
- * bijection of h for a given word and of the word for a given h, so any change confined to
- * one word (any single bit flip, any burst within 8 bytes) changes the sum for certain; the
- * rotation carries a change in a word's high bits down, where the product spreads it (plain
+ * The hash works a 64-bit word at a time: h = rotl(h ^ w, 29) * FNV prime (tscvx_wordsum of
+ * tscvx_fnv1a.h, which the guidance workspace's checksum shares). Each step is a bijection
+ * of h for a given word and of the word for a given h, so any change confined to one word
+ * (any single bit flip, any burst within 8 bytes) changes the sum for certain; the rotation
+ * carries a change in a word's high bits down, where the product spreads it (plain
  * word-wise FNV-1a would let two flips of bit 63 cancel). About 4 host instructions per 8
- * bytes, where the bytewise FNV-1a of tscvx_fnv1a.h takes 4 per byte.
+ * bytes, where the bytewise FNV-1a takes 4 per byte.
  */
 #include <string.h>
 
 #include "socp_internal.h"
+#include "tscvx_fnv1a.h"
 
-#define SUM_START 0xCBF29CE484222325ull /* FNV-1a's offset basis */
-#define SUM_PRIME 0x100000001B3ull      /* FNV's 64-bit prime */
+#define SUM_START TSCVX_FNV1A_START /* FNV-1a's offset basis */
 
-static inline uint64_t mix(uint64_t h, uint64_t w) {
-    h ^= w;
-    h = (h << 29) | (h >> 35);
-    return h * SUM_PRIME;
-}
+static inline uint64_t mix(uint64_t h, uint64_t w) { return tscvx_wordmix(h, w); }
 
 static inline uint64_t mix_ptr(uint64_t h, const void *p) { return mix(h, (uint64_t)(uintptr_t)p); }
 
@@ -43,23 +40,10 @@ static inline uint64_t mix_float(uint64_t h, tscvx_float v) {
     return mix(h, w);
 }
 
-/* `bytes` bytes at p, 8 at a time, the last few zero-padded to a word (nothing beyond them
- * is read). p may be NULL when bytes is 0. */
+/* `bytes` bytes at p, 8 at a time, the last few zero-padded to a word, then the length
+ * (nothing beyond them is read). p may be NULL when bytes is 0. */
 static uint64_t mix_bytes(uint64_t h, const void *p, size_t bytes) {
-    const unsigned char *b = (const unsigned char *)p;
-    const size_t words = bytes / 8;
-    for (size_t k = 0; k < words; k++) {
-        uint64_t w;
-        memcpy(&w, b + 8 * k, sizeof w);
-        h = mix(h, w);
-    }
-    const size_t rest = bytes - 8 * words;
-    if (rest > 0) {
-        uint64_t w = 0;
-        for (size_t k = 0; k < rest; k++) w |= (uint64_t)b[8 * words + k] << (8 * k);
-        h = mix(h, w);
-    }
-    return mix(h, (uint64_t)bytes); /* the length: a shorter array is another sum */
+    return tscvx_wordsum(h, p, bytes);
 }
 
 /* One array of the body: `bytes` bytes at p. */

@@ -9,10 +9,15 @@
  * full-constraint check, and the log/mask getters refuse bad indices.
  * Cross-checks against the Python reference are in tests/test_cguidance.py.
  */
+#define _POSIX_C_SOURCE 200809L /* sigaction, mprotect, sysconf: test_upset_in_conic_solve */
 #include <math.h>
+#include <signal.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/mman.h>
+#include <unistd.h>
 
 #include "gnc_test.h"
 #include "pdg_internal.h" /* the workspace's set-up constants (layout checksum) */
@@ -787,6 +792,22 @@ static int misuse(void *ctx, int k, unsigned char *mask, int n)
     return 0;
 }
 
+/* Clock standing for an integrator's misuse: at read clock_misuse_read it sets the
+ * workspace of clock_misuse up again over its arena (reads counted in clock_reads). */
+static misuse_ctx *clock_misuse;
+static int clock_misuse_read;
+
+static double misuse_clock(void)
+{
+    pdg_workspace *again = NULL;
+    if (++clock_reads == clock_misuse_read) {
+        CHECK(pdg_setup(&again, clock_misuse->arena, clock_misuse->bytes,
+                        &clock_misuse->s->params, clock_misuse->st) == PDG_SETUP_OK);
+        CHECK(again == clock_misuse->ws);
+    }
+    return 0.0;
+}
+
 /* Review of 27 Nov (an integrator's misuse of the callbacks and the result), on N = 12:
  * - a solve called from its own mask callback with the running solve's result is refused and
  *   leaves that result as it is: it used to zero its IPM iteration count, which is the
@@ -795,6 +816,8 @@ static int misuse(void *ctx, int k, unsigned char *mask, int n)
  *   return the last iterate, the unsolved guess at iteration 1, under PDG_INVALID_INPUT;
  * - pdg_setup from a mask callback over the running workspace's arena stops the solve with
  *   that reason (it used to run on, ending "conic solver returned invalid_input" with t_f 0);
+ *   so does pdg_setup from the clock, before a subproblem's conic solve or after it (it used
+ *   to run on over the new set-up: 28 Nov);
  * - a solve refused for a NULL result leaves no record of the solve before it (it used to
  *   leave its log and masks), and pdg_problem_size takes a NULL workspace as the getters. */
 static void test_callbacks(void)
@@ -850,12 +873,211 @@ static void test_callbacks(void)
     CHECK(isnan(r.t_f) && x1[0] == -7.0);
     CHECK(pdg_solve(ws, &s, NULL, &r) == PDG_MAX_ITERATIONS); /* set up, and idle */
 
+    /* reads 3 and 4: around the second subproblem's conic solve */
+    memset(&o, 0, sizeof o);
+    o.clock_s = misuse_clock;
+    clock_misuse = &c;
+    for (clock_misuse_read = 3; clock_misuse_read <= 4; ++clock_misuse_read) {
+        for (i = 0; i < PDG_NSTATE * 12; ++i) {
+            x1[i] = -7.0;
+        }
+        clock_reads = 0;
+        CHECK(pdg_solve(ws, &s, &o, &r) == PDG_INVALID_INPUT);
+        printf("pdg_setup from the clock (read %d): %s\n", clock_misuse_read, r.message);
+        CHECK(clock_reads == clock_misuse_read); /* nothing ran after it */
+        CHECK(strstr(r.message, "the clock callback of iteration ") == r.message &&
+              strstr(r.message, "set the workspace up again or wrote over its arena") != NULL);
+        CHECK(isnan(r.t_f) && x1[0] == -7.0 && r.subproblems_solved == 0);
+        CHECK(pdg_solve(ws, &s, NULL, &r) == PDG_MAX_ITERATIONS); /* set up, and idle */
+    }
+
     CHECK(pdg_log_length(ws, &rows) == PDG_SETUP_OK && rows > 0);
     CHECK(pdg_solve(ws, &s, NULL, NULL) == PDG_INVALID_INPUT);
     CHECK(pdg_log_length(ws, &rows) == PDG_SETUP_OK && rows == 0);
     CHECK(pdg_problem_size(NULL, &n, NULL, NULL, NULL, NULL) == PDG_SETUP_NULL_ARGUMENT &&
           n == -1);
     free(arena);
+}
+
+/* Every single bit flip in what the set-up checksum covers (pdg_layout_sum and pdg_map_sum,
+ * word-wise since 28 Nov: a change within one 8-byte word is found for certain, as a change
+ * within one byte was by the bytewise FNV-1a) makes the workspace not set up; flipped back,
+ * it is again. On N = 12: the struct's covered fields, and the first and last 16 entries of
+ * the map dest. A flip in the map's pointer or length is refused without being followed (the
+ * sum used to read the map by them: out of bounds, under ASan and valgrind). */
+static int flips_refused(pdg_workspace *ws, unsigned char *at, size_t bytes)
+{
+    size_t i;
+    int b, refused = 0;
+    for (i = 0; i < bytes; ++i) {
+        for (b = 0; b < 8; ++b) {
+            at[i] ^= (unsigned char)(1u << b);
+            refused += !pdg_ws_ready(ws);
+            at[i] ^= (unsigned char)(1u << b);
+        }
+    }
+    return refused;
+}
+
+static void test_every_bit_flip_refused(void)
+{
+    pdg_settings st;
+    pdg_scenario s;
+    void *arena = NULL;
+    size_t bytes = 0, total = 0;
+    unsigned char *w;
+    pdg_workspace *ws = budget_ws(&st, &s, &arena, &bytes);
+    int refused = 0;
+    if (!ws) {
+        return;
+    }
+    w = (unsigned char *)ws;
+    {
+        const struct {
+            size_t from, to;
+        } span[] = {{offsetof(pdg_workspace, N), offsetof(pdg_workspace, scn)},
+                    {offsetof(pdg_workspace, z), offsetof(pdg_workspace, disc)},
+                    {offsetof(pdg_workspace, aug), offsetof(pdg_workspace, n_log)},
+                    {offsetof(pdg_workspace, masks_out),
+                     offsetof(pdg_workspace, masks_out) + sizeof(unsigned char *)},
+                    {offsetof(pdg_workspace, arena_bytes),
+                     offsetof(pdg_workspace, arena_bytes) + sizeof(size_t)}};
+        size_t i;
+        for (i = 0; i < sizeof span / sizeof span[0]; ++i) {
+            refused += flips_refused(ws, w + span[i].from, span[i].to - span[i].from);
+            total += 8 * (span[i].to - span[i].from);
+        }
+    }
+    refused += flips_refused(ws, (unsigned char *)ws->dest, 16 * sizeof(int));
+    refused += flips_refused(ws, (unsigned char *)(ws->dest + ws->nnz - 16), 16 * sizeof(int));
+    total += 2 * 8 * 16 * sizeof(int);
+    printf("set-up checksum: %d of %zu single bit flips refused\n", refused, total);
+    CHECK((size_t)refused == total);
+    CHECK(pdg_ws_ready(ws));
+    free(arena);
+}
+
+/* ---- an upset inside a subproblem's conic solve ---------------------------------------------
+ * The SOCP runtime's end check (tscvx_solve) finds a bit flipped during the solve; the
+ * iterations the solve ran count in the call's record and budget all the same (28 Nov: its
+ * log row said 0). The library has no hook inside a solve, and none is added for the test:
+ * as in test_solver.c's test_upset_during_solve, the moment is the solve's own write of a
+ * row of its iteration log. The workspace is set up with the row (iteration 1) at a page
+ * boundary; the clock read just before the second subproblem's conic solve makes the page
+ * read-only; the solve's write of the row traps into a handler that flips the lowest bit of
+ * a row index of A's pattern (within range: the solve follows it without leaving its arrays,
+ * for valgrind and ASan), lets the page be written and returns, and the solve goes on. */
+static unsigned char *trap_page;
+static size_t trap_len;
+static tscvx_int *trap_at;
+static volatile sig_atomic_t trap_hits;
+static int trap_read; /* the clock read that arms the trap */
+
+static void on_trap(int sig, siginfo_t *si, void *uc)
+{
+    const unsigned char *at = (const unsigned char *)si->si_addr;
+    (void)uc;
+    if (!trap_page || at < trap_page || at >= trap_page + trap_len) {
+        signal(sig, SIG_DFL); /* not ours: the fault happens again, unhandled */
+        return;
+    }
+    *trap_at ^= 1;
+    mprotect(trap_page, trap_len, PROT_READ | PROT_WRITE);
+    trap_page = NULL;
+    trap_hits++;
+}
+
+static double trapping_clock(void)
+{
+    if (++clock_reads == trap_read && trap_page) {
+        CHECK(mprotect(trap_page, trap_len, PROT_READ) == 0);
+    }
+    return 0.0;
+}
+
+static void test_upset_in_conic_solve(void)
+{
+    static double x1[PDG_NSTATE * 12], u1[PDG_NCTRL * 12];
+    const long page = sysconf(_SC_PAGESIZE);
+    pdg_settings st;
+    pdg_scenario s;
+    pdg_result r;
+    pdg_options o;
+    pdg_log_row row;
+    tscvx_info info;
+    struct sigaction on, old;
+    unsigned char *buf, *base;
+    size_t need = 0, shift;
+    pdg_workspace *ws = NULL;
+    int tries, i, sum = 0, k = -1;
+    CHECK(page > 0 && page <= 65536);
+    pdg_default_settings(&st);
+    pdg_default_scenario(&s);
+    s.params.N = 12;
+    CHECK(arena_size(12, 1, &st, &need, &tries) == PDG_SETUP_OK);
+    buf = (unsigned char *)malloc(need + 2 * (size_t)page);
+    if (!buf || page <= 0 || page > 65536) {
+        free(buf);
+        return;
+    }
+    base = buf + ((size_t)page - (uintptr_t)buf % (size_t)page) % (size_t)page;
+    CHECK(pdg_setup(&ws, base, need, &s.params, &st) == PDG_SETUP_OK);
+    if (!ws) {
+        free(buf);
+        return;
+    }
+    /* the log rows are 16-aligned, as the arena's claims: a shift by a multiple of 16 moves
+     * the layout as a whole */
+    shift = ((size_t)page - (uintptr_t)&ws->socp->log[1] % (size_t)page) % (size_t)page;
+    CHECK(shift % 16 == 0);
+    CHECK(pdg_setup(&ws, base + shift, need, &s.params, &st) == PDG_SETUP_OK);
+    if (!ws) {
+        free(buf);
+        return;
+    }
+    CHECK((uintptr_t)&ws->socp->log[1] % (size_t)page == 0);
+    CHECK((size_t)(ws->socp->log_cap - 1) * sizeof(tscvx_iter_log) >= (size_t)page);
+    for (i = 0; i < ws->socp->A.nnz && k < 0; ++i) { /* an even row index below the last */
+        k = ws->socp->A.i[i] % 2 == 0 && ws->socp->A.i[i] + 1 < ws->socp->p ? i : -1;
+    }
+    CHECK(k >= 0);
+    trap_at = &ws->socp->A.i[k >= 0 ? k : 0];
+    memset(&on, 0, sizeof on);
+    on.sa_sigaction = on_trap;
+    on.sa_flags = SA_SIGINFO;
+    sigemptyset(&on.sa_mask);
+    memset(&o, 0, sizeof o);
+    o.clock_s = trapping_clock;
+    r.x = x1;
+    r.u = u1;
+    clock_reads = 0;
+    trap_read = 3; /* before the second subproblem's conic solve */
+    trap_hits = 0;
+    trap_len = (size_t)page;
+    trap_page = (unsigned char *)&ws->socp->log[1];
+    CHECK(sigaction(SIGSEGV, &on, &old) == 0);
+    CHECK(pdg_solve(ws, &s, &o, &r) == PDG_SOLVER_ERROR);
+    mprotect((unsigned char *)&ws->socp->log[1], (size_t)page, PROT_READ | PROT_WRITE);
+    trap_page = NULL;
+    sigaction(SIGSEGV, &old, NULL);
+    printf("upset in the second subproblem's conic solve: %s\n", r.message);
+    CHECK(trap_hits == 1 && clock_reads == 4);
+    CHECK(strstr(r.message, "conic solver returned invalid_input: workspace damaged during a "
+                            "solve") != NULL);
+    /* the solve's own count, from the SOCP runtime (its struct intact), in the row */
+    CHECK(tscvx_get_info(ws->socp, &info) == TSCVX_SETUP_OK && info.iterations >= 1);
+    CHECK(log_rows(ws) == 2 && pdg_get_log(ws, 1, &row) == PDG_SETUP_OK);
+    CHECK(row.solver_iterations == info.iterations + info.restart_iterations);
+    for (i = 0; i < log_rows(ws); ++i) {
+        CHECK(pdg_get_log(ws, i, &row) == PDG_SETUP_OK);
+        sum += row.solver_iterations;
+    }
+    CHECK(sum == r.socp_iterations);
+    printf("  its log row: %d IPM iterations (the runtime ran %d); the call %d\n",
+           row.solver_iterations, (int)info.iterations, r.socp_iterations);
+    *trap_at ^= 1;
+    CHECK(pdg_solve(ws, &s, NULL, &r) == PDG_SOLVED);
+    free(buf);
 }
 
 /* The polish (pdg_settings.polish): the default landing's defects removed, the final mass
@@ -1095,6 +1317,8 @@ int main(void)
     test_settings_and_sizes();
     test_iteration_budget();
     test_callbacks();
+    test_upset_in_conic_solve();
+    test_every_bit_flip_refused();
     test_polish();
     test_scenario_at_state();
     memset(&st, 0, sizeof st); /* padding zero, as the workspace's copy */
