@@ -55,6 +55,37 @@ CONVERGED_AT_REFERENCE = (
 )
 
 
+# The reasons of a solve stopped short of convergence by its iteration limit (_diagnose; C:
+# pdg_scvx.c diagnose, the same words). Whatever the numbers, each fits the flight library's
+# message (cguidance.MESSAGE_LEN - 1 = 255 characters): test_scvx_termination.py builds the
+# longest (246). The mass at the floor used to be printed (%.6f: as long as m_dry is), and
+# with long settings the C text was cut mid-word.
+def not_converged_reason(k: int, defect: float, viol: float) -> str:
+    """At the iteration limit with no virtual control left."""
+    return (
+        f"not converged after {k} iterations; virtual control is zero (the linearized "
+        f"dynamics are met), largest nonlinear defect {defect:.2e}, largest "
+        f"path-constraint value {viol:.2e}"
+    )
+
+
+def infeasible_reason(
+    vc: float, vc_tol: float, k: int, defect: float, interval: int, state: str, at_floor: bool
+) -> str:
+    """At the iteration limit with virtual control left; ``at_floor``: the final mass at
+    m_dry."""
+    parts = [f"virtual control {vc:.3g} > {vc_tol:g} after {k} iterations"]
+    parts.append(f"largest defect {defect:.3g} at interval {interval}, state {state}")
+    if at_floor:
+        parts.append("mass at the floor: not enough fuel, or no landing within the constraints")
+    return "; ".join(parts)
+
+
+def stalled_reason(eta_lb: float, reason: str) -> str:
+    """``reason`` of a solve whose step was rejected at the smallest trust radius."""
+    return f"step rejected at the smallest trust radius {eta_lb:g}; {reason}"
+
+
 @dataclass
 class IterationRecord:
     k: int
@@ -538,7 +569,7 @@ class SCvxSolver:
         if status == "max_iterations" and not s.spent:
             status, reason = self._diagnose(s.z, s.vc, s.defect, s.viol, s.k)
             if s.stalled:
-                reason = f"step rejected at the smallest trust radius {self.st.eta_lb:g}; " + reason
+                reason = stalled_reason(self.st.eta_lb, reason)
         x, u, t_f = physical(s.z, self.lay, self.sc)
         N = self.p.N
         return SCvxResult(
@@ -583,23 +614,15 @@ class SCvxSolver:
         """Why the iteration limit was hit: infeasible (virtual control left) or not converged."""
         st = self.st
         if vc <= st.vc_tol:
-            return "max_iterations", (
-                f"not converged after {k} iterations; virtual control is zero (the linearized "
-                f"dynamics are met), largest nonlinear defect {defect:.2e}, largest "
-                f"path-constraint value {viol:.2e}"
-            )
+            return "max_iterations", not_converged_reason(k, defect, viol)
         x, _, _ = physical(z, self.lay, self.sc)
         disc = self._discretize(z)
         rel = np.abs((x[1:] - disc["x_next"]) / self.sc.Sx[None, :])
         interval, i = np.unravel_index(int(np.argmax(rel)), rel.shape)
-        parts = [f"virtual control {vc:.3g} > {st.vc_tol:g} after {k} iterations"]
-        parts.append(f"largest defect {defect:.3g} at interval {interval}, state {STATE_NAMES[i]}")
-        if x[-1, IM] <= self.p.m_dry + 1e-6 * self.sc.Sx[IM]:
-            parts.append(
-                f"mass at the floor (m_f = {x[-1, IM]:.6f} = m_dry): not enough fuel, or no "
-                "landing within the constraints"
-            )
-        return "infeasible", "; ".join(parts)
+        at_floor = bool(x[-1, IM] <= self.p.m_dry + 1e-6 * self.sc.Sx[IM])
+        return "infeasible", infeasible_reason(
+            vc, st.vc_tol, k, defect, int(interval), STATE_NAMES[i], at_floor
+        )
 
 
 _HEADER = "  k        J         dJ         dL        rho    radius   |vc|_1  tight  sub[ms]  step"

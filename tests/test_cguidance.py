@@ -331,6 +331,41 @@ def test_infeasible_start_gets_the_same_diagnosis() -> None:
     assert "virtual control" in c.reason and "mass at the floor" in c.reason
 
 
+def test_a_long_infeasible_reason_is_whole_in_c_as_in_python() -> None:
+    """F8 (28 Nov): a heavy vehicle (every mass, force and inertia times 2000: m_f = 4000 at
+    the floor) stalled at a long eta_lb with a long vc_tol, from the infeasible start above.
+    The C reason is Python's, whole (the C text used to be cut at 255 characters, "...no
+    landing within the constraint"; the longest possible: tests/test_scvx_termination.py)."""
+    s = 2000.0
+    p = Params()
+    heavy = dataclasses.replace(
+        p,
+        J_B=(s * p.J_B[0], s * p.J_B[1], s * p.J_B[2]),
+        beta_mdot=s * p.beta_mdot,
+        aero_coeff=s * p.aero_coeff,
+        m_dry=s * p.m_dry,
+        T_min=s * p.T_min,
+        T_max=s * p.T_max,
+    )
+    far = Scenario(InitialState(r0=(8.0, 8.0, 0.0), v0=(0.0, -2.0, -2.0), m0=2.4 * s), heavy)
+    st = SCvxSettings(
+        eta_lb=0.0123456789,
+        eta_init=0.0123456789,
+        rho0=0.9,
+        rho1=0.96,
+        rho2=0.97,
+        vc_tol=1.23456789e-100,
+    )
+    c = cguidance.solve_c(far, st)
+    py = SCvxSolver(far, st, backend="c").solve()
+    assert py.status == c.status == "infeasible" and py.iterations >= 10
+    assert c.reason == py.reason
+    assert py.reason.startswith("step rejected at the smallest trust radius 0.0123457; ")
+    assert py.reason.endswith(
+        "; mass at the floor: not enough fuel, or no landing within the constraints"
+    )
+
+
 def test_model_failure_at_the_guess_is_the_same_status_and_reason() -> None:
     """v0 = 1e4 (the edge of validation's envelope) overflows the guess's dynamics: C and
     Python stop with the same status and reason, t_f NaN and x, u untouched (NaN), before any

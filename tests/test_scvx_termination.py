@@ -5,19 +5,29 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import math
+import sys
 import warnings
 
 import numpy as np
 import pytest
 
 from guidance.catalog import SCENARIOS
+from guidance.cguidance import MESSAGE_LEN
 from guidance.cli import main
 from guidance.errors import ModelEvaluationError
 from guidance.guess import initial_guess
 from guidance.model import discretize
-from guidance.params import IM, SCvxSettings
+from guidance.params import IM, INT_SETTING_RANGES, N_MAX, SCvxSettings
 from guidance.scenario import scenario_to_dict
-from guidance.scvx import SCvxResult, SCvxSolver
+from guidance.scvx import (
+    STATE_NAMES,
+    SCvxResult,
+    SCvxSolver,
+    infeasible_reason,
+    not_converged_reason,
+    stalled_reason,
+)
 from guidance.subproblem import scaled
 from guidance.verify import audit
 
@@ -153,6 +163,43 @@ def test_mass_floor_is_named_only_at_the_floor(
     for m_f, named in ((m_dry + 2e-6, False), (m_dry + 0.5e-6, True)):
         _, reason = _diagnose_with_final_mass(solver, ref, m_f)
         assert ("mass at the floor" in reason) == named, m_f
+
+
+# Doubles of every exponent, both signs, with the mantissas that print widest in each
+# format (1.23457 in %g, 1.23 in %.3g and %.2e), the extremes and the non-finite values
+_MANTISSAS = (1.0, 1.23456789, 9.99999999)
+_DOUBLES = [
+    sign * m * 10.0**e for e in range(-323, 308) for m in _MANTISSAS for sign in (1.0, -1.0)
+] + [5e-324, -5e-324, sys.float_info.max, -sys.float_info.max, math.inf, -math.inf, math.nan]
+
+
+def _widest(fmt: str, values: list[float]) -> float:
+    return max(values, key=lambda v: len(format(v, fmt)))
+
+
+def test_the_longest_diagnosis_fits_the_flight_message() -> None:
+    """F8 (28 Nov): the reasons of the iteration limit fit the C library's message buffer
+    (255 characters) whatever the numbers, so C never cuts one and says what Python says. Built
+    from the widest value each field takes: eta_lb > 0 and vc_tol >= 0 (the settings' checks)
+    in %g, any double for the rest, k at iter_max's bound, the last interval of N_MAX nodes,
+    the longest state name. (With the final mass printed, %.6f, the text grew with m_dry;
+    the C text of a long-settings landing with m_f = 4000 was cut at "...within the
+    constraint": tests/test_cguidance.py.)"""
+    finite = [v for v in _DOUBLES if math.isfinite(v)]
+    eta_lb = _widest("g", [v for v in finite if v > 0.0])
+    vc_tol = _widest("g", [v for v in finite if v >= 0.0])
+    vc, defect = _widest(".3g", _DOUBLES), _widest(".3g", _DOUBLES)
+    e_defect, viol = _widest(".2e", _DOUBLES), _widest(".2e", _DOUBLES)
+    k = INT_SETTING_RANGES["iter_max"][1]
+    state = max(STATE_NAMES, key=len)
+    longest = [
+        stalled_reason(eta_lb, infeasible_reason(vc, vc_tol, k, defect, N_MAX - 2, state, True)),
+        stalled_reason(eta_lb, not_converged_reason(k, e_defect, viol)),
+    ]
+    assert len(f"{eta_lb:g}") == len(f"{vc_tol:g}") == len("1.23457e-100")
+    assert len(f"{vc:.3g}") == len("-1.23e-100") and len(f"{viol:.2e}") == len("-1.23e-100")
+    assert [len(t) for t in longest] == [246, 229], longest
+    assert all(len(t) <= MESSAGE_LEN - 1 for t in longest)
 
 
 # ---- a model that cannot be evaluated -------------------------------------------------------

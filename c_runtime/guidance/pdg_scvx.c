@@ -1060,7 +1060,12 @@ int pdg_check_workspace_scenario(const pdg_workspace *ws, const pdg_scenario *s,
 static const char *const state_names[NX] = {"r1", "r2", "r3", "v1", "v2", "v3", "q0",
                                             "q1", "q2", "q3", "w1", "w2", "w3", "m"};
 
-/* Why the iteration limit was hit (guidance/scvx.py _diagnose). */
+/* Why the iteration limit was hit (guidance/scvx.py _diagnose, not_converged_reason,
+ * infeasible_reason and stalled_reason: the same words). Whatever the numbers, the text fits
+ * msg: the longest, built by tests/test_scvx_termination.py from the widest value of each
+ * field (eta_lb and vc_tol at a three-digit exponent, vc and the defect negative at one, k =
+ * iter_max's bound 100, interval PDG_N_MAX - 2), is 246 characters of PDG_MESSAGE_LEN - 1 =
+ * 255. */
 static pdg_status diagnose(pdg_workspace *ws, double vc, double defect, double viol,
                            int iterations, int stalled, char *msg)
 {
@@ -1102,9 +1107,7 @@ static pdg_status diagnose(pdg_workspace *ws, double vc, double defect, double v
     if (len < PDG_MESSAGE_LEN &&
         ws->x[NX * (ws->N - 1) + IM] <= ws->scn.params.m_dry + 1e-6 * ws->sc.Sx[IM]) {
         snprintf(msg + len, (size_t)(PDG_MESSAGE_LEN - len),
-                 "; mass at the floor (m_f = %.6f = m_dry): not enough fuel, or no landing "
-                 "within the constraints",
-                 ws->x[NX * (ws->N - 1) + IM]);
+                 "; mass at the floor: not enough fuel, or no landing within the constraints");
     }
     return PDG_INFEASIBLE;
 }
