@@ -408,8 +408,17 @@ static int initialize(tscvx_workspace *ws, int warm) {
  * (like 1/mu) and matters in the last iterations only. Over the SCvx solves of the landing
  * catalog (25 Nov), every ratio from 1e-3 (used before) down to 1e-6 took the same
  * subproblems and IPM iterations; 1e-8 took 1 % more iterations (and, from the blended warm
- * start used before, 1e-12 took 10 % more). 1e-6 keeps two decades from that edge. */
+ * start used before, 1e-12 took 10 % more). 1e-6 keeps two decades from that edge.
+ * mu_0 is at least REFINE_MU_0_MIN = 1. The cold start has mu_0 >= 1 anyway: it shifts s and
+ * z until every cone holds e + (a point of the cone), so s'z >= 1 per cone, and tau kappa = 1.
+ * A warm start begins near an answer with mu_0 down to 1e-5 (warm_initialize), where the
+ * rounding already matters: measured from its own mu_0, refinement started near mu = 1e-11,
+ * after the banded method's unrefined directions had spoilt the primal residual (28 of the
+ * 134 random problems it takes, warm-started from their own answers, ended SOLVED_INACCURATE
+ * where the cold start solves them; docs/socp-runtime.md, "Warm start"). With the floor a warm
+ * run refines from the mu at which a cold run would at the latest; cold runs are unchanged. */
 #define REFINE_MU 1e-6
+#define REFINE_MU_0_MIN 1.0
 
 static void log_row(tscvx_workspace *ws, tscvx_int k, const measures *r, tscvx_float step) {
     if (k >= ws->log_cap) return;
@@ -494,7 +503,7 @@ static tscvx_solve_status ipm_run(tscvx_workspace *ws, int warm) {
         if (k == ws->st.max_iter) { status = fallback(ws, TSCVX_MAX_ITER, &r); break; }
 
         /* inexact Newton: directions need no refinement until mu < REFINE_MU mu_0 */
-        if (k == 0) mu0 = r.mu;
+        if (k == 0) mu0 = fmax(r.mu, REFINE_MU_0_MIN);
         ws->refine_now = r.mu < REFINE_MU * mu0 || ws->kkt.nexp > 0 ? ws->st.refine_iters : 0;
         /* NT scaling, one factorization, constant solve, predictor-corrector */
         if (tscvx_nt_scaling(&ws->K, ws->s, ws->z, &ws->W, ws->lambda) != 0 || factor(ws) != 0 ||
