@@ -474,11 +474,18 @@ def random_set(count: int = 30) -> list[ConicProblem]:
 def landing_set(limit: int | None = None, prox_u: float = 0.0) -> list[ConicProblem]:
     """The default landing's subproblems: by default the paper's (linear objective), which
     ECOS can take too; with prox_u > 0 the flight library's, whose proximal term on the thrust
-    is a diagonal P (ECOS has no quadratic objective)."""
-    from guidance.params import Scenario
+    is a diagonal P (ECOS has no quadratic objective). A weight above SCvxSettings' bound
+    (params.PROX_U_MAX, where SCvx stops short of the optimum) is taken too: these
+    subproblems time the conic solver, whatever SCvx's answer (docs/budget.md timed them
+    at prox_u = 1)."""
+    from guidance.params import PROX_U_MAX, Scenario
     from guidance.scvx import collect_subproblems
 
-    subs = collect_subproblems(Scenario(), SCvxSettings(prox_u=prox_u))
+    beyond = math.isfinite(prox_u) and prox_u > PROX_U_MAX
+    settings = SCvxSettings(prox_u=PROX_U_MAX if beyond else prox_u)  # NaN, < 0: InputError
+    if beyond:
+        object.__setattr__(settings, "prox_u", float(prox_u))
+    subs = collect_subproblems(Scenario(), settings)
     return subs[:limit] if limit else subs
 
 

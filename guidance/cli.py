@@ -21,7 +21,7 @@ from guidance.errors import InputError, Interrupted, LibraryNotBuiltError, Worke
 from guidance.guess import plan_remainder
 from guidance.interrupts import exit_code, sigterm_as_interrupt
 from guidance.nn.conventions import KINDS, MODELS_DIR, network_file
-from guidance.params import IM, Params, Scenario, SCvxSettings
+from guidance.params import IM, PROX_U_MAX, Params, Scenario, SCvxSettings
 from guidance.scenario import read_scenario_data, scenario_from_dict, scenario_to_dict
 from guidance.tscvx import REDUCED_ETA_INIT
 
@@ -68,7 +68,8 @@ def add_prox_u(parser: argparse.ArgumentParser, about_zero: str) -> None:
         "--prox-u",
         type=_setting("prox_u"),
         default=SCvxSettings().prox_u,
-        help="weight of the subproblems' proximal term on the scaled thrust, >= 0 (default "
+        help="weight of the subproblems' proximal term on the scaled thrust, within "
+        f"[0, {PROX_U_MAX:g}] (default "
         f"%(default)s; 0: the paper's linear objective, {about_zero})",
     )
 

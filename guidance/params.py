@@ -143,6 +143,27 @@ INT_SETTING_RANGES = {
 # landing dual infeasible where the C runtime solved it, and at 1e300 every backend failed there.
 LAM_MAX = 1e8
 
+# Smallest trust-region shrink factor alpha (C: PDG_ALPHA_MIN). A rejected step is retried at
+# eta / alpha: at alpha = 1 at the same radius, so the same step comes back and is rejected
+# until max_subproblems is spent (the default landing: "not converged after 0 iterations"), and
+# just above 1 it is hardly better. Over the 11 catalog landings (C library, 27 Nov): at
+# alpha = 1.001 none solved and each accepted 0 to 4 steps in 60 subproblems (low_fast was
+# called infeasible, which it is not); with the largest budget the settings allow (iter_max
+# 100, max_subproblems 500) 1.01 solved 1 of them (low_fast infeasible again within 60), 1.05
+# 10 and 1.1 all 11 (Table 1's 2: 11 within the default budget). beta = 1 (no growth) is valid.
+ALPHA_MIN = 1.1
+
+# Largest proximal weight prox_u (C: PDG_PROX_U_MAX). The term shortens every step, and SCvx
+# stops on the step's size (step_tol), so a heavier weight stops it short of the optimum and
+# calls that solved. Over the 11 catalog landings (C library, 27 Nov; docs/scvx.md, "Beyond the
+# paper") the final masses against prox_u = 0.02 were, median (best): +3.4e-4 (+1.3e-3) at
+# 0.01, -5.6e-4 (+4.8e-4) at 0.03, the spread of the local optima; -1.7e-3 (-2.5e-4) at 0.05,
+# every landing lighter; at 0.1 -3.9e-3 and 6 of 11 out of iterations, 0.2 to 1 none solved,
+# and 10 "solved" all 11, 5.5e-2 lighter (11 % more propellant). 0.03 is the largest weight
+# whose answers are not lighter than the default's across the board; it is also the top of
+# the 55-landing sweep that chose 0.02.
+PROX_U_MAX = 0.03
+
 
 # RK4 steps over the whole normalized time [0, 1] at least: 2 per interval at N = 50, the grid
 # whose discretization error rk4_substeps = 2 was chosen for. With a fixed count per interval
@@ -197,7 +218,7 @@ class SCvxSettings:
     # correct conic solvers stop at different points of it and SCvx follows them apart (final
     # masses 1e-4 apart); with w = 2e-2 the answer is unique and the solvers agree to about
     # 1e-8 (docs/scvx.md, "Beyond the paper"). 0 gives the
-    # paper's objective.
+    # paper's objective; at most PROX_U_MAX (heavier, SCvx stops short of the optimum).
     prox_u: float = 2e-2
     # Beyond the paper, off by default: once SCvx has converged, one more subproblem about
     # the answer without the fuel term (scvx.POLISH_WEIGHT, scvx.POLISH_TOL_FACTOR), which
@@ -268,10 +289,20 @@ class SCvxSettings:
         yield "rho0", self.rho0 >= 0.0, "be >= 0 (a step that raises the penalty is refused)"
         yield "rho1", self.rho0 <= self.rho1, "satisfy rho0 <= rho1 (rho0 = {rho0:g})"
         yield "rho2", self.rho1 <= self.rho2, "satisfy rho1 <= rho2 (rho1 = {rho1:g})"
-        for name in ("alpha", "beta"):
-            yield name, getattr(self, name) >= 1.0, "be >= 1 (a trust-region factor)"
-        for name in ("step_tol", "vc_tol", "defect_tol", "tight_tol", "prox_u"):
+        yield (
+            "alpha",
+            self.alpha >= ALPHA_MIN,
+            f"be >= {ALPHA_MIN:g} (the trust region's shrink factor: a rejected step is "
+            "retried at eta / alpha)",
+        )
+        yield "beta", self.beta >= 1.0, "be >= 1 (the trust region's growth factor)"
+        for name in ("step_tol", "vc_tol", "defect_tol", "tight_tol"):
             yield name, getattr(self, name) >= 0.0, "be >= 0"
+        yield (
+            "prox_u",
+            0.0 <= self.prox_u <= PROX_U_MAX,
+            f"lie within [0, {PROX_U_MAX:g}] (a larger weight stops SCvx short of the optimum)",
+        )
         yield "socp_tol", 0.0 < self.socp_tol < 1.0, "lie within (0, 1)"
 
     def replace(self, **changes: Any) -> SCvxSettings:

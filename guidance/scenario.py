@@ -350,9 +350,17 @@ def _validate_terminal(p: Params) -> None:
     """The terminal state must meet the path constraints it is held to at the last node."""
     r_f = np.asarray(p.r_f)
     gs = math.radians(p.glideslope_deg)
-    if math.sin(gs) * float(_norm(r_f[1:])) > math.cos(gs) * r_f[0] + 1e-12:
+    horizontal = float(_norm(r_f[1:]))
+    if math.sin(gs) * horizontal > math.cos(gs) * r_f[0] + 1e-12:
         raise ScenarioError(
             "r_f", f"landing point is outside the {p.glideslope_deg:g} deg glideslope cone"
+        )
+    if _arrives_from_outside_the_cone(r_f, horizontal, p.v_f, gs):
+        raise ScenarioError(
+            "v_f",
+            f"v_f = ({p.v_f[0]:g}, {p.v_f[1]:g}, {p.v_f[2]:g}) reaches r_f, on the "
+            f"{p.glideslope_deg:g} deg glideslope cone, from outside the cone (e1 is up): at "
+            "r_f = 0, v_f[0] <= -tan(glideslope) |(v_f[1], v_f[2])|",
         )
     if _norm(p.omega_f) > p.omega_max + 1e-12:
         raise ScenarioError(
@@ -373,6 +381,26 @@ def _validate_terminal(p: Params) -> None:
             f"pinned final tilt {_tilt_deg(tilt_q):.3f} deg exceeds tilt_max_deg = "
             f"{p.tilt_max_deg:g}",
         )
+
+
+def _arrives_from_outside_the_cone(
+    r_f: np.ndarray, horizontal: float, v_f: tuple[float, ...], gs: float
+) -> bool:
+    """Whether the vehicle would reach r_f (inside the glideslope cone) with velocity v_f only
+    from outside the cone: r_f on the cone's boundary (g(r_f) = 0 to 1e-12, with g(r) =
+    sin(gs) |(r2, r3)| - cos(gs) r1 <= 0 inside) and g growing backwards along -v_f. Then the
+    path constraint holds at the last nodes and is broken between them: at r_f = 0, v_f =
+    (0.1, 0, 0) "solved" 4e-3 below the surface inside the last interval (C library, 27 Nov).
+    The C library's check_terminal computes the same, in the same order."""
+    sin_gs, cos_gs = math.sin(gs), math.cos(gs)
+    if sin_gs * horizontal - cos_gs * float(r_f[0]) < -1e-12:
+        return False  # inside the cone: any final velocity keeps the path near r_f in it
+    vh = (float(v_f[1]), float(v_f[2]))
+    if horizontal > 0.0:  # d|r_h| along -v_h: -(r_h . v_h) / |r_h|
+        away = -(float(r_f[1]) * vh[0] + float(r_f[2]) * vh[1]) / horizontal
+    else:  # at the axis |r_h| grows along any horizontal motion
+        away = _norm(vh)
+    return sin_gs * away + cos_gs * float(v_f[0]) > 1e-12
 
 
 def _tilt_deg(tilt_q: float) -> float:

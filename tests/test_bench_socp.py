@@ -154,3 +154,24 @@ def test_a_solver_s_ratio_is_on_the_problems_it_answered(monkeypatch: pytest.Mon
     assert r.ratio("ecos") == pytest.approx(10 / 1.5)  # not 10 / 2.5
     assert r.ratio("clarabel") == pytest.approx(5 / 2.5)
     assert "2 not answered, ratio on the others" in next(ln for ln in r.lines if "ecos" in ln)
+
+
+def test_the_landing_set_takes_a_proximal_weight_beyond_the_solves_bound() -> None:
+    """SCvxSettings refuses prox_u > PROX_U_MAX (SCvx stops short of the optimum there), but
+    the SOCP benchmark's landing subproblems only time the conic solver: docs/budget.md timed
+    those of prox_u = 1. They still carry that weight on the thrust, and a weight no setting
+    takes (< 0, NaN) is refused as SCvxSettings refuses it."""
+    import numpy as np
+
+    from guidance.errors import InputError
+    from guidance.params import PROX_U_MAX, SCvxSettings
+
+    with pytest.raises(InputError, match="prox_u must lie within"):
+        SCvxSettings(prox_u=1.0)
+    prob = bench_socp.landing_set(limit=1, prox_u=1.0)[0]
+    assert prob.P is not None
+    assert set(np.unique(prob.P.diagonal())) == {0.0, 1.0}
+    assert PROX_U_MAX < 1.0
+    for bad in (-1.0, float("nan"), float("inf")):
+        with pytest.raises(InputError, match="prox_u"):
+            bench_socp.landing_set(limit=1, prox_u=bad)

@@ -40,7 +40,16 @@ from guidance.constraints import constraint_scales, path_constraint_values
 from guidance.errors import InputError
 from guidance.guess import initial_guess
 from guidance.model import discretize
-from guidance.params import NC, InitialState, Params, Scenario, SCvxSettings, rk4_steps_per_interval
+from guidance.params import (
+    ALPHA_MIN,
+    NC,
+    PROX_U_MAX,
+    InitialState,
+    Params,
+    Scenario,
+    SCvxSettings,
+    rk4_steps_per_interval,
+)
 from guidance.scenario import (
     MAGNITUDE_MAX,
     ScenarioError,
@@ -525,7 +534,11 @@ def test_a_penalty_weight_of_1e8_solves_as_the_clarabel_reference() -> None:
     [("eta_lb", 0.0), ("eta_ub", 5e-4), ("lam", 0.0), ("rho1", -0.1), ("rho2", 0.05),
      ("alpha", 0.5), ("beta", 0.5), ("step_tol", -1.0), ("vc_tol", -1.0), ("lam", 2e8),
      ("lam", 1e300), ("rho0", -0.1), ("rho0", -1e300),
-     ("defect_tol", -1.0), ("tight_tol", -1.0), ("prox_u", -1.0)],
+     ("defect_tol", -1.0), ("tight_tol", -1.0), ("prox_u", -1.0),
+     # accepted until 27 Nov: alpha = 1 retried a rejected step at the same radius until
+     # max_subproblems was spent; prox_u = 0.1 "solved" the default landing 6.4e-3 lighter
+     # than 0.02, 10 all 11 catalog landings 5.5e-2 lighter (SCvxSettings.prox_u)
+     ("alpha", 1.0), ("alpha", 1.05), ("prox_u", 0.1), ("prox_u", 10.0)],
 )  # fmt: skip
 def test_a_bad_setting_is_named_alike_in_python_and_c(field: str, value: float) -> None:
     """The one field at fault, by SCvxSettings and by the C library's own check (eta_lb = 0
@@ -718,6 +731,15 @@ BAD_DICTS = [
     ({"q_f": [0.0, 0.0, 1.0, 0.0], "final_roll_free": False}, "q_f"),
     ({"q_f": [math.cos(0.1), 0.0, math.sin(0.1), 0.0]}, "q_f"),  # roll-free ends upright
     ({"r_f": [0.0, 1.0, 0.0]}, "r_f"),
+    # final velocities that reach the landing point, on the glideslope cone's boundary, from
+    # outside the cone: accepted until 27 Nov, and v_f = (0.1, 0, 0) "solved" the default
+    # landing 4e-3 below the surface inside the last interval, (0, 0.3, 0) 4.4e-3 outside the
+    # cone there (its path constraints met at the nodes)
+    ({"v_f": [0.1, 0.0, 0.0]}, "v_f"),
+    ({"v_f": [0.0, 0.3, 0.0]}, "v_f"),
+    ({"v_f": [-0.1, 0.3, 0.0]}, "v_f"),  # descending, but too shallow for the 20 deg cone
+    ({"v_f": [0.1, 0.0, 0.0], "glideslope_deg": 0.0}, "v_f"),
+    ({"v_f": [0.0, -0.3, 0.0], "r_f": [1.0, 1.0 / math.tan(math.radians(20.0)), 0.0]}, "v_f"),
     # beyond the envelope of magnitudes (scenario.MAGNITUDE_MAX = PDG_MAGNITUDE_MAX)
     ({"r0": [1e9, 0.0, 0.0]}, "r0"),  # was a numpy LinAlgError in the reference's guess
     ({"v0": [0.0, -10000.5, 0.0]}, "v0"),
@@ -882,6 +904,34 @@ def test_validation_agrees_with_fields_at_their_edges() -> None:
         _assert_same_verdict(Scenario(init, params))
 
 
+def test_final_velocities_at_the_glideslope_cone_get_the_same_verdict() -> None:
+    """The final velocity's rule (a landing point on the glideslope cone's boundary must be
+    reached from inside the cone) on landing points at the apex, on the boundary, and a
+    rounding either side of it, and velocities near the cone's edge: Python and C accept the
+    same and name the same field. A velocity from inside is accepted, one from outside is
+    named v_f (a landing point outside the cone is named r_f first)."""
+    rng = np.random.default_rng(27)
+    named = set()
+    for _ in range(2000):
+        gs = float(rng.choice([0.0, 20.0, 45.0, 89.0]))
+        t = math.tan(math.radians(gs))
+        height = float(rng.choice([0.0, 0.0, 1.0, 3.5]))
+        angle = rng.uniform(0.0, 2.0 * math.pi)
+        d = (height / t if t > 0.0 else float(rng.uniform(0.0, 2.0))) * (
+            1.0 + float(rng.choice([0.0, 0.0, 1e-15, -1e-15, 1e-9, -1e-9]))
+        )
+        r_f = (height, d * math.cos(angle), d * math.sin(angle))
+        speed = float(rng.uniform(0.0, 2.0))
+        a = rng.uniform(0.0, 2.0 * math.pi)
+        edge = speed * t * float(rng.choice([1.0, 1.0 + 1e-9, 1.0 - 1e-9, 0.5, 2.0]))
+        v_f = (-edge if rng.uniform() < 0.8 else edge, speed * math.cos(a), speed * math.sin(a))
+        scn = Scenario(InitialState(), Params(glideslope_deg=gs, r_f=r_f, v_f=v_f))
+        _assert_same_verdict(scn)
+        msg = cguidance.validate_c(scn)
+        named.add(None if msg is None else msg.split("'")[1])
+    assert {None, "r_f", "v_f"} <= named  # (r0: the default start is below the steeper cones)
+
+
 def test_bad_guess_and_masks_are_refused() -> None:
     scn = SCENARIOS["default"]
     x, u, tf = initial_guess(scn)
@@ -908,18 +958,42 @@ def test_no_heap_allocation_inside_a_guidance_call() -> None:
 # ---- settings and loop logic against the Python reference (same conic solver) ---------------
 
 
-def test_trust_region_factor_alpha_below_one_is_refused() -> None:
-    """alpha >= 1 (SCvxSettings: "alpha and beta ... must be >= 1"); the boundary is valid."""
-    with pytest.raises(ValueError, match="alpha"):
-        SCvxSettings(alpha=0.5)
+def test_trust_region_shrink_factor_below_its_floor_is_refused() -> None:
+    """alpha >= ALPHA_MIN (PDG_ALPHA_MIN) in both. alpha = 1 was accepted, and a rejected step
+    was retried at the same radius until max_subproblems was spent: the default landing
+    ended "not converged after 0 iterations", low_fast "infeasible" (it is not). At the floor
+    the default landing solves within the largest budget the settings allow; beta = 1 (no
+    growth) stays valid."""
+    for alpha in (0.5, 1.0, 1.001, 1.09):
+        with pytest.raises(ValueError, match=rf"^alpha must be >= {ALPHA_MIN:g}"):
+            SCvxSettings(alpha=alpha)
+        st = cguidance.c_settings()
+        st.alpha = alpha
+        with pytest.raises(ValueError, match=rf"settings\.alpha: must be >= {ALPHA_MIN:g}"):
+            cguidance.Workspace(Params(N=12), st)
     st = cguidance.c_settings()
-    st.alpha = 0.5
-    with pytest.raises(ValueError, match="alpha"):
-        cguidance.Workspace(Params(N=12), st)
-    SCvxSettings(alpha=1.0)
-    st = cguidance.c_settings()
-    st.alpha = 1.0
+    st.alpha, st.beta = ALPHA_MIN, 1.0
     cguidance.Workspace(Params(N=12), st)  # accepted
+    slow = SCvxSettings(alpha=ALPHA_MIN, beta=1.0, iter_max=100, max_subproblems=500)
+    assert cguidance.solve_c(SCENARIOS["default"], slow).status == "solved"
+
+
+def test_the_largest_proximal_weight_still_reaches_the_optimum() -> None:
+    """prox_u <= PROX_U_MAX in both: the term shortens the steps and SCvx stops on the step's
+    size, so a heavier weight stopped short of the optimum and called it solved (0.1: the
+    default landing 6.4e-3 lighter than at 0.02; 10: 8.5e-2 lighter). At the bound the
+    default landing still ends where the default weight's does, to 1e-3 (2.6e-4, 27 Nov)."""
+    ref = cguidance.solve_c(SCENARIOS["default"])
+    at = cguidance.solve_c(SCENARIOS["default"], SCvxSettings(prox_u=PROX_U_MAX))
+    assert ref.status == at.status == "solved"
+    assert abs(at.m_f - ref.m_f) < 1e-3
+    for weight in (0.1, 10.0):
+        with pytest.raises(ValueError, match=rf"^prox_u must lie within \[0, {PROX_U_MAX:g}\]"):
+            SCvxSettings(prox_u=weight)
+        st = cguidance.c_settings()
+        st.prox_u = weight
+        with pytest.raises(ValueError, match=r"settings\.prox_u: must lie within"):
+            cguidance.Workspace(Params(N=12), st)
 
 
 def test_restart_from_the_converged_solution_is_one_iteration() -> None:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 import os
 import stat
 from pathlib import Path
@@ -12,7 +13,7 @@ import pytest
 
 from guidance.cli import main
 from guidance.errors import InputError
-from guidance.params import Params, SCvxSettings
+from guidance.params import ALPHA_MIN, Params, SCvxSettings
 from guidance.scenario import ScenarioError, load_scenario, scenario_from_dict
 
 GOOD = {
@@ -54,6 +55,12 @@ BAD = [
     ({"q_f": [0, 0, 1, 0], "final_roll_free": False}, "q_f"),
     ({"q_f": [0.9800665778412416, 0, 0.19866933079506122, 0]}, "q_f"),  # roll-free but tilted
     ({"r_f": [0, 1, 0]}, "r_f"),
+    # a final velocity that reaches the landing point (on the cone's boundary) from outside
+    # the glideslope cone: accepted until 27 Nov, then "solved" below the surface or outside
+    # the cone between the last two nodes
+    ({"v_f": [0.1, 0, 0]}, "v_f"),  # rising out of the ground at touchdown (e1 is up)
+    ({"v_f": [0, 0.3, 0]}, "v_f"),  # sliding in along the surface
+    ({"v_f": [0.1, 0, 0], "glideslope_deg": 0.0}, "v_f"),
 ]
 
 
@@ -216,7 +223,7 @@ def test_parameter_override_and_defaults() -> None:
     assert p.J_B == (0.001, 0.01, 0.01)
 
 
-@pytest.mark.parametrize("weight", ["-0.01", "nan", "inf", "heavy"])
+@pytest.mark.parametrize("weight", ["-0.01", "nan", "inf", "heavy", "0.1", "10"])
 def test_bad_proximal_weight_exits_2(weight: str, capsys: pytest.CaptureFixture[str]) -> None:
     for command in ("solve", "agreement"):
         with pytest.raises(SystemExit) as exc:
@@ -246,7 +253,12 @@ OVER_THE_LIMIT = [
     ({"gimbal_max_deg": 90.0}, "gimbal_max_deg"),
 ]
 JUST_INSIDE = [{"N": 400}, {"N": 3}, {"T_min": 4.999, "T_max": 5.0}, {"tilt_max_deg": 180.0},
-               {"gimbal_max_deg": 89.9}]  # fmt: skip
+               {"gimbal_max_deg": 89.9},
+               # touchdown at rest, or along the cone's edge; rising to a point above the cone's
+               # apex; any horizontal velocity on the ground without a glideslope
+               {"v_f": (0.0, 0.0, 0.0)}, {"v_f": (-1.0, 0.0, 1.0 / math.tan(math.radians(20)))},
+               {"v_f": (0.1, 0.0, 0.0), "r_f": (1.0, 0.0, 0.0)},
+               {"v_f": (0.0, 0.3, 0.0), "glideslope_deg": 0.0}]  # fmt: skip
 
 
 @pytest.mark.parametrize(("change", "field"), OVER_THE_LIMIT)
@@ -271,8 +283,12 @@ def test_trust_region_factors_and_ratio_thresholds_are_checked() -> None:
         SCvxSettings(rho1=0.8, rho2=0.7)
     with pytest.raises(ValueError, match="rho0 <= rho1"):
         SCvxSettings(rho0=0.2, rho1=0.1)
-    # the limits themselves are allowed
-    assert SCvxSettings(alpha=1.0, beta=1.0).beta == 1.0
+    # the limits themselves are allowed: alpha at ALPHA_MIN, beta = 1 (no growth)
+    assert SCvxSettings(alpha=ALPHA_MIN, beta=1.0).beta == 1.0
+    # alpha = 1 retried a rejected step at the same radius until max_subproblems was spent
+    for alpha in (1.0, 1.001, 1.09):
+        with pytest.raises(ValueError, match=rf"^alpha must be >= {ALPHA_MIN:g}"):
+            SCvxSettings(alpha=alpha)
     assert SCvxSettings(rho0=0.7, rho1=0.7, rho2=0.7).rho1 == 0.7
 
 

@@ -199,11 +199,15 @@ def test_a_rejection_skips_the_radii_that_hold_the_step() -> None:
 
 
 def test_retry_radius_follows_the_sequence_and_its_bounds() -> None:
-    from guidance.scvx import _retry_radius
+    from guidance.params import ALPHA_MIN
+    from guidance.scvx import RETRY_SKIP_MAX, _retry_radius
 
     st = SCvxSettings()  # alpha = 2, eta_lb = 1e-3
     assert _retry_radius(2.0, 1.5, st) == 1.0  # the step is cut at once: Eq. (15)
     assert _retry_radius(2.0, 0.3, st) == 0.25  # 1 and 0.5 hold the step: skipped
     assert _retry_radius(2.0, 0.2502, st) == 0.25  # within the margin: not skipped
     assert _retry_radius(2.0, 0.0, st) == st.eta_lb
-    assert _retry_radius(2.0, 0.3, dataclasses.replace(st, alpha=1.0)) == 2.0  # bounded
+    # at most RETRY_SKIP_MAX radii are skipped: at the smallest factor, with no step and no
+    # floor in reach, the retry radius is eta / ALPHA_MIN^(1 + RETRY_SKIP_MAX)
+    slow = dataclasses.replace(st, alpha=ALPHA_MIN, eta_lb=1e-30)
+    assert _retry_radius(2.0, 0.0, slow) == pytest.approx(2.0 / ALPHA_MIN ** (1 + RETRY_SKIP_MAX))

@@ -247,16 +247,44 @@ static double tilt_deg(double tilt_q)
     return acos(c) / DEG;
 }
 
-/* The terminal state must meet the path constraints it is held to at the last node. */
+/* Whether the vehicle reaches r_f (in the glideslope cone, |(r2, r3)| = horizontal) with
+ * velocity v_f only from outside the cone: r_f on its boundary (to 1e-12) and the cone's
+ * g(r) = sin(gs) |(r2, r3)| - cos(gs) r1 growing backwards along -v_f, so the path constraint
+ * is broken between the last nodes (guidance/scenario.py _arrives_from_outside_the_cone: the
+ * same computation in the same order). */
+static int arrives_from_outside_the_cone(const pdg_params *p, double horizontal, double gs)
+{
+    const double sin_gs = sin(gs), cos_gs = cos(gs);
+    double away;
+    if (sin_gs * horizontal - cos_gs * p->r_f[0] < -1e-12) {
+        return 0; /* inside the cone: any final velocity keeps the path near r_f in it */
+    }
+    if (horizontal > 0.0) { /* d|r_h| along -v_h: -(r_h . v_h) / |r_h| */
+        away = -(p->r_f[1] * p->v_f[1] + p->r_f[2] * p->v_f[2]) / horizontal;
+    } else { /* at the axis |r_h| grows along any horizontal motion */
+        away = norm(p->v_f + 1, 2);
+    }
+    return sin_gs * away + cos_gs * p->v_f[0] > 1e-12;
+}
+
+/* The terminal state must meet the path constraints it is held to at the last node, and be
+ * reached from inside the glideslope cone. */
 static int check_terminal(const pdg_params *p, char *msg)
 {
     char text[200];
     const double gs = p->glideslope_deg * DEG, wn = norm(p->omega_f, 3);
-    const double tilt_q = norm(p->q_f + 2, 2);
-    if (sin(gs) * norm(p->r_f + 1, 2) > cos(gs) * p->r_f[0] + 1e-12) {
+    const double tilt_q = norm(p->q_f + 2, 2), horizontal = norm(p->r_f + 1, 2);
+    if (sin(gs) * horizontal > cos(gs) * p->r_f[0] + 1e-12) {
         snprintf(text, sizeof text, "landing point is outside the %g deg glideslope cone",
                  p->glideslope_deg);
         return fail(msg, "r_f", text);
+    }
+    if (arrives_from_outside_the_cone(p, horizontal, gs)) {
+        snprintf(text, sizeof text,
+                 "v_f = (%g, %g, %g) reaches r_f, on the %g deg glideslope cone, from outside "
+                 "the cone (e1 is up): at r_f = 0, v_f[0] <= -tan(glideslope) |(v_f[1], v_f[2])|",
+                 p->v_f[0], p->v_f[1], p->v_f[2], p->glideslope_deg);
+        return fail(msg, "v_f", text);
     }
     if (wn > pdg_omega_max(p) + 1e-12) {
         snprintf(text, sizeof text, "|omega_f| = %.3f deg/U_T exceeds omega_max_deg = %g",

@@ -204,23 +204,27 @@ static int trust_region_fault(const pdg_settings *s, char *text)
     return 0;
 }
 
-/* The trust-region factors (>= 1), the tolerances and the proximal weight. */
+/* The trust-region factors (alpha >= PDG_ALPHA_MIN, beta >= 1), the tolerances and the
+ * proximal weight (within [0, PDG_PROX_U_MAX]). */
 static int tolerance_fault(const pdg_settings *s, char *text)
 {
     const struct {
         const char *name;
         double v;
-    } factor[] = {{"alpha", s->alpha}, {"beta", s->beta}},
-      nonneg[] = {{"step_tol", s->step_tol},   {"vc_tol", s->vc_tol},
-                  {"defect_tol", s->defect_tol}, {"tight_tol", s->tight_tol},
-                  {"prox_u", s->prox_u}};
+    } nonneg[] = {{"step_tol", s->step_tol},   {"vc_tol", s->vc_tol},
+                  {"defect_tol", s->defect_tol}, {"tight_tol", s->tight_tol}};
     size_t i;
-    for (i = 0; i < sizeof factor / sizeof factor[0]; ++i) {
-        if (!(factor[i].v >= 1.0)) {
-            snprintf(text, SETTING_TEXT, "%s: must be >= 1 (a trust-region factor), got %g",
-                     factor[i].name, factor[i].v);
-            return 1;
-        }
+    if (!(s->alpha >= PDG_ALPHA_MIN)) {
+        snprintf(text, SETTING_TEXT,
+                 "alpha: must be >= %g (the trust region's shrink factor: a rejected step is "
+                 "retried at eta / alpha), got %g",
+                 PDG_ALPHA_MIN, s->alpha);
+        return 1;
+    }
+    if (!(s->beta >= 1.0)) {
+        snprintf(text, SETTING_TEXT,
+                 "beta: must be >= 1 (the trust region's growth factor), got %g", s->beta);
+        return 1;
     }
     for (i = 0; i < sizeof nonneg / sizeof nonneg[0]; ++i) {
         if (!(nonneg[i].v >= 0)) {
@@ -228,6 +232,13 @@ static int tolerance_fault(const pdg_settings *s, char *text)
                      nonneg[i].v);
             return 1;
         }
+    }
+    if (!(s->prox_u >= 0 && s->prox_u <= PDG_PROX_U_MAX)) {
+        snprintf(text, SETTING_TEXT,
+                 "prox_u: must lie within [0, %g] (a larger weight stops SCvx short of the "
+                 "optimum), got %g",
+                 PDG_PROX_U_MAX, s->prox_u);
+        return 1;
     }
     if (!(s->socp_tol > 0 && s->socp_tol < 1)) {
         snprintf(text, SETTING_TEXT, "socp_tol: must lie within (0, 1), got %g", s->socp_tol);

@@ -207,7 +207,8 @@ typedef struct {
     double lam;             /* penalty weight on virtual control and buffers, (0, PDG_LAM_MAX] */
     double rho0, rho1, rho2;/* acceptance / shrink / grow thresholds,
                                0 <= rho0 <= rho1 <= rho2 */
-    double alpha, beta;     /* trust-region shrink and growth factors, >= 1 */
+    double alpha;           /* trust-region shrink factor, >= PDG_ALPHA_MIN */
+    double beta;            /* trust-region growth factor, >= 1 */
     double eta_init;        /* initial trust radius (scaled units), in [eta_lb, eta_ub] */
     double eta_lb, eta_ub;  /* trust-radius bounds, 0 < eta_lb <= eta_ub */
     int iter_max;           /* accepted steps at most, 1..100 */
@@ -236,7 +237,8 @@ typedef struct {
     int tau_r_update;
     /* Beyond the paper: weight w >= 0 of (w/2)|u_hat - u_hat_ref|^2 on the scaled thrust in
      * the subproblem objective (not in L, Eq. (13)); it makes the subproblem's answer unique,
-     * so that conic solvers agree. 0: the paper's linear objective. Fixed at pdg_setup. */
+     * so that conic solvers agree. 0: the paper's linear objective; at most PDG_PROX_U_MAX.
+     * Fixed at pdg_setup. */
     double prox_u;
     /* Beyond the paper, off by default: 1 = once converged, one more subproblem about the answer on the
      * full constraint set without the fuel term, min lam (sum t + sum s') +
@@ -252,6 +254,11 @@ typedef struct {
 
 /* pdg_settings.lam at most (guidance/params.py LAM_MAX, which says why) */
 #define PDG_LAM_MAX 1e8
+/* pdg_settings.alpha at least and prox_u at most (guidance/params.py ALPHA_MIN, PROX_U_MAX,
+ * which say why: nearer 1 a rejected step is retried at almost the same radius; a larger
+ * weight stops SCvx short of the optimum with a "solved" that wastes propellant) */
+#define PDG_ALPHA_MIN 1.1
+#define PDG_PROX_U_MAX 0.03
 
 #define PDG_POLISH_WEIGHT 1.0     /* guidance/scvx.py POLISH_WEIGHT */
 #define PDG_POLISH_TOL_FACTOR 1e-2 /* guidance/scvx.py POLISH_TOL_FACTOR */

@@ -216,16 +216,25 @@ static void test_settings_and_sizes(void)
         CHECK(pdg_check_settings(&st, msg) == PDG_SETUP_BAD_SETTINGS);
         CHECK(strstr(msg, "settings.defect_tol: must be finite") == msg);
         CHECK(pdg_check_settings(&st, NULL) == PDG_SETUP_BAD_SETTINGS);
-        /* trust-region factors >= 1 (SCvxSettings: "alpha and beta ... must be >= 1") */
+        /* alpha >= PDG_ALPHA_MIN: at 1 a rejected step was retried at the same radius until
+         * max_subproblems was spent; beta >= 1 (guidance/params.py ALPHA_MIN) */
         pdg_default_settings(&st);
-        st.alpha = 0.5;
+        st.alpha = 1.0;
         CHECK(pdg_check_settings(&st, msg) == PDG_SETUP_BAD_SETTINGS);
-        CHECK(strstr(msg, "alpha") != NULL);
-        st.alpha = 1.0; /* the boundary is valid */
+        CHECK(strstr(msg, "settings.alpha: must be >= 1.1") == msg);
+        st.alpha = PDG_ALPHA_MIN; /* the boundary is valid, and beta = 1 (no growth) */
+        st.beta = 1.0;
         CHECK(pdg_check_settings(&st, msg) == PDG_SETUP_OK);
         st.beta = 0.999;
         CHECK(pdg_check_settings(&st, msg) == PDG_SETUP_BAD_SETTINGS);
-        CHECK(strstr(msg, "beta") != NULL);
+        CHECK(strstr(msg, "settings.beta: must be >= 1") == msg);
+        /* prox_u within [0, PDG_PROX_U_MAX]: a larger weight stops SCvx short of the optimum */
+        pdg_default_settings(&st);
+        st.prox_u = PDG_PROX_U_MAX;
+        CHECK(pdg_check_settings(&st, msg) == PDG_SETUP_OK);
+        st.prox_u = 0.05;
+        CHECK(pdg_check_settings(&st, msg) == PDG_SETUP_BAD_SETTINGS);
+        CHECK(strstr(msg, "settings.prox_u: must lie within [0, 0.03]") == msg);
     }
     {   /* a vehicle the scenario rules refuse is refused at set-up, by name (a NaN r_cp_B set
          * up a workspace that then refused every scenario as "r_cp_B not zero") */
@@ -240,6 +249,20 @@ static void test_settings_and_sizes(void)
         CHECK(strcmp(msg, "scenario field 'r_cp_B': must be finite") == 0);
         CHECK(pdg_workspace_size(&p, &st, NULL, 0, &need) == PDG_SETUP_BAD_VEHICLE);
         CHECK(pdg_setup(&ws, buf, sizeof buf, &p, &st) == PDG_SETUP_BAD_VEHICLE && ws == NULL);
+        /* a final velocity that reaches the landing point (the cone's apex) from outside the
+         * glideslope cone: rising out of the ground, or sliding in along it */
+        pdg_default_params(&p);
+        p.v_f[0] = 0.1;
+        CHECK(pdg_check_vehicle(&p, msg) == PDG_SETUP_BAD_VEHICLE);
+        CHECK(strstr(msg, "scenario field 'v_f': v_f = (0.1, 0, 0) reaches r_f") == msg);
+        p.v_f[0] = 0.0;
+        p.v_f[1] = 0.3;
+        CHECK(pdg_check_vehicle(&p, msg) == PDG_SETUP_BAD_VEHICLE);
+        p.glideslope_deg = 0.0; /* no cone: the surface only */
+        CHECK(pdg_check_vehicle(&p, msg) == PDG_SETUP_OK);
+        p.v_f[1] = 0.0; /* at rest at touchdown */
+        p.glideslope_deg = 20.0;
+        CHECK(pdg_check_vehicle(&p, msg) == PDG_SETUP_OK);
         pdg_default_params(&p);
         p.m_dry = -3.0;
         CHECK(pdg_check_vehicle(&p, msg) == PDG_SETUP_BAD_VEHICLE && strstr(msg, "'m_dry'"));
