@@ -352,4 +352,7 @@ def project_guess(
     u = np.column_stack([new_axial, u[:, 1] * scale_lat, u[:, 2] * scale_lat])
     un = np.maximum(np.linalg.norm(u, axis=1), 1e-12)
     u *= (np.clip(un, p.T_min, p.T_max) / un)[:, None]
+    # node 0 is the initial state as given (checked at input): normalizing its q again moved
+    # it by an ulp off the subproblem's boundary condition
+    x[0] = scenario.x0
     return x, u, float(max(t_f, 1e-2))

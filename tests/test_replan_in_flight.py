@@ -80,6 +80,23 @@ def test_the_c_library_computes_it_to_the_bit(plan: SCvxResult, t1_fraction: flo
     assert a[2] == b[2]
 
 
+def test_node_0_is_the_start_as_given_not_renormalized(plan: SCvxResult) -> None:
+    """A start whose q0 is off unit length within the input tolerance (1e-6) is the
+    subproblem's boundary condition as given: the remainder's node 0 must be that state to
+    the bit, in Python and C alike (both normalized node 0's q again, moving it off by up to
+    the tolerance; on a unit q0, by an ulp)."""
+    here, t1 = state_at_node(plan, NODE)
+    q = tuple(c * (1.0 + 5e-7) for c in here.initial.q0)
+    init = InitialState(here.initial.r0, here.initial.v0, q, here.initial.w0, here.initial.m0)
+    start = Scenario(init, SCN.params)
+    x, _, _ = plan_remainder(start, plan.x, plan.u, plan.t_f, t1)
+    cx, _, _ = cguidance.plan_remainder_c(start, plan.x, plan.u, plan.t_f, t1)
+    np.testing.assert_array_equal(x[0], start.x0)
+    np.testing.assert_array_equal(cx[0], start.x0)
+    # the other nodes' attitudes are still made unit
+    np.testing.assert_allclose(np.linalg.norm(x[1:, 6:10], axis=1), 1.0, atol=1e-15)
+
+
 def test_the_remainder_replans_to_the_plan(plan: SCvxResult) -> None:
     """Measured 27 Nov: 9 subproblems (22 from the cubic guess), final mass 2.238491 against
     the plan's 2.238336, touchdown 6.8740 against 6.8749."""

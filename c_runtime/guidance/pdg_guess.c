@@ -484,7 +484,9 @@ void pdg_project_guess(const pdg_scenario *sc, double *x, double *u, double *t_f
     int k;
     pin_boundary(sc, x);
     for (k = 0; k < sc->params.N; ++k) {
-        project_state(sc, x + NX * k);
+        /* node 0 is the initial state as given (checked at input): normalizing its q again
+         * moved it by an ulp off the subproblem's boundary condition */
+        if (k > 0) project_state(sc, x + NX * k);
         project_thrust(&sc->params, u + 3 * k);
     }
     *t_f = *t_f > 1e-2 ? *t_f : 1e-2;
