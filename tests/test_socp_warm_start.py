@@ -60,7 +60,6 @@ def test_warm_start_from_a_neighbour_matches_clarabel(block: int) -> None:
     assert warm == tried >= 25
 
 
-
 @pytest.mark.parametrize("backend", [csocp.KKT_BANDED, csocp.KKT_STATIC])
 def test_a_warm_start_from_the_answer_itself_solves_to_full_accuracy(backend: int) -> None:
     """Started from its own answer, a problem is solved (not solved_inaccurate) and meets
@@ -83,6 +82,7 @@ def test_a_warm_start_from_the_answer_itself_solves_to_full_accuracy(backend: in
         check_against_clarabel(prob, sol)
         warm += 1
     assert warm >= 12  # the banded method takes 14 of the 40, the static one all
+
 
 def _interior_start(
     prob: ConicProblem, seed: int, primal_scale: float = 1.0, dual_scale: float = 1.0
