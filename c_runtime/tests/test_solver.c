@@ -1250,6 +1250,29 @@ static void on_trap(int sig, siginfo_t *si, void *uc) {
     trap_hits++;
 }
 
+/* Arms the trap: `site` is flipped at the first write into [at, at + len), made read-only
+ * here; the previous SIGSEGV action is kept in `old` for trap_disarm. */
+static void trap_arm(const upset_site *site, unsigned char *at, size_t len, struct sigaction *old) {
+    struct sigaction on;
+    memset(&on, 0, sizeof on);
+    on.sa_sigaction = on_trap;
+    on.sa_flags = SA_SIGINFO;
+    sigemptyset(&on.sa_mask);
+    trap_site = site;
+    trap_hits = 0;
+    trap_len = len;
+    trap_page = at;
+    CHECK(sigaction(SIGSEGV, &on, old) == 0, "sigaction");
+    CHECK(mprotect(at, len, PROT_READ) == 0, "mprotect");
+}
+
+/* The page writable again (whether or not the trap fired) and the old SIGSEGV action back. */
+static void trap_disarm(unsigned char *at, size_t len, const struct sigaction *old) {
+    mprotect(at, len, PROT_READ | PROT_WRITE);
+    trap_page = NULL;
+    sigaction(SIGSEGV, old, NULL);
+}
+
 static unsigned char dur_buf[(1 << 18) + 2 * 65536];
 
 static void test_upset_during_solve(int backend, tscvx_int dense_max) {
@@ -1285,25 +1308,14 @@ static void test_upset_during_solve(int backend, tscvx_int dense_max) {
     /* what the solve no longer follows after that row (n is: the best iterate is saved) */
     const upset_site sites[] = {SITE("A.i[6]", ws->A.i[6], 0, 0),
                                 SITE("log_cap", ws->log_cap, 0, 1)};
-    struct sigaction on, old;
-    memset(&on, 0, sizeof on);
-    on.sa_sigaction = on_trap;
-    on.sa_flags = SA_SIGINFO;
-    sigemptyset(&on.sa_mask);
+    struct sigaction old;
     char msg[TSCVX_MESSAGE_LEN];
     int said = 0;
     for (size_t t = 0; t < sizeof sites / sizeof sites[0]; t++) {
         const upset_site *u = &sites[t];
-        trap_site = u;
-        trap_hits = 0;
-        trap_len = (size_t)page;
-        trap_page = (unsigned char *)&ws->log[last];
-        CHECK(sigaction(SIGSEGV, &on, &old) == 0, "sigaction");
-        CHECK(mprotect(trap_page, trap_len, PROT_READ) == 0, "mprotect");
+        trap_arm(u, (unsigned char *)&ws->log[last], (size_t)page, &old);
         const tscvx_solve_status got = tscvx_solve(ws);
-        mprotect((unsigned char *)&ws->log[last], (size_t)page, PROT_READ | PROT_WRITE);
-        trap_page = NULL;
-        sigaction(SIGSEGV, &old, NULL);
+        trap_disarm((unsigned char *)&ws->log[last], (size_t)page, &old);
         CHECK(trap_hits == 1, "method %d, %s: the upset did not come during the solve (%d)",
               (int)method, u->name, (int)trap_hits);
         said += trap_hits == 1 && got == TSCVX_INVALID_INPUT;
@@ -1379,25 +1391,14 @@ static void test_upset_during_update(int backend, tscvx_int dense_max) {
     unsigned char *const h_page =
         (unsigned char *)((uintptr_t)ws->h - (uintptr_t)ws->h % (size_t)page);
     CHECK(h_page >= base, "the page of h begins before the arena");
-    struct sigaction on, old;
-    memset(&on, 0, sizeof on);
-    on.sa_sigaction = on_trap;
-    on.sa_flags = SA_SIGINFO;
-    sigemptyset(&on.sa_mask);
+    struct sigaction old;
     char msg[TSCVX_MESSAGE_LEN];
     int said = 0;
     for (size_t t = 0; t < sizeof sites / sizeof sites[0]; t++) {
         const upset_site *u = &sites[t];
-        trap_site = u;
-        trap_hits = 0;
-        trap_len = (size_t)page;
-        trap_page = h_page;
-        CHECK(sigaction(SIGSEGV, &on, &old) == 0, "sigaction");
-        CHECK(mprotect(trap_page, trap_len, PROT_READ) == 0, "mprotect");
+        trap_arm(u, h_page, (size_t)page, &old);
         const tscvx_setup_status got = tscvx_update_data(ws, NULL, sp.c, NULL, NULL, NULL, NULL);
-        mprotect(h_page, (size_t)page, PROT_READ | PROT_WRITE);
-        trap_page = NULL;
-        sigaction(SIGSEGV, &old, NULL);
+        trap_disarm(h_page, (size_t)page, &old);
         CHECK(trap_hits == 1, "method %d, %s: the upset did not come during the update (%d)",
               (int)method, u->name, (int)trap_hits);
         said += trap_hits == 1 && got == TSCVX_SETUP_NOT_READY;
