@@ -958,6 +958,17 @@ def test_no_heap_allocation_inside_a_guidance_call() -> None:
 # ---- settings and loop logic against the Python reference (same conic solver) ---------------
 
 
+def _refused_alike(field: str, value: float, rule: str) -> None:
+    """`field` = `value` refused by SCvxSettings and by the C library's check, both stating
+    `rule` (a regular expression)."""
+    with pytest.raises(ValueError, match=rf"^{field} {rule}"):
+        SCvxSettings(**{field: value})
+    st = cguidance.c_settings()
+    setattr(st, field, value)
+    with pytest.raises(ValueError, match=rf"settings\.{field}: {rule}"):
+        cguidance.Workspace(Params(N=12), st)
+
+
 def test_trust_region_shrink_factor_below_its_floor_is_refused() -> None:
     """alpha >= ALPHA_MIN (PDG_ALPHA_MIN) in both. alpha = 1 was accepted, and a rejected step
     was retried at the same radius until max_subproblems was spent: the default landing
@@ -965,12 +976,7 @@ def test_trust_region_shrink_factor_below_its_floor_is_refused() -> None:
     the default landing solves within the largest budget the settings allow; beta = 1 (no
     growth) stays valid."""
     for alpha in (0.5, 1.0, 1.001, 1.09):
-        with pytest.raises(ValueError, match=rf"^alpha must be >= {ALPHA_MIN:g}"):
-            SCvxSettings(alpha=alpha)
-        st = cguidance.c_settings()
-        st.alpha = alpha
-        with pytest.raises(ValueError, match=rf"settings\.alpha: must be >= {ALPHA_MIN:g}"):
-            cguidance.Workspace(Params(N=12), st)
+        _refused_alike("alpha", alpha, rf"must be >= {ALPHA_MIN:g}")
     st = cguidance.c_settings()
     st.alpha, st.beta = ALPHA_MIN, 1.0
     cguidance.Workspace(Params(N=12), st)  # accepted
@@ -988,12 +994,7 @@ def test_the_largest_proximal_weight_still_reaches_the_optimum() -> None:
     assert ref.status == at.status == "solved"
     assert abs(at.m_f - ref.m_f) < 1e-3
     for weight in (0.1, 10.0):
-        with pytest.raises(ValueError, match=rf"^prox_u must lie within \[0, {PROX_U_MAX:g}\]"):
-            SCvxSettings(prox_u=weight)
-        st = cguidance.c_settings()
-        st.prox_u = weight
-        with pytest.raises(ValueError, match=r"settings\.prox_u: must lie within"):
-            cguidance.Workspace(Params(N=12), st)
+        _refused_alike("prox_u", weight, rf"must lie within \[0, {PROX_U_MAX:g}\]")
 
 
 def test_restart_from_the_converged_solution_is_one_iteration() -> None:

@@ -1275,18 +1275,34 @@ static void trap_disarm(unsigned char *at, size_t len, const struct sigaction *o
 
 static unsigned char dur_buf[(1 << 18) + 2 * 65536];
 
-static void test_upset_during_solve(int backend, tscvx_int dense_max) {
-    static stage_problem sp;
-    const tscvx_data d = stage_data(&sp);
+/* The page size the upset tests trap on (0 when the system's is not one they can use), the
+ * start of dur_buf's first whole page, and an upset test's settings. */
+static size_t upset_page(void) {
     const long page = sysconf(_SC_PAGESIZE);
     CHECK(page > 0 && page <= 65536, "page size %ld", page);
-    if (page <= 0 || page > 65536) return;
+    return page > 0 && page <= 65536 ? (size_t)page : 0;
+}
+
+static unsigned char *upset_base(size_t page) {
+    return dur_buf + (page - (uintptr_t)dur_buf % page) % page;
+}
+
+static tscvx_settings upset_settings(int backend, tscvx_int dense_max) {
     tscvx_settings st;
     tscvx_default_settings(&st);
     st.kkt_backend = backend;
     st.soc_dense_max = dense_max;
+    return st;
+}
+
+static void test_upset_during_solve(int backend, tscvx_int dense_max) {
+    static stage_problem sp;
+    const tscvx_data d = stage_data(&sp);
+    const size_t page = upset_page();
+    if (page == 0) return;
+    tscvx_settings st = upset_settings(backend, dense_max);
     st.max_iter = 500; /* a log long enough that the page from the last row holds log rows only */
-    unsigned char *base = dur_buf + ((size_t)page - (uintptr_t)dur_buf % (size_t)page) % (size_t)page;
+    unsigned char *base = upset_base(page);
     size_t narena = 0;
     CHECK(tscvx_workspace_size(&d, &st, base, 1 << 18, &narena) == TSCVX_SETUP_OK &&
               narena + (size_t)page <= (1 << 18) + 65536, "size %zu", narena);
@@ -1363,14 +1379,10 @@ static void test_upset_during_solve(int backend, tscvx_int dense_max) {
 static void test_upset_during_update(int backend, tscvx_int dense_max) {
     static stage_problem sp;
     const tscvx_data d = stage_data(&sp);
-    const long page = sysconf(_SC_PAGESIZE);
-    CHECK(page > 0 && page <= 65536, "page size %ld", page);
-    if (page <= 0 || page > 65536) return;
-    tscvx_settings st;
-    tscvx_default_settings(&st);
-    st.kkt_backend = backend;
-    st.soc_dense_max = dense_max;
-    unsigned char *base = dur_buf + ((size_t)page - (uintptr_t)dur_buf % (size_t)page) % (size_t)page;
+    const size_t page = upset_page();
+    if (page == 0) return;
+    tscvx_settings st = upset_settings(backend, dense_max);
+    unsigned char *base = upset_base(page);
     size_t narena = 0;
     CHECK(tscvx_workspace_size(&d, &st, base, 1 << 18, &narena) == TSCVX_SETUP_OK &&
               narena <= (1 << 18), "size %zu", narena);
