@@ -550,6 +550,24 @@ def test_a_bad_setting_is_named_alike_in_python_and_c(field: str, value: float) 
         cguidance.Workspace(Params(), st)
 
 
+def test_two_non_finite_settings_are_named_alike_in_python_and_c() -> None:
+    """With two real settings NaN, SCvxSettings and pdg_check_settings name the same one (the
+    first in the fields' order). C checked socp_tol before prox_u until 28 Nov (a drift audit:
+    SCvxSettings' docstring says both name the same one)."""
+    reals = [f.name for f in dataclasses.fields(SCvxSettings) if f.type == "float"]
+    differ = []
+    for i, a in enumerate(reals):
+        for b in reals[i + 1 :]:
+            with pytest.raises(InputError) as py:
+                SCvxSettings(**{a: math.nan, b: math.nan})
+            with pytest.raises(InputError) as c:
+                cguidance.Workspace(Params(), cguidance.c_settings(**{a: math.nan, b: math.nan}))
+            named = str(py.value).split()[0]
+            if not str(c.value).startswith(f"settings.{named}: must be finite"):
+                differ.append((a, b, str(py.value), str(c.value)))
+    assert len(reals) == 15 and not differ, differ
+
+
 def test_the_unit_quaternion_limit_is_judged_alike_to_the_last_bit() -> None:
     """|q0| within 1e-6 of 1: two orders of summing its squares differ in the last bit, which
     near the limit gave C and Python opposite verdicts (numpy's norm against C's sum in order:

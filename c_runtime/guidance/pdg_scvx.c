@@ -122,7 +122,8 @@ static int bad_setting(char *msg, const char *text)
  * fault and its value, in the order of params.py), 0 when they pass. */
 #define SETTING_TEXT (PDG_MESSAGE_LEN - 16)
 
-/* Every real finite, every integer within its range. */
+/* Every real finite (in the order of SCvxSettings' fields, as params.py checks them: with two
+ * non-finite both name the first), every integer within its range. */
 static int numbers_fault(const pdg_settings *s, char *text)
 {
     const struct {
@@ -132,7 +133,7 @@ static int numbers_fault(const pdg_settings *s, char *text)
              {"rho2", s->rho2},       {"alpha", s->alpha},         {"beta", s->beta},
              {"eta_init", s->eta_init}, {"eta_lb", s->eta_lb},     {"eta_ub", s->eta_ub},
              {"step_tol", s->step_tol}, {"vc_tol", s->vc_tol},     {"defect_tol", s->defect_tol},
-             {"tight_tol", s->tight_tol}, {"socp_tol", s->socp_tol}, {"prox_u", s->prox_u}};
+             {"tight_tol", s->tight_tol}, {"prox_u", s->prox_u},     {"socp_tol", s->socp_tol}};
     const struct {
         const char *name;
         int v, lo, hi;
