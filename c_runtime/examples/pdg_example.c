@@ -15,8 +15,9 @@
  *      -lamd -lldl -lsuitesparseconfig -lm
  *
  * Exit status: 0 solved (the re-plan too), 3 not solved (the status line says why), 2 input refused by the
- * library or a usage error (nothing solved, nothing printed but the message), 1 set-up
- * failure (a file that cannot be read included).
+ * library or a usage error (nothing solved: the message on stderr, no log or trajectory; a
+ * usage error prints nothing else, a refused network follows the networks' size lines), 1
+ * set-up failure (a file that cannot be read included).
  *
  * All memory comes from arenas obtained once before the solve (malloc here stands for the
  * flight computer's statically reserved SRAM blocks: the guidance arena, one per network, and

@@ -206,7 +206,7 @@ typedef struct {
     tscvx_float tol_gap_rel_inacc;
     tscvx_float tol_feas_inacc;
     tscvx_float step_fraction;   /* fraction of the step to the cone boundary, (0, 1) */
-    tscvx_float static_reg;      /* static KKT regularization delta (scaled data), > 0; the
+    tscvx_float static_reg;      /* static KKT regularization delta (scaled data), (0, 1); the
                                     banded method uses 1e-4 of it (its factors need no
                                     regularization for stability) */
     tscvx_int refine_iters;      /* iterative-refinement steps per KKT solve, 0..20 (used once
