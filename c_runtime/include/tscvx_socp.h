@@ -210,7 +210,8 @@ typedef struct {
                                     banded method uses 1e-4 of it (its factors need no
                                     regularization for stability) */
     tscvx_int refine_iters;      /* iterative-refinement steps per KKT solve, 0..20 (used once
-                                    mu < 1e-3 mu_0, always with expanded SOCs) */
+                                    mu < 1e-6 mu_0, mu_0 taken as at least 1e-4; always with
+                                    expanded SOCs) */
     tscvx_int ruiz_iters;        /* Ruiz equilibration passes at most, 0..50 (setup only) */
     tscvx_int soc_dense_max;     /* SOCs up to this dimension get a dense KKT block; larger
                                     ones the sparse diagonal + rank-2 expansion (setup only) */
