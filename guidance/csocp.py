@@ -525,7 +525,7 @@ class Solver:
     def _set_up(self) -> None:
         """The C set-up: arena size, arena, workspace; on failure, not ready with a message."""
         self.ws = ct.c_void_p()
-        self.message = "ok"
+        self.message = self._data_message = "ok"
         self.arena = np.zeros(0, dtype=np.uint8)
         data, settings = ct.byref(self._data), ct.byref(self._settings)
         need = ct.c_size_t(0)
@@ -543,7 +543,7 @@ class Solver:
             st = self.lib.tscvx_setup(ct.byref(self.ws), arena_p, need.value, data, settings)
         self.setup_status = int(st)
         if st != 0:
-            self.message = self._setup_message(st)
+            self.message = self._data_message = self._setup_message(st)
             self.ws = ct.c_void_p()
 
     def _setup_message(self, st: int) -> str:
@@ -623,6 +623,7 @@ class Solver:
             self._P.data[:] = new["P_values"][self.split.P.order]  # type: ignore[union-attr]
         st = self._send(new)
         self.message = "ok" if st == 0 else self.lib.tscvx_setup_status_message(st).decode()
+        self._data_message = self.message  # why a solve is refused until the next update
         return st
 
     def _send(self, new: dict[str, np.ndarray]) -> int:
@@ -716,8 +717,9 @@ class Solver:
         elapsed = time.perf_counter() - t0
         status = SOLVE_STATUS[st] if 0 <= st < len(SOLVE_STATUS) else "numerical_error"
         if status == "invalid_input":  # a refused update's message, else the workspace's why
-            why = self.check_workspace()[1] if self.message == "ok" else ""
-            return invalid_solution(n, m, why or self.message)
+            # (not self.message: a refused limit_iterations, which changed nothing, wrote it)
+            why = self.check_workspace()[1] if self._data_message == "ok" else ""
+            return invalid_solution(n, m, why or self._data_message)
         p, mg = self._Aeq.shape[0], self._G.shape[0]
         # NaN where the runtime keeps no point (TSCVX_SETUP_NO_SOLUTION after a numerical error)
         x, y = np.full(n, np.nan), np.full(p, np.nan)

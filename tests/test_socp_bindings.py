@@ -872,6 +872,26 @@ def test_a_limit_above_the_setup_one_is_refused_by_name() -> None:
         assert session.solve(random_feasible(7, n=30), max_iter=50).status == "solved"
 
 
+def test_a_refused_limit_does_not_become_a_later_solves_reason() -> None:
+    """A refused limit_iterations changes nothing in the workspace: a later solve refused for
+    damage says why as a solver that never had the refusal does (the workspace's reason).
+    Before, solve answered with the stale "max_iter 51" message of the refused limit."""
+    prob = random_feasible(3, n=10, with_P=True)
+    answers = []
+    for refused_before in (False, True):
+        solver = csocp.Solver(prob, max_iter=50)
+        if refused_before:
+            assert solver.limit_iterations(51) != 0 and solver.limit_iterations(None) == 0
+        arena = solver.arena
+        at = (-arena.ctypes.data) % 16 + 8  # the workspace struct's sizes: its checksum fails
+        arena[at] ^= 0x10
+        sol = solver.solve()
+        arena[at] ^= 0x10
+        assert sol.status == "invalid_input"
+        answers.append(sol.info["message"])
+    assert answers[1] == answers[0] and answers[0].startswith("workspace damaged")
+
+
 def test_check_workspace_says_why_the_workspace_is_refused() -> None:
     """Solver.check_workspace binds tscvx_check_workspace: (0, "") for a ready workspace; a
     bit flipped in the workspace struct (the arena is the solver's array) is refused with the
