@@ -1330,6 +1330,159 @@ static void test_scenario_at_state(void)
     CHECK(strstr(msg, "'m0'") != NULL);
 }
 
+/* ---- an answer does not depend on the workspace's history ---------------------------------
+ * One call on a workspace that has been through other calls (another settings' set-up in the
+ * same arena, a T-SCvx solve with masks, refused input, a callback stopping a solve, the model
+ * failing at a guess and at a subproblem's answer, an upset found and repaired, a debug
+ * assembly) gives, to the bit, the answer of the same call on a workspace freshly set up in an arena of
+ * other bytes: status, message, every field of the result, x, u, the log and the masks. */
+typedef struct {
+    pdg_status status;
+    pdg_result r;
+    double x[12 * PDG_NSTATE], u[12 * PDG_NCTRL];
+    int rows;
+    pdg_log_row log[60];
+    unsigned char masks[20 * PDG_NCON * 12];
+} history_answer;
+
+static int stop_at_two(void *ctx, int k, unsigned char *mask, int n)
+{
+    (void)ctx;
+    (void)mask;
+    (void)n;
+    return k == 2 ? 7 : 0;
+}
+
+static void history_call(pdg_workspace *ws, const pdg_scenario *s, const unsigned char *masks,
+                         history_answer *a)
+{
+    pdg_options o;
+    int i;
+    memset(a, 0, sizeof *a);
+    memset(&o, 0, sizeof o);
+    o.masks = masks;
+    o.n_masks = masks ? 1 : 0;
+    a->r.x = a->x;
+    a->r.u = a->u;
+    a->status = pdg_solve(ws, s, &o, &a->r);
+    a->r.x = NULL; /* compared by value below */
+    a->r.u = NULL;
+    a->rows = log_rows(ws);
+    CHECK(a->rows >= 0 && a->rows <= 60 && a->r.iterations <= 20);
+    for (i = 0; i < a->rows && i < 60; ++i) {
+        CHECK(pdg_get_log(ws, i, &a->log[i]) == PDG_SETUP_OK);
+    }
+    for (i = 0; i < a->r.iterations && i < 20; ++i) {
+        CHECK(pdg_get_mask(ws, i, a->masks + (size_t)i * PDG_NCON * 12) == PDG_SETUP_OK);
+    }
+}
+
+static void test_answers_independent_of_history(void)
+{
+    enum { NH = 12 };
+    static unsigned char drop[PDG_NCON * NH];
+    static history_answer fresh, used;
+    pdg_settings st, other;
+    pdg_scenario s, b, bad, far;
+    pdg_options o;
+    pdg_result r;
+    pdg_workspace *ws = NULL, *ws_fresh = NULL;
+    void *arena = NULL, *arena2 = NULL;
+    size_t bytes = 0, need_other = 0;
+    int tries, i, round;
+    static double gx[NH * PDG_NSTATE], gu[NH * PDG_NCTRL], c[4000], Ax[20000], bb[4000],
+        Gx[20000], h[4000];
+    double gt_f;
+    pdg_default_settings(&st);
+    other = st;
+    other.polish = 1;
+    other.socp_warm_start = 0;
+    other.lam = 300.0;
+    if (arena_size(NH, 1, &st, &bytes, &tries) != PDG_SETUP_OK ||
+        arena_size(NH, 1, &other, &need_other, &tries) != PDG_SETUP_OK) {
+        CHECK(0);
+        return;
+    }
+    bytes = need_other > bytes ? need_other : bytes;
+    arena = malloc(bytes);
+    arena2 = malloc(bytes);
+    if (!arena || !arena2) {
+        CHECK(0);
+        free(arena);
+        free(arena2);
+        return;
+    }
+    pdg_default_scenario(&s);
+    s.params.N = NH;
+    b = s;
+    b.r0[1] = 1.0;
+    b.r0[2] = 2.5;
+    b.v0[1] = 0.5;
+    b.params.glideslope_deg = 35.0;
+    for (i = 0; i < PDG_NCON * NH; ++i) {
+        drop[i] = i % PDG_NCON != 1; /* the glideslope dropped everywhere */
+    }
+    r.x = x;
+    r.u = u;
+    memset(arena, 0xA5, bytes);
+    /* the history: another settings' workspace in the arena first, then ours over it */
+    CHECK(pdg_setup(&ws, arena, bytes, vehicle(NH, 1), &other) == PDG_SETUP_OK);
+    CHECK(pdg_solve(ws, &b, NULL, &r) == PDG_SOLVED);
+    CHECK(pdg_setup(&ws, arena, bytes, vehicle(NH, 1), &st) == PDG_SETUP_OK);
+    memset(&o, 0, sizeof o);
+    o.masks = drop;
+    o.n_masks = 1;
+    CHECK(pdg_solve(ws, &b, &o, &r) != PDG_INVALID_INPUT);
+    bad = s;
+    bad.m0 = NAN;
+    CHECK(pdg_solve(ws, &bad, NULL, &r) == PDG_INVALID_INPUT);
+    memset(&o, 0, sizeof o);
+    o.mask_fn = stop_at_two;
+    CHECK(pdg_solve(ws, &b, &o, &r) == PDG_INVALID_INPUT && log_rows(ws) > 0);
+    CHECK(pdg_debug_guess(ws, &b, gx, gu, &gt_f) == 0);
+    gx[6 * PDG_NSTATE + 13] = 0.0; /* m = 0 at a node: the model fails at the guess */
+    memset(&o, 0, sizeof o);
+    o.guess_x = gx;
+    o.guess_u = gu;
+    o.guess_t_f = gt_f;
+    CHECK(pdg_solve(ws, &b, &o, &r) == PDG_SOLVER_ERROR);
+    ws->lay.n ^= 1 << 3; /* an upset, refused, then repaired */
+    CHECK(pdg_solve(ws, &s, NULL, &r) == PDG_INVALID_INPUT);
+    ws->lay.n ^= 1 << 3;
+    CHECK(pdg_debug_guess(ws, &b, gx, gu, &gt_f) == 0);
+    CHECK(pdg_debug_assemble(ws, &b, gx, gu, gt_f, 0.3, c, Ax, bb, Gx, h, NULL, NULL, NULL,
+                             NULL) == 0);
+    far = s;
+    far.r0[0] = 1e3; /* out of reach: the model fails at the first subproblem's answer */
+    CHECK(pdg_solve(ws, &far, NULL, &r) == PDG_SOLVER_ERROR && r.subproblems_solved > 0);
+    for (round = 0; round < 2; ++round) { /* plain SCvx, then with a mask table */
+        const unsigned char *masks = round ? drop : NULL;
+        history_call(ws, &s, masks, &used);
+        memset(arena2, 0, bytes); /* the history's arena was 0xA5 bytes */
+        CHECK(pdg_setup(&ws_fresh, arena2, bytes, vehicle(NH, 1), &st) == PDG_SETUP_OK);
+        history_call(ws_fresh, &s, masks, &fresh);
+        CHECK(used.status == PDG_SOLVED && fresh.status == PDG_SOLVED);
+        CHECK(strcmp(used.r.message, fresh.r.message) == 0);
+        CHECK(memcmp(&used.r.t_f, &fresh.r.t_f, sizeof(double)) == 0);
+        CHECK(used.r.iterations == fresh.r.iterations);
+        CHECK(used.r.subproblems_solved == fresh.r.subproblems_solved);
+        CHECK(used.r.socp_iterations == fresh.r.socp_iterations);
+        CHECK(memcmp(&used.r.max_defect, &fresh.r.max_defect, sizeof(double)) == 0);
+        CHECK(memcmp(&used.r.max_violation, &fresh.r.max_violation, sizeof(double)) == 0);
+        CHECK(used.r.polish == fresh.r.polish);
+        CHECK(memcmp(used.x, fresh.x, sizeof used.x) == 0);
+        CHECK(memcmp(used.u, fresh.u, sizeof used.u) == 0);
+        CHECK(used.rows == fresh.rows);
+        CHECK(memcmp(used.log, fresh.log, sizeof used.log) == 0);
+        CHECK(memcmp(used.masks, fresh.masks, sizeof used.masks) == 0);
+        printf("history vs fresh (%s): %s in %d subproblems, %d IPM iterations\n",
+               round ? "masks" : "SCvx", pdg_status_name(used.status), used.r.subproblems_solved,
+               used.r.socp_iterations);
+    }
+    free(arena);
+    free(arena2);
+}
+
 int main(void)
 {
     pdg_settings st;
@@ -1344,6 +1497,7 @@ int main(void)
     test_every_bit_flip_refused();
     test_polish();
     test_scenario_at_state();
+    test_answers_independent_of_history();
     memset(&st, 0, sizeof st); /* padding zero, as the workspace's copy */
     pdg_default_settings(&st);
     ws = make_ws(50, 1, &st, &arena, &bytes);
