@@ -3,7 +3,8 @@
 #   $(BUILD)/libtscvx_gnc.a               guidance: SCvx loop, subproblem, guess, FOH, model
 #   $(BUILD)/libtscvx_gnc.so              the same + the SOCP runtime (for the Python bindings)
 #   $(BUILD)/pdg_example                  plain C example: static libraries + Debian deps only
-#   make ctest-gnc                        guidance C tests under valgrind + no-malloc check
+#   make ctest-gnc                        guidance C tests under valgrind, the landing against
+#                                         another hypot (test_libm_hypot) + no-malloc check
 #   make ctest-asan-gnc                   the same tests under ASan/UBSan (in make ctest-asan)
 #   make budget-gnc                       RAD750 budget table (guidance/budget.py)
 
@@ -51,15 +52,24 @@ $(BUILD)/ctest/%: c_runtime/guidance/tests/%.c c_runtime/guidance/tests/gnc_test
 	$(CC) -std=c99 -Wall -Wextra -Werror -O1 -g -Ic_runtime/include -Ic_runtime/examples \
 	  -Ic_runtime/guidance -Ic_runtime/src -I$(GEN_DIR) $< -o $@ $(GNC_LINK)
 
+# The default landing with the host's hypot and with one rounding a ulp up (-Wl,--wrap=hypot):
+# the same answer to the bit, whatever the libm (run natively by ctest-gnc)
+$(BUILD)/ctest/test_libm_hypot: c_runtime/guidance/tests/test_libm_hypot.c c_runtime/guidance/tests/gnc_test.h c_runtime/include/tscvx_guidance.h $(BUILD)/libtscvx_gnc.a $(BUILD)/libtscvx.a
+	@mkdir -p $(BUILD)/ctest
+	$(CC) -std=c99 -Wall -Wextra -Werror -O1 -g -Ic_runtime/include $< -o $@ -Wl,--wrap=hypot \
+	  $(GNC_LINK)
+
 gnc: $(BUILD)/libtscvx_gnc.a $(BUILD)/libtscvx_gnc.so
 lib: gnc
 example: $(BUILD)/pdg_example
 lib: example
 
-ctest-gnc: lib $(addprefix $(BUILD)/ctest/,$(GNC_TESTS)) $(BUILD)/pdg_budget_driver
+ctest-gnc: lib $(addprefix $(BUILD)/ctest/,$(GNC_TESTS)) $(BUILD)/pdg_budget_driver $(BUILD)/ctest/test_libm_hypot
 	@set -e; for t in $(GNC_TESTS); do \
 	  echo "== $$t (valgrind)"; valgrind -q --error-exitcode=1 --leak-check=full \
 	    --errors-for-leak-kinds=definite $(BUILD)/ctest/$$t; done
+	@echo "== test_libm_hypot (the landing whatever libm's hypot, native run)"
+	@$(BUILD)/ctest/test_libm_hypot
 	@echo "== no heap allocation inside pdg_solve (malloc interposition, native run)"
 	@$(BUILD)/pdg_budget_driver | tee $(BUILD)/ctest/pdg_budget_driver.out | grep -q '^heap_allocations_in_solve 0$$' \
 	  || { cat $(BUILD)/ctest/pdg_budget_driver.out; echo "heap allocation inside pdg_solve"; exit 1; }

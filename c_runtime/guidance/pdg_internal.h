@@ -153,6 +153,7 @@ pdg_status pdg_solve_from(pdg_workspace *ws, const pdg_scenario *scenario,
 /* pdg_scenario.c */
 int pdg_check_scenario(const pdg_scenario *s, char *msg);
 int pdg_all_finite(const double *v, size_t n); /* 1 when no NaN or inf among v[0..n) */
+double pdg_hypot(double a, double b); /* libm's hypot, the same bits on every host */
 void pdg_param_vector(const pdg_params *p, double *pv);
 double pdg_tan_glideslope(const pdg_params *p);
 double pdg_cos_gimbal(const pdg_params *p);

@@ -94,6 +94,66 @@ double pdg_tilt_q_max(const pdg_params *p)
     return sqrt((1.0 - cos(p->tilt_max_deg * DEG)) / 2.0);
 }
 
+/* ---- portable arithmetic ----------------------------------------------------------------- */
+
+/* sqrt(big^2 + small^2) for big >= small >= 0 in range, corrected to the correctly rounded
+ * value in nearly all cases: the rounding error of the first sqrt, computed without FMA from
+ * the exact-enough residuals, taken off (C. F. Borges, "An improved algorithm for hypot(a,b)",
+ * ACM TOMS 47(1), 2021, the corrected algorithm). */
+static double hypot_corrected(double big, double small)
+{
+    const double h = sqrt(big * big + small * small);
+    double p, q;
+    if (h <= 2.0 * small) {
+        const double e = h - small;
+        p = big * (2.0 * e - big);
+        q = (e - 2.0 * (big - small)) * e;
+    } else {
+        const double e = h - big;
+        p = 2.0 * e * (big - 2.0 * small);
+        q = (4.0 * e - small) * small + e * e;
+    }
+    return h - (p + q) / (2.0 * h);
+}
+
+/* hypot(a, b) from IEEE operations only (+ - * / sqrt, each correctly rounded): the same bits
+ * on every host. libm's hypot is not: Debian's 32-bit PowerPC glibc has its own, whose last
+ * bit differs from x86-64 glibc's for 6 % of random arguments and for about a third of the
+ * default landing's calls, so the trust-region steps and the penalty, and with them the
+ * landing (one more IPM iteration, m_f 4e-12 apart), differed between the ground and the
+ * RAD750's kind of CPU. These are the bits of x86-64 glibc 2.36's hypot (20 million arguments
+ * compared), with the same scaling by powers of two near overflow and underflow. */
+double pdg_hypot(double a, double b)
+{
+    double big, small;
+    if (isinf(a) || isinf(b)) {
+        return INFINITY;
+    }
+    if (isnan(a) || isnan(b)) {
+        return a + b;
+    }
+    a = fabs(a);
+    b = fabs(b);
+    big = a < b ? b : a;
+    small = a < b ? a : b;
+    if (big > 0x1p511) {
+        if (small <= big * 0x1p-54) {
+            return big + small;
+        }
+        return hypot_corrected(big * 0x1p-600, small * 0x1p-600) * 0x1p600;
+    }
+    if (small < 0x1p-511) {
+        if (big >= small * 0x1p54) {
+            return big + small;
+        }
+        return hypot_corrected(big * 0x1p600, small * 0x1p600) * 0x1p-600;
+    }
+    if (small <= big * 0x1p-54) {
+        return big + small;
+    }
+    return hypot_corrected(big, small);
+}
+
 /* The parameter vector of the generated model (guidance/model.py param_vector). */
 void pdg_param_vector(const pdg_params *p, double *pv)
 {

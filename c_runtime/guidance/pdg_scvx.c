@@ -850,7 +850,7 @@ static double penalty(pdg_workspace *ws, const double *x, const double *u, const
             blocks += fabs(d[pdg_tr_scalar_states[i]]);
         }
         for (i = 0; i < N_TR_PAIRS; ++i) {
-            blocks += hypot(d[pdg_tr_pairs[i][0]], d[pdg_tr_pairs[i][1]]);
+            blocks += pdg_hypot(d[pdg_tr_pairs[i][0]], d[pdg_tr_pairs[i][1]]);
         }
     }
     path_values(ws, x, u, h);
@@ -929,7 +929,7 @@ static double trust_norm_step(const pdg_workspace *ws)
         }
         for (i = 0; i < N_TR_PAIRS; ++i) {
             const int a = pdg_tr_pairs[i][0], b = pdg_tr_pairs[i][1];
-            const double d = hypot(zn[a] - zr[a], zn[b] - zr[b]);
+            const double d = pdg_hypot(zn[a] - zr[a], zn[b] - zr[b]);
             r = d > r ? d : r;
         }
     }
