@@ -122,7 +122,8 @@ typedef enum {
     TSCVX_SETUP_NONFINITE_DATA,  /* NaN or infinity in P, c, A, b, G or h */
     TSCVX_SETUP_SCRATCH_TOO_SMALL, /* scratch smaller than tscvx_scratch_size() */
     TSCVX_SETUP_ARENA_TOO_SMALL, /* arena smaller than tscvx_workspace_size() */
-    TSCVX_SETUP_TOO_LARGE,       /* sizes overflow the index type */
+    TSCVX_SETUP_TOO_LARGE,       /* sizes overflow the index type, or the workspace would
+                                    pass SIZE_MAX / 2 bytes (2 GiB with a 32-bit size_t) */
     TSCVX_SETUP_NOT_READY,       /* workspace not set up, cleaned up or overwritten,
                                     damaged (set-up checksum mismatch), or invalidated by a
                                     failed update (tscvx_check_workspace says which) */
@@ -277,7 +278,9 @@ tscvx_setup_status tscvx_default_settings(tscvx_settings *settings);
 tscvx_setup_status tscvx_check_settings(const tscvx_settings *settings, char *message);
 
 /* Bytes of scratch that tscvx_workspace_size needs: the data and settings are validated as
- * by setup (the same statuses), then the size is arithmetic on the dimensions. */
+ * by setup (the same statuses), then the size is arithmetic on the dimensions. A size past
+ * SIZE_MAX / 2 is never reported: TSCVX_SETUP_TOO_LARGE (here, from tscvx_workspace_size and
+ * from tscvx_setup alike). */
 tscvx_setup_status tscvx_scratch_size(const tscvx_data *data, const tscvx_settings *settings,
                                       size_t *scratch_bytes);
 

@@ -21,7 +21,8 @@ static const char *const setup_messages[TSCVX_SETUP_NSTATUS] = {
     "NaN or infinity in the problem data",
     "scratch smaller than tscvx_scratch_size()",
     "arena smaller than tscvx_workspace_size()",
-    "problem too large for the index type",
+    "problem too large for the index type, or its workspace for the address space (more than "
+    "SIZE_MAX / 2 bytes: 2 GiB with a 32-bit size_t)",
     "workspace not ready (not set up, cleaned up or overwritten; damaged: its set-up checksum "
     "does not match; or a data update failed); tscvx_check_workspace says which",
     "iteration-log index out of range",
@@ -61,13 +62,13 @@ const char *tscvx_solve_status_message(tscvx_solve_status status) {
 
 void *tscvx_arena_alloc(tscvx_arena *a, size_t count, size_t size) {
     if (size != 0 && count > (SIZE_MAX / 2) / size) {
-        a->overflow = 1;
+        a->overflow = a->too_large = 1;
         return NULL;
     }
     const size_t bytes = (count * size + TSCVX_ALIGN - 1) & ~(size_t)(TSCVX_ALIGN - 1);
     const size_t start = a->top;
     if (bytes > SIZE_MAX / 2 - start) {
-        a->overflow = 1;
+        a->overflow = a->too_large = 1;
         return NULL;
     }
     a->top = start + bytes;
@@ -79,6 +80,7 @@ void *tscvx_arena_alloc(tscvx_arena *a, size_t count, size_t size) {
 
 static void arena_init(tscvx_arena *a, void *mem, size_t bytes) {
     a->base = NULL, a->cap = SIZE_MAX / 2, a->top = 0, a->high = 0, a->overflow = 0;
+    a->too_large = 0;
     if (mem == NULL) return; /* counting mode */
     const size_t pad = (TSCVX_ALIGN - (size_t)((uintptr_t)mem % TSCVX_ALIGN)) % TSCVX_ALIGN;
     a->base = (unsigned char *)mem + pad;
@@ -603,17 +605,20 @@ static tscvx_setup_status build(const tscvx_data *d, const tscvx_settings *st, t
     tscvx_int *q, *off;
     alloc_data(ws, a, nnzP, nnzA, nnzG, &q, &off);
     ws->P.nnz = nnzP, ws->A.nnz = nnzA, ws->G.nnz = nnzG;
+    /* a size past the address space's half was not counted: no size, no arena holds it */
+    if (a->too_large) return TSCVX_SETUP_TOO_LARGE;
     if (a->overflow && mode != MODE_COUNT) return short_memory;
     if (mode != MODE_COUNT) copy_problem(ws, d, q, off);
 
     int banded = 0;
     status = choose_method(ws, st, a, mode, short_memory, &banded);
+    if (a->too_large) return TSCVX_SETUP_TOO_LARGE;
     if (status != TSCVX_SETUP_OK) return status;
     if (mode == MODE_COUNT) {
         *need = a->high + TSCVX_ALIGN; /* + worst-case alignment of the caller's pointer */
         return TSCVX_SETUP_OK;
     }
-    if (alloc_iterates(ws, a) != 0) return TSCVX_SETUP_TOO_LARGE;
+    if (alloc_iterates(ws, a) != 0 || a->too_large) return TSCVX_SETUP_TOO_LARGE;
     if (mode == MODE_ANALYSE) {
         *need = a->high + TSCVX_ALIGN;
         return TSCVX_SETUP_OK;

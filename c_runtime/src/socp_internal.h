@@ -16,9 +16,12 @@ typedef struct {
     size_t top;          /* bytes in use */
     size_t high;         /* most bytes ever in use */
     int overflow;        /* set when a request did not fit */
+    int too_large;       /* set when a request would take the count past SIZE_MAX / 2 bytes:
+                            not counted (top, high unchanged), so no size may be reported */
 } tscvx_arena;
 
-/* 16-byte aligned block of `count * size` bytes; NULL on overflow or in counting mode. */
+/* 16-byte aligned block of `count * size` bytes; NULL on overflow or in counting mode. A count
+ * past SIZE_MAX / 2 (2 GiB on the RAD750's 32-bit size_t) sets overflow and too_large. */
 void *tscvx_arena_alloc(tscvx_arena *a, size_t count, size_t size);
 
 /* A CSC matrix in the arena (values x[k] of entry k). */

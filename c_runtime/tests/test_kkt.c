@@ -285,7 +285,7 @@ static int factor_with(tscvx_kkt *kk, const tscvx_backend *b, unsigned char *are
     const long lnz = b->symbolic(kk, tmp);
     if (lnz < 0) return -1;
     kk->lnz = (tscvx_int)lnz;
-    tscvx_arena a = {arena, bytes, 0, 0, 0};
+    tscvx_arena a = {arena, bytes, 0, 0, 0, 0};
     if (b->alloc(kk, &a) != 0 || a.overflow) return -1;
     kk->sol = sol, kk->Pattern = (tscvx_int *)sol;
     return b->numeric(kk);
