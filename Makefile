@@ -16,7 +16,7 @@ GUIDANCE := $(PY) -m guidance
 APT_PACKAGES := libeigen3-dev libsuitesparse-dev valgrind gcc python3-venv
 BUILD  := build
 
-.PHONY: all setup setup-flight apt lib gnc ctest pytest test lint analyze demo bench budget models coverage clean
+.PHONY: all setup setup-flight apt lib gnc ctest pytest test lint analyze demo bench budget models coverage check-ppc clean
 
 all: lib
 
@@ -74,6 +74,7 @@ include c_runtime/runtime.mk
 include c_runtime/nn.mk
 include c_runtime/guidance.mk
 include c_runtime/coverage.mk
+include c_runtime/ppc.mk
 
 # ---- tests ---------------------------------------------------------------------------------
 pytest: setup lib
@@ -92,6 +93,8 @@ analyze: lib
 	@echo "analyze: no findings"
 
 test: setup lib ctest ctest-asan analyze lint pytest
+# (not in `make test`: `make check-ppc`, the flight library and its C suites built for and run on
+# a 32-bit big-endian PowerPC 750 under qemu, the landing compared with x86's: c_runtime/ppc.mk)
 
 # ---- user-facing jobs ----------------------------------------------------------------------
 # The default landing three ways: the ground reference, the flight library, and T-SCvx with

@@ -11,11 +11,11 @@
  * iteration), the networks set up in their own arenas before it. Instructions are counted by
  * running this program under `valgrind --tool=callgrind --toggle-collect=pdg_solve` (or
  * pdg_solve_tscvx). It prints
- * `key value` lines: status, iterations, m_f, arena bytes, arena high-water, the stack
- * high-water of pdg_solve (measured by painting the stack below the caller's frame with a
- * pattern and finding the deepest overwritten byte), heap allocations made inside pdg_solve
- * (malloc interposition), the wall time per call and, for T-SCvx, the weight bytes (blobs
- * read in place) and network arena bytes.
+ * `key value` lines: status, iterations, m_f, a digest of the answer (solution_fnv1a), arena
+ * bytes, arena high-water, the stack high-water of pdg_solve (measured by painting the stack
+ * below the caller's frame with a pattern and finding the deepest overwritten byte), heap
+ * allocations made inside pdg_solve (malloc interposition), the wall time per call and, for
+ * T-SCvx, the weight bytes (blobs read in place) and network arena bytes.
  */
 #define _GNU_SOURCE
 #include <stdint.h>
@@ -42,6 +42,27 @@ static __attribute__((noinline)) pdg_status measured_call(pdg_workspace *ws,
                      : pdg_solve(ws, scn, NULL, res);
 }
 
+/* FNV-1a of the answer, x (N x 14) then u (N x 3), each double's bits least significant byte
+ * first: the same digest for the same numbers whatever the host's byte order (`make
+ * check-ppc` compares the PowerPC build's landing with the x86 build's by it). */
+static uint64_t solution_digest(const pdg_result *res, int N)
+{
+    const double *v[2] = {res->x, res->u};
+    const size_t n[2] = {(size_t)N * PDG_NSTATE, (size_t)N * PDG_NCTRL};
+    uint64_t h = 0xCBF29CE484222325ull, bits;
+    size_t i;
+    int a, k;
+    for (a = 0; a < 2; ++a) {
+        for (i = 0; i < n[a]; ++i) {
+            memcpy(&bits, &v[a][i], sizeof bits);
+            for (k = 0; k < 8; ++k) {
+                h = (h ^ ((bits >> (8 * k)) & 0xFFu)) * 0x100000001B3ull;
+            }
+        }
+    }
+    return h;
+}
+
 /* The call's answer as `key value` lines (guidance/budget.py reads them). */
 static void print_result(pdg_status status, const pdg_result *res, int N)
 {
@@ -53,6 +74,7 @@ static void print_result(pdg_status status, const pdg_result *res, int N)
     printf("subproblems %d\n", res->subproblems_solved);
     printf("socp_iterations %d\n", res->socp_iterations);
     printf("m_f %.12f\n", res->x[PDG_NSTATE * (N - 1) + 13]);
+    printf("solution_fnv1a %016llx\n", (unsigned long long)solution_digest(res, N));
 }
 
 /* The two networks of a T-SCvx call: the files, their blobs and arenas (index 0: solution,
