@@ -340,7 +340,9 @@ tscvx_solve_status tscvx_solve(tscvx_workspace *ws);
  * x: n, y: p, z: m, s: m. For infeasible statuses these hold the certificate, normalized to
  * b'y + h'z = -1 (primal) or c'x = -1 (dual), and the arrays it does not use are NaN (x and s
  * for PRIMAL_INFEASIBLE, y and z for DUAL_INFEASIBLE: no number there to be taken for a
- * solution); for SOLVED_INACCURATE and MAX_ITER the best or last iterate.
+ * solution); a direction whose normalized numbers would not be finite (a descent near the
+ * bottom of the double range) is not reported as a certificate. For SOLVED_INACCURATE and
+ * MAX_ITER the best or last iterate.
  * TSCVX_SETUP_NO_SOLUTION (arrays untouched) before a solve since the last setup or data
  * update, after NUMERICAL_ERROR, and after a solve whose end check found the workspace
  * damaged (TSCVX_INVALID_INPUT). */

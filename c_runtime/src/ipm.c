@@ -54,6 +54,15 @@ void tscvx_spmv_both(const tscvx_csc *M, const tscvx_float *u, tscvx_float *yt,
     }
 }
 
+/* yt += M' u */
+static void spmv_t(const tscvx_csc *M, const tscvx_float *u, tscvx_float *yt) {
+    for (tscvx_int j = 0; j < M->ncol; j++) {
+        tscvx_float acc = 0.0;
+        for (tscvx_int k = M->p[j]; k < M->p[j + 1]; k++) acc += M->x[k] * u[M->i[k]];
+        yt[j] += acc;
+    }
+}
+
 /* y = P x, P symmetric given by its upper triangle */
 void tscvx_spmv_sym(const tscvx_csc *P, const tscvx_float *x, tscvx_float *y) {
     for (tscvx_int j = 0; j < P->ncol; j++) y[j] = 0.0;
@@ -125,21 +134,51 @@ static tscvx_float certificate_factor(const tscvx_workspace *ws, tscvx_float obj
     return objective_norm > constraints ? constraints / objective_norm : 1.0;
 }
 
+/* The certificate tscvx_unscale_solution would return is finite: its normalization (b'y + h'z
+ * = -1, or c'x = -1) divides by the certificate's objective, which for data near the bottom
+ * of the double range (b = DBL_MIN: make fuzz) can be so small that the normalized numbers
+ * overflow. Such a direction is no certificate the caller can use: the solve goes on (and
+ * ends as the iterations decide). The same products as tscvx_unscale_solution. */
+static int certificate_finite(const tscvx_workspace *ws, int primal) {
+    if (primal) {
+        const tscvx_float pd =
+            -1.0 / (tscvx_dot(ws->b, ws->y, ws->p) + tscvx_dot(ws->h, ws->z, ws->m));
+        if (!isfinite(pd)) return 0;
+        for (tscvx_int i = 0; i < ws->p; i++)
+            if (!isfinite(ws->EA[i] * ws->y[i] * pd)) return 0;
+        for (tscvx_int i = 0; i < ws->m; i++)
+            if (!isfinite(ws->EG[i] * ws->z[i] * pd)) return 0;
+        return 1;
+    }
+    const tscvx_float px = -ws->cs / tscvx_dot(ws->c, ws->x, ws->n);
+    if (!isfinite(px)) return 0;
+    for (tscvx_int j = 0; j < ws->n; j++)
+        if (!isfinite(ws->D[j] * ws->x[j] * px)) return 0;
+    for (tscvx_int i = 0; i < ws->m; i++)
+        if (!isfinite(ws->s[i] / ws->EG[i] * px)) return 0;
+    return 1;
+}
+
 /* Primal infeasibility: |A'y + G'z| <= tol (-(b'y + h'z)) f, f = certificate_factor, original
- * units, kappa > tau. */
+ * units, kappa > tau; and the normalized certificate finite. */
 static int primal_infeasible(tscvx_workspace *ws) {
     const tscvx_int n = ws->n;
     const tscvx_float rho = -(tscvx_dot(ws->b, ws->y, ws->p) + tscvx_dot(ws->h, ws->z, ws->m)) / ws->cs;
     if (!(rho > 0.0) || !(ws->kappa > ws->tau)) return 0;
-    tscvx_float *aty = ws->wn; /* A'y + G'z = rx - Px - c tau (scaled) */
-    for (tscvx_int j = 0; j < n; j++) aty[j] = ws->rx[j] - ws->Px[j] - ws->c[j] * ws->tau;
+    /* A'y + G'z (scaled), from the data: as rx - Px - c tau it kept nothing of itself where
+     * Px or c tau dominate (P = 1e135: make fuzz, test_certificate_cancellation) */
+    tscvx_float *aty = ws->wn;
+    for (tscvx_int j = 0; j < n; j++) aty[j] = 0.0;
+    spmv_t(&ws->A, ws->y, aty);
+    spmv_t(&ws->G, ws->z, aty);
     const tscvx_float f = certificate_factor(ws, fmax(ws->norm_b, ws->norm_h));
-    return vnorm_inf_div(aty, ws->D, n) / ws->cs <= ws->st.tol_infeas * rho * f;
+    return vnorm_inf_div(aty, ws->D, n) / ws->cs <= ws->st.tol_infeas * rho * f &&
+           certificate_finite(ws, 1);
 }
 
 /* Dual infeasibility: |Ax|, |Gx + s| <= tol (-c'x) f (f = certificate_factor) and
  * |Px| <= max(that, tol |P| |x|) (x in the null space of a P perturbed by tol |P|), original
- * units, kappa > tau. */
+ * units, kappa > tau; and the normalized certificate finite. */
 static int dual_infeasible(tscvx_workspace *ws) {
     const tscvx_int n = ws->n, p = ws->p, m = ws->m;
     const tscvx_float rho = -tscvx_dot(ws->c, ws->x, n) / ws->cs;
@@ -152,7 +191,8 @@ static int dual_infeasible(tscvx_workspace *ws) {
         r = tscvx_max(r, fabs((ws->rz[i] + ws->h[i] * ws->tau) / ws->EG[i]));
     for (tscvx_int j = 0; j < n; j++) xnorm = tscvx_max(xnorm, fabs(ws->D[j] * ws->x[j]));
     const tscvx_float px = vnorm_inf_div(ws->Px, ws->D, n) / ws->cs;
-    return r <= tol && px <= fmax(tol, ws->st.tol_infeas * ws->norm_P * xnorm);
+    return r <= tol && px <= fmax(tol, ws->st.tol_infeas * ws->norm_P * xnorm) &&
+           certificate_finite(ws, 0);
 }
 
 /* ---- output ------------------------------------------------------------------------------ */

@@ -84,6 +84,114 @@ static void test_infeasible(void) {
     CHECK(fabs(c2[0] * x[0] + 1.0) < 1e-12, "the dual certificate normalized: c'x = -1");
 }
 
+/* Found by make fuzz (c_runtime/fuzz/corpus/socp/certificate_overflow): A x = b with four rows
+ * of which three are empty and b = DBL_MIN (2.2e-308) in each, infeasible (0 = DBL_MIN), had
+ * its primal certificate normalized to b'y = -1 by dividing by a b'y of the order of 1e-308:
+ * y came out as +-inf, and b'y as NaN, under a PRIMAL_INFEASIBLE status (the problem set up
+ * with b = (-1.5625, DBL_MIN, DBL_MIN, DBL_MIN), then updated and warm-started; tolerances
+ * DBL_MIN). A
+ * certificate that cannot be normalized to finite numbers is not one: whatever the status,
+ * every number returned is finite, and a certificate is normalized. */
+static void check_certificate_finite(tscvx_workspace *ws, const tscvx_float *b, const char *when) {
+    const tscvx_solve_status s = tscvx_solve(ws);
+    tscvx_float x[1], y[4];
+    if (tscvx_get_solution(ws, x, y, NULL, NULL) != TSCVX_SETUP_OK) return;
+    if (s == TSCVX_DUAL_INFEASIBLE) return;
+    double by = 0.0;
+    for (int i = 0; i < 4; i++) {
+        CHECK(isfinite(y[i]), "certificate_finite, %s (status %d): y[%d] = %g", when, (int)s, i,
+              y[i]);
+        by += b[i] * y[i];
+    }
+    if (s == TSCVX_PRIMAL_INFEASIBLE)
+        CHECK(fabs(by + 1.0) < 1e-6, "certificate_finite, %s: b'y = %g", when, by);
+}
+
+static void test_certificate_finite(void) {
+    const tscvx_float tiny = 2.2250738585072014e-308;
+    tscvx_int Ap[] = {0, 1}, Ai[] = {2};
+    tscvx_float Ax[] = {tiny}, b[] = {-1.5625, tiny, tiny, tiny}, c[] = {tiny};
+    tscvx_float b2[] = {tiny, tiny, tiny, tiny}, c2[] = {2.5};
+    const tscvx_data d = {1, 4, 0, NULL, NULL, NULL, c, Ap, Ai, Ax, b, NULL, NULL, NULL, NULL,
+                          0, 0, NULL};
+    tscvx_settings st;
+    tscvx_default_settings(&st);
+    st.kkt_backend = TSCVX_KKT_STATIC;
+    st.max_iter = 165;
+    st.tol_feas = st.tol_gap_abs = st.tol_gap_rel = tiny;
+    tscvx_workspace *ws = NULL;
+    size_t narena = 0;
+    CHECK(tscvx_workspace_size(&d, &st, arena, sizeof arena, &narena) == TSCVX_SETUP_OK &&
+              tscvx_setup(&ws, arena, narena, &d, &st) == TSCVX_SETUP_OK,
+          "certificate_finite: setup");
+    if (ws == NULL) return;
+    check_certificate_finite(ws, b, "first data");
+    CHECK(tscvx_update_data(ws, NULL, c2, NULL, b2, NULL, NULL) == TSCVX_SETUP_OK,
+          "certificate_finite: update");
+    check_certificate_finite(ws, b2, "updated");
+    /* the fuzz input's sequence: the update, then a warm start, then the solve */
+    CHECK(tscvx_update_data(ws, NULL, c2, NULL, b2, NULL, NULL) == TSCVX_SETUP_OK,
+          "certificate_finite: update");
+    const tscvx_float wx[] = {tiny}, wy[] = {tiny, -3.625, -4, -4};
+    CHECK(tscvx_warm_start(ws, wx, wy, NULL, NULL) == TSCVX_SETUP_OK,
+          "certificate_finite: warm start");
+    check_certificate_finite(ws, b2, "updated, warm-started");
+}
+
+/* Found by make fuzz (c_runtime/fuzz/corpus/socp/certificate_cancellation): min 1/2 P x^2 - 4x
+ * with P = 1.5e135, -3.9375 x = -4, and G x + s = h = -4 in R_+ x Q^3 with G's only entry in
+ * the cone's first row: the orthant row (0 + s = -4) makes it infeasible; (y, z) = (0, (1/4,
+ * 0, 0, 0)) is a certificate. The test of a primal certificate took A'y + G'z as
+ * rx - Px - c tau, a difference of numbers of the order of P x (1e135 in scaled units) that
+ * keeps nothing of it: a (y, z) with A'y + G'z = 0.1 (z = (5e-43, 0.104, 0.073, 0.073)) was
+ * returned as the certificate. The certificate returned must meet its equations, here from
+ * the caller's numbers: |A'y + G'z| small against |A, G| |y, z|, b'y + h'z = -1, z in K. Set
+ * up with other numbers and updated, as the fuzz input did, and set up directly. */
+static void check_primal_certificate(tscvx_workspace *ws, const tscvx_float *Ax, const tscvx_float *Gx,
+                                     const tscvx_float *b, const tscvx_float *h, const char *when) {
+    const tscvx_solve_status s = tscvx_solve(ws);
+    if (s != TSCVX_PRIMAL_INFEASIBLE) return; /* only a claimed certificate is checked */
+    tscvx_float y[1], z[4];
+    CHECK(tscvx_get_solution(ws, NULL, y, z, NULL) == TSCVX_SETUP_OK, "%s: solution", when);
+    const double aty = Ax[0] * y[0] + Gx[0] * z[1];
+    const double size = fmax(fabs(Ax[0] * y[0]), fabs(Gx[0] * z[1]));
+    const double obj = b[0] * y[0] + h[0] * (z[0] + z[1] + z[2] + z[3]);
+    CHECK(fabs(aty) <= 1e-6 * fmax(size, 1.0), "certificate_cancellation, %s: A'y + G'z = %g "
+          "(z = %g %g %g %g)", when, aty, z[0], z[1], z[2], z[3]);
+    CHECK(fabs(obj + 1.0) < 1e-6, "certificate_cancellation, %s: b'y + h'z = %g", when, obj);
+    CHECK(z[0] >= 0.0 && z[1] >= hypot(z[2], z[3]) * (1.0 - 1e-12),
+          "certificate_cancellation, %s: z outside the cones", when);
+}
+
+static void test_certificate_cancellation(void) {
+    tscvx_int Pp[] = {0, 1}, Pi[] = {0}, Ap[] = {0, 1}, Ai[] = {0}, Gp[] = {0, 1}, Gi[] = {1};
+    tscvx_int q[] = {3};
+    tscvx_float Px[] = {3.0625}, Ax[] = {6.5185151242703548e+91}, Gx[] = {0.5}, c[] = {0.0625};
+    tscvx_float b[] = {1}, h[] = {-4, -4, -4, -4};
+    tscvx_float Px2[] = {1.5445322891281643e+135}, Ax2[] = {-3.9375}, Gx2[] = {1}, c2[] = {-4};
+    tscvx_float b2[] = {-4};
+    const tscvx_data d = {1, 1, 4, Pp, Pi, Px, c, Ap, Ai, Ax, b, Gp, Gi, Gx, h, 1, 1, q};
+    const tscvx_data d2 = {1, 1, 4, Pp, Pi, Px2, c2, Ap, Ai, Ax2, b2, Gp, Gi, Gx2, h, 1, 1, q};
+    const tscvx_data *start[] = {&d, &d2};
+    for (int k = 0; k < 2; k++) {
+        tscvx_settings st;
+        tscvx_default_settings(&st);
+        st.max_iter = 30;
+        tscvx_workspace *ws = NULL;
+        size_t narena = 0;
+        CHECK(tscvx_workspace_size(start[k], &st, arena, sizeof arena, &narena) == TSCVX_SETUP_OK &&
+                  tscvx_setup(&ws, arena, narena, start[k], &st) == TSCVX_SETUP_OK,
+              "certificate_cancellation: setup");
+        if (ws == NULL) continue;
+        if (k == 0) {
+            check_primal_certificate(ws, Ax, Gx, b, h, "first numbers");
+            CHECK(tscvx_update_data(ws, Px2, c2, Ax2, b2, Gx2, h) == TSCVX_SETUP_OK,
+                  "certificate_cancellation: update");
+        }
+        check_primal_certificate(ws, Ax2, Gx2, b2, h, k == 0 ? "updated" : "set up directly");
+    }
+}
+
 /* Scaling the objective (c) or the right-hand sides (b, h) of a feasible, bounded problem by
  * 1e8 or 1e10 leaves it feasible and bounded, with the same x (c scaled) or x scaled likewise
  * (b, h scaled): no certificate may be claimed. Both problems are random_feasible(142) and
@@ -1506,6 +1614,8 @@ int main(void) {
     test_soc();
     test_qp();
     test_infeasible();
+    test_certificate_finite();
+    test_certificate_cancellation();
     test_no_false_certificate_when_scaled();
     test_bad_input();
     test_update();
