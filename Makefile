@@ -75,6 +75,7 @@ include c_runtime/nn.mk
 include c_runtime/guidance.mk
 include c_runtime/coverage.mk
 include c_runtime/ppc.mk
+include c_runtime/fuzz/fuzz.mk
 
 # ---- tests ---------------------------------------------------------------------------------
 pytest: setup lib
