@@ -63,6 +63,12 @@ static void spmv_t(const tscvx_csc *M, const tscvx_float *u, tscvx_float *yt) {
     }
 }
 
+/* y += M x */
+static void spmv_n(const tscvx_csc *M, const tscvx_float *x, tscvx_float *y) {
+    for (tscvx_int j = 0; j < M->ncol; j++)
+        for (tscvx_int k = M->p[j]; k < M->p[j + 1]; k++) y[M->i[k]] += M->x[k] * x[j];
+}
+
 /* y = P x, P symmetric given by its upper triangle */
 void tscvx_spmv_sym(const tscvx_csc *P, const tscvx_float *x, tscvx_float *y) {
     for (tscvx_int j = 0; j < P->ncol; j++) y[j] = 0.0;
@@ -185,10 +191,15 @@ static int dual_infeasible(tscvx_workspace *ws) {
     if (!(rho > 0.0) || !(ws->kappa > ws->tau)) return 0;
     const tscvx_float tol = ws->st.tol_infeas * rho * certificate_factor(ws, ws->norm_c);
     tscvx_float r = 0.0, xnorm = 0.0;
-    for (tscvx_int i = 0; i < p; i++)
-        r = tscvx_max(r, fabs((ws->ry[i] + ws->b[i] * ws->tau) / ws->EA[i]));
-    for (tscvx_int i = 0; i < m; i++)
-        r = tscvx_max(r, fabs((ws->rz[i] + ws->h[i] * ws->tau) / ws->EG[i]));
+    /* Ax and Gx + s (scaled) from the data: as ry + b tau and rz + h tau they kept nothing of
+     * themselves where b tau or h tau dominate (make fuzz: A x = DBL_MIN x beside b = 2.5) */
+    tscvx_float *ax = ws->wp, *gxs = ws->wm;
+    for (tscvx_int i = 0; i < p; i++) ax[i] = 0.0;
+    for (tscvx_int i = 0; i < m; i++) gxs[i] = ws->s[i];
+    spmv_n(&ws->A, ws->x, ax);
+    spmv_n(&ws->G, ws->x, gxs);
+    for (tscvx_int i = 0; i < p; i++) r = tscvx_max(r, fabs(ax[i] / ws->EA[i]));
+    for (tscvx_int i = 0; i < m; i++) r = tscvx_max(r, fabs(gxs[i] / ws->EG[i]));
     for (tscvx_int j = 0; j < n; j++) xnorm = tscvx_max(xnorm, fabs(ws->D[j] * ws->x[j]));
     const tscvx_float px = vnorm_inf_div(ws->Px, ws->D, n) / ws->cs;
     return r <= tol && px <= fmax(tol, ws->st.tol_infeas * ws->norm_P * xnorm) &&
