@@ -55,7 +55,7 @@ TEXT = {doc: doc.read_text(encoding="utf-8") for doc in [*DOCUMENTS, *HEADERS]}
 SPAN = re.compile(r"`([^`]+)`")  # an inline code span (it may run over a line break)
 MAKEFILES = [
     ROOT / "Makefile",
-    *sorted((ROOT / "c_runtime").glob("*.mk")),
+    *sorted((ROOT / "c_runtime").rglob("*.mk")),
     ROOT / "models" / "models.mk",
 ]
 
