@@ -21,14 +21,18 @@ BUILD  := build
 all: lib
 
 # ---- environment -------------------------------------------------------------------------
-apt:
-	@missing=""; for p in $(APT_PACKAGES); do \
+# Installs those of the Debian packages $(1) that are missing (as root, or through sudo);
+# make apt, fuzz-apt (c_runtime/fuzz/fuzz.mk) and ppc-apt (c_runtime/ppc.mk) use it.
+apt_install = missing=""; for p in $(1); do \
 	  dpkg -s $$p >/dev/null 2>&1 || missing="$$missing $$p"; done; \
 	if [ -n "$$missing" ]; then \
 	  echo "installing Debian packages:$$missing"; \
 	  SUDO=""; [ "$$(id -u)" = 0 ] || SUDO=sudo; \
 	  $$SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq $$missing; \
 	fi
+
+apt:
+	@$(call apt_install,$(APT_PACKAGES))
 
 $(FLIGHT_STAMP): pyproject.toml
 	@test -x $(PY) || $(PYTHON) -m venv $(VENV)

@@ -32,21 +32,21 @@ PPC_OBJ      := $(PPC_DIR)/obj
 
 # ---- tools and sources from Debian ---------------------------------------------------------
 # Idempotent: packages only when missing; a deb-src entry for Debian's own mirror only when
-# apt knows no source of suitesparse (the suite is the host's, from /etc/os-release).
+# apt knows no source of suitesparse (the host's suite, from /etc/os-release, on the mirror its
+# apt sources already name).
 PPC_SRC_LIST := /etc/apt/sources.list.d/tscvx-debian-src.sources
 ppc-apt: apt
-	@SUDO=""; [ "$$(id -u)" = 0 ] || SUDO=sudo; updated=""; \
+	@SUDO=""; [ "$$(id -u)" = 0 ] || SUDO=sudo; \
 	if ! apt-cache showsrc suitesparse 2>/dev/null | grep -q '^Package: suitesparse'; then \
-	  . /etc/os-release; echo "enabling Debian's deb-src ($$VERSION_CODENAME): $(PPC_SRC_LIST)"; \
-	  printf 'Types: deb-src\nURIs: http://deb.debian.org/debian\nSuites: %s\nComponents: main\nSigned-By: /usr/share/keyrings/debian-archive-keyring.gpg\n' \
-	    "$$VERSION_CODENAME" | $$SUDO tee $(PPC_SRC_LIST) >/dev/null; \
-	  $$SUDO apt-get update -qq; updated=1; fi; \
-	missing=""; for p in $(PPC_PACKAGES); do \
-	  dpkg -s $$p >/dev/null 2>&1 || missing="$$missing $$p"; done; \
-	if [ -n "$$missing" ]; then \
-	  echo "installing Debian packages:$$missing"; \
-	  [ -n "$$updated" ] || $$SUDO apt-get update -qq; \
-	  DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq $$missing; fi
+	  . /etc/os-release; \
+	  uri=$$(sed -n 's/^URIs: *//p' /etc/apt/sources.list.d/debian.sources 2>/dev/null | head -n 1); \
+	  [ -n "$$uri" ] || uri=$$(awk '$$1 == "deb" { print $$2; exit }' /etc/apt/sources.list 2>/dev/null); \
+	  [ -n "$$uri" ] || { echo "ppc-apt: no Debian mirror in the apt sources to take deb-src from"; exit 1; }; \
+	  echo "enabling Debian's deb-src ($$VERSION_CODENAME, the mirror of the apt sources): $(PPC_SRC_LIST)"; \
+	  printf 'Types: deb-src\nURIs: %s\nSuites: %s\nComponents: main\nSigned-By: /usr/share/keyrings/debian-archive-keyring.gpg\n' \
+	    "$$uri" "$$VERSION_CODENAME" | $$SUDO tee $(PPC_SRC_LIST) >/dev/null; \
+	  $$SUDO apt-get update -qq; fi
+	@$(call apt_install,$(PPC_PACKAGES))
 
 # Debian's source package of the SuiteSparse the x86 build links (same version, checked
 # against Debian's signed index by apt), unpacked to the three libraries' C sources only.

@@ -33,13 +33,7 @@ FUZZ_DEPS     := c_runtime/fuzz/fuzz.h $(CRT_HDRS) $(NN_HDRS) $(GNC_HDRS) $(CRT_
                  $(GNC_SRCS)
 
 fuzz-apt:
-	@missing=""; for p in $(FUZZ_APT); do \
-	  dpkg -s $$p >/dev/null 2>&1 || missing="$$missing $$p"; done; \
-	if [ -n "$$missing" ]; then \
-	  echo "installing Debian packages:$$missing"; \
-	  SUDO=""; [ "$$(id -u)" = 0 ] || SUDO=sudo; \
-	  $$SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq $$missing; \
-	fi
+	@$(call apt_install,$(FUZZ_APT))
 
 # clang: the harness with -Wall -Wextra -Werror, the library sources without -Werror. The
 # flight warnings are gcc's (replay_% below builds the harnesses with them): clang's
