@@ -199,6 +199,53 @@ def _stacked(
 
 # ---- solvers: each returns (solve seconds, iterations, status) -----------------------------
 
+
+@dataclass(frozen=True)
+class Tolerances:
+    """A solver's stopping tolerances as the benchmark runs it: the duality gap's absolute and
+    relative bounds and the feasibility bound (each solver scales them its own way)."""
+
+    gap_abs: float
+    gap_rel: float
+    feas: float
+
+    def __str__(self) -> str:
+        return f"{self.gap_abs:.0e}/{self.gap_rel:.0e}/{self.feas:.0e}"
+
+
+# ECOS's defaults (FEASTOL, ABSTOL, RELTOL of its ecos.h), given explicitly: its Python
+# interface does not report them
+ECOS_TOLERANCES = Tolerances(gap_abs=1e-8, gap_rel=1e-8, feas=1e-8)
+
+
+def stopping_tolerances() -> dict[str, Tolerances]:
+    """Each solver's stopping tolerances in this benchmark: its defaults, read from the solver
+    (ECOS: ECOS_TOLERANCES). QOCO's abstol and reltol bound both its gap and its residuals."""
+    import clarabel
+    from qoco import qoco_ext
+
+    from guidance import csocp
+
+    ours = csocp._settings_struct(csocp.load_library(), {})
+    cl = clarabel.DefaultSettings()
+    qo = qoco_ext.QOCOSettings()
+    qoco_ext.set_default_settings(qo)
+    return {
+        "tscvx": Tolerances(ours.tol_gap_abs, ours.tol_gap_rel, ours.tol_feas),
+        "clarabel": Tolerances(cl.tol_gap_abs, cl.tol_gap_rel, cl.tol_feas),
+        "ecos": ECOS_TOLERANCES,
+        "qoco": Tolerances(qo.abstol, qo.reltol, qo.abstol),
+    }
+
+
+def tolerance_line() -> str:
+    """What accuracy each solver's time is for: the tolerances it stops at."""
+    tols = stopping_tolerances()
+    return "stopping tolerances (gap abs/gap rel/feasibility), each solver's defaults: " + (
+        ", ".join(f"{k} {t}" for k, t in tols.items())
+    )
+
+
 # Each other solver's status, in its own words, for an answer to its full tolerances: any other
 # (an inaccurate answer, a failure) is noted on its row (_status_note)
 SOLVED = {"clarabel": "Solved", "ecos": "Optimal solution found", "qoco": "QOCO_SOLVED"}
@@ -278,7 +325,9 @@ def run_ecos(prob: ConicProblem, reps: int) -> Run | None:
     best, out = math.inf, None
     for _ in range(reps):
         kw = {"A": Aeq, "b": beq} if Aeq.shape[0] else {}
-        out = ecos.solve(prob.q, G, h, dims, verbose=False, **kw)
+        tol = ECOS_TOLERANCES
+        out = ecos.solve(prob.q, G, h, dims, verbose=False, feastol=tol.feas,
+                         abstol=tol.gap_abs, reltol=tol.gap_rel, **kw)  # fmt: skip
         best = min(best, float(out["info"]["timing"]["tsolve"]))
     assert out is not None
     return Run(best, int(out["info"]["iter"]), str(out["info"]["infostring"]))
@@ -684,7 +733,7 @@ def main(argv: list[str] | None = None) -> int:
     ]
     print(
         f"SOCP benchmark: median of per-problem best-of-{reps} solve-call times "
-        f"(set-up excluded); ratio = solver time / tscvx time"
+        f"(set-up excluded); ratio = solver time / tscvx time\n{tolerance_line()}"
     )
     results = []
     for name, probs in sets:

@@ -196,3 +196,42 @@ def test_the_landing_set_takes_a_proximal_weight_beyond_the_solves_bound() -> No
     for bad in (-1.0, float("nan"), float("inf")):
         with pytest.raises(InputError, match="prox_u"):
             bench_socp.landing_set(limit=1, prox_u=bad)
+
+
+def test_the_stopping_tolerances_printed_are_the_ones_each_solver_runs_at() -> None:
+    """The table's times are for answers to different accuracies (QOCO stops at 1e-7, a decade
+    looser than the others): the header says so. Checked against the solvers themselves: each
+    one run at the printed tolerances takes the iterations it takes at its own defaults on the
+    3-DoF problem (b), and a decade tighter takes more (the figure is not a no-op)."""
+    ecos = pytest.importorskip("ecos")
+    qoco = pytest.importorskip("qoco")
+    import numpy as np
+
+    from guidance.bench_socp import (
+        _split_c_form,
+        lcvx_3dof,
+        run_ecos,
+        run_qoco,
+        stopping_tolerances,
+        tolerance_line,
+    )
+
+    tols = stopping_tolerances()
+    assert tols["qoco"].gap_abs == pytest.approx(10 * tols["tscvx"].gap_abs)
+    assert "qoco 1e-07/1e-07/1e-07" in tolerance_line()
+    prob = lcvx_3dof(50)
+    s, Aeq, beq, G, h = _split_c_form(prob)
+    dims = {"l": int(s.l), "q": [int(d) for d in s.soc]}
+    default_it = ecos.solve(prob.q, G, h, dims, A=Aeq, b=beq, verbose=False)["info"]["iter"]
+    run = run_ecos(prob, 1)
+    assert run is not None and run.iterations == default_it
+
+    def qoco_iterations(tol: float) -> int:
+        solver = qoco.QOCO()
+        cones = (int(s.l), len(s.soc), s.soc.astype(np.int32))
+        solver.setup(prob.n, G.shape[0], Aeq.shape[0], None, prob.q, Aeq, beq, G, h, *cones,
+                     verbose=0, abstol=tol, reltol=tol)  # fmt: skip
+        return int(solver.solve().iters)
+
+    assert run_qoco(prob, 1).iterations == qoco_iterations(tols["qoco"].gap_abs)
+    assert qoco_iterations(tols["tscvx"].gap_abs) > qoco_iterations(tols["qoco"].gap_abs)
