@@ -171,7 +171,7 @@ def _weights_of(path: str | Path, model: Any, meta: dict[str, Any]) -> FlightWei
     fw = FlightWeights(
         kind=meta["kind"], tokens=tokens, d_in=d_in, d_out=d_out, d_model=d, n_heads=H,
         n_layers=n_layers, d_ff=ff, N=int(meta["N"]), ln_eps=ln_eps,
-        threshold=float(meta.get("threshold", 0.5)), arrays=arrays,
+        threshold=_threshold(path, meta), arrays=arrays,
         probe_in=np.asarray(meta["probe_input"], np.float32).reshape(-1, d_in),
         probe_out=np.asarray(meta["probe_output"], np.float32).reshape(-1, d_out),
         trained=_trained(path, meta),
@@ -287,6 +287,15 @@ def _check_probes(path: str | Path, fw: FlightWeights) -> None:
     want = fw.probe_out.astype(np.float64)
     if np.any(np.abs(got - want) > PROBE_RTOL * np.maximum(np.abs(want), 1.0)):
         raise OnnxLayoutError(f"{path}: the extracted weights do not reproduce the probes")
+
+
+def _threshold(path: str | Path, meta: dict[str, Any]) -> float:
+    from guidance.nn.infer import decision_threshold
+
+    try:
+        return decision_threshold(meta, meta["kind"])
+    except ValueError as exc:
+        raise OnnxLayoutError(f"{path}: metadata: {exc}") from None
 
 
 def _trained(path: str | Path, meta: dict[str, Any]) -> np.ndarray:

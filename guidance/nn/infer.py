@@ -115,6 +115,23 @@ def trained_dict(vector: Sequence[float]) -> dict[str, Any]:
     return out
 
 
+def decision_threshold(meta: dict[str, Any], kind: str) -> float:
+    """The decision threshold a model's metadata records: a number in (0, 1), as the flight
+    library requires of every blob (tscvx_nn.h). A constraint network must record its own
+    (the calibrated one of `guidance train`): read as 0.5 it would miss about one tight bit in
+    eight on the shipped network instead of one in a hundred. ValueError saying why otherwise."""
+    value = meta.get("threshold")
+    if value is None and kind != "constraint":
+        return 0.5  # unused: the solution network has no decision
+    if value is None:
+        raise ValueError("no decision threshold ('threshold') in its metadata")
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise ValueError(f"decision threshold {value!r} is not a number")
+    if not 0.0 < value < 1.0:
+        raise ValueError(f"decision threshold {value!r} is outside (0, 1)")
+    return float(value)
+
+
 def _params_diff(trained: dict[str, Any], problem: Params) -> list[str]:
     cur = problem.to_json_dict()
     diff = []
@@ -184,11 +201,11 @@ class OnnxModel:
         if diff:
             raise _fail(path, "trained for other problem parameters: " + "; ".join(diff))
         self._check_normalization(meta, d_in, d_out)
+        self.threshold = self._recorded_threshold(meta, kind)
         self.meta = meta
         self.kind = kind
         self.N = params.N
         self.input_name = inp.name
-        self.threshold = float(meta.get("threshold", 0.5))
         self._check_probe()
 
     def _check_normalization(self, meta: dict, d_in: int, d_out: int) -> None:
@@ -201,9 +218,17 @@ class OnnxModel:
             if v.shape != (size,) or not np.all(np.isfinite(v)) or np.any(v <= 0):
                 raise _fail(self.path, f"normalization '{key}' must be {size} positive values")
 
+    def _recorded_threshold(self, meta: dict, kind: str) -> float:
+        try:
+            return decision_threshold(meta, kind)
+        except ValueError as exc:
+            raise _fail(self.path, str(exc)) from None
+
     def _check_probe(self) -> None:
-        """The graph must reproduce the outputs recorded at export (catches a graph whose
-        folded normalization or weights differ from its metadata)."""
+        """The graph must reproduce the outputs recorded at export: catches a graph whose
+        weights or folded normalization are not the exported ones. The statistics of the
+        metadata are a record (checked for their sizes and signs by _check_normalization):
+        the graph's own are the ones applied, and the probe cannot compare the two."""
         x = np.asarray(self.meta["probe_input"], np.float32)
         want = np.asarray(self.meta["probe_output"], np.float64)
         got = self.run(x).astype(np.float64)
