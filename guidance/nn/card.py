@@ -375,9 +375,10 @@ def _constraint_metrics(add: _Add, c: dict) -> None:
     add(f"Constraint network, architecture `{_arch(c['arch'])}`, threshold p >= ")
     add(
         f"{c['threshold']:.4g} (chosen for recall >= {tc['target_recall']} with "
-        f"{100 * tc.get('recall_confidence', 0):g} % confidence over bootstrap resamples "
-        f"of a calibration split of {c.get('n_calibration_bases', 0)} train+val base "
-        "landings kept out of training):"
+        f"{100 * tc.get('recall_confidence', 0):g} % nominal confidence over bootstrap "
+        f"resamples of a calibration split of {c.get('n_calibration_bases', 0)} train+val "
+        "base landings kept out of training; a percentile bootstrap, whose coverage is "
+        "somewhat below nominal: guidance/nn/train.py):"
     )
     add("")
     add("| metric | test | OOD test | test at p >= 0.5 |")
