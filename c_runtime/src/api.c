@@ -387,46 +387,44 @@ static long long count_kkt_nnz(const tscvx_data *d, tscvx_int dense_max, tscvx_i
 
 enum { MODE_COUNT, MODE_ANALYSE, MODE_SETUP };
 
-#define ALLOC(ptr, count, type) ((ptr) = (type *)tscvx_arena_alloc(a, (size_t)(count), sizeof(type)))
-
 /* Claim the problem data: cones, P, A, G, c, b, h and the equilibration. The cone arrays
  * are read-only in the workspace; *q and *off are where set-up writes them. */
 static void alloc_data(tscvx_workspace *ws, tscvx_arena *a, tscvx_int nnzP, tscvx_int nnzA,
                        tscvx_int nnzG, tscvx_int **q, tscvx_int **off) {
     const tscvx_int n = ws->n, p = ws->p, m = ws->m, nsoc = ws->K.nsoc;
-    ALLOC(*q, nsoc, tscvx_int);
-    ALLOC(*off, nsoc, tscvx_int);
+    TSCVX_CLAIM(a, *q, nsoc, tscvx_int);
+    TSCVX_CLAIM(a, *off, nsoc, tscvx_int);
     ws->K.q = *q, ws->K.off = *off;
     tscvx_csc *M[3] = {&ws->P, &ws->A, &ws->G};
     const tscvx_int nnz[3] = {nnzP, nnzA, nnzG};
     for (int k = 0; k < 3; k++) {
-        ALLOC(M[k]->p, n + 1, tscvx_int);
-        ALLOC(M[k]->i, nnz[k], tscvx_int);
-        ALLOC(M[k]->x, nnz[k], tscvx_float);
+        TSCVX_CLAIM(a, M[k]->p, n + 1, tscvx_int);
+        TSCVX_CLAIM(a, M[k]->i, nnz[k], tscvx_int);
+        TSCVX_CLAIM(a, M[k]->x, nnz[k], tscvx_float);
     }
-    ALLOC(ws->c, n, tscvx_float);
-    ALLOC(ws->b, p, tscvx_float);
-    ALLOC(ws->h, m, tscvx_float);
-    ALLOC(ws->D, n, tscvx_float);
-    ALLOC(ws->EA, p, tscvx_float);
-    ALLOC(ws->EG, m, tscvx_float);
+    TSCVX_CLAIM(a, ws->c, n, tscvx_float);
+    TSCVX_CLAIM(a, ws->b, p, tscvx_float);
+    TSCVX_CLAIM(a, ws->h, m, tscvx_float);
+    TSCVX_CLAIM(a, ws->D, n, tscvx_float);
+    TSCVX_CLAIM(a, ws->EA, p, tscvx_float);
+    TSCVX_CLAIM(a, ws->EG, m, tscvx_float);
 }
 
 /* Claim the sparse method's KKT pattern and maps (its factor comes later). */
 static void alloc_kkt(tscvx_workspace *ws, tscvx_arena *a) {
     tscvx_kkt *k = &ws->kkt;
     const tscvx_int dim = k->dim;
-    ALLOC(k->Kp, dim + 1, tscvx_int);
-    ALLOC(k->Ki, k->nnz, tscvx_int);
-    ALLOC(k->Kx, k->nnz, tscvx_float);
-    ALLOC(k->rowblk, dim, signed char);
-    ALLOC(k->pinv, dim, tscvx_int);
-    ALLOC(k->mapP, ws->P.nnz, tscvx_int);
-    ALLOC(k->mapA, ws->A.nnz, tscvx_int);
-    ALLOC(k->mapG, ws->G.nnz, tscvx_int);
-    ALLOC(k->mapDiag, ws->n + ws->p, tscvx_int);
-    ALLOC(k->mapCone, k->ncone, tscvx_int);
-    ALLOC(k->expanded, ws->K.nsoc, tscvx_int);
+    TSCVX_CLAIM(a, k->Kp, dim + 1, tscvx_int);
+    TSCVX_CLAIM(a, k->Ki, k->nnz, tscvx_int);
+    TSCVX_CLAIM(a, k->Kx, k->nnz, tscvx_float);
+    TSCVX_CLAIM(a, k->rowblk, dim, signed char);
+    TSCVX_CLAIM(a, k->pinv, dim, tscvx_int);
+    TSCVX_CLAIM(a, k->mapP, ws->P.nnz, tscvx_int);
+    TSCVX_CLAIM(a, k->mapA, ws->A.nnz, tscvx_int);
+    TSCVX_CLAIM(a, k->mapG, ws->G.nnz, tscvx_int);
+    TSCVX_CLAIM(a, k->mapDiag, ws->n + ws->p, tscvx_int);
+    TSCVX_CLAIM(a, k->mapCone, k->ncone, tscvx_int);
+    TSCVX_CLAIM(a, k->expanded, ws->K.nsoc, tscvx_int);
 }
 
 /* Claim the iteration vectors (and, for the sparse method, the factor: the backend finishes
@@ -436,21 +434,27 @@ static int alloc_iterates(tscvx_workspace *ws, tscvx_arena *a) {
     if (ws->method == &tscvx_method_sparse) {
         tscvx_kkt *k = &ws->kkt;
         if (k->backend->alloc(k, a) != 0) return -1;
-        ALLOC(k->sol, k->dim, tscvx_float);
+        TSCVX_CLAIM(a, k->sol, k->dim, tscvx_float);
         k->Pattern = (tscvx_int *)k->sol; /* LDL's factorization work; sol is for solves only */
     }
-    ALLOC(ws->W.w, m, tscvx_float);
-    ALLOC(ws->W.eta, nsoc, tscvx_float);
+    TSCVX_CLAIM(a, ws->W.w, m, tscvx_float);
+    TSCVX_CLAIM(a, ws->W.eta, nsoc, tscvx_float);
     tscvx_float **nvec[] = {&ws->x, &ws->rx, &ws->Px, &ws->x1, &ws->dx, &ws->cx, &ws->wn,
                             &ws->bx};
     tscvx_float **pvec[] = {&ws->y, &ws->ry, &ws->y1, &ws->dy, &ws->cy, &ws->wp, &ws->by};
     tscvx_float **mvec[] = {&ws->z, &ws->s, &ws->lambda, &ws->rz, &ws->z1, &ws->wz1,
                             &ws->dz, &ws->wdz, &ws->cz, &ws->cwz, &ws->e, &ws->ds,
                             &ws->wm, &ws->wm2, &ws->bz, &ws->bs};
-    for (size_t i = 0; i < sizeof nvec / sizeof nvec[0]; i++) ALLOC(*nvec[i], n, tscvx_float);
-    for (size_t i = 0; i < sizeof pvec / sizeof pvec[0]; i++) ALLOC(*pvec[i], p, tscvx_float);
-    for (size_t i = 0; i < sizeof mvec / sizeof mvec[0]; i++) ALLOC(*mvec[i], m, tscvx_float);
-    ALLOC(ws->log, ws->st.max_iter + 1, tscvx_iter_log);
+    for (size_t i = 0; i < sizeof nvec / sizeof nvec[0]; i++) {
+        TSCVX_CLAIM(a, *nvec[i], n, tscvx_float);
+    }
+    for (size_t i = 0; i < sizeof pvec / sizeof pvec[0]; i++) {
+        TSCVX_CLAIM(a, *pvec[i], p, tscvx_float);
+    }
+    for (size_t i = 0; i < sizeof mvec / sizeof mvec[0]; i++) {
+        TSCVX_CLAIM(a, *mvec[i], m, tscvx_float);
+    }
+    TSCVX_CLAIM(a, ws->log, ws->st.max_iter + 1, tscvx_iter_log);
     return 0;
 }
 

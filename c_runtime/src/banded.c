@@ -19,9 +19,6 @@
 
 #include "socp_internal.h"
 
-#define CLAIM(ptr, count, type) \
-    ((ptr) = (type *)tscvx_arena_alloc(a, (size_t)(count), sizeof(type)))
-
 /* ---- small dense kernels ----------------------------------------------------------------- */
 
 /* Numerically zero pivots. A pivot d <= DYN_EPS a_jj has lost all but the last few digits of
@@ -657,60 +654,62 @@ static void claim_persistent(tscvx_workspace *ws, tscvx_arena *a) {
     tscvx_banded *bd = &ws->bd;
     const tscvx_int n = ws->n, p = ws->p, m = ws->m, l = ws->K.l, nsoc = ws->K.nsoc;
     const tscvx_int nnzA = ws->A.nnz, nnzG = ws->G.nnz, nnzP = ws->P.nnz;
-    CLAIM(bd->gp, n + 1, tscvx_int);
-    CLAIM(bd->gvar, n, tscvx_int);
-    CLAIM(bd->loc, n, tscvx_int);
-    CLAIM(bd->border, n, signed char);
-    CLAIM(bd->hp, n + 1, tscvx_int);
-    CLAIM(bd->mapP, nnzP, tscvx_int);
-    CLAIM(bd->Grp, m + 1, tscvx_int);
-    CLAIM(bd->Gr_k, nnzG, tscvx_int);
-    CLAIM(bd->Gr_loc, nnzG, tscvx_int);
-    CLAIM(bd->cgroup, l + nsoc, tscvx_int);
-    CLAIM(bd->gcp, n + 1, tscvx_int);
-    CLAIM(bd->gcone, l + nsoc, tscvx_int);
-    CLAIM(bd->hasP, n, signed char);
-    CLAIM(bd->ga0, n, tscvx_int);
-    CLAIM(bd->bp, nsoc + 1, tscvx_int);
-    CLAIM(bd->rp, n + 1, tscvx_int);
-    CLAIM(bd->rrow, nnzA, tscvx_int);
-    CLAIM(bd->posA, nnzA, tscvx_int);
-    CLAIM(bd->cp, n + 1, tscvx_int);
-    CLAIM(bd->perm, p, tscvx_int);
-    CLAIM(bd->iperm, p, tscvx_int);
-    CLAIM(bd->yfirst, p, tscvx_int);
-    CLAIM(bd->yp, p + 1, tscvx_int);
-    CLAIM(bd->Ydinv, p, tscvx_float);
-    CLAIM(bd->Hdinv, n, tscvx_float);
+    TSCVX_CLAIM(a, bd->gp, n + 1, tscvx_int);
+    TSCVX_CLAIM(a, bd->gvar, n, tscvx_int);
+    TSCVX_CLAIM(a, bd->loc, n, tscvx_int);
+    TSCVX_CLAIM(a, bd->border, n, signed char);
+    TSCVX_CLAIM(a, bd->hp, n + 1, tscvx_int);
+    TSCVX_CLAIM(a, bd->mapP, nnzP, tscvx_int);
+    TSCVX_CLAIM(a, bd->Grp, m + 1, tscvx_int);
+    TSCVX_CLAIM(a, bd->Gr_k, nnzG, tscvx_int);
+    TSCVX_CLAIM(a, bd->Gr_loc, nnzG, tscvx_int);
+    TSCVX_CLAIM(a, bd->cgroup, l + nsoc, tscvx_int);
+    TSCVX_CLAIM(a, bd->gcp, n + 1, tscvx_int);
+    TSCVX_CLAIM(a, bd->gcone, l + nsoc, tscvx_int);
+    TSCVX_CLAIM(a, bd->hasP, n, signed char);
+    TSCVX_CLAIM(a, bd->ga0, n, tscvx_int);
+    TSCVX_CLAIM(a, bd->bp, nsoc + 1, tscvx_int);
+    TSCVX_CLAIM(a, bd->rp, n + 1, tscvx_int);
+    TSCVX_CLAIM(a, bd->rrow, nnzA, tscvx_int);
+    TSCVX_CLAIM(a, bd->posA, nnzA, tscvx_int);
+    TSCVX_CLAIM(a, bd->cp, n + 1, tscvx_int);
+    TSCVX_CLAIM(a, bd->perm, p, tscvx_int);
+    TSCVX_CLAIM(a, bd->iperm, p, tscvx_int);
+    TSCVX_CLAIM(a, bd->yfirst, p, tscvx_int);
+    TSCVX_CLAIM(a, bd->yp, p + 1, tscvx_int);
+    TSCVX_CLAIM(a, bd->Ydinv, p, tscvx_float);
+    TSCVX_CLAIM(a, bd->Hdinv, n, tscvx_float);
     tscvx_float **vec[] = {&bd->xg, &bd->res_x, &bd->ex, &bd->yb, &bd->res_y, &bd->ey,
                            &bd->t, &bd->res_z, &bd->ez, &bd->ewz};
     const tscvx_int len[] = {n, n, n, p, p, p, m, m, m, m};
-    for (size_t i = 0; i < sizeof len / sizeof len[0]; i++) CLAIM(*vec[i], len[i], tscvx_float);
+    for (size_t i = 0; i < sizeof len / sizeof len[0]; i++) {
+        TSCVX_CLAIM(a, *vec[i], len[i], tscvx_float);
+    }
 }
 
 /* The analysis's temporaries (released once it is done). */
 static void claim_temporaries(const tscvx_workspace *ws, tscvx_arena *a, analysis_tmp *t) {
     const tscvx_int n = ws->n, p = ws->p, nnzA = ws->A.nnz, nnzG = ws->G.nnz;
-    CLAIM(t->parent, n, tscvx_int);
-    CLAIM(t->gid, n, tscvx_int);
-    CLAIM(t->Grc, nnzG, tscvx_int);
-    CLAIM(t->rgp, p + 1, tscvx_int);
-    CLAIM(t->rgg, nnzA, tscvx_int);
-    CLAIM(t->deg, p, tscvx_int);
-    CLAIM(t->seen, p, tscvx_int);
-    CLAIM(t->queue, p, tscvx_int);
-    CLAIM(t->order, p, tscvx_int);
+    TSCVX_CLAIM(a, t->parent, n, tscvx_int);
+    TSCVX_CLAIM(a, t->gid, n, tscvx_int);
+    TSCVX_CLAIM(a, t->Grc, nnzG, tscvx_int);
+    TSCVX_CLAIM(a, t->rgp, p + 1, tscvx_int);
+    TSCVX_CLAIM(a, t->rgg, nnzA, tscvx_int);
+    TSCVX_CLAIM(a, t->deg, p, tscvx_int);
+    TSCVX_CLAIM(a, t->seen, p, tscvx_int);
+    TSCVX_CLAIM(a, t->queue, p, tscvx_int);
+    TSCVX_CLAIM(a, t->order, p, tscvx_int);
 }
 
 /* The numeric arrays, of the sizes the analysis found (size_values). */
 static void claim_values(tscvx_workspace *ws, tscvx_arena *a) {
     tscvx_banded *bd = &ws->bd;
-    CLAIM(bd->H, bd->nH, tscvx_float);
-    CLAIM(bd->PF, ws->P.nnz > 0 ? bd->nH : 0, tscvx_float);
-    CLAIM(bd->CT, bd->nCT, tscvx_float);
-    CLAIM(bd->Y, bd->nY, tscvx_float);
-    CLAIM(bd->V, (size_t)ws->p * bd->nb, tscvx_float);
-    CLAIM(bd->B, bd->bp[ws->K.nsoc], tscvx_float);
+    TSCVX_CLAIM(a, bd->H, bd->nH, tscvx_float);
+    TSCVX_CLAIM(a, bd->PF, ws->P.nnz > 0 ? bd->nH : 0, tscvx_float);
+    TSCVX_CLAIM(a, bd->CT, bd->nCT, tscvx_float);
+    TSCVX_CLAIM(a, bd->Y, bd->nY, tscvx_float);
+    TSCVX_CLAIM(a, bd->V, (size_t)ws->p * bd->nb, tscvx_float);
+    TSCVX_CLAIM(a, bd->B, bd->bp[ws->K.nsoc], tscvx_float);
 }
 
 int tscvx_banded_analyse(tscvx_workspace *ws, tscvx_arena *a) {

@@ -32,14 +32,14 @@ static long ldl_backend_symbolic(tscvx_kkt *k, tscvx_int *tmp) {
 
 static int ldl_backend_alloc(tscvx_kkt *k, tscvx_arena *a) {
     const size_t dim = (size_t)k->dim;
-    k->Lp = (tscvx_int *)tscvx_arena_alloc(a, dim + 1, sizeof(tscvx_int));
-    k->Parent = (tscvx_int *)tscvx_arena_alloc(a, dim, sizeof(tscvx_int));
-    k->Lnz = (tscvx_int *)tscvx_arena_alloc(a, dim, sizeof(tscvx_int));
-    k->Flag = (tscvx_int *)tscvx_arena_alloc(a, dim, sizeof(tscvx_int));
-    k->Li = (tscvx_int *)tscvx_arena_alloc(a, (size_t)k->lnz + 1, sizeof(tscvx_int));
-    k->Lx = (tscvx_float *)tscvx_arena_alloc(a, (size_t)k->lnz + 1, sizeof(tscvx_float));
-    k->D = (tscvx_float *)tscvx_arena_alloc(a, dim, sizeof(tscvx_float));
-    k->Y = (tscvx_float *)tscvx_arena_alloc(a, dim, sizeof(tscvx_float));
+    TSCVX_CLAIM(a, k->Lp, dim + 1, tscvx_int);
+    TSCVX_CLAIM(a, k->Parent, dim, tscvx_int);
+    TSCVX_CLAIM(a, k->Lnz, dim, tscvx_int);
+    TSCVX_CLAIM(a, k->Flag, dim, tscvx_int);
+    TSCVX_CLAIM(a, k->Li, (size_t)k->lnz + 1, tscvx_int);
+    TSCVX_CLAIM(a, k->Lx, (size_t)k->lnz + 1, tscvx_float);
+    TSCVX_CLAIM(a, k->D, dim, tscvx_float);
+    TSCVX_CLAIM(a, k->Y, dim, tscvx_float);
     k->res = k->Y; /* the factor's work vector is free during solves */
     if (a->base == NULL || a->overflow) return 0;
     ldl_symbolic(k->dim, k->Kp, k->Ki, k->Lp, k->Parent, k->Lnz, k->Flag, NULL, NULL);

@@ -33,13 +33,13 @@ static long st_symbolic(tscvx_kkt *k, tscvx_int *tmp) {
  * claims for the elimination tree, counts and flags, released again). */
 static int st_alloc(tscvx_kkt *k, tscvx_arena *a) {
     const tscvx_int dim = k->dim, lnz = k->lnz;
-    k->Lp = (tscvx_int *)tscvx_arena_alloc(a, (size_t)dim + 1, sizeof(tscvx_int));
-    k->Li = (tscvx_int *)tscvx_arena_alloc(a, (size_t)lnz + 1, sizeof(tscvx_int));
-    k->Lx = (tscvx_float *)tscvx_arena_alloc(a, (size_t)lnz + 1, sizeof(tscvx_float));
-    k->Rp = (tscvx_int *)tscvx_arena_alloc(a, (size_t)dim + 1, sizeof(tscvx_int));
-    k->Rj = (tscvx_int *)tscvx_arena_alloc(a, (size_t)lnz + 1, sizeof(tscvx_int));
-    k->D = (tscvx_float *)tscvx_arena_alloc(a, (size_t)dim, sizeof(tscvx_float));
-    k->Y = (tscvx_float *)tscvx_arena_alloc(a, (size_t)dim, sizeof(tscvx_float));
+    TSCVX_CLAIM(a, k->Lp, (size_t)dim + 1, tscvx_int);
+    TSCVX_CLAIM(a, k->Li, (size_t)lnz + 1, tscvx_int);
+    TSCVX_CLAIM(a, k->Lx, (size_t)lnz + 1, tscvx_float);
+    TSCVX_CLAIM(a, k->Rp, (size_t)dim + 1, tscvx_int);
+    TSCVX_CLAIM(a, k->Rj, (size_t)lnz + 1, tscvx_int);
+    TSCVX_CLAIM(a, k->D, (size_t)dim, tscvx_float);
+    TSCVX_CLAIM(a, k->Y, (size_t)dim, tscvx_float);
     k->res = k->Y; /* the factorization's work vector is free during solves */
     const size_t mark = a->top;
     tscvx_int *Parent = (tscvx_int *)tscvx_arena_alloc(a, 4 * (size_t)dim, sizeof(tscvx_int));

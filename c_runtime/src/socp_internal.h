@@ -24,6 +24,11 @@ typedef struct {
  * past SIZE_MAX / 2 (2 GiB on the RAD750's 32-bit size_t) sets overflow and too_large. */
 void *tscvx_arena_alloc(tscvx_arena *a, size_t count, size_t size);
 
+/* ptr = `count` elements of `type` from arena a (tscvx_arena_alloc: NULL on overflow or in
+ * counting mode); set-up's array claims, in api.c and the KKT methods. */
+#define TSCVX_CLAIM(a, ptr, count, type) \
+    ((ptr) = (type *)tscvx_arena_alloc((a), (size_t)(count), sizeof(type)))
+
 /* A CSC matrix in the arena (values x[k] of entry k). */
 typedef struct {
     tscvx_int nrow, ncol, nnz;
