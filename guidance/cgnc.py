@@ -22,11 +22,21 @@ LIB_PATH = Path(os.environ.get(LIB_ENV, str(BUILD_DIR / "libtscvx_gnc.so")))
 _dp = ctypes.POINTER(ctypes.c_double)
 
 
-@lru_cache(maxsize=1)
-def library() -> ctypes.CDLL:
+def require_library() -> None:
+    """LibraryNotBuiltError unless the guidance library has been built."""
     if not LIB_PATH.exists():
         raise LibraryNotBuiltError(f"{LIB_PATH} not found: run `make lib`")
-    lib = ctypes.CDLL(str(LIB_PATH))
+
+
+def open_library() -> ctypes.CDLL:
+    """The guidance library, opened for one binding (which declares its own functions)."""
+    require_library()
+    return ctypes.CDLL(str(LIB_PATH))
+
+
+@lru_cache(maxsize=1)
+def library() -> ctypes.CDLL:
+    lib = open_library()
     lib.pdg_foh_interval.restype = ctypes.c_int
     lib.pdg_foh_interval.argtypes = [_dp, _dp, _dp, ctypes.c_double, ctypes.c_double, _dp,
                                      ctypes.c_int, _dp, _dp, _dp]  # fmt: skip

@@ -34,7 +34,8 @@ from typing import TypeVar
 
 import numpy as np
 
-from guidance.cgnc import LIB_PATH, LibraryNotBuiltError  # one library path (TSCVX_GNC_LIB)
+# one library (TSCVX_GNC_LIB); its path and error re-exported for the callers that name them here
+from guidance.cgnc import LIB_PATH, LibraryNotBuiltError, open_library  # noqa: F401
 from guidance.csocp import SOLVE_STATUS
 from guidance.errors import InputError, describe
 from guidance.guess import checked_guess
@@ -153,9 +154,7 @@ class _LogRow(ct.Structure):
 
 @lru_cache(maxsize=1)
 def library() -> ct.CDLL:
-    if not LIB_PATH.exists():
-        raise LibraryNotBuiltError(f"{LIB_PATH} not found: run `make lib`")
-    lib = ct.CDLL(str(LIB_PATH))
+    lib = open_library()
     sz = ct.c_size_t
     lib.pdg_default_settings.argtypes = [ct.POINTER(_Settings)]
     lib.pdg_default_scenario.argtypes = [ct.POINTER(_Scenario)]

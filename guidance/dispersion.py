@@ -328,11 +328,9 @@ def run(args: argparse.Namespace, progress: bool = True) -> int:
 def _check_options(args: argparse.Namespace) -> None:
     """Refuse, before any work, what the campaign could not run or keep."""
     from guidance.atomic import check_folder
-    from guidance.cguidance import LIB_PATH
-    from guidance.errors import LibraryNotBuiltError
+    from guidance.cgnc import require_library
 
-    if not LIB_PATH.exists():
-        raise LibraryNotBuiltError(f"{LIB_PATH} not found: run `make lib`")
+    require_library()
     if args.method == "tscvx" and args.nodes != NETWORK_N:
         raise InputError(
             f"--method tscvx: the shipped networks are for N = {NETWORK_N}, "

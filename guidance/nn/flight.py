@@ -436,11 +436,9 @@ _dp = ctypes.POINTER(ctypes.c_double)
 
 @lru_cache(maxsize=1)
 def library() -> ctypes.CDLL:
-    from guidance.cgnc import LIB_PATH, LibraryNotBuiltError
+    from guidance.cgnc import open_library
 
-    if not LIB_PATH.exists():
-        raise LibraryNotBuiltError(f"{LIB_PATH} not found: run `make lib`")
-    lib = ctypes.CDLL(str(LIB_PATH))
+    lib = open_library()
     vp, sz = ctypes.c_void_p, ctypes.c_size_t
     lib.tscvx_nn_status_message.restype = ctypes.c_char_p
     lib.tscvx_nn_status_message.argtypes = [ctypes.c_int]
