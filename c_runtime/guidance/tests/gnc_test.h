@@ -19,6 +19,17 @@ static int failures = 0;
         }                                                                            \
     } while (0)
 
+/* main's exit status: 1 after any failed CHECK (counted on stderr), 0 with `name`'s all-clear */
+static inline int gnc_report(const char *name)
+{
+    if (failures) {
+        fprintf(stderr, "%s: %d check(s) failed\n", name, failures);
+        return 1;
+    }
+    printf("%s: all checks passed\n", name);
+    return 0;
+}
+
 static double x[PDG_N_MAX * PDG_NSTATE], u[PDG_N_MAX * PDG_NCTRL];
 
 /* The default vehicle with N nodes and the terminal condition roll_free (one static copy:

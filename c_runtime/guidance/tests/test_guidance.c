@@ -1541,10 +1541,5 @@ int main(void)
         }
         free(arena);
     }
-    if (failures) {
-        fprintf(stderr, "%d check(s) failed\n", failures);
-        return 1;
-    }
-    printf("test_guidance: all checks passed\n");
-    return 0;
+    return gnc_report("test_guidance");
 }

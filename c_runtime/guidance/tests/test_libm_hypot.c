@@ -63,10 +63,5 @@ int main(void)
     CHECK(memcmp(x, x2, sizeof(double) * (size_t)N * PDG_NSTATE) == 0);
     CHECK(memcmp(u, u2, sizeof(double) * (size_t)N * PDG_NCTRL) == 0);
     free(arena);
-    if (failures) {
-        fprintf(stderr, "test_libm_hypot: %d check(s) failed\n", failures);
-        return 1;
-    }
-    printf("test_libm_hypot: ok\n");
-    return 0;
+    return gnc_report("test_libm_hypot");
 }

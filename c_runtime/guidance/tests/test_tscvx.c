@@ -337,10 +337,5 @@ int main(int argc, char **argv)
         free(net_arena[i]);
         free(blob[i]);
     }
-    if (failures) {
-        fprintf(stderr, "%d check(s) failed\n", failures);
-        return 1;
-    }
-    printf("test_tscvx: all checks passed\n");
-    return 0;
+    return gnc_report("test_tscvx");
 }
