@@ -5,6 +5,7 @@
 #ifndef TSCVX_GNC_TEST_H
 #define TSCVX_GNC_TEST_H
 
+#include <limits.h>
 #include <stdio.h>
 #include <stdlib.h>
 
@@ -64,6 +65,23 @@ static inline int log_rows(const pdg_workspace *ws)
 {
     int rows = -1;
     return pdg_log_length(ws, &rows) == PDG_SETUP_OK ? rows : -1;
+}
+
+/* The IPM iterations of the last solve's log rows, summed, each row read (CHECKed); *fewest,
+ * unless NULL, the fewest of a row (INT_MAX without rows). */
+static inline int logged_iterations(const pdg_workspace *ws, int *fewest)
+{
+    pdg_log_row row;
+    int i, sum = 0, least = INT_MAX;
+    for (i = 0; i < log_rows(ws); ++i) {
+        CHECK(pdg_get_log(ws, i, &row) == PDG_SETUP_OK);
+        sum += row.solver_iterations;
+        least = row.solver_iterations < least ? row.solver_iterations : least;
+    }
+    if (fewest) {
+        *fewest = least;
+    }
+    return sum;
 }
 
 /* Arena bytes for (N, roll_free, settings) in *need; *tries counts the sizing calls. */

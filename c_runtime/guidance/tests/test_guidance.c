@@ -578,7 +578,7 @@ static void test_solve(pdg_workspace *ws, int with_masks)
     pdg_log_row row;
     unsigned char m[PDG_NCON * 50];
     double mf;
-    int i, sum;
+    int fewest;
     pdg_default_scenario(&s);
     pdg_default_settings(&st); /* the workspace's (main sets it up with these) */
     r.x = x;
@@ -597,13 +597,7 @@ static void test_solve(pdg_workspace *ws, int with_masks)
     CHECK(r.polish == PDG_POLISH_OFF && r.polish_iterations == 0); /* off by default */
     CHECK(r.defect_before_polish == r.max_defect && r.m_f_before_polish == mf);
     CHECK(log_rows(ws) == r.subproblems_solved);
-    sum = 0;
-    for (i = 0; i < log_rows(ws); ++i) {
-        CHECK(pdg_get_log(ws, i, &row) == PDG_SETUP_OK);
-        CHECK(row.solver_iterations > 0);
-        sum += row.solver_iterations;
-    }
-    CHECK(sum == r.socp_iterations);
+    CHECK(logged_iterations(ws, &fewest) == r.socp_iterations && fewest > 0);
     CHECK(pdg_get_log(ws, log_rows(ws), &row) == PDG_SETUP_BAD_INDEX);
     CHECK(pdg_get_log(ws, -1, &row) == PDG_SETUP_BAD_INDEX);
     CHECK(pdg_get_mask(ws, r.iterations - 1, m) == PDG_SETUP_OK);
@@ -757,11 +751,10 @@ static void test_iteration_budget(void)
     pdg_settings st;
     pdg_scenario s;
     pdg_result r;
-    pdg_log_row row;
     void *arena = NULL;
     size_t bytes = 0;
     pdg_workspace *ws;
-    int i, sum = 0, first_total;
+    int first_total;
     ws = budget_ws(&st, &s, &arena, &bytes);
     if (!ws) {
         return;
@@ -773,11 +766,7 @@ static void test_iteration_budget(void)
            r.socp_iterations, r.subproblems_solved, r.iterations, r.message);
     CHECK(strstr(r.message, "IPM iteration budget spent (") == r.message);
     CHECK(r.socp_iterations <= 80 && r.socp_iterations >= 60 && r.iterations >= 1);
-    for (i = 0; i < log_rows(ws); ++i) {
-        CHECK(pdg_get_log(ws, i, &row) == PDG_SETUP_OK);
-        sum += row.solver_iterations;
-    }
-    CHECK(sum == r.socp_iterations);
+    CHECK(logged_iterations(ws, NULL) == r.socp_iterations);
     CHECK(r.t_f > 0.0 && fabs(x1[0] - 4.0) < 1e-7); /* an iterate, not the caller's arrays */
     first_total = r.socp_iterations;
     memcpy(x, x1, sizeof x1);
@@ -850,7 +839,6 @@ static void test_callbacks(void)
     pdg_scenario s;
     pdg_result r;
     pdg_options o;
-    pdg_log_row row;
     misuse_ctx c;
     void *arena = NULL;
     size_t bytes = 0;
@@ -869,10 +857,7 @@ static void test_callbacks(void)
     r.x = x1;
     r.u = u1;
     CHECK(pdg_solve(ws, &s, &o, &r) == PDG_MAX_ITERATIONS);
-    for (i = 0; i < log_rows(ws); ++i) {
-        CHECK(pdg_get_log(ws, i, &row) == PDG_SETUP_OK);
-        sum += row.solver_iterations;
-    }
+    sum = logged_iterations(ws, NULL);
     printf("callback re-entering with the running result: %d refused, %d IPM iterations "
            "(budget 80), logged %d\n", c.refused, r.socp_iterations, sum);
     CHECK(c.refused == r.subproblems_solved && c.refused > 0);
@@ -1032,7 +1017,7 @@ static void test_upset_in_conic_solve(void)
     unsigned char *buf, *base;
     size_t need = 0, shift;
     pdg_workspace *ws = NULL;
-    int tries, i, sum = 0, k = -1;
+    int tries, i, k = -1;
     CHECK(page > 0 && page <= 65536);
     pdg_default_settings(&st);
     pdg_default_scenario(&s);
@@ -1091,11 +1076,7 @@ static void test_upset_in_conic_solve(void)
     CHECK(tscvx_get_info(ws->socp, &info) == TSCVX_SETUP_OK && info.iterations >= 1);
     CHECK(log_rows(ws) == 2 && pdg_get_log(ws, 1, &row) == PDG_SETUP_OK);
     CHECK(row.solver_iterations == info.iterations + info.restart_iterations);
-    for (i = 0; i < log_rows(ws); ++i) {
-        CHECK(pdg_get_log(ws, i, &row) == PDG_SETUP_OK);
-        sum += row.solver_iterations;
-    }
-    CHECK(sum == r.socp_iterations);
+    CHECK(logged_iterations(ws, NULL) == r.socp_iterations);
     printf("  its log row: %d IPM iterations (the runtime ran %d); the call %d\n",
            row.solver_iterations, (int)info.iterations, r.socp_iterations);
     *trap_at ^= 1;
@@ -1162,11 +1143,10 @@ static void test_polish(void)
     pdg_settings st;
     pdg_scenario s;
     pdg_result r;
-    pdg_log_row row;
     void *arena = NULL;
     size_t bytes = 0;
     pdg_workspace *ws;
-    int i, sum = 0, plain_total;
+    int i, plain_total;
     double plain_mf;
     pdg_default_settings(&st);
     st.polish = 1;
@@ -1190,11 +1170,7 @@ static void test_polish(void)
     check_landing(&s, &st, x, u, r.t_f, 1e-8);
     CHECK(r.m_f_before_polish - x[PDG_NSTATE * 49 + 13] > 1e-5);
     CHECK(r.m_f_before_polish - x[PDG_NSTATE * 49 + 13] < 1e-3);
-    for (i = 0; i < log_rows(ws); ++i) {
-        CHECK(pdg_get_log(ws, i, &row) == PDG_SETUP_OK);
-        sum += row.solver_iterations;
-    }
-    CHECK(sum + r.polish_iterations == r.socp_iterations);
+    CHECK(logged_iterations(ws, NULL) + r.polish_iterations == r.socp_iterations);
     free(arena);
     test_replan_from_polished(r.t_f);
     /* the budget spent to the last iteration at convergence: no polish. Cold IPM starts, so
