@@ -6,6 +6,7 @@ import json
 from pathlib import Path
 
 import pytest
+from c_library import needs_c_library
 
 from guidance import agreement
 from guidance.agreement import (
@@ -19,7 +20,6 @@ from guidance.agreement import (
     summary_table,
 )
 from guidance.catalog import SCENARIOS
-from guidance.cguidance import LIB_PATH
 from guidance.cli import main
 from guidance.scenario import scenario_to_dict
 
@@ -61,7 +61,7 @@ def test_landings_reject_unknown_catalog_names() -> None:
     assert names == ["default", "sampled 0", "sampled 1"]
 
 
-@pytest.mark.skipif(not LIB_PATH.exists(), reason="build/libtscvx_gnc.so not built (make lib)")
+@needs_c_library
 def test_cli_on_a_landing_every_solver_resolves(capsys: pytest.CaptureFixture[str]) -> None:
     """`overhead` is determined well below 1e-6 by each solver (measured 3e-8 .. 2.5e-7):
     every variant is the reference's trajectory there, through the command line."""
@@ -72,7 +72,7 @@ def test_cli_on_a_landing_every_solver_resolves(capsys: pytest.CaptureFixture[st
     assert out.count("1 of 1") == 2 * (len(VARIANTS) - 2) + 2
 
 
-@pytest.mark.skipif(not LIB_PATH.exists(), reason="build/libtscvx_gnc.so not built (make lib)")
+@needs_c_library
 def test_cli_on_a_scenario_file(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     """A user's scenario file alone: one landing named by the file, every variant solved."""
     path = tmp_path / "my_landing.json"
@@ -87,7 +87,7 @@ def test_cli_on_a_scenario_file(tmp_path: Path, capsys: pytest.CaptureFixture[st
     assert main(["agreement", str(bad)]) == 2
 
 
-@pytest.mark.skipif(not LIB_PATH.exists(), reason="build/libtscvx_gnc.so not built (make lib)")
+@needs_c_library
 def test_the_proximal_term_is_what_makes_the_solvers_agree(
     capsys: pytest.CaptureFixture[str],
 ) -> None:
@@ -142,7 +142,7 @@ def _stand_ins(monkeypatch, stop_at: int | None = None) -> list[int]:
     return solved
 
 
-@pytest.mark.skipif(not LIB_PATH.exists(), reason="build/libtscvx_gnc.so not built (make lib)")
+@needs_c_library
 def test_an_interrupted_run_resumes_solving_only_what_is_missing(
     tmp_path: Path, monkeypatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -166,7 +166,7 @@ def test_an_interrupted_run_resumes_solving_only_what_is_missing(
     assert record["code_versions"] and record["scvx_settings"]["prox_u"] == 0.02
 
 
-@pytest.mark.skipif(not LIB_PATH.exists(), reason="build/libtscvx_gnc.so not built (make lib)")
+@needs_c_library
 def test_a_resume_with_other_landings_or_settings_is_refused(
     tmp_path: Path, monkeypatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -184,7 +184,7 @@ def test_a_resume_with_other_landings_or_settings_is_refused(
         assert said in err, err
 
 
-@pytest.mark.skipif(not LIB_PATH.exists(), reason="build/libtscvx_gnc.so not built (make lib)")
+@needs_c_library
 def test_ctrl_c_without_a_run_directory_says_nothing_was_kept(
     monkeypatch, capsys: pytest.CaptureFixture[str]
 ) -> None:

@@ -31,6 +31,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from c_library import needs_c_library
 
 from guidance import cguidance
 from guidance.agreement import STRICT_REL_MF, same_trajectory
@@ -62,9 +63,7 @@ from guidance.subproblem import Scaling, SubproblemTemplate, physical, scaled
 from guidance.trajectory_io import read_trajectory
 from guidance.verify import audit
 
-pytestmark = pytest.mark.skipif(
-    not cguidance.LIB_PATH.exists(), reason="build/libtscvx_gnc.so not built (make lib)"
-)
+pytestmark = needs_c_library
 
 
 @pytest.fixture(scope="module")

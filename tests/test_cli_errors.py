@@ -13,13 +13,13 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
+from c_library import needs_c_library
 
 from guidance import budget, cli, pool
 from guidance.cgnc import LIB_PATH
 from guidance.pool import WorkerDiedError
 
 ROOT = Path(__file__).resolve().parent.parent
-needs_lib = pytest.mark.skipif(not LIB_PATH.exists(), reason="libtscvx_gnc.so not built")
 
 
 def _guidance(args: list[str], env: dict[str, str] | None = None) -> subprocess.CompletedProcess:
@@ -232,7 +232,7 @@ def test_main_reports_a_dead_worker_of_any_command(tmp_path: Path, monkeypatch, 
     assert capsys.readouterr().err.startswith("error: a worker process died")
 
 
-@needs_lib
+@needs_c_library
 def test_dispersion_run_raises_a_dead_worker_for_its_caller(tmp_path: Path, monkeypatch) -> None:
     """dispersion.run leaves a dead worker to its caller, as mask_ceiling.measure and
     dataset_run.generate do (it printed the error itself and returned 1)."""

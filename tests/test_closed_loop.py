@@ -19,6 +19,7 @@ import json
 
 import numpy as np
 import pytest
+from c_library import needs_c_library
 
 from guidance import cguidance
 from guidance.cli import main
@@ -38,9 +39,7 @@ from guidance.provenance import code_version
 from guidance.scvx import SCvxResult
 from guidance.verify import propagate
 
-pytestmark = pytest.mark.skipif(
-    not cguidance.LIB_PATH.exists(), reason="build/libtscvx_gnc.so not built (make lib)"
-)
+pytestmark = needs_c_library
 
 SCN = Scenario()
 SETTINGS = ReplanSettings(period=1.0, lock=0.5)  # 6 re-plans of the default landing

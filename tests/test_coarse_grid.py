@@ -8,14 +8,13 @@ from __future__ import annotations
 import ctypes
 
 import pytest
+from c_library import needs_c_library
 
 from guidance import cgnc, cguidance
 from guidance.file_check import Tolerances
 from guidance.params import INT_SETTING_RANGES, Params, Scenario, rk4_steps_per_interval
 from guidance.scvx import SCvxSolver
 from guidance.verify import audit
-
-needs_lib = pytest.mark.skipif(not cgnc.LIB_PATH.exists(), reason="run `make lib` first")
 
 
 def test_a_coarse_grid_takes_more_steps_per_interval() -> None:
@@ -27,7 +26,7 @@ def test_a_coarse_grid_takes_more_steps_per_interval() -> None:
     assert rk4_steps_per_interval(1, 99) == 1  # 98 intervals: one step each
 
 
-@needs_lib
+@needs_c_library
 def test_the_c_library_takes_the_same_steps() -> None:
     fun = cgnc.library().pdg_rk4_steps
     fun.restype, fun.argtypes = ctypes.c_int, [ctypes.c_int, ctypes.c_int]
@@ -37,7 +36,7 @@ def test_the_c_library_takes_the_same_steps() -> None:
             assert fun(substeps, N) == rk4_steps_per_interval(substeps, N), (substeps, N)
 
 
-@needs_lib
+@needs_c_library
 @pytest.mark.parametrize("N", [5, 10, 15])
 def test_a_coarse_grid_lands_open_loop(N: int) -> None:
     """Solved in the C library, flown open loop by scipy: within file_check's tolerances."""

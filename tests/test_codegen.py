@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from c_library import needs_c_library
 
 from guidance import cgnc
 from guidance.model import (
@@ -24,7 +25,7 @@ from guidance.params import Params
 ROOT = Path(__file__).resolve().parent.parent
 P = Params()
 
-pytestmark = pytest.mark.skipif(not cgnc.LIB_PATH.exists(), reason="run `make lib` first")
+pytestmark = needs_c_library
 
 
 def random_point(rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:

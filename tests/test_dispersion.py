@@ -8,14 +8,15 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from c_library import needs_c_library
 
-from guidance import cgnc, cli, dispersion
+from guidance import cli, dispersion
 from guidance.file_check import verify_file
 from guidance.params import InitialState, Scenario, SCvxSettings
 from guidance.scenario import load_scenario
 from guidance.trajectory_io import write_trajectory
 
-pytestmark = pytest.mark.skipif(not cgnc.LIB_PATH.exists(), reason="run `make lib` first")
+pytestmark = needs_c_library
 
 # A heavy vehicle on a long flight (t_f 13.5): solved, but its converged defects grow open
 # loop past verify's 1e-3 at the pad (27 Nov: 2.0e-3)

@@ -17,8 +17,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from c_library import needs_c_library
 
-from guidance import cguidance
 from guidance.agreement import same_trajectory
 from guidance.api import solve
 from guidance.cli import main
@@ -30,9 +30,7 @@ from guidance.scenario import scenario_to_dict
 from guidance.trajectory_io import read_trajectory
 from guidance.verify import audit
 
-pytestmark = pytest.mark.skipif(
-    not cguidance.LIB_PATH.exists(), reason="build/libtscvx_gnc.so not built (make lib)"
-)
+pytestmark = needs_c_library
 
 NEAR = Scenario(InitialState(r0=(4.3, 3.7, 0.1), v0=(0.0, -1.0, -2.0)))
 CONVEX = [0, 1, 2, 3, 4, 5]  # every path constraint but T_min (nonconvex), DESIGN.md order

@@ -18,10 +18,11 @@ import random
 from fractions import Fraction
 
 import pytest
+from c_library import needs_c_library
 
 from guidance import cgnc
 
-pytestmark = pytest.mark.skipif(not cgnc.LIB_PATH.exists(), reason="run `make lib` first")
+pytestmark = needs_c_library
 
 
 @pytest.fixture(scope="module")

@@ -16,12 +16,12 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
+from c_library import needs_c_library
 
 from guidance import atomic, bench_tscvx, cli, dataset, mask_ceiling
 from guidance.cguidance import LIB_PATH
 
 ROOT = Path(__file__).resolve().parent.parent
-needs_lib = pytest.mark.skipif(not LIB_PATH.exists(), reason="libtscvx_gnc.so not built")
 
 
 def _ctrl_c(*args: object, **kwargs: object) -> None:
@@ -93,7 +93,7 @@ def test_ctrl_c_outside_the_pool_exits_130_with_one_line(
     assert said.format(run=run) in err, err
 
 
-@needs_lib
+@needs_c_library
 def test_a_real_ctrl_c_while_the_landings_are_drawn(tmp_path: Path) -> None:
     """SIGINT to the process group, as a terminal sends it, while dispersion draws its
     landings (held there until the test has signalled): exit 130, the line, no traceback."""

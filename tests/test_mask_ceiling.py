@@ -9,8 +9,9 @@ import signal
 
 import numpy as np
 import pytest
+from c_library import needs_c_library
 
-from guidance import cguidance, mask_ceiling
+from guidance import mask_ceiling
 from guidance.cli import main
 from guidance.errors import InputError
 from guidance.mask_ceiling import (
@@ -58,7 +59,7 @@ def test_more_training_landings_are_never_farther() -> None:
     assert d[0] > d[2]
 
 
-@pytest.mark.skipif(not cguidance.LIB_PATH.exists(), reason="build/libtscvx_gnc.so not built")
+@needs_c_library
 def test_identical_neighbours_score_one_and_a_rerun_solves_nothing(tmp_path, monkeypatch) -> None:
     """eps = 0: every neighbour is the landing itself, and the C solve is deterministic. The
     neighbour masks are kept in the run directory: a rerun reads them instead of solving."""

@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from c_library import needs_c_library
 
 from guidance import cguidance
 from guidance.cli import main
@@ -31,9 +32,7 @@ from guidance.scvx import SCvxResult
 from guidance.trajectory_io import read_trajectory
 from guidance.verify import T_F_RANGE, VALUE_LIMIT, audit, propagate
 
-pytestmark = pytest.mark.skipif(
-    not cguidance.LIB_PATH.exists(), reason="build/libtscvx_gnc.so not built (make lib)"
-)
+pytestmark = needs_c_library
 
 SCN = Scenario()
 NODE = 15  # re-plan at the plan's node 15 of 49: t = 15 t_f / 49
