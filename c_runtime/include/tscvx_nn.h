@@ -180,8 +180,11 @@ tscvx_nn_status tscvx_nn_check_buffers(const tscvx_nn *net, const void *input,
                                        size_t output_bytes);
 
 /* Runs the probes recorded in the blob; *max_rel_err (may be NULL) = max |y - y_rec| /
- * max(1, |y_rec|). TSCVX_NN_SELF_TEST_FAILED above 1e-4 (the exporter's probe tolerance), and
- * for a blob that records no probe (max_rel_err NaN): nothing tested is not a pass. */
+ * max(1, |y_rec|). TSCVX_NN_SELF_TEST_FAILED above 1e-4 (the exporter's probe tolerance); for
+ * a probe whose input, output or recorded output is not finite (a weight or probe value
+ * damaged since init: max_rel_err infinite; it used to return NUMERICAL_ERROR or BAD_INPUT,
+ * or pass a NaN recorded output); and for a blob that records no probe (max_rel_err NaN):
+ * nothing tested is not a pass. Otherwise only TSCVX_NN_NULL_ARGUMENT and _NOT_READY. */
 tscvx_nn_status tscvx_nn_self_test(tscvx_nn *net, double *max_rel_err);
 
 #ifdef __cplusplus

@@ -454,6 +454,9 @@ tscvx_nn_status tscvx_nn_arena_size(const void *blob, size_t len, unsigned flags
     int copy = 0;
     size_t need = 0;
     tscvx_nn_status st;
+    if (bytes) {
+        *bytes = 0; /* 0 when refused, a NULL blob too */
+    }
     if (!blob || !bytes) {
         return TSCVX_NN_NULL_ARGUMENT;
     }
@@ -733,13 +736,15 @@ tscvx_nn_status tscvx_nn_self_test(tscvx_nn *net, double *max_rel_err)
             net->xb[i] = xin[i];
         }
         st = nn_run(net, net->xb, net->yb); /* its own buffers, in the arena */
-        if (st != TSCVX_NN_OK) {
-            return st;
+        if (st != TSCVX_NN_OK) { /* a non-finite input or output: a damaged value */
+            worst = HUGE_VAL;
+            break;
         }
         for (i = 0; i < net->d_out; ++i) {
             double ref = yrec[i];
             double err = fabs(net->yb[i] - ref) / (fabs(ref) > 1.0 ? fabs(ref) : 1.0);
-            worst = err > worst ? err : worst;
+            /* a NaN recorded output is no match either (NaN compares false) */
+            worst = err <= worst ? worst : (isnan(err) ? HUGE_VAL : err);
         }
     }
     if (net->hdr.n_probes == 0) { /* nothing tested is not a pass */

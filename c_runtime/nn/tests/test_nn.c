@@ -325,6 +325,56 @@ static void test_synthetic(void)
     }
 }
 
+/* The self-test is what checks the weight values after init (tscvx_nn.h): a probe whose
+ * input, weights or recorded output were damaged since (here NaN, written into the blob read
+ * in place) is a failed self-test, SELF_TEST_FAILED with max_rel_err infinite. It returned
+ * NUMERICAL_ERROR (a NaN weight) or BAD_INPUT (a NaN probe input) with max_rel_err untouched,
+ * and passed a NaN recorded output (its error, NaN, compared false). The probes' outputs are
+ * recorded from the naive reference, so the intact blob passes. */
+static void test_self_test_damage(void)
+{
+    static const arch a = {TSCVX_NN_KIND_SOLUTION, TSCVX_NN_TOKENS_SINGLE, 16, 18, 9, 1, 1, 3,
+                           2, 1};
+    const size_t nw = n_weights_of(&a), at_in = nw, at_out = nw + 2 * (size_t)a.d_in;
+    const size_t damaged[3] = {nw - 1, at_in + 3, at_out + 5}; /* b_d, a probe input, output */
+    size_t len = 0, need = 0, k;
+    unsigned char *blob = make_blob(&a, &len), *w;
+    void *arena = NULL;
+    tscvx_nn *net = NULL;
+    double err = -1.0, y[64];
+    int p;
+    CHECK(blob != NULL);
+    if (!blob || !in_place) { /* a copied blob's values lie in the arena */
+        free(blob);
+        return;
+    }
+    w = blob + TSCVX_NN_HEADER_BYTES;
+    for (p = 0; p < 2; ++p) {
+        double x[64];
+        int i;
+        for (i = 0; i < a.d_in; ++i) x[i] = rd_f64(w + 8 * (at_in + (size_t)p * a.d_in + i));
+        reference(&a, blob, x, y);
+        for (i = 0; i < a.d_out; ++i) wr_f64(w + 8 * (at_out + (size_t)p * a.d_out + i), y[i]);
+    }
+    reseal(blob, len);
+    CHECK_ST(tscvx_nn_arena_size(blob, len, 0, &need), TSCVX_NN_OK);
+    arena = malloc(need);
+    CHECK_ST(tscvx_nn_init(&net, arena, need, blob, len, 0), TSCVX_NN_OK);
+    CHECK_ST(tscvx_nn_self_test(net, &err), TSCVX_NN_OK);
+    CHECK(err >= 0.0 && err <= 1e-12);
+    for (k = 0; k < 3 && net; ++k) {
+        const double kept = rd_f64(w + 8 * damaged[k]);
+        wr_f64(w + 8 * damaged[k], NAN);
+        err = -1.0;
+        CHECK_ST(tscvx_nn_self_test(net, &err), TSCVX_NN_SELF_TEST_FAILED);
+        CHECK(isinf(err) && err > 0.0);
+        wr_f64(w + 8 * damaged[k], kept);
+        CHECK_ST(tscvx_nn_self_test(net, &err), TSCVX_NN_OK);
+    }
+    free(arena);
+    free(blob);
+}
+
 /* The tight rule at its boundary: a bit is tight when 1 / (1 + exp(-logit)) >= threshold
  * (tscvx_nn.h), so probability exactly equal to the threshold is tight. With threshold 0.5,
  * logit 0 (or -0) gives p = 1 / (1 + 1) = 0.5 exactly, logit -1e-12 gives p < 0.5. */
@@ -520,7 +570,9 @@ static void test_bad_blobs(void)
     CHECK(good != NULL);
     if (!good) return;
     CHECK_ST(try_init(good, len, 0), TSCVX_NN_OK);
+    need = 12345; /* "0 when refused" (tscvx_nn.h): a NULL blob left the size untouched */
     CHECK_ST(tscvx_nn_arena_size(NULL, len, 0, &need), TSCVX_NN_NULL_ARGUMENT);
+    CHECK(need == 0);
     CHECK_ST(tscvx_nn_arena_size(good, len, 0, NULL), TSCVX_NN_NULL_ARGUMENT);
     CHECK_ST(tscvx_nn_arena_size(good, len, 2u, &need), TSCVX_NN_BAD_FLAGS);
     CHECK_ST(tscvx_nn_init(NULL, good, len, good, len, 0), TSCVX_NN_NULL_ARGUMENT);
@@ -972,6 +1024,7 @@ int main(int argc, char **argv)
     test_messages();
     test_synthetic();
     test_mask_threshold_boundary();
+    test_self_test_damage();
     test_bad_blobs();
     test_fuzz_header();
     test_hardening();
