@@ -176,29 +176,52 @@ const char *pdg_polish_message(pdg_polish_status polish);
 /* ---- problem ----------------------------------------------------------------------------- */
 
 /* Vehicle, environment, constraints and boundary conditions: the trajectory `params`
- * contract of DESIGN.md, field by field, same names and units. */
+ * contract of DESIGN.md, field by field, same names and units (nondimensional: U_L length,
+ * U_T time, U_M mass). The ranges are what pdg_check_vehicle and pdg_validate_scenario
+ * enforce, in the order they check (the message names the field, "scenario field 'T_min':
+ * ..."): every number finite and |value| <= PDG_MAGNITUDE_MAX, then the rules below. */
 typedef struct {
-    double g_I[3];          /* gravity, inertial frame (must be along -e1) */
-    double J_B[3];          /* diagonal of the inertia */
-    double r_T_B[3];        /* engine position, body frame */
-    double r_cp_B[3];       /* centre of pressure, body frame */
-    double alpha_mdot;      /* 1 / (I_sp g0) */
-    double beta_mdot;       /* back-pressure mass loss */
-    double aero_coeff;      /* c_A in A_B = -c_A |v_B| v_B */
-    double m_dry;
-    double T_min, T_max;
-    double gimbal_max_deg;
-    double tilt_max_deg;
-    double glideslope_deg;
-    double omega_max_deg;   /* deg / U_T */
-    double r_f[3], v_f[3], q_f[4], omega_f[3];
-    int final_roll_free;    /* 1: only q2(t_f) = q3(t_f) = 0; 0: q(t_f) = q_f */
-    int N;                  /* nodes; must equal the vehicle's given to pdg_setup */
+    double g_I[3];          /* gravity, inertial frame, U_L / U_T^2: along -e1, g_I[0] < 0,
+                               g_I[1] = g_I[2] = 0 */
+    double J_B[3];          /* diagonal of the inertia, U_M U_L^2, each >= PDG_INERTIA_MIN */
+    double r_T_B[3];        /* engine position, body frame, U_L: r_T_B[0] < 0 (below the
+                               centre of mass) */
+    double r_cp_B[3];       /* centre of pressure, body frame, U_L (any; not zero gives
+                               another pattern: pdg_workspace_size) */
+    double alpha_mdot;      /* 1 / (I_sp g0), U_T / U_L, > 0 */
+    double beta_mdot;       /* back-pressure mass loss, U_M / U_T, >= 0 */
+    double aero_coeff;      /* c_A in A_B = -c_A |v_B| v_B, U_M / U_L, > 0 */
+    double m_dry;           /* dry mass, U_M, > 0 */
+    double T_min, T_max;    /* thrust bounds, U_M U_L / U_T^2, 0 < T_min < T_max */
+    double gimbal_max_deg;  /* deg, within (0, 90) */
+    double tilt_max_deg;    /* deg, within (0, 180] */
+    double glideslope_deg;  /* deg, within [0, 90) */
+    double omega_max_deg;   /* deg / U_T, >= PDG_OMEGA_MAX_DEG_MIN */
+    double r_f[3];          /* landing point, U_L: r_f[0] >= 0, inside the glideslope cone
+                               (its boundary included, to 1e-12) */
+    double v_f[3];          /* touchdown velocity, U_L / U_T: reaching r_f from inside the
+                               glideslope cone */
+    double q_f[4];          /* final attitude (scalar first): a unit quaternion (to 1e-6),
+                               upright (q_f[2] = q_f[3] = 0) when roll-free, else tilted at
+                               most tilt_max_deg */
+    double omega_f[3];      /* final angular rate, rad / U_T: |omega_f| at most
+                               omega_max_deg (in rad / U_T) */
+    int final_roll_free;    /* 1: only q2(t_f) = q3(t_f) = 0; 0: q(t_f) = q_f (0 or 1) */
+    int N;                  /* nodes, within [PDG_N_MIN, PDG_N_MAX]; must equal the
+                               vehicle's given to pdg_setup */
 } pdg_params;
 
+/* The initial state (pdg_validate_scenario: inside the path constraints it will be held to) */
 typedef struct {
-    double r0[3], v0[3], q0[4], w0[3]; /* w0 in rad / U_T */
-    double m0;
+    double r0[3];           /* U_L: inside the glideslope cone (its boundary included, to
+                               1e-12) */
+    double v0[3];           /* U_L / U_T */
+    double q0[4];           /* scalar first: a unit quaternion (to 1e-6), tilted at most
+                               tilt_max_deg */
+    double w0[3];           /* rad / U_T: |w0| at most omega_max_deg (in rad / U_T);
+                               w0[0] = omega_f[0] when the vehicle makes no roll torque
+                               (J_B[1] = J_B[2], r_T_B and r_cp_B on the body axis) */
+    double m0;              /* U_M, > m_dry */
     pdg_params params;
 } pdg_scenario;
 
@@ -213,14 +236,15 @@ typedef struct {
     double eta_lb, eta_ub;  /* trust-radius bounds, 0 < eta_lb <= eta_ub */
     int iter_max;           /* accepted steps at most, 1..100 */
     int max_subproblems;    /* subproblem solves at most (rejections included), 1..500 */
-    double step_tol;        /* convergence: scaled inf-norm of an accepted step */
-    double vc_tol;          /* convergence: virtual control + buffers (scaled) */
-    double defect_tol;      /* convergence: nonlinear defects and path constraints */
+    double step_tol;        /* convergence: scaled inf-norm of an accepted step, >= 0 */
+    double vc_tol;          /* convergence: virtual control + buffers (scaled), >= 0 */
+    double defect_tol;      /* convergence: nonlinear defects and path constraints, >= 0 */
     int rk4_substeps;       /* RK4 steps per FOH interval at least, 1..64; a grid coarser
                                than N = 50 takes more: none longer than N = 50's */
-    double tight_tol;       /* slack threshold of the tight-constraint labelling */
+    double tight_tol;       /* slack threshold of the tight-constraint labelling, >= 0 */
     /* conic subproblem solver (tscvx_socp.h) */
-    double socp_tol;        /* gap and feasibility tolerances (the reference uses 1e-9) */
+    double socp_tol;        /* gap and feasibility tolerances (the reference uses 1e-9),
+                               (0, 1) */
     int socp_max_iter;      /* IPM iteration limit, 1..500 */
     int socp_max_iter_total;/* IPM iterations of the whole call at most, 1..500000: a
                                subproblem is given at most what is left of it (half of it
@@ -230,10 +254,11 @@ typedef struct {
                                max_subproblems and socp_max_iter allow) never binds; a flight
                                configuration sets it to bound the call's time */
     int socp_warm_start;    /* 1: each subproblem's IPM starts from the last subproblem's
-                               solution (tscvx_warm_start), 0: from the cold start */
+                               solution (tscvx_warm_start), 0: from the cold start
+                               (0 or 1) */
     /* T-SCvx only: 1 = Algorithm 2's radius update (alpha^tau_r, beta^(1 - tau_r), tau_r the
      * fraction of bits in which the predicted masks of successions k+1 and k differ);
-     * 0 = Eq. (15) of Algorithm 1 with the masks as well */
+     * 0 = Eq. (15) of Algorithm 1 with the masks as well (0 or 1) */
     int tau_r_update;
     /* Beyond the paper: weight w >= 0 of (w/2)|u_hat - u_hat_ref|^2 on the scaled thrust in
      * the subproblem objective (not in L, Eq. (13)); it makes the subproblem's answer unique,
@@ -248,7 +273,7 @@ typedef struct {
      * the step squared after it). Its answer is kept when it leaves no virtual control,
      * smaller defects and every path constraint met (pdg_result.polish). Needs prox_u > 0
      * (the P pattern). 0 (the default): the converged iterate as it is (the polish costs
-     * 6.8 % more instructions on the default landing; docs/scvx.md). */
+     * 6.8 % more instructions on the default landing; docs/scvx.md). 0 or 1. */
     int polish;
 } pdg_settings;
 

@@ -115,8 +115,10 @@ typedef enum {
     TSCVX_SETUP_OK = 0,
     TSCVX_SETUP_NULL_ARGUMENT,   /* a required pointer is NULL */
     TSCVX_SETUP_BAD_SETTINGS,    /* a setting is out of its documented range */
-    TSCVX_SETUP_BAD_DIMENSIONS,  /* n <= 0, p < 0, m < 0, or l + sum(q) != m */
-    TSCVX_SETUP_BAD_CONES,       /* a cone dimension < 1, or cones larger than the rows */
+    TSCVX_SETUP_BAD_DIMENSIONS,  /* n <= 0, p < 0 or m < 0 */
+    TSCVX_SETUP_BAD_CONES,       /* l < 0, nsoc < 0, a cone dimension < 1, or
+                                    l + sum(q) != m (the cones cover more or fewer rows
+                                    than G has) */
     TSCVX_SETUP_BAD_SPARSITY,    /* CSC pointers/indices invalid, unsorted or duplicated */
     TSCVX_SETUP_P_NOT_UPPER,     /* P has an entry below the diagonal (give the upper part) */
     TSCVX_SETUP_NONFINITE_DATA,  /* NaN or infinity in P, c, A, b, G or h */
@@ -158,9 +160,9 @@ const char *tscvx_solve_status_message(tscvx_solve_status status);
 /* ---- problem data (read during setup/update only; never modified, never kept) ----------- */
 
 typedef struct {
-    tscvx_int n;                 /* number of variables */
-    tscvx_int p;                 /* number of equality rows */
-    tscvx_int m;                 /* number of cone rows */
+    tscvx_int n;                 /* number of variables, >= 1 */
+    tscvx_int p;                 /* number of equality rows, >= 0 */
+    tscvx_int m;                 /* number of cone rows, >= 0 */
     const tscvx_int *Pp;         /* n+1 column pointers of P's upper triangle, or NULL (P = 0) */
     const tscvx_int *Pi;         /* nnz(P) row indices, sorted within a column, row <= col */
     const tscvx_float *Px;       /* nnz(P) values */
@@ -173,8 +175,9 @@ typedef struct {
     const tscvx_int *Gi;         /* nnz(G) row indices, sorted within a column */
     const tscvx_float *Gx;       /* nnz(G) values */
     const tscvx_float *h;        /* m right-hand side */
-    tscvx_int l;                 /* dimension of the nonnegative orthant (first l rows of G) */
-    tscvx_int nsoc;              /* number of second-order cones */
+    tscvx_int l;                 /* dimension of the nonnegative orthant (first l rows of G),
+                                    >= 0 */
+    tscvx_int nsoc;              /* number of second-order cones, >= 0 */
     const tscvx_int *q;          /* nsoc cone dimensions (each >= 1), in row order after l */
 } tscvx_data;
 
@@ -203,9 +206,9 @@ typedef struct {
     tscvx_float tol_feas;        /* |Ax-b|,|Gx+s-h| <= tol_feas (1 + |b,h|); dual same with c,
                                     (0, 1) */
     tscvx_float tol_infeas;      /* certificate residual / certificate objective, (0, 1) */
-    tscvx_float tol_gap_abs_inacc; /* reduced tolerances for SOLVED_INACCURATE, > 0 */
-    tscvx_float tol_gap_rel_inacc;
-    tscvx_float tol_feas_inacc;
+    tscvx_float tol_gap_abs_inacc; /* reduced tolerances for SOLVED_INACCURATE: gap, > 0 */
+    tscvx_float tol_gap_rel_inacc; /* relative gap, > 0 */
+    tscvx_float tol_feas_inacc;    /* feasibility, > 0 */
     tscvx_float step_fraction;   /* fraction of the step to the cone boundary, (0, 1) */
     tscvx_float static_reg;      /* static KKT regularization delta (scaled data), (0, 1); the
                                     banded method uses 1e-4 of it (its factors need no
@@ -215,7 +218,9 @@ typedef struct {
                                     expanded SOCs) */
     tscvx_int ruiz_iters;        /* Ruiz equilibration passes at most, 0..50 (setup only) */
     tscvx_int soc_dense_max;     /* SOCs up to this dimension get a dense KKT block; larger
-                                    ones the sparse diagonal + rank-2 expansion (setup only) */
+                                    ones the sparse diagonal + rank-2 expansion (setup only),
+                                    >= 1 (no upper bound: a dense block too large for the
+                                    index type is TSCVX_SETUP_TOO_LARGE) */
     tscvx_int kkt_backend;       /* KKT method (setup only): TSCVX_KKT_AUTO (default: banded
                                     if the problem has the structure, else static),
                                     TSCVX_KKT_BANDED (setup fails with NOT_BANDED without the
