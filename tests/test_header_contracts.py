@@ -11,6 +11,7 @@ from __future__ import annotations
 import ctypes
 import math
 import re
+import struct
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -19,6 +20,7 @@ import numpy as np
 import pytest
 
 from guidance import cguidance, csocp
+from guidance.params import NU, NX, Scenario
 
 INCLUDE = Path(__file__).resolve().parents[1] / "c_runtime" / "include"
 SOCP_H = (INCLUDE / "tscvx_socp.h").read_text()
@@ -43,7 +45,7 @@ def struct_comments(header: str, name: str) -> dict[str, str]:
                 pending = comment
             continue
         decl = " ".join(text[:-1].split())
-        names = [re.sub(r"\[.*?\]", "", n).strip() for n in decl.split(",")]
+        names = [re.sub(r"\[.*?\]", "", n).strip().lstrip("*") for n in decl.split(",")]
         names[0] = names[0].split()[-1]
         last, last_end = names, m.end()
         for f in names:
@@ -430,3 +432,58 @@ def test_a_data_refusal_is_the_status_whose_comment_names_it(
     documented = [n for n, text in comments.items() if condition in text]
     assert len(documented) == 1, (condition, documented)
     assert names[status] == documented[0], (condition, names[status], msg.value)
+
+
+# ---- a failed warm-start inference: what pdg_result and pdg_tscvx_guess say of it ------------
+
+NETS = cguidance.BUILD_MODELS_DIR
+
+
+def _nan_output_net():
+    """The shipped solution network with out_mean[0] NaN in its blob (read in place: init
+    checked the blob before), so that every prediction has a NaN entry."""
+    from guidance.nn.flight import FlightNet
+
+    net = FlightNet(NETS / "solution.tnn")
+    at = 128 + 8 * 2 * net.d_in  # header, in_mean, in_scale: out_mean[0]
+    ctypes.memmove(ctypes.addressof(net._blob) + at, struct.pack("<d", math.nan), 8)
+    return net
+
+
+def _function_comment(header: str, name: str) -> str:
+    """The comment just before a function's declaration."""
+    at = header.index(f" {name}(")
+    return " ".join(header[header.rindex("/*", 0, at) : at].replace("*", " ").split())
+
+
+@pytest.mark.skipif(not (NETS / "solution.tnn").exists(), reason="`make lib` writes the nets")
+def test_a_solution_network_that_fails_returns_what_the_header_says() -> None:
+    """pdg_solve_tscvx with a solution network whose prediction is not finite returns
+    PDG_SOLVER_ERROR with t_f NaN and x, u untouched, and pdg_tscvx_guess PDG_SOLVER_ERROR
+    with its outputs untouched; the header listed neither (PDG_SOLVER_ERROR's comment said
+    x and u then hold the last accepted iterate, t_f's comment left the case out, and
+    pdg_tscvx_guess named PDG_INVALID_INPUT alone)."""
+    lib, net = cguidance.library(), _nan_output_net()
+    scn = Scenario()
+    ws, cs = cguidance.workspace(scn), cguidance.c_scenario(scn)
+    N = scn.params.N
+    x, u = np.full((N, NX), 7.0), np.full((N, NU), 7.0)
+    res = cguidance._Result()
+    res.x, res.u = cguidance._dptr(x), cguidance._dptr(u)
+    opt = cguidance._TscvxOptions()
+    opt.solution = net._net
+    status = lib.pdg_solve_tscvx(ws.ws, ctypes.byref(cs), ctypes.byref(opt), ctypes.byref(res),
+                                 None)  # fmt: skip
+    assert status == 3 and res.message.startswith(b"solution network: ")  # PDG_SOLVER_ERROR
+    assert math.isnan(res.t_f) and (x == 7.0).all() and (u == 7.0).all()
+    assert ws.log_length() == 0
+    assert "solution network" in enum_comments(GUIDANCE_H, "pdg_status")["PDG_SOLVER_ERROR"]
+    assert "solution network" in struct_comments(GUIDANCE_H, "pdg_result")["t_f"]
+
+    t_f = ctypes.c_double(7.0)
+    msg = ctypes.create_string_buffer(cguidance.MESSAGE_LEN)
+    status = lib.pdg_tscvx_guess(ws.ws, ctypes.byref(cs), net._net, cguidance._dptr(x),
+                                 cguidance._dptr(u), ctypes.byref(t_f), msg)  # fmt: skip
+    assert status == 3 and msg.value.startswith(b"solution network: ")
+    assert t_f.value == 7.0 and (x == 7.0).all() and (u == 7.0).all()
+    assert "PDG_SOLVER_ERROR" in _function_comment(GUIDANCE_H, "pdg_tscvx_guess")

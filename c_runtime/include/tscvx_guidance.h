@@ -140,7 +140,10 @@ typedef enum {
                               and u hold the last accepted iterate; or the guidance
                               workspace's map, or the end check, found a workspace damaged
                               during the call (see above): nothing returned (t_f NaN, x and
-                              u untouched); or the end check found a network damaged */
+                              u untouched); or the end check found a network damaged; or
+                              (pdg_solve_tscvx) the solution network's prediction was not
+                              finite: nothing solved, nothing returned (t_f NaN, x and u
+                              untouched, the log empty), "solution network: ..." */
     PDG_INVALID_INPUT,     /* bad scenario, guess (NaN/inf, t_f <= 0, one of x, u alone),
                               mask or workspace: nothing was solved. A running solve stopped
                               by its mask callback (an error answer, or the workspace set up
@@ -320,7 +323,7 @@ typedef struct {
     double *u;                /* caller array N x 3: thrust T_B at the nodes (FOH) */
     double t_f;               /* NaN, x and u untouched: nothing returned (PDG_INVALID_INPUT,
                                  the model failing at the guess, a workspace damaged during
-                                 the call) */
+                                 the call, the solution network's prediction not finite) */
     int iterations;           /* accepted steps */
     int subproblems_solved;   /* convex subproblems solved, rejections included */
     double max_defect;        /* max |x_{k+1} - F(x_k, u_k, u_k+1, t_f)|, physical units */
@@ -463,7 +466,10 @@ pdg_setup_status pdg_theta_of(const pdg_scenario *scenario, double *theta);
 
 /* The projected warm start of the solution network for `scenario` into x (N x 14), u (N x 3),
  * t_f: for tests and ground tools (pdg_solve_tscvx does the same internally). Returns 0 or a
- * pdg_status (PDG_INVALID_INPUT with the message in `message`, PDG_MESSAGE_LEN bytes). */
+ * pdg_status with the reason in `message` (PDG_MESSAGE_LEN bytes; may be NULL), x, u and t_f
+ * then untouched: PDG_INVALID_INPUT (a NULL pointer, a workspace not set up or busy, a
+ * scenario it refuses, a network of the wrong kind, size or problem: "nets: ...") or
+ * PDG_SOLVER_ERROR (the network's output is not finite: "solution network: ..."). */
 int pdg_tscvx_guess(pdg_workspace *ws, const pdg_scenario *scenario, struct tscvx_nn *solution,
                     double *x, double *u, double *t_f, char *message);
 
