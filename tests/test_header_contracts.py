@@ -487,3 +487,45 @@ def test_a_solution_network_that_fails_returns_what_the_header_says() -> None:
     assert status == 3 and msg.value.startswith(b"solution network: ")
     assert t_f.value == 7.0 and (x == 7.0).all() and (u == 7.0).all()
     assert "PDG_SOLVER_ERROR" in _function_comment(GUIDANCE_H, "pdg_tscvx_guess")
+
+
+# ---- the guidance layer's messages -----------------------------------------------------------
+
+
+def test_the_guidance_checks_clear_the_message_of_what_they_accept() -> None:
+    """pdg_check_settings, pdg_check_vehicle and pdg_validate_scenario left `message` as it
+    was for input they accept (a caller printing it printed the last refusal, or garbage),
+    where tscvx_check_settings writes ""; for NULL they wrote nothing."""
+    lib = cguidance.library()
+    st, scn = cguidance.c_settings(), cguidance.c_scenario(Scenario())
+    calls = {
+        "pdg_check_settings": lambda m: lib.pdg_check_settings(ctypes.byref(st), m),
+        "pdg_check_vehicle": lambda m: lib.pdg_check_vehicle(ctypes.byref(scn.params), m),
+        "pdg_validate_scenario": lambda m: lib.pdg_validate_scenario(ctypes.byref(scn), m),
+    }
+    for name, call in calls.items():
+        msg = ctypes.create_string_buffer(b"stale", cguidance.MESSAGE_LEN)
+        assert call(msg) == 0 and msg.value == b"", (name, msg.value)
+    msg = ctypes.create_string_buffer(b"stale", cguidance.MESSAGE_LEN)
+    assert lib.pdg_check_settings(None, msg) == 1 and msg.value == b"settings is NULL"
+    assert lib.pdg_check_vehicle(None, msg) == 1 and msg.value == b"vehicle is NULL"
+
+
+def test_a_damaged_guidance_workspace_is_refused_with_a_message_that_says_so() -> None:
+    """A bit flipped in a set-up workspace's N: every call refuses it (PDG_SETUP_NOT_READY,
+    PDG_INVALID_INPUT) as the header says, but the status message and the solve's message
+    said "workspace not set up", which it was; they now name the damage and what to do."""
+    lib = cguidance.library()
+    w = cguidance.Workspace(Scenario().params, cguidance.c_settings())
+    addr = ctypes.addressof(w.arena)
+    n_at = (-addr) % 16 + 4  # the aligned workspace: unsigned magic, then int N
+    w.arena[n_at] = bytes([w.arena[n_at][0] ^ 1])
+    rows = ctypes.c_int(-1)
+    status = lib.pdg_log_length(w.ws, ctypes.byref(rows))
+    assert status == 7 and rows.value == -1  # PDG_SETUP_NOT_READY, output untouched
+    assert b"damaged" in lib.pdg_setup_status_message(status)
+    assert "damaged" in enum_comments(GUIDANCE_H, "pdg_setup_status")["PDG_SETUP_NOT_READY"]
+    _x, _u, res = cguidance._result_buffers(Scenario().params.N)  # alive while res points
+    cs = cguidance.c_scenario(Scenario())
+    assert lib.pdg_solve(w.ws, ctypes.byref(cs), None, ctypes.byref(res)) == 4
+    assert b"damaged" in res.message and math.isnan(res.t_f)

@@ -508,6 +508,9 @@ int pdg_check_scenario(const pdg_scenario *s, char *msg)
 
 int pdg_validate_scenario(const pdg_scenario *scenario, char *message)
 {
+    if (message) {
+        message[0] = '\0'; /* "" for a scenario it accepts */
+    }
     return pdg_check_scenario(scenario, message) != 0 ? PDG_INVALID_INPUT : 0;
 }
 
@@ -516,7 +519,13 @@ int pdg_validate_scenario(const pdg_scenario *scenario, char *message)
 pdg_setup_status pdg_check_vehicle(const pdg_params *vehicle, char *message)
 {
     pdg_scenario s;
+    if (message) {
+        message[0] = '\0'; /* "" for a vehicle it accepts */
+    }
     if (!vehicle) {
+        if (message) {
+            snprintf(message, PDG_MESSAGE_LEN, "vehicle is NULL");
+        }
         return PDG_SETUP_NULL_ARGUMENT;
     }
     pdg_default_scenario(&s);

@@ -20,7 +20,8 @@ static const char *const setup_messages[PDG_SETUP_NSTATUS] = {
     "scratch too small: retry with the returned size",
     "arena smaller than pdg_workspace_size()",
     "the SOCP runtime refused the subproblem",
-    "workspace not set up",
+    "workspace not set up, or its arena overwritten or damaged (a set-up checksum mismatch): "
+    "set it up again (pdg_setup)",
     "index out of range",
     "a vehicle parameter is NaN or out of range (pdg_check_vehicle names it)",
 };
@@ -251,6 +252,9 @@ static int tolerance_fault(const pdg_settings *s, char *text)
 static pdg_setup_status check_settings(const pdg_settings *s, char *msg)
 {
     char text[SETTING_TEXT];
+    if (msg) {
+        msg[0] = '\0'; /* "" for settings it accepts (tscvx_check_settings alike) */
+    }
     if (numbers_fault(s, text) || trust_region_fault(s, text) || tolerance_fault(s, text)) {
         return bad_setting(msg, text);
     }
@@ -259,7 +263,13 @@ static pdg_setup_status check_settings(const pdg_settings *s, char *msg)
 
 pdg_setup_status pdg_check_settings(const pdg_settings *settings, char *message)
 {
-    return settings ? check_settings(settings, message) : PDG_SETUP_NULL_ARGUMENT;
+    if (!settings) {
+        if (message) {
+            snprintf(message, PDG_MESSAGE_LEN, "settings is NULL");
+        }
+        return PDG_SETUP_NULL_ARGUMENT;
+    }
+    return check_settings(settings, message);
 }
 
 static void socp_settings(const pdg_settings *st, tscvx_settings *ts)
@@ -1733,7 +1743,9 @@ int pdg_result_begin(pdg_workspace *ws, pdg_result *res)
     res->polish_iterations = 0;
     res->defect_before_polish = res->m_f_before_polish = NAN;
     if (!PDG_WS_READY(ws)) {
-        snprintf(res->message, PDG_MESSAGE_LEN, "workspace not set up (call pdg_setup)");
+        snprintf(res->message, PDG_MESSAGE_LEN,
+                 "workspace not set up, or its arena overwritten or damaged (a set-up checksum "
+                 "mismatch): call pdg_setup");
         return -1;
     }
     if (ws->busy) { /* the running solve's record stays as it is */

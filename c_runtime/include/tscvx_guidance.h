@@ -120,7 +120,8 @@ typedef enum {
     PDG_SETUP_SCRATCH_TOO_SMALL, /* retry pdg_workspace_size with the returned size */
     PDG_SETUP_ARENA_TOO_SMALL,   /* arena smaller than pdg_workspace_size() */
     PDG_SETUP_SOCP_ERROR,        /* the SOCP runtime refused the subproblem pattern */
-    PDG_SETUP_NOT_READY,         /* workspace not set up */
+    PDG_SETUP_NOT_READY,         /* workspace not set up, or its arena overwritten or damaged
+                                    (a set-up checksum mismatch): set it up again */
     PDG_SETUP_BAD_INDEX,         /* log or mask index out of range */
     PDG_SETUP_BAD_VEHICLE,       /* a vehicle parameter is NaN or out of its range
                                     (pdg_check_vehicle names it) */
@@ -363,12 +364,14 @@ pdg_setup_status pdg_default_params(pdg_params *params);
 /* The default scenario of DESIGN.md (r0 = (4, 4, 0), v0 = (0, -1, -2), m0 = 3, ...). */
 pdg_setup_status pdg_default_scenario(pdg_scenario *scenario);
 
-/* PDG_SETUP_OK, or PDG_SETUP_BAD_SETTINGS with the field, its range and the value in `message`
- * (PDG_MESSAGE_LEN bytes; may be NULL): what pdg_workspace_size and pdg_setup refuse. */
+/* PDG_SETUP_OK and "" in `message` (PDG_MESSAGE_LEN bytes; may be NULL), or
+ * PDG_SETUP_BAD_SETTINGS with the field, its range and the value in it: what
+ * pdg_workspace_size and pdg_setup refuse. PDG_SETUP_NULL_ARGUMENT, "settings is NULL". */
 pdg_setup_status pdg_check_settings(const pdg_settings *settings, char *message);
 
-/* PDG_SETUP_OK, or PDG_SETUP_BAD_VEHICLE with the field and why in `message` (PDG_MESSAGE_LEN
- * bytes; may be NULL), by the rules pdg_validate_scenario applies to a scenario's params:
+/* PDG_SETUP_OK and "" in `message` (PDG_MESSAGE_LEN bytes; may be NULL), or
+ * PDG_SETUP_BAD_VEHICLE with the field and why in it (PDG_SETUP_NULL_ARGUMENT, "vehicle is
+ * NULL"), by the rules pdg_validate_scenario applies to a scenario's params:
  * what pdg_workspace_size and pdg_setup refuse (a NaN r_cp_B used to set up a workspace that
  * then refused every scenario as "a vehicle with r_cp_B not zero"). */
 pdg_setup_status pdg_check_vehicle(const pdg_params *vehicle, char *message);
@@ -384,8 +387,9 @@ pdg_setup_status pdg_setup(pdg_workspace **ws, void *arena, size_t arena_bytes,
                            const pdg_params *vehicle, const pdg_settings *settings);
 
 /* Validates the scenario as guidance/scenario.py does (every number finite and within
- * PDG_MAGNITUDE_MAX, then the physics): 0 when valid, otherwise PDG_INVALID_INPUT with the
- * message ("scenario field 'm0': ...") in `message` (PDG_MESSAGE_LEN bytes; may be NULL). */
+ * PDG_MAGNITUDE_MAX, then the physics): 0 and "" in `message` when valid, otherwise
+ * PDG_INVALID_INPUT with the message ("scenario field 'm0': ...") in `message`
+ * (PDG_MESSAGE_LEN bytes; may be NULL). */
 int pdg_validate_scenario(const pdg_scenario *scenario, char *message);
 
 /* Runs SCvx (T-SCvx with masks). `options` may be NULL. result->x and result->u must point
