@@ -155,7 +155,9 @@ tscvx_nn_status tscvx_nn_init(tscvx_nn **net, void *arena, size_t arena_bytes, c
                               size_t len, unsigned flags);
 
 /* One inference: raw inputs (n_in = d_in values; theta (16) [+ k]) -> raw outputs (n_out =
- * d_out values: logits, or the physical warm start). TSCVX_NN_BAD_BUFFER when `input` or
+ * d_out values: logits, or the physical warm start). A refused call leaves `output` untouched;
+ * TSCVX_NN_NUMERICAL_ERROR (an entry not finite) sets every entry of it NaN: no part of it is
+ * an answer. TSCVX_NN_BAD_INPUT for a non-finite input. TSCVX_NN_BAD_BUFFER when `input` or
  * `output` overlaps the arena given to tscvx_nn_init, `output` overlaps `input`, or `output`
  * overlaps the blob whose weights are read in place (writing there would change the
  * activations, the net or its weights; the input may lie in the blob, e.g. its probes). */

@@ -187,8 +187,14 @@ tscvx_nn_status nn_run(tscvx_nn *net, const double *input, double *output)
     nn_forward(net, input, output);
     for (i = 0; i < net->d_out; ++i) {
         if (!isfinite(output[i])) {
-            return TSCVX_NN_NUMERICAL_ERROR;
+            break;
         }
+    }
+    if (i < net->d_out) { /* not an answer: no entry of it left to be taken for one */
+        for (i = 0; i < net->d_out; ++i) {
+            output[i] = (double)NAN;
+        }
+        return TSCVX_NN_NUMERICAL_ERROR;
     }
     return TSCVX_NN_OK;
 }

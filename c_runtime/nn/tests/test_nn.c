@@ -368,6 +368,15 @@ static void test_self_test_damage(void)
         err = -1.0;
         CHECK_ST(tscvx_nn_self_test(net, &err), TSCVX_NN_SELF_TEST_FAILED);
         CHECK(isinf(err) && err > 0.0);
+        if (k == 0) { /* b_d's last entry NaN: one output NaN, the run's whole output NaN
+                         (it left the other d_out - 1 finite, to be taken for an answer) */
+            double x[64];
+            int i, nan_out = 0;
+            for (i = 0; i < a.d_in; ++i) x[i] = 0.25;
+            CHECK_ST(tscvx_nn_run(net, x, a.d_in, y, a.d_out), TSCVX_NN_NUMERICAL_ERROR);
+            for (i = 0; i < a.d_out; ++i) nan_out += isnan(y[i]) != 0;
+            CHECK(nan_out == a.d_out);
+        }
         wr_f64(w + 8 * damaged[k], kept);
         CHECK_ST(tscvx_nn_self_test(net, &err), TSCVX_NN_OK);
     }
