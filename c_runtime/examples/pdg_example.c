@@ -260,8 +260,15 @@ int main(int argc, char **argv)
                rep.warm_started ? "yes" : "no", rep.eta_init, rep.masks_predicted,
                rep.mask_failures);
     }
-    /* 5. the record of the solve, and its answer */
+    /* 5. the record of the solve, and its answer: a NaN t_f means none was returned (x and u
+     *    untouched; the header lists when) */
     print_log(ws);
+    if (isnan(res.t_f)) {
+        printf("status %s (%s): no trajectory returned\n", pdg_status_name(res.status),
+               res.message);
+        release(&mem);
+        return 3;
+    }
     print_summary(&scn, &res);
     size_t high_water = 0;
     pdg_arena_high_water(ws, &high_water);
