@@ -1,12 +1,18 @@
 """Which libm functions the flight libraries call, read from their objects (`nm`).
 
 IEEE 754 fixes the result of sqrt, fabs, fmax and fmin to the bit; libm's other functions it
-does not (glibc documents errors of up to 1 or 2 ulp, and the RAD750's libm is not glibc). A
-function of the second kind inside the interior-point iterations would make a landing's bits
-depend on the libm it is linked with: the centering parameter (1 - alpha)^3 was libm's pow
-until 28 Nov. So the SOCP runtime may call the exact functions only; the guidance and the
-networks call the others where listed below, each for a stated reason, and a new one (or
-libm's hypot, which pdg_hypot replaced) needs a decision here first.
+does not (glibc documents errors of up to 1 or 2 ulp, and the RAD750's libm is not glibc), so
+each of them makes a landing's last bits depend on the libm linked. The flight code calls them
+only where listed below, each for a stated reason, and a new one (or libm's hypot, which
+pdg_hypot replaced) needs a decision here first.
+
+The SOCP runtime's one such call is pow, for the centering parameter (1 - alpha)^3 of every
+IPM iteration. Two multiplications instead were tried on 28 Nov: the default landing moved by
+its last bits (268 to 267 IPM iterations, m_f 2.238335537 to 2.238335535), and the
+undisturbed closed-loop re-plan at t = 5 of tests/test_closed_loop.py, which creeps (J
+falling by about 1e-6 per accepted step, each step above step_tol) and converged at 18 of its
+20 iterations, then ended max_iterations. That re-plan must converge robustly first
+(docs/budget.md, "On a PowerPC").
 """
 
 from __future__ import annotations
@@ -26,6 +32,7 @@ RUNTIME = BUILD / "libtscvx.a"  # the SOCP runtime
 GUIDANCE = BUILD / "libtscvx_gnc.a"  # the guidance loop, its generated model and the networks
 
 IEEE_EXACT = {"sqrt", "fabs", "fmax", "fmin"}
+RUNTIME_ROUNDED_BY_LIBM = {"pow"}  # the centering parameter (1 - alpha)^3: see above
 # not fixed by IEEE 754, each once per call or outside the IPM: the scenario's constants
 # (glide slope, gimbal and tilt limits: tan, cos, sincos, acos), the guess's grid of final
 # times and T-SCvx's tau-radius rule (pow), the networks' softmax and mask (exp)
@@ -62,10 +69,10 @@ def _libm_calls(archive: Path) -> set[str]:
     return undefined & _libm_functions()
 
 
-def test_the_socp_runtime_calls_only_libm_functions_ieee_754_fixes() -> None:
+def test_the_socp_runtime_calls_libm_only_where_listed() -> None:
     calls = _libm_calls(RUNTIME)
     assert "sqrt" in calls  # the reading works: the cone operations take square roots
-    assert calls <= IEEE_EXACT, f"libm functions of inexact rounding: {calls - IEEE_EXACT}"
+    assert calls - IEEE_EXACT <= RUNTIME_ROUNDED_BY_LIBM, calls - IEEE_EXACT
 
 
 def test_the_guidance_calls_libm_only_where_listed() -> None:
