@@ -29,6 +29,7 @@ import numpy as np
 from guidance.atomic import atomic_write
 from guidance.dataset_run import scvx_solver
 from guidance.errors import UNREADABLE_NPZ, InputError, npz_damage
+from guidance.nn.tight_set import fmt_rate, ratio
 from guidance.params import Scenario, SCvxSettings
 from guidance.pool import pool_results
 from guidance.provenance import provenance
@@ -64,12 +65,12 @@ class Score:
     rows_missing: int  # of which at least one tight bit was not predicted
 
     @property
-    def precision(self) -> float:
-        return self.tp / max(self.tp + self.fp, 1)
+    def precision(self) -> float | None:
+        return ratio(self.tp, self.tp + self.fp)  # None (undefined) when no bit is predicted
 
     @property
-    def recall(self) -> float:
-        return self.tp / max(self.tp + self.fn, 1)
+    def recall(self) -> float | None:
+        return ratio(self.tp, self.tp + self.fn)  # None when no bit is tight
 
 
 def theta_spread(n: int = 2000, seed: int = DATA_SEED) -> np.ndarray:
@@ -270,7 +271,8 @@ def format_table(
     ]
     for s in scores:
         lines.append(
-            f"{s.eps:9.3f}  {s.rule:8}  {s.precision:9.3f}  {s.recall:6.3f}  {s.rows:6d}  "
+            f"{s.eps:9.3f}  {s.rule:8}  {fmt_rate(s.precision):>9}  {fmt_rate(s.recall):>6}  "
+            f"{s.rows:6d}  "
             f"{s.rows_missing / max(s.rows, 1):13.1%}"
         )
     if spacing is not None:

@@ -120,6 +120,11 @@ def test_breakdown_counts_by_type_and_iteration() -> None:
     gs, tmax = b["by_type"]["glideslope"], b["by_type"]["thrust_max"]
     assert gs["precision"] == pytest.approx(3 / 4) and gs["recall"] == 1.0
     assert gs["share_of_tight"] == pytest.approx(3 / 4) and tmax["recall"] == 0.0
+    # 0/0 is undefined, not perfect: T_max is tight once and never predicted (no precision),
+    # omega is never tight and never predicted (no precision, recall or F1)
+    omega = b["by_type"]["omega"]
+    assert tmax["precision"] is None and tmax["f1"] is None
+    assert omega["precision"] is None and omega["recall"] is None and omega["f1"] is None
     assert b["by_iteration"]["1"]["rows"] == 1 and b["by_iteration"]["3-5"]["rows"] == 2
     assert b["by_iteration"]["1"]["recall"] == pytest.approx(1 / 2)
     assert b["by_iteration"]["3-5"]["precision"] == pytest.approx(2 / 3)

@@ -29,6 +29,7 @@ from guidance.nn.conventions import (
     network_file,
 )
 from guidance.nn.model_files import check_model_files
+from guidance.nn.tight_set import RATES, defined_rates, fmt_rate, rate_text, ratio
 from guidance.provenance import UNKNOWN
 
 # The card is written line by line: each section hands its lines to ``add``.
@@ -106,19 +107,38 @@ def _breakdown(add: _Add, b: dict | None) -> None:
     add("| constraint | share of the tight bits | precision | recall |")
     add("|---|---|---|---|")
     for name, m in b["by_type"].items():
-        add(
-            f"| {name} | {_f(m['share_of_tight'], '{:.3f}')} | "
-            f"{_f(m['precision'], '{:.3f}')} | {_f(m['recall'], '{:.3f}')} |"
-        )
+        add(f"| {name} | {_f(m['share_of_tight'], '{:.3f}')} | {_pr(m)} |")
     add("")
     add("| SCvx iteration k | rows | tight fraction | precision | recall |")
     add("|---|---|---|---|---|")
     for label, m in b["by_iteration"].items():
-        add(
-            f"| {label} | {m['rows']} | {_f(m['all_ones_accuracy'], '{:.3f}')} | "
-            f"{_f(m['precision'], '{:.3f}')} | {_f(m['recall'], '{:.3f}')} |"
-        )
+        add(f"| {label} | {m['rows']} | {_f(m['all_ones_accuracy'], '{:.3f}')} | {_pr(m)} |")
     add("")
+    add(UNDEFINED_NOTE)
+    add("")
+
+
+# Said under every table with precision and recall: what a dash means.
+UNDEFINED_NOTE = (
+    "A dash: undefined (no tight bit for a recall, no predicted bit for a precision), not a "
+    "perfect score."
+)
+
+
+def _pr(m: dict) -> str:
+    """'precision | recall' cells (3 decimals) of a mask-metrics record, "–" where undefined."""
+    r = defined_rates(m)
+    return f"{fmt_rate(r['precision'])} | {fmt_rate(r['recall'])}"
+
+
+def _metric_cell(m: dict, key: str) -> str:
+    """One cell of the constraint network's test table: "n/a" without the record, "–" for an
+    undefined ratio."""
+    if not m:
+        return "n/a"
+    if key in RATES:
+        return fmt_rate(defined_rates(m)[key], "{:.4f}")
+    return _f(m.get(key))
 
 
 def _f(v: Any, fmt: str = "{:.4f}") -> str:
@@ -384,7 +404,7 @@ def _constraint_metrics(add: _Add, c: dict) -> None:
     add("| metric | test | OOD test | test at p >= 0.5 |")
     add("|---|---|---|---|")
     for key, name in _MASK_METRIC_ROWS:
-        add(f"| {name} | {_f(t.get(key))} | {_f(o.get(key))} | {_f(t5.get(key))} |")
+        add(f"| {name} | " + " | ".join(_metric_cell(m, key) for m in (t, o, t5)) + " |")
     add(f"| probability MSE | {_f(c.get('test_prob_mse'))} | {_f(c.get('ood_prob_mse'))} | |")
     add("")
     add(
@@ -461,10 +481,7 @@ def _sweep_section(add: _Add, sweep: dict) -> None:
 def _sweep_test_metric(r: dict) -> str:
     if r["kind"] == "constraint" and "test" in r:
         t = r["test"]
-        return (
-            f"acc {_pct(t['binary_accuracy'])}, P {t['precision']:.3f}, "
-            f"R {t['recall']:.3f}, F1 {t['f1']:.3f}"
-        )
+        return f"acc {_pct(t['binary_accuracy'])}, {rate_text(t)}"
     return f"MSE {_f(r.get('test_mse'))}, OOD {_f(r.get('ood_mse'))}"
 
 
@@ -523,11 +540,11 @@ def _goals_section(add: _Add, shipped: dict, measured: dict[str, int]) -> None:
     add("")
     c = _tested_constraint(shipped)
     if c:
-        t = c["test"]
-        ok = t["recall"] >= 0.99 and t["precision"] >= 0.9
+        r = defined_rates(c["test"])
         add(
-            f"- Tight-set recall >= 0.99 with precision >= 0.9: **{_met(ok)}** "
-            f"(recall {t['recall']:.3f}, precision {t['precision']:.3f} at the shipped threshold)."
+            f"- Tight-set recall >= 0.99 with precision >= 0.9: **{_met(_meets_goal(r))}** "
+            f"(recall {fmt_rate(r['recall'])}, precision {fmt_rate(r['precision'])} at the "
+            "shipped threshold)."
         )
     s = _tested_solution(shipped)
     if s:
@@ -588,9 +605,10 @@ def _ceiling_section(add: _Add, ceiling: dict) -> None:
     add("| eps [std] | rule | precision | recall | masks missing a tight bit |")
     add("|---|---|---|---|---|")
     for sc in ceiling["scores"]:
+        r = _ceiling_rates(sc)
         add(
-            f"| {sc['eps']:g} | {sc['rule']} | {sc['precision']:.3f} | {sc['recall']:.3f} | "
-            f"{_pct(sc['rows_missing'] / max(sc['rows'], 1))} |"
+            f"| {sc['eps']:g} | {sc['rule']} | {fmt_rate(r['precision'])} | "
+            f"{fmt_rate(r['recall'])} | {_pct(sc['rows_missing'] / max(sc['rows'], 1))} |"
         )
     add("")
     spacing = ceiling.get("data_spacing_std")
@@ -603,7 +621,7 @@ def _ceiling_section(add: _Add, ceiling: dict) -> None:
         add("")
     meets = {sc["eps"]: False for sc in ceiling["scores"]}
     for sc in ceiling["scores"]:
-        meets[sc["eps"]] |= sc["recall"] >= 0.99 and sc["precision"] >= 0.9
+        meets[sc["eps"]] |= _meets_goal(_ceiling_rates(sc))
     fine = [e for e, ok in meets.items() if ok]
     coarse = [e for e, ok in meets.items() if not ok]
     if coarse and spacing is not None:
@@ -625,6 +643,22 @@ def _ceiling_section(add: _Add, ceiling: dict) -> None:
             "a 15-dimensional θ."
         )
         add("")
+
+
+def _meets_goal(r: Mapping[str, float | None]) -> bool:
+    """Issue 5's goal: recall >= 0.99 with precision >= 0.9 (not met when either is
+    undefined)."""
+    p, rc = r["precision"], r["recall"]
+    return p is not None and rc is not None and rc >= 0.99 and p >= 0.9
+
+
+def _ceiling_rates(sc: dict) -> dict[str, float | None]:
+    """A mask-ceiling score's precision and recall, from its counts when it has them (files
+    before 28 Nov 2026 wrote 0 for an undefined ratio)."""
+    if "tp" in sc:
+        tp, fp, fn = sc["tp"], sc["fp"], sc["fn"]
+        return {"precision": ratio(tp, tp + fp), "recall": ratio(tp, tp + fn)}
+    return {"precision": sc["precision"], "recall": sc["recall"]}
 
 
 def _arch(a: dict) -> str:

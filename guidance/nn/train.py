@@ -59,6 +59,7 @@ from guidance.dataset import Dataset
 from guidance.errors import InputError
 from guidance.nn.conventions import KINDS, LEARNING_RATE, TEST_FRACTION, default_epochs
 from guidance.nn.model import ArchConfig, Transformer, n_params
+from guidance.nn.tight_set import mask_metrics, rate_text
 from guidance.params import CONSTRAINT_NAMES
 from guidance.provenance import LEARNING_PACKAGES, code_version, provenance
 
@@ -119,27 +120,6 @@ def standardization(A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 # ---- metrics ------------------------------------------------------------------------------
-def mask_metrics(y: np.ndarray, pred: np.ndarray) -> dict[str, float]:
-    y = y.astype(bool)
-    pred = pred.astype(bool)
-    tp = float(np.sum(y & pred))
-    fp = float(np.sum(~y & pred))
-    fn = float(np.sum(y & ~pred))
-    precision = tp / (tp + fp) if tp + fp else 1.0
-    recall = tp / (tp + fn) if tp + fn else 1.0
-    f1 = 2 * precision * recall / (precision + recall) if precision + recall else 0.0
-    return {
-        "binary_accuracy": float(np.mean(y == pred)),
-        "all_zeros_accuracy": float(np.mean(~y)),
-        "all_ones_accuracy": float(np.mean(y)),
-        "precision": precision,
-        "recall": recall,
-        "f1": f1,
-        "mse": float(np.mean((y.astype(float) - pred.astype(float)) ** 2)),
-        "rows_fully_correct": float(np.mean(np.all(y == pred, axis=1))),
-    }
-
-
 def mahalanobis(theta_train: np.ndarray, theta: np.ndarray) -> np.ndarray:
     """Distance of each row of ``theta`` from the training distribution (pseudo-inverse S)."""
     mu = theta_train.mean(axis=0)
@@ -873,8 +853,7 @@ def summarize(res: TrainResult) -> str:
         t = m["test"]
         return (
             f"{head}: acc {100 * t['binary_accuracy']:.2f} % (zeros "
-            f"{100 * t['all_zeros_accuracy']:.2f} %), P {t['precision']:.3f} R {t['recall']:.3f} "
-            f"F1 {t['f1']:.3f} at p >= {res.threshold:.3g}"
+            f"{100 * t['all_zeros_accuracy']:.2f} %), {rate_text(t)} at p >= {res.threshold:.3g}"
         )
     if "test_mse" in m:
         return f"{head}: test MSE {m['test_mse']:.4f}, OOD MSE {m.get('ood_mse', float('nan')):.4f}"
