@@ -106,3 +106,42 @@ def test_mask_ceiling_score_without_tight_or_predicted_bits_is_undefined() -> No
         text = _card_text(_ceiling_section, dict(run=run, scores=[first, scores[1]]))
         assert _row(text, "0.02")[2:4] == ["–", "–"]
         assert _row(text, "0.1")[2:4] == ["0.750", "1.000"]
+
+
+def _threshold_sentence(**record) -> str:
+    from guidance.nn.card import _constraint_metrics
+
+    c = {"arch": dict(tokens="single", d_model=8, n_layers=1, n_heads=1, d_ff=8),
+         "threshold": 0.1, "train_config": dict(target_recall=0.99, recall_confidence=0.95),
+         "test": REAL, **record}  # fmt: skip
+    text = _card_text(_constraint_metrics, c)
+    return " ".join(text.split("\n\n")[0].split())
+
+
+OLD_FALLBACK = dict(n_calibration_bases=0)  # metrics.json before 28 Nov 2026
+NEW_FALLBACK = OLD_FALLBACK | dict(
+    threshold_chosen_on=dict(rows="last_fold_validation", base_landings=4)
+)
+OLD_CALIBRATED = dict(n_calibration_bases=301)
+NEW_CALIBRATED = OLD_CALIBRATED | dict(
+    threshold_chosen_on=dict(rows="calibration", base_landings=301)
+)
+
+
+@pytest.mark.parametrize("record", [OLD_FALLBACK, NEW_FALLBACK], ids=["old file", "new file"])
+def test_card_says_when_the_threshold_was_chosen_on_trained_landings(record) -> None:
+    """Without calibration landings train.py chooses the threshold on the last fold's
+    validation rows, which the earlier folds trained on; the card said 'a calibration split
+    of 0 train+val base landings kept out of training'."""
+    sentence = _threshold_sentence(**record)
+    assert "kept out of training" not in sentence and "calibration split of" not in sentence
+    assert "last fold's validation rows" in sentence and "trained on" in sentence
+    if "threshold_chosen_on" in record:
+        assert "(4 base landings)" in sentence
+
+
+@pytest.mark.parametrize("record", [OLD_CALIBRATED, NEW_CALIBRATED], ids=["old", "new"])
+def test_card_names_the_calibration_split_the_threshold_was_chosen_on(record) -> None:
+    sentence = _threshold_sentence(**record)
+    split = "a calibration split of 301 train+val base landings kept out of training"
+    assert split in sentence and "trained on" not in sentence

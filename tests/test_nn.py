@@ -62,6 +62,8 @@ def test_a_few_training_steps_run_and_report(trained) -> None:
     assert np.isfinite(s["test_mse"]) and "ood_mse" in s
     assert c["n_test_bases"] == 2 and c["n_trainval_bases"] == 10
     assert c["n_calibration_bases"] == 1 and s["n_calibration_bases"] == 0
+    assert c["threshold_chosen_on"] == {"rows": "calibration", "base_landings": 1}
+    assert "threshold_chosen_on" not in s
     assert set(c["test_breakdown"]["by_type"]) == {
         "mass",
         "glideslope",
@@ -71,6 +73,25 @@ def test_a_few_training_steps_run_and_report(trained) -> None:
         "gimbal",
         "thrust_min",
     }
+
+
+def test_without_calibration_landings_the_metrics_and_card_say_what_the_threshold_saw() -> None:
+    """calibration_fraction 0: the threshold is chosen on the last fold's validation rows,
+    which folds 1 and 2 trained on; the card said 'kept out of training'."""
+    from guidance.nn.card import _threshold_rows
+
+    ds = random_dataset(n_base=12, seed=1)
+    cfg = TrainConfig(epochs=1, batch_size=64, threads=1, calibration_fraction=0.0)
+    logged: list[str] = []
+    m = train(ds, "constraint", TINY, cfg, log=logged.append).metrics
+    assert m["n_calibration_bases"] == 0
+    chosen = m["threshold_chosen_on"]
+    assert chosen["rows"] == "last_fold_validation"
+    # the third fold of the 10 train+val landings: 3 or 4 of them
+    assert chosen["base_landings"] in (3, 4)
+    assert any("earlier folds trained on" in line for line in logged)
+    text = _threshold_rows(m)
+    assert "kept out of training" not in text and "which the earlier folds trained on" in text
 
 
 def test_mask_metrics_and_threshold() -> None:

@@ -25,6 +25,8 @@ from guidance.nn.conventions import (
     METRICS_FILE,
     MODEL_CARD_FILE,
     TEST_FRACTION,
+    THRESHOLD_ON_CALIBRATION,
+    THRESHOLD_ON_LAST_FOLD,
     TNN_SUFFIX,
     network_file,
 )
@@ -396,8 +398,7 @@ def _constraint_metrics(add: _Add, c: dict) -> None:
     add(
         f"{c['threshold']:.4g} (chosen for recall >= {tc['target_recall']} with "
         f"{100 * tc.get('recall_confidence', 0):g} % nominal confidence over bootstrap "
-        f"resamples of a calibration split of {c.get('n_calibration_bases', 0)} train+val "
-        "base landings kept out of training; a percentile bootstrap, whose coverage is "
+        f"resamples of {_threshold_rows(c)}; a percentile bootstrap, whose coverage is "
         "somewhat below nominal: guidance/nn/train.py):"
     )
     add("")
@@ -414,6 +415,26 @@ def _constraint_metrics(add: _Add, c: dict) -> None:
     )
     add("")
     _breakdown(add, c.get("test_breakdown"))
+
+
+def _threshold_rows(c: dict) -> str:
+    """What the threshold was chosen on, as its metrics record it (records before 28 Nov
+    2026: a calibration split when they count calibration landings, the last fold's
+    validation rows when they count none, as train.py did)."""
+    chosen = c.get("threshold_chosen_on") or {}
+    n_cal = int(c.get("n_calibration_bases", 0))
+    on = chosen.get("rows", THRESHOLD_ON_CALIBRATION if n_cal else THRESHOLD_ON_LAST_FOLD)
+    if on == THRESHOLD_ON_CALIBRATION:
+        n = chosen.get("base_landings", n_cal)
+        return f"a calibration split of {n} train+val base landings kept out of training"
+    n = chosen.get("base_landings")
+    landings = f" ({n} base landings)" if n is not None else ""
+    return (
+        f"the last fold's validation rows{landings}, which the earlier folds trained on: "
+        "the data left no calibration split (too few train+val landings, or a calibration "
+        "fraction of 0), so the threshold is chosen on landings the network has seen and its "
+        "recall on new ones is likely below the target"
+    )
 
 
 def _solution_metrics(add: _Add, s: dict) -> None:

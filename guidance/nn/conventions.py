@@ -64,3 +64,12 @@ def default_epochs(kind: str) -> int:
     if kind not in EPOCHS:
         raise ValueError(f"kind must be one of {', '.join(KINDS)}, got {kind!r}")
     return EPOCHS[kind]
+
+
+# Which rows the constraint network's decision threshold was chosen on (metrics key
+# "threshold_chosen_on": {"rows": ..., "base_landings": n}): the calibration landings, kept out
+# of the folds, or, when the data leave none (too few train+validation landings, or
+# calibration_fraction 0), the last fold's validation rows, which the earlier folds of the
+# sequential K-fold trained on.
+THRESHOLD_ON_CALIBRATION = "calibration"
+THRESHOLD_ON_LAST_FOLD = "last_fold_validation"

@@ -15,6 +15,9 @@
   iteration; a spurious one only a little speed) on a calibration split: 10 % of the
   train+validation base landings kept out of the folds. (By the end of the sequential K-fold
   every validation row has been trained on, and a threshold chosen there is overconfident.)
+  Data too small for a calibration split (train+validation landings <= K), or
+  calibration_fraction 0, leave only that: the threshold is then chosen on the last fold's
+  validation rows, with a warning, and the metrics ("threshold_chosen_on") and the card say so.
   The target must hold with 95 % confidence over bootstrap resamples of the calibration
   landings, not only on them. On the 4,000-landing data a threshold that just reached 0.99 on
   the 304 calibration landings gave 0.988 on the test split; the bootstrap one (0.0407 instead
@@ -57,7 +60,14 @@ from torch import nn
 from guidance.atomic import atomic_write
 from guidance.dataset import Dataset
 from guidance.errors import InputError
-from guidance.nn.conventions import KINDS, LEARNING_RATE, TEST_FRACTION, default_epochs
+from guidance.nn.conventions import (
+    KINDS,
+    LEARNING_RATE,
+    TEST_FRACTION,
+    THRESHOLD_ON_CALIBRATION,
+    THRESHOLD_ON_LAST_FOLD,
+    default_epochs,
+)
 from guidance.nn.model import ArchConfig, Transformer, n_params
 from guidance.nn.tight_set import mask_metrics, rate_text
 from guidance.params import CONSTRAINT_NAMES
@@ -388,10 +398,15 @@ def train(
     if run.stopped_early:
         log(f"[{kind}] stopped at the wall-clock cap of {cfg.max_seconds:.0f} s")
     trainer.net.eval()
-    threshold = 0.5
+    threshold, chosen_on = 0.5, None
     if kind == "constraint":
-        threshold = trainer.threshold(last_fold=run.history[-1]["fold"] - 1)
+        threshold, chosen_on = trainer.threshold(last_fold=run.history[-1]["fold"] - 1)
+        if chosen_on["rows"] != THRESHOLD_ON_CALIBRATION:
+            log(f"[{kind}] warning: no calibration landings; the threshold is chosen on the "
+                "last fold's validation rows, which earlier folds trained on")  # fmt: skip
     metrics = trainer.evaluate(threshold)
+    if chosen_on:
+        metrics["threshold_chosen_on"] = chosen_on
     metrics.update(_run_record(trainer, run, identity, time.perf_counter() - t_start))
     in_mean, in_std, out_mean, out_std = (getattr(data, name) for name in NORMALIZATION)
     return TrainResult(
@@ -652,16 +667,21 @@ class _Trainer:
                 break
         return running / max(nb, 1)
 
-    def threshold(self, last_fold: int) -> float:
+    def threshold(self, last_fold: int) -> tuple[float, dict[str, Any]]:
         """The constraint network's decision threshold, chosen on the calibration landings
-        (on the last fold's validation rows when there are none)."""
+        (on the last fold's validation rows, which earlier folds trained on, when there are
+        none), and which rows those were (the metrics' "threshold_chosen_on")."""
         split = self.data.split
-        rows = np.flatnonzero(split.cal) if split.cal.any() else split.val_rows(last_fold)
+        if split.cal.any():
+            rows, on = np.flatnonzero(split.cal), THRESHOLD_ON_CALIBRATION
+        else:
+            rows, on = split.val_rows(last_fold), THRESHOLD_ON_LAST_FOLD
         p_cal = 1 / (1 + np.exp(-_predict(self.net, self.data.Xs[rows])))
-        return prob_threshold(
+        threshold = prob_threshold(
             self.data.Ys[rows], p_cal, self.cfg.target_recall, self.data.bid[rows],
             self.cfg.recall_confidence,
         )  # fmt: skip
+        return threshold, {"rows": on, "base_landings": len(np.unique(self.data.bid[rows]))}
 
     def evaluate(self, threshold: float) -> dict[str, Any]:
         d = self.data
