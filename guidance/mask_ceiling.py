@@ -29,7 +29,7 @@ import numpy as np
 from guidance.atomic import atomic_write
 from guidance.dataset_run import scvx_solver
 from guidance.errors import UNREADABLE_NPZ, InputError, npz_damage
-from guidance.nn.tight_set import fmt_rate, ratio
+from guidance.nn.tight_set import ALWAYS_KEPT, droppable_bits, fmt_rate, ratio
 from guidance.params import Scenario, SCvxSettings
 from guidance.pool import pool_results
 from guidance.provenance import provenance
@@ -93,13 +93,15 @@ def neighbour(theta: np.ndarray, eps: float, std: np.ndarray, rng: np.random.Gen
 def loo_counts(masks: Sequence[np.ndarray], min_votes: int) -> tuple[int, int, int, int, int]:
     """(tp, fp, fn, rows, rows_missing) of predicting each neighbour's (k, 7N) masks from the
     others': a bit is predicted where at least ``min_votes`` others have it, iteration by
-    iteration over the iterations all of them reached."""
+    iteration over the iterations all of them reached. Only the bits of the constraints the
+    flight code can drop count (not T_min's: tight_set.ALWAYS_KEPT)."""
     tp = fp = fn = rows = missing = 0
+    cols = droppable_bits(np.shape(masks[0])[1])
     for j, target in enumerate(masks):
         others = [m for i, m in enumerate(masks) if i != j]
         K = min(len(m) for m in masks)
-        T = np.asarray(target[:K], bool)
-        votes = sum(np.asarray(o[:K], np.int64) for o in others)
+        T = np.asarray(target[:K], bool)[:, cols]
+        votes = sum(np.asarray(o[:K], np.int64)[:, cols] for o in others)
         pred = votes >= min_votes
         tp += int((pred & T).sum())
         fp += int((pred & ~T).sum())
@@ -295,4 +297,5 @@ def results_dict(
         ],
         "data_spacing_std": spacing,
         "n_train_landings": n_train,
+        "headline_excludes": list(ALWAYS_KEPT),  # bits not counted (always kept in flight)
     }

@@ -16,6 +16,7 @@ from guidance.cli import main
 from guidance.errors import InputError
 from guidance.mask_ceiling import (
     PERTURBED,
+    Score,
     data_spacing,
     loo_counts,
     measure,
@@ -37,6 +38,19 @@ def test_leave_one_out_counts_by_hand() -> None:
     # vote >= 2: a from (b, c) = [1,0,0,0],[0,1,0,0]: tp 2, fn 1; b: [1,0,0,0],[0,1,0,0]:
     # tp 2, fn 1; c: [1,0,0,0],[0,1,0,0]: tp 2, fn 1
     assert loo_counts([a, b, c], 2) == (6, 0, 3, 6, 3)
+
+
+def test_leave_one_out_counts_leave_out_the_always_kept_thrust_min_bits() -> None:
+    """T_min (bit 7k + 6) is kept by the flight code whatever the mask says: neighbours that
+    differ only there predict each other perfectly. They were counted (fp 4, fn 2 here)."""
+    a = np.zeros((1, 14), np.uint8)
+    a[0, [1, 4]] = 1  # glideslope at node 0, T_max at node 0
+    b, c = a.copy(), a.copy()
+    b[0, 6] = c[0, 13] = 1  # T_min at node 0, at node 1
+    # union: a from b|c gets both T_min bits (not counted); b misses 6, c misses 13
+    assert loo_counts([a, b, c], 1) == (6, 0, 0, 3, 0)
+    s = Score(0.0, "union", *loo_counts([a, b, c], 1))
+    assert (s.precision, s.recall) == (1.0, 1.0)
 
 
 def test_neighbour_moves_only_the_perturbed_components_by_eps() -> None:

@@ -145,3 +145,31 @@ def test_card_names_the_calibration_split_the_threshold_was_chosen_on(record) ->
     sentence = _threshold_sentence(**record)
     split = "a calibration split of 301 train+val base landings kept out of training"
     assert split in sentence and "trained on" not in sentence
+
+
+@pytest.mark.parametrize(
+    ("record", "says"),
+    [
+        ({}, "count all 7N mask bits, thrust_min's included, although the flight code always "
+             "keeps thrust_min"),
+        ({"headline_excludes": ["thrust_min"]},
+         "count only the mask bits of the constraints the flight code can drop, not those of "
+         "thrust_min"),
+    ],
+    ids=["old file", "new file"],
+)  # fmt: skip
+def test_card_states_how_the_always_kept_thrust_min_bits_are_counted(record, says) -> None:
+    """The flight code keeps T_min whatever its mask bit; the card's headline precision and
+    recall counted its bits without saying so. Now it says how, for files written before
+    (all 7N bits counted) and after (thrust_min's left out), of the network's scores and
+    threshold and of the mask ceiling's."""
+    from guidance.nn.card import _ceiling_section, _constraint_metrics
+
+    c = {"arch": dict(tokens="single", d_model=8, n_layers=1, n_heads=1, d_ff=8),
+         "threshold": 0.1, "train_config": dict(target_recall=0.99, recall_confidence=0.95),
+         "test": REAL, "n_calibration_bases": 3, **record}  # fmt: skip
+    network = " ".join(_card_text(_constraint_metrics, c).split())
+    assert f"and the threshold's recall target {says}" in network
+    run = dict(landings=1, neighbours=3, backend="c")
+    ceiling = " ".join(_card_text(_ceiling_section, dict(run=run, scores=[], **record)).split())
+    assert f"The scores below {says}" in ceiling

@@ -21,6 +21,8 @@ from guidance.nn.model import ArchConfig, Transformer  # noqa: E402
 from guidance.nn.train import (  # noqa: E402
     TrainConfig,
     breakdown,
+    evaluate,
+    headline_threshold,
     mask_metrics,
     prob_threshold,
     split_bases,
@@ -92,6 +94,49 @@ def test_without_calibration_landings_the_metrics_and_card_say_what_the_threshol
     assert any("earlier folds trained on" in line for line in logged)
     text = _threshold_rows(m)
     assert "kept out of training" not in text and "which the earlier folds trained on" in text
+
+
+def test_headline_scores_leave_out_the_always_kept_thrust_min_bits() -> None:
+    """The flight code keeps T_min whatever its mask bit. A network right on every other bit
+    and wrong on every T_min bit (half of them spurious, half missed) scored recall 0.5 and
+    precision 0.5 on the test split; its masks are perfect for flight."""
+
+    class Identity(torch.nn.Module):  # the inputs are the logits
+        def forward(self, x: torch.Tensor) -> torch.Tensor:
+            return x
+
+    rng = np.random.default_rng(0)
+    n, bits = 60, 14  # N = 2: T_min is bit 6 and bit 13
+    Y = (rng.random((n, bits)) < 0.3).astype(np.float32)
+    Y[:, [6, 13]] = [1, 0]
+    logits = np.where(Y > 0, 4.0, -4.0).astype(np.float32)
+    logits[:, [6, 13]] = [-4.0, 4.0]  # every T_min bit wrong
+    te = np.arange(n) >= 20
+    theta = rng.standard_normal((n, 16))
+    out = evaluate(Identity(), "constraint", logits, Y, ~te, te, theta, 0.5, np.ones(n))
+    assert out["headline_excludes"] == ["thrust_min"]
+    for m in (out["test"], out["test_at_0.5"], out["test_breakdown"]["by_iteration"]["1"]):
+        assert m["precision"] == 1.0 and m["recall"] == 1.0 and m["binary_accuracy"] == 1.0
+        assert m["tight_bits"] == int(Y[te][:, [0, 1, 2, 3, 4, 5, 7, 8, 9, 10, 11, 12]].sum())
+    tmin = out["test_breakdown"]["by_type"]["thrust_min"]  # still shown on its own
+    assert tmin["recall"] == 0.0 and tmin["precision"] == 0.0
+
+
+def test_the_threshold_reaches_its_recall_on_the_bits_the_flight_code_can_drop() -> None:
+    """The threshold's recall target was of all 7N bits: T_min bits the network is unsure
+    about (p 0.05 here) pulled it down to them, though the flight code keeps T_min anyway."""
+    rng = np.random.default_rng(1)
+    n, bits = 40, 14
+    y = rng.random((n, bits)) < 0.4
+    y[:, [6, 13]] = True
+    p = np.where(y, rng.uniform(0.6, 0.9, (n, bits)), rng.uniform(0.0, 0.1, (n, bits)))
+    p[:, [6, 13]] = 0.05
+    thr = headline_threshold(y, p, 0.99, np.arange(n), 0.95)
+    kept = np.ones(bits, bool)
+    kept[[6, 13]] = False
+    assert thr > 0.5 * p[y & kept].min()  # near the other tight bits' lowest probability
+    assert mask_metrics(y[:, kept], p[:, kept] >= thr)["recall"] >= 0.99
+    assert prob_threshold(y, p, 0.99, np.arange(n), 0.95) < 0.06  # the T_min bits' pull
 
 
 def test_mask_metrics_and_threshold() -> None:

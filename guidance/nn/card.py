@@ -31,7 +31,7 @@ from guidance.nn.conventions import (
     network_file,
 )
 from guidance.nn.model_files import check_model_files
-from guidance.nn.tight_set import RATES, defined_rates, fmt_rate, rate_text, ratio
+from guidance.nn.tight_set import ALWAYS_KEPT, RATES, defined_rates, fmt_rate, rate_text, ratio
 from guidance.provenance import UNKNOWN
 
 # The card is written line by line: each section hands its lines to ``add``.
@@ -414,7 +414,34 @@ def _constraint_metrics(add: _Add, c: dict) -> None:
         "the training 95th percentile). Paper: 96.45 % vs 95.95 % all-zeros."
     )
     add("")
+    what = "These scores (also the sweep's, the goal's and the iteration table's)"
+    add(_counted_bits(c, what, threshold=True))
+    add("")
     _breakdown(add, c.get("test_breakdown"))
+
+
+def _counted_bits(record: dict, what: str, threshold: bool = False) -> str:
+    """How ``what`` (scores of a metrics or mask-ceiling ``record``; with ``threshold``, also
+    the threshold's recall target) count the mask bits of the constraints the flight code
+    always keeps (T_min), whose bits change nothing it solves: left out (the record's
+    "headline_excludes"), or counted, in records from before 28 Nov 2026."""
+    kept = ", ".join(ALWAYS_KEPT)
+    why = (
+        f"the flight code always keeps {kept} whatever its mask bit (guidance/subproblem.py, "
+        "c_runtime/guidance/pdg_scvx.c)"
+    )
+    target = " and the threshold's recall target" if threshold else ""
+    excluded = record.get("headline_excludes")
+    if excluded is not None:
+        left_out = ", ".join(excluded) or "none"
+        return (
+            f"{what}{target} count only the mask bits of the constraints the flight code can "
+            f"drop, not those of {left_out}: {why}."
+        )
+    return (
+        f"{what}{target} count all 7N mask bits, {kept}'s included, although {why}: they "
+        f"were measured before 28 Nov 2026; the next `make models` leaves {kept} out."
+    )
 
 
 def _threshold_rows(c: dict) -> str:
@@ -549,8 +576,8 @@ def _baselines_section(add: _Add, baselines: dict) -> None:
         add(_baseline_table(kind, res))
         add("")
     add(
-        "MSE of the constraint task is against the 0/1 labels (the network's: of its "
-        "probabilities); of the solution task on standardized outputs. Linear "
+        "MSE of the constraint task is against the 0/1 labels of all 7N bits (the network's: "
+        "of its probabilities); of the solution task on standardized outputs. Linear "
         "interpolation runs on a subset (see the train/test rows) on 10 PCA components."
     )
     add("")
@@ -622,6 +649,8 @@ def _ceiling_section(add: _Add, ceiling: dict) -> None:
         f"neighbour's per-iteration masks are predicted from the other {n - 1}'s exact masks "
         "of the same iteration: any of them tight (union) or at least two (vote>=2)."
     )
+    add("")
+    add(_counted_bits(ceiling, "The scores below"))
     add("")
     add("| eps [std] | rule | precision | recall | masks missing a tight bit |")
     add("|---|---|---|---|---|")

@@ -15,7 +15,24 @@ from typing import Any
 
 import numpy as np
 
+from guidance.params import CONSTRAINT_NAMES
+
 RATES = ("precision", "recall", "f1")
+
+# Constraints the flight code keeps whatever their mask bit: T_min (guidance/subproblem.py
+# sets its mask column, tpl.mask; c_runtime/guidance/pdg_scvx.c its keep[] bit). Predicting
+# or missing such a bit changes nothing that is solved, so the headline scores of the
+# constraint network (test, OOD, per iteration) and of the mask ceiling, and the threshold's
+# recall target, count only the other bits (metrics key "headline_excludes"; before 28 Nov
+# 2026 they counted all 7N).
+ALWAYS_KEPT = ("thrust_min",)
+
+
+def droppable_bits(n_bits: int) -> np.ndarray:
+    """Which of ``n_bits`` mask bits (bit 7k + c: constraint c at node k) belong to a
+    constraint the flight code can drop (not in ALWAYS_KEPT)."""
+    kept = [CONSTRAINT_NAMES.index(name) for name in ALWAYS_KEPT]
+    return ~np.isin(np.arange(n_bits) % len(CONSTRAINT_NAMES), kept)
 
 
 def ratio(num: float, den: float) -> float | None:

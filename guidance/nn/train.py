@@ -13,7 +13,9 @@
 - Constraint network: BCE on the 7N tight bits; the decision threshold is the largest one
   reaching the target recall of the tight set (a missed tight constraint costs an SCvx
   iteration; a spurious one only a little speed) on a calibration split: 10 % of the
-  train+validation base landings kept out of the folds. (By the end of the sequential K-fold
+  train+validation base landings kept out of the folds. The recall, and the test scores, are
+  of the bits the flight code can drop: it keeps T_min whatever its bit, so T_min's bits count
+  in neither (until 28 Nov 2026 they did). (By the end of the sequential K-fold
   every validation row has been trained on, and a threshold chosen there is overconfident.)
   Data too small for a calibration split (train+validation landings <= K), or
   calibration_fraction 0, leave only that: the threshold is then chosen on the last fold's
@@ -69,7 +71,7 @@ from guidance.nn.conventions import (
     default_epochs,
 )
 from guidance.nn.model import ArchConfig, Transformer, n_params
-from guidance.nn.tight_set import mask_metrics, rate_text
+from guidance.nn.tight_set import ALWAYS_KEPT, droppable_bits, mask_metrics, rate_text
 from guidance.params import CONSTRAINT_NAMES
 from guidance.provenance import LEARNING_PACKAGES, code_version, provenance
 
@@ -178,6 +180,15 @@ def prob_threshold(
         for _ in range(n_boot)
     ]
     return float(np.quantile(thr, 1.0 - confidence))
+
+
+def headline_threshold(
+    y: np.ndarray, p: np.ndarray, target_recall: float, groups: np.ndarray, confidence: float
+) -> float:
+    """:func:`prob_threshold` for the recall of the bits the flight code can drop: those of
+    the constraints it always keeps (tight_set.ALWAYS_KEPT, T_min) change nothing it solves."""
+    cols = droppable_bits(p.shape[1])
+    return prob_threshold(y[:, cols], p[:, cols], target_recall, groups, confidence)
 
 
 def _recall_threshold(pos: np.ndarray, target_recall: float) -> float:
@@ -677,7 +688,7 @@ class _Trainer:
         else:
             rows, on = split.val_rows(last_fold), THRESHOLD_ON_LAST_FOLD
         p_cal = 1 / (1 + np.exp(-_predict(self.net, self.data.Xs[rows])))
-        threshold = prob_threshold(
+        threshold = headline_threshold(
             self.data.Ys[rows], p_cal, self.cfg.target_recall, self.data.bid[rows],
             self.cfg.recall_confidence,
         )  # fmt: skip
@@ -826,11 +837,15 @@ def evaluate(
     Y = Ys[te]
     if kind == "constraint":
         prob = 1 / (1 + np.exp(-pred))
+        if iteration is not None:  # every constraint type, the iterations as the headline
+            out["test_breakdown"] = breakdown(Y, prob >= threshold, iteration[te])
+        # the headline: the bits of the constraints the flight code can drop
+        out["headline_excludes"] = list(ALWAYS_KEPT)
+        cols = droppable_bits(Y.shape[1])
+        Y, prob = Y[:, cols], prob[:, cols]
         out["test"] = mask_metrics(Y, prob >= threshold)
         out["test_at_0.5"] = mask_metrics(Y, prob >= 0.5)
         out["test_prob_mse"] = float(np.mean((prob - Y) ** 2))
-        if iteration is not None:
-            out["test_breakdown"] = breakdown(Y, prob >= threshold, iteration[te])
         if ood.any():
             out["ood"] = mask_metrics(Y[ood], prob[ood] >= threshold)
             out["ood_prob_mse"] = float(np.mean((prob[ood] - Y[ood]) ** 2))
@@ -848,7 +863,8 @@ ITERATION_BINS = ((1, 1), (2, 2), (3, 5), (6, 10), (11, 10**6))
 
 def breakdown(y: np.ndarray, pred: np.ndarray, k: np.ndarray) -> dict:
     """Where the tight set's errors are: metrics of the predicted mask bits ``pred`` per
-    constraint type (bit 7k + c: column c of every node) and per SCvx iteration bin."""
+    constraint type (bit 7k + c: column c of every node; every type) and per SCvx iteration
+    bin (the bits the headline counts: not those of ALWAYS_KEPT)."""
     n_types = len(CONSTRAINT_NAMES)
     by_type = {}
     for c, name in enumerate(CONSTRAINT_NAMES):
@@ -858,6 +874,8 @@ def breakdown(y: np.ndarray, pred: np.ndarray, k: np.ndarray) -> dict:
             "share_of_tight": float(yc.sum() / max(y.sum(), 1)),
         }
     by_iter = {}
+    cols = droppable_bits(y.shape[1])
+    y, pred = y[:, cols], pred[:, cols]
     for lo, hi in ITERATION_BINS:
         rows = (k >= lo) & (k <= hi)
         if rows.any():
