@@ -5,6 +5,7 @@ an independent open-loop integration (scipy, numpy dynamics) and across the thre
 from __future__ import annotations
 
 import re
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -103,21 +104,36 @@ def test_a_replan_from_the_polished_plan_converges_at_it(polished) -> None:
     assert c.subproblems_solved == py.subproblems_solved
 
 
+def _c_loop(st: SCvxSettings) -> SCvxResult:
+    return cguidance.solve_c(SCN, st)
+
+
+def _python_loop(st: SCvxSettings) -> SCvxResult:
+    return SCvxSolver(SCN, st, backend="c").solve()
+
+
+@pytest.mark.parametrize("loop", [_c_loop, _python_loop], ids=["c", "python"])
 @pytest.mark.parametrize("left", [0, 1])
-def test_a_spent_budget_leaves_the_converged_answer(left: int) -> None:
+def test_a_spent_budget_leaves_the_converged_answer(
+    left: int, loop: Callable[[SCvxSettings], SCvxResult]
+) -> None:
     """With cold IPM starts each subproblem may take all that is left, so a budget of the
     solve's own IPM iterations changes none of them and leaves the polish nothing (or one
-    iteration): not kept, in both loops alike, and the answer is the unpolished one."""
+    iteration): not kept, in both loops alike, and the answer is the unpolished one. Each
+    loop's budget is its own count: the Python loop's subproblems are assembled with numpy
+    and differ from the C loop's in the last bits, so on some machines its polish takes an
+    IPM iteration more or less (an Intel Xeon with AVX-512, 28 Nov: one more; the test took
+    the C loop's count for both and failed there)."""
     cold = POLISH.replace(socp_warm_start=False)
-    full = cguidance.solve_c(SCN, cold)
+    full = loop(cold)
     total = full.ipm_iterations - full.polish.ipm_iterations
     st = cold.replace(socp_max_iter_total=total + left)
-    for r in (cguidance.solve_c(SCN, st), SCvxSolver(SCN, st, backend="c").solve()):
-        assert r.status == "solved"
-        assert (r.polish.outcome, r.polish.ipm_iterations) == ("no_budget", left)
-        assert r.ipm_iterations == total + left
-        assert r.m_f == r.polish.m_f_before and r.max_defect == r.polish.defect_before
-        assert abs(r.m_f - full.polish.m_f_before) <= 1e-9 * r.m_f
+    r = loop(st)
+    assert r.status == "solved"
+    assert (r.polish.outcome, r.polish.ipm_iterations) == ("no_budget", left)
+    assert r.ipm_iterations == total + left
+    assert r.m_f == r.polish.m_f_before and r.max_defect == r.polish.defect_before
+    assert abs(r.m_f - full.polish.m_f_before) <= 1e-9 * r.m_f
 
 
 def test_without_the_proximal_term_it_is_off() -> None:
