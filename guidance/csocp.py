@@ -556,6 +556,16 @@ class Solver:
             message += "A and b the zero-cone rows, G and h the other rows)"
         return message
 
+    def _update_message(self, st: int) -> str:
+        """Why tscvx_update_data refused: the array and entry at fault, as set-up says it (the
+        solver's copies hold every number the workspace would now have), or, for a workspace
+        not ready (damaged before or during the update), tscvx_check_workspace's reason."""
+        message = self._setup_message(st)
+        why = ct.create_string_buffer(MESSAGE_LEN)
+        if st == SETUP_NOT_READY and self.lib.tscvx_check_workspace(self.ws, why) and why.value:
+            message += f": {why.value.decode()}"
+        return message
+
     def _make_data(self) -> _Data:
         d = _Data()
         d.n, d.p, d.m = self.n, self._Aeq.shape[0], self._G.shape[0]
@@ -607,7 +617,8 @@ class Solver:
         """New numbers, same sparsity: q and b of lengths n and m, A_values / P_values in the
         caller's value order of the set-up's A / P (``A.data`` for CSC, CSR and COO, else
         ``csc_matrix(A).data``). An array that does not fit raises InvalidProblemError before
-        anything changes. Returns the C setup status (0 = ok)."""
+        anything changes. Returns the C setup status (0 = ok); ``message`` says why it refused
+        (the array and entry at fault, or what tscvx_check_workspace finds)."""
         new = self._checked_update(q, A_values, b, P_values)
         if not self.ready:
             return self.setup_status
@@ -622,7 +633,7 @@ class Solver:
         if "P_values" in new and self._P is not None:
             self._P.data[:] = new["P_values"][self.split.P.order]  # type: ignore[union-attr]
         st = self._send(new)
-        self.message = "ok" if st == 0 else self.lib.tscvx_setup_status_message(st).decode()
+        self.message = "ok" if st == 0 else self._update_message(st)
         self._data_message = self.message  # why a solve is refused until the next update
         return st
 

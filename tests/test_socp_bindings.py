@@ -926,3 +926,21 @@ def test_check_workspace_says_why_the_workspace_is_refused() -> None:
     refused = csocp.Solver(prob, max_iter=0)  # no workspace: the set-up's status and message
     assert not refused.ready and refused.setup_status != 0
     assert refused.check_workspace() == (refused.setup_status, refused.message)
+
+
+def test_a_refused_update_names_the_array_and_entry_at_fault() -> None:
+    """update() said only "NaN or infinity in the problem data" (set-up names the entry) and,
+    on a damaged workspace, not what tscvx_check_workspace finds; now both say which."""
+    prob = random_feasible(3, n=10, with_P=True)
+    solver = csocp.Solver(prob)
+    q = prob.q.copy()
+    q[4] = np.inf
+    assert solver.update(q=q) == 7  # TSCVX_SETUP_NONFINITE_DATA
+    assert "(c[4] = inf;" in solver.message
+    assert "(c[4] = inf;" in solver.solve().info["message"]  # the reason a solve is refused
+    assert solver.update(q=prob.q) == 0 and solver.message == "ok"
+    arena = solver.arena
+    arena[(-arena.ctypes.data) % 16 + 20] ^= 0x10  # a bit of the workspace struct's head
+    assert solver.update(q=prob.q) == csocp.SETUP_NOT_READY
+    _, why = solver.check_workspace()
+    assert why.startswith("workspace damaged") and solver.message.endswith(f": {why}")
