@@ -73,6 +73,7 @@ from guidance.tscvx import REDUCED_ETA_INIT
 
 MESSAGE_LEN = 256
 STATUS_NAMES = ("solved", "infeasible", "max_iterations", "solver_error", "invalid_input")
+PDG_INVALID_INPUT = STATUS_NAMES.index("invalid_input")  # pdg_status (tscvx_guidance.h)
 SOCP_STATUS_NAMES = SOLVE_STATUS  # one table of the SOCP runtime's statuses (csocp)
 
 _d = ct.c_double
@@ -472,7 +473,7 @@ def _collect(
     lib = ws.lib
     N = ws.N
     message = res.message.decode()
-    if status == 4:  # PDG_INVALID_INPUT
+    if status == PDG_INVALID_INPUT:
         raise _refusal(message)
     history = []
     row = _LogRow()
@@ -531,6 +532,17 @@ NET_KINDS = (SOLUTION, CONSTRAINT)  # the C call's order: the warm start's, then
 
 class FlightNetsError(InputError):
     """The C library refused the networks for this problem; the message says why."""
+
+
+class FlightStatusError(RuntimeError):
+    """A C call that returns no SCvxResult (tscvx_guess_c) ended in a status that is not a
+    refusal, e.g. PDG_SOLVER_ERROR for a solution network whose prediction is not finite:
+    ``status`` its name as SCvxResult.status gives it ("solver_error"), ``reason`` (and the
+    message) the library's, as SCvxResult.reason."""
+
+    def __init__(self, status: str, reason: str) -> None:
+        super().__init__(f"{status}: {reason}")
+        self.status, self.reason = status, reason
 
 
 def net_source(models_dir: Path, kind: str) -> Path:
@@ -661,9 +673,9 @@ def solve_tscvx_c(
         status = lib.pdg_solve_tscvx(ws.ws, ct.byref(cs), ct.byref(opt), ct.byref(res),
                                      ct.byref(rep))  # fmt: skip
         solve_time = time.perf_counter() - t_start
-    if status == 4 and res.message.startswith(b"nets: "):
+    if status == PDG_INVALID_INPUT and res.message.startswith(b"nets: "):
         raise FlightNetsError(res.message.decode())
-    if status != 4:  # on PDG_INVALID_INPUT no radius was taken; _collect raises the message
+    if rep.eta_init > 0:  # 0: no solve started (a refusal, or the warm start's inference failed)
         ran_with = ran_with.replace(eta_init=float(rep.eta_init))
     out = _collect(ws, status, res, x, u, solve_time, ran_with)
     out.tscvx_report = {  # type: ignore[attr-defined]
@@ -703,7 +715,9 @@ def _check_net(what: str, net: object) -> None:
 def tscvx_guess_c(
     scenario: Scenario, models_dir: Path | str | None = None, net=None
 ) -> tuple[np.ndarray, np.ndarray, float]:
-    """The projected warm start computed on board (pdg_tscvx_guess)."""
+    """The projected warm start computed on board (pdg_tscvx_guess). A refusal raises
+    FlightNetsError (the networks) or InputError; a failed inference (PDG_SOLVER_ERROR)
+    FlightStatusError with status "solver_error" and the library's reason."""
     _check_net("net", net)
     sol = net if net is not None else _nets(models_dir, False, scenario.params)[0]
     ws = workspace(scenario)
@@ -713,9 +727,11 @@ def tscvx_guess_c(
     with _holding(sol):
         st = library().pdg_tscvx_guess(ws.ws, ct.byref(c_scenario(scenario)), sol._net,
                                        _dptr(x), _dptr(u), ct.byref(tf), msg)  # fmt: skip
-    if st != 0:
-        text = msg.value.decode()
+    text = msg.value.decode()
+    if st == PDG_INVALID_INPUT:
         raise (FlightNetsError if text.startswith("nets: ") else InputError)(text)
+    if st != 0:
+        raise FlightStatusError(STATUS_NAMES[st] if 0 < st < len(STATUS_NAMES) else str(st), text)
     return x, u, tf.value
 
 

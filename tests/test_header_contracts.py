@@ -11,13 +11,13 @@ from __future__ import annotations
 import ctypes
 import math
 import re
-import struct
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 import pytest
+from c_library import nan_output_net
 
 from guidance import cguidance, csocp
 from guidance.params import NU, NX, Scenario
@@ -439,17 +439,6 @@ def test_a_data_refusal_is_the_status_whose_comment_names_it(
 NETS = cguidance.BUILD_MODELS_DIR
 
 
-def _nan_output_net():
-    """The shipped solution network with out_mean[0] NaN in its blob (read in place: init
-    checked the blob before), so that every prediction has a NaN entry."""
-    from guidance.nn.flight import FlightNet
-
-    net = FlightNet(NETS / "solution.tnn")
-    at = 128 + 8 * 2 * net.d_in  # header, in_mean, in_scale: out_mean[0]
-    ctypes.memmove(ctypes.addressof(net._blob) + at, struct.pack("<d", math.nan), 8)
-    return net
-
-
 def _function_comment(header: str, name: str) -> str:
     """The comment just before a function's declaration."""
     at = header.index(f" {name}(")
@@ -463,7 +452,7 @@ def test_a_solution_network_that_fails_returns_what_the_header_says() -> None:
     with its outputs untouched; the header listed neither (PDG_SOLVER_ERROR's comment said
     x and u then hold the last accepted iterate, t_f's comment left the case out, and
     pdg_tscvx_guess named PDG_INVALID_INPUT alone)."""
-    lib, net = cguidance.library(), _nan_output_net()
+    lib, net = cguidance.library(), nan_output_net()
     scn = Scenario()
     ws, cs = cguidance.workspace(scn), cguidance.c_scenario(scn)
     N = scn.params.N

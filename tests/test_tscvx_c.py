@@ -22,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from c_library import nan_output_net
 
 from guidance import cguidance
 from guidance.catalog import SCENARIOS
@@ -409,3 +410,21 @@ def test_cli_refuses_a_network_file_it_cannot_read(tmp_path: Path, monkeypatch, 
     err = capsys.readouterr().err
     assert "solution.tnn" in err and "Permission denied" in err
     assert not (tmp_path / "out.npz").exists()
+
+
+def test_a_failed_warm_start_inference_is_a_solver_error_not_bad_input() -> None:
+    """pdg_tscvx_guess's PDG_SOLVER_ERROR (a solution network whose prediction is not finite)
+    became an InputError in tscvx_guess_c, and solve_tscvx_c with that network raised one
+    (it read the report's eta_init 0, no solve started, as the radius it ran with). Now the
+    status and reason of the whole call, which are the Python reference's (guidance.tscvx)."""
+    net = nan_output_net()
+    scn = SCENARIOS["default"]
+    with pytest.raises(cguidance.FlightStatusError) as raised:
+        cguidance.tscvx_guess_c(scn, net=net)
+    assert not isinstance(raised.value, InputError)
+    whole = cguidance.solve_tscvx_c(scn, nets=(net, None))
+    assert (raised.value.status, raised.value.reason) == (whole.status, whole.reason)
+    assert whole.status == "solver_error" and np.isnan(whole.t_f) and np.isnan(whole.x).all()
+    assert whole.reason == (
+        "solution network: the network output is not finite (overflow inside the network)"
+    )

@@ -461,7 +461,9 @@ typedef struct {
     int masks_predicted;   /* subproblems that used a constraint-network mask */
     int mask_failures;     /* mask inferences refused by the network (non-finite output):
                               those subproblems were the full one */
-    double eta_init;       /* trust radius the solve started from */
+    double eta_init;       /* trust radius the solve started from; 0 when no solve
+                              started (a refusal, or the solution network's prediction not
+                              finite) */
 } pdg_tscvx_report;
 
 /* theta of a scenario (PDG_THETA_LEN numbers, guidance/dataset.py theta_of);
