@@ -357,7 +357,11 @@ tscvx_setup_status tscvx_get_solution(const tscvx_workspace *ws, tscvx_float *x,
 tscvx_setup_status tscvx_get_info(const tscvx_workspace *ws, tscvx_info *info);
 
 /* Row k (0 <= k <= info.iterations) of the last solve's iteration log;
- * TSCVX_SETUP_NO_SOLUTION before a solve (since setup or the last data update). */
+ * TSCVX_SETUP_NO_SOLUTION before a solve (since setup or the last data update). Row 0 is
+ * the start point (step 0). A solve that failed before it (TSCVX_NUMERICAL_ERROR with 0
+ * iterations: the start's factorization or solves failed, e.g. on overflow) computed no
+ * iterate: row 0 then holds iter 0, step 0 and NaN costs, gap, residuals and mu, and so
+ * does the info (its costs, gaps, residuals and mu NaN, as before a solve). */
 tscvx_setup_status tscvx_get_iter_log(const tscvx_workspace *ws, tscvx_int k,
                                       tscvx_iter_log *row);
 

@@ -532,8 +532,11 @@ static tscvx_solve_status ipm_run(tscvx_workspace *ws, int warm) {
     ws->refine_now = ws->st.refine_iters;
     ws->info.warm_started = 0;
     if (ws->method->load(ws) != 0 || initialize(ws, warm) != 0) {
-        log_row(ws, 0, &r, 0.0); /* row 0 of the log, as the info says: no iterate */
-        finish_info(ws, TSCVX_NUMERICAL_ERROR, 0, &r);
+        /* no iterate: row 0 of the log and the info hold NaN for the costs, gaps,
+         * residuals and mu, never computed (as before a solve; 0 read as a perfect answer) */
+        const measures none = {NAN, NAN, NAN, NAN, NAN, NAN, NAN};
+        log_row(ws, 0, &none, 0.0);
+        finish_info(ws, TSCVX_NUMERICAL_ERROR, 0, &none);
         return TSCVX_NUMERICAL_ERROR;
     }
     for (k = 0; k <= ws->st.max_iter; k++) {

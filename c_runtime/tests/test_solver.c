@@ -1610,6 +1610,39 @@ static void test_warm_start_from_its_own_answer(void) {
           info.pcost, cold);
 }
 
+/* A solve that fails before its first iterate (NUMERICAL_ERROR, 0 iterations) computed no
+ * cost, gap, residual or mu: the log's row 0 and the info hold NaN for them (as before any
+ * solve), not 0 (which read as a zero gap and residuals). The start fails here on overflow:
+ * min 1e300 x1 + x2 s.t. 1e300 x1 = 1e300, x >= 0. Under every KKT method. */
+static void test_start_failure_logs_nan(void) {
+    tscvx_int Ap[] = {0, 1, 1}, Ai[] = {0}, Gp[] = {0, 1, 2}, Gi[] = {0, 1};
+    tscvx_float c[] = {1e300, 1}, Ax[] = {1e300}, b[] = {1e300}, Gx[] = {-1, -1}, h[] = {0, 0};
+    tscvx_data d = {2, 1, 2, NULL, NULL, NULL, c, Ap, Ai, Ax, b, Gp, Gi, Gx, h, 2, 0, NULL};
+    const tscvx_int methods[] = {TSCVX_KKT_AUTO, TSCVX_KKT_STATIC, TSCVX_KKT_LDL};
+    for (size_t k = 0; k < sizeof methods / sizeof methods[0]; k++) {
+        tscvx_settings st;
+        tscvx_default_settings(&st);
+        st.kkt_backend = methods[k];
+        tscvx_workspace *ws = NULL;
+        CHECK(tscvx_setup(&ws, arena2, sizeof arena2, &d, &st) == TSCVX_SETUP_OK && ws,
+              "method %d: setup", (int)methods[k]);
+        if (ws == NULL) continue;
+        tscvx_info info;
+        tscvx_iter_log row;
+        CHECK(tscvx_solve(ws) == TSCVX_NUMERICAL_ERROR, "method %d: status", (int)methods[k]);
+        CHECK(tscvx_get_info(ws, &info) == TSCVX_SETUP_OK && info.iterations == 0 &&
+                  isnan(info.pcost) && isnan(info.dcost) && isnan(info.gap_abs) &&
+                  isnan(info.gap_rel) && isnan(info.pres) && isnan(info.dres) && isnan(info.mu),
+              "method %d: info %d iterations, pcost %g pres %g dres %g", (int)methods[k],
+              (int)info.iterations, info.pcost, info.pres, info.dres);
+        CHECK(tscvx_get_iter_log(ws, 0, &row) == TSCVX_SETUP_OK && row.iter == 0 &&
+                  isnan(row.pcost) && isnan(row.dcost) && isnan(row.gap) && isnan(row.pres) &&
+                  isnan(row.dres) && isnan(row.mu) && row.step == 0.0,
+              "method %d: log row 0 pcost %g gap %g pres %g dres %g mu %g step %g",
+              (int)methods[k], row.pcost, row.gap, row.pres, row.dres, row.mu, row.step);
+    }
+}
+
 int main(void) {
     test_soc();
     test_qp();
@@ -1630,6 +1663,7 @@ int main(void) {
     test_warm_start();
     test_warm_start_from_its_own_answer();
     test_fuzz_structure();
+    test_start_failure_logs_nan();
     test_upsets(TSCVX_KKT_AUTO, 16);
     test_upsets(TSCVX_KKT_STATIC, 16);
     test_upsets(TSCVX_KKT_STATIC, 2);
