@@ -747,10 +747,13 @@ pdg_setup_status pdg_setup(pdg_workspace **ws, void *arena_mem, size_t arena_byt
                            const pdg_params *vehicle, const pdg_settings *settings)
 {
     size_t need = 0;
-    if (!ws || !arena_mem) {
+    if (!ws) {
         return PDG_SETUP_NULL_ARGUMENT;
     }
-    *ws = NULL;
+    *ws = NULL; /* whatever is refused below: no workspace */
+    if (!arena_mem) {
+        return PDG_SETUP_NULL_ARGUMENT;
+    }
     return build(arena_mem, arena_bytes, vehicle, settings, BUILD_SETUP, ws, &need);
 }
 

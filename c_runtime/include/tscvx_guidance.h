@@ -383,6 +383,9 @@ pdg_setup_status pdg_check_vehicle(const pdg_params *vehicle, char *message);
 pdg_setup_status pdg_workspace_size(const pdg_params *vehicle, const pdg_settings *settings,
                                     void *scratch, size_t scratch_bytes, size_t *bytes);
 
+/* Builds the workspace in `arena` (arena_bytes from pdg_workspace_size). On success *ws
+ * points into the arena; on any refusal (a NULL arena included) *ws is NULL (ws itself
+ * NULL: PDG_SETUP_NULL_ARGUMENT, nothing written). */
 pdg_setup_status pdg_setup(pdg_workspace **ws, void *arena, size_t arena_bytes,
                            const pdg_params *vehicle, const pdg_settings *settings);
 

@@ -148,7 +148,9 @@ tscvx_nn_status tscvx_nn_check_blob(const void *blob, size_t len, char *message)
 tscvx_nn_status tscvx_nn_arena_size(const void *blob, size_t len, unsigned flags, size_t *bytes);
 
 /* Validates `blob` and builds the net in `arena` (any alignment; `arena_bytes` at least
- * tscvx_nn_arena_size()). On success *net points into the arena. The arena, all
+ * tscvx_nn_arena_size()). On success *net points into the arena; on any refusal *net is NULL
+ * (net itself NULL: TSCVX_NN_NULL_ARGUMENT, nothing written), as tscvx_setup and pdg_setup
+ * leave their workspace pointer. The arena, all
  * `arena_bytes` of it, is the net's until the caller drops the net: a blob within it is
  * TSCVX_NN_BAD_BUFFER (init would write over the weights it reads). */
 tscvx_nn_status tscvx_nn_init(tscvx_nn **net, void *arena, size_t arena_bytes, const void *blob,

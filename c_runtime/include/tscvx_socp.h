@@ -295,7 +295,9 @@ tscvx_setup_status tscvx_workspace_size(const tscvx_data *data, const tscvx_sett
                                         void *scratch, size_t scratch_bytes,
                                         size_t *arena_bytes);
 
-/* Builds the workspace inside `arena` (16-byte aligned is best; any alignment works). */
+/* Builds the workspace inside `arena` (16-byte aligned is best; any alignment works). On
+ * success *ws points into the arena; on any refusal (a NULL arena included) *ws is NULL
+ * (ws itself NULL: TSCVX_SETUP_NULL_ARGUMENT, nothing written). */
 tscvx_setup_status tscvx_setup(tscvx_workspace **ws, void *arena, size_t arena_bytes,
                                const tscvx_data *data, const tscvx_settings *settings);
 

@@ -615,10 +615,13 @@ tscvx_nn_status tscvx_nn_init(tscvx_nn **out, void *arena, size_t arena_bytes, c
     size_t need;
     int copy;
 
-    if (!out || !arena || !blob) {
+    if (!out) {
         return TSCVX_NN_NULL_ARGUMENT;
     }
-    *out = NULL;
+    *out = NULL; /* whatever is refused below: no net */
+    if (!arena || !blob) {
+        return TSCVX_NN_NULL_ARGUMENT;
+    }
     st = check_init(arena_bytes, blob, len, flags, &hd, &copy, &need);
     if (st != TSCVX_NN_OK) {
         return st;

@@ -661,8 +661,9 @@ tscvx_setup_status tscvx_workspace_size(const tscvx_data *data, const tscvx_sett
 
 tscvx_setup_status tscvx_setup(tscvx_workspace **ws, void *arena, size_t arena_bytes,
                                const tscvx_data *data, const tscvx_settings *settings) {
-    if (ws == NULL || arena == NULL) return TSCVX_SETUP_NULL_ARGUMENT;
-    *ws = NULL;
+    if (ws == NULL) return TSCVX_SETUP_NULL_ARGUMENT;
+    *ws = NULL; /* whatever is refused below: no workspace */
+    if (arena == NULL) return TSCVX_SETUP_NULL_ARGUMENT;
     tscvx_arena a;
     arena_init(&a, arena, arena_bytes);
     size_t unused = 0;

@@ -265,6 +265,13 @@ static void test_bad_input(void) {
     tscvx_float Px[] = {1, 1}, Gx[] = {-1, -1}, h[] = {1, 0, 0}, c[] = {-1, -1};
     tscvx_data ok = {2, 0, 3, Pp, Pi, Px, c, NULL, NULL, NULL, NULL, Gp, Gi, Gx, h, 0, 1, q};
     CHECK(try_setup(&ok) == TSCVX_SETUP_OK, "valid data refused");
+    { /* a refused set-up leaves *ws NULL, a NULL arena too (it left *ws untouched) */
+        tscvx_settings st;
+        tscvx_default_settings(&st);
+        tscvx_workspace *ws = (tscvx_workspace *)(void *)arena;
+        CHECK(tscvx_setup(&ws, NULL, sizeof arena, &ok, &st) == TSCVX_SETUP_NULL_ARGUMENT &&
+                  ws == NULL, "NULL arena: *ws %p", (void *)ws);
+    }
     char msg[TSCVX_MESSAGE_LEN];
     CHECK(tscvx_check_data(&ok, msg) == TSCVX_SETUP_OK && msg[0] == '\0', "check_data(ok)");
     tscvx_data d = ok;

@@ -182,6 +182,9 @@ static void test_settings_and_sizes(void)
     CHECK(pdg_setup(&ws, buf, sizeof buf, vehicle(50, 1), &st) == PDG_SETUP_ARENA_TOO_SMALL);
     CHECK(pdg_setup(NULL, buf, sizeof buf, vehicle(50, 1), &st) == PDG_SETUP_NULL_ARGUMENT);
     CHECK(pdg_setup(&ws, buf, sizeof buf, NULL, &st) == PDG_SETUP_NULL_ARGUMENT);
+    ws = (pdg_workspace *)buf; /* a refused set-up leaves *ws NULL, a NULL arena too */
+    CHECK(pdg_setup(&ws, NULL, sizeof buf, vehicle(50, 1), &st) == PDG_SETUP_NULL_ARGUMENT);
+    CHECK(ws == NULL);
     CHECK(pdg_workspace_size(NULL, &st, NULL, 0, &need) == PDG_SETUP_NULL_ARGUMENT);
     CHECK(strcmp(pdg_status_name(PDG_INFEASIBLE), "infeasible") == 0);
     CHECK(strcmp(pdg_status_name((pdg_status)99), "unknown") == 0);

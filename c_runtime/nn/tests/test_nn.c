@@ -585,7 +585,13 @@ static void test_bad_blobs(void)
     CHECK_ST(tscvx_nn_arena_size(good, len, 0, NULL), TSCVX_NN_NULL_ARGUMENT);
     CHECK_ST(tscvx_nn_arena_size(good, len, 2u, &need), TSCVX_NN_BAD_FLAGS);
     CHECK_ST(tscvx_nn_init(NULL, good, len, good, len, 0), TSCVX_NN_NULL_ARGUMENT);
+    /* a refused init leaves *net NULL, as tscvx_setup and pdg_setup do (a NULL arena or blob
+     * left it untouched: a stale net a caller could go on using) */
+    net = (tscvx_nn *)good;
     CHECK_ST(tscvx_nn_init(&net, NULL, len, good, len, 0), TSCVX_NN_NULL_ARGUMENT);
+    CHECK(net == NULL);
+    net = (tscvx_nn *)good;
+    CHECK_ST(tscvx_nn_init(&net, good + len, len, NULL, len, 0), TSCVX_NN_NULL_ARGUMENT);
     CHECK(net == NULL);
 
     /* magic, version, header size */
