@@ -46,6 +46,9 @@ CONSTRAINT_NAMES = (
     "thrust_min",  # 6  T_min <= |T|   (nonconvex)
 )
 NC = len(CONSTRAINT_NAMES)
+# Constraints every subproblem keeps whatever their mask bit (T_min: nonconvex, its buffer is
+# penalized instead; c_runtime/guidance/pdg_scvx.c keeps the same in keep[]).
+ALWAYS_KEPT = ("thrust_min",)
 
 # Table 1 quantities from which the contract's derived values are computed.
 I_SP = 30.0  # U_T, specific impulse (g0 = 1)

@@ -24,7 +24,19 @@ import scipy.sparse as sp
 
 from guidance.conic import ConeKind, ConicProblem
 from guidance.model import transition_pattern
-from guidance.params import IM, IR, IV, IW, NC, NU, NX, Params, Scenario
+from guidance.params import (
+    ALWAYS_KEPT,
+    CONSTRAINT_NAMES,
+    IM,
+    IR,
+    IV,
+    IW,
+    NC,
+    NU,
+    NX,
+    Params,
+    Scenario,
+)
 
 # Cone dimension of each path constraint (mask order); 1 = a linear row.
 CONE_DIMS = (1, 3, 3, 4, 4, 4, 1)
@@ -168,7 +180,7 @@ class SubproblemTemplate:
         if mask.shape != (NC * N,):
             raise ValueError(f"mask must have {NC * N} entries (7N), got {mask.shape}")
         mask = mask.reshape(N, NC).copy()
-        mask[:, 6] = True
+        mask[:, [CONSTRAINT_NAMES.index(name) for name in ALWAYS_KEPT]] = True
         self.mask = mask
         self._build()
 

@@ -15,17 +15,15 @@ from typing import Any
 
 import numpy as np
 
-from guidance.params import CONSTRAINT_NAMES
+from guidance.params import ALWAYS_KEPT, CONSTRAINT_NAMES
 
 RATES = ("precision", "recall", "f1")
 
-# Constraints the flight code keeps whatever their mask bit: T_min (guidance/subproblem.py
-# sets its mask column, tpl.mask; c_runtime/guidance/pdg_scvx.c its keep[] bit). Predicting
-# or missing such a bit changes nothing that is solved, so the headline scores of the
-# constraint network (test, OOD, per iteration) and of the mask ceiling, and the threshold's
-# recall target, count only the other bits (metrics key "headline_excludes"; before 28 Nov
-# 2026 they counted all 7N).
-ALWAYS_KEPT = ("thrust_min",)
+# The constraints the flight code keeps whatever their mask bit (params.ALWAYS_KEPT: T_min).
+# Predicting or missing such a bit changes nothing that is solved, so the headline scores of
+# the constraint network (test, OOD, per iteration) and of the mask ceiling, and the
+# threshold's recall target, count only the other bits (metrics key "headline_excludes";
+# before 28 Nov 2026 they counted all 7N).
 
 
 def droppable_bits(n_bits: int) -> np.ndarray:
