@@ -100,7 +100,8 @@ class _Scenario(ct.Structure):
 
 SETTING_FIELDS = (
     "lam", "rho0", "rho1", "rho2", "alpha", "beta", "eta_init", "eta_lb", "eta_ub",
-    "iter_max", "max_subproblems", "step_tol", "vc_tol", "defect_tol", "rk4_substeps",
+    "iter_max", "max_subproblems", "step_tol", "cost_tol", "vc_tol", "defect_tol",
+    "rk4_substeps",
     "tight_tol", "socp_tol", "socp_max_iter", "socp_max_iter_total", "socp_warm_start",
     "tau_r_update", "prox_u", "polish",
 )  # fmt: skip

@@ -12,6 +12,7 @@ rho = dJ / dL >= rho0; the trust radius follows Eq. (15), or its tau_r-scaled fo
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
@@ -53,6 +54,12 @@ CONVERGED_AT_REFERENCE = (
     "converged; the step at the smallest trust radius, within step_tol, was rejected: "
     "the iterate kept"
 )
+
+# The reason of a solve whose last accepted step was longer than step_tol but changed the
+# penalty cost J by at most cost_tol (paper Algorithm 1: while dJ > eps_tol), every other
+# tolerance met: a creep along a flat valley of J, which the step test alone let run to the
+# iteration limit (C: pdg_scvx.c, the same words).
+CONVERGED_ON_COST = "converged; the accepted step changed J by at most cost_tol"
 
 
 # The reasons of a solve stopped short of convergence by its iteration limit (_diagnose; C:
@@ -370,8 +377,9 @@ class SCvxSolver:
         if record.accepted:
             self._succeed(s, cand, pred)
         # 5. convergence on the FULL constraint set; T-SCvx never returns what it rejects
-        if record.accepted and self._converged(s, cand):
-            s.status, s.reason = "solved", "converged"
+        if record.accepted and self._converged(s, cand, record.dJ):
+            step_met = cand.step <= st.step_tol
+            s.status, s.reason = "solved", "converged" if step_met else CONVERGED_ON_COST
             return False
         if not record.accepted and not record.restored:
             if s.eta <= st.eta_lb:  # same reference, same radius: rejected forever
@@ -510,10 +518,13 @@ class SCvxSolver:
         s.z, s.disc, s.J, s.defect, s.viol = c.z, c.disc, c.J, c.defect, c.viol
         self.trace.append(s.z.copy())
 
-    def _converged(self, s: _LoopState, c: _Candidate) -> bool:
+    def _converged(self, s: _LoopState, c: _Candidate, dJ: float = math.inf) -> bool:
+        """The convergence test: the step within step_tol, or the change of J it made (dJ,
+        accepted steps only) within cost_tol; the virtual control within vc_tol; the iterate
+        (the candidate when accepted) within defect_tol."""
         st = self.st
         return (
-            c.step <= st.step_tol
+            (c.step <= st.step_tol or abs(dJ) <= st.cost_tol)
             and s.vc <= st.vc_tol
             and s.defect <= st.defect_tol
             and s.viol <= st.defect_tol

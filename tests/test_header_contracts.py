@@ -149,7 +149,7 @@ PDG_SETTINGS: dict[str, Documented] = {
     "eta_ub": Documented(("0 < eta_lb <= eta_ub",), _closed(0.001), also={"eta_init": 0.001}),
     **{
         t: Documented((">= 0",), _closed(0.0))
-        for t in ("step_tol", "vc_tol", "defect_tol", "tight_tol")
+        for t in ("step_tol", "cost_tol", "vc_tol", "defect_tol", "tight_tol")
     },
     "socp_tol": Documented(("(0, 1)",), *UNIT),
     "prox_u": Documented(("w >= 0", "at most PDG_PROX_U_MAX"), _closed(0.0), _closed(PROX_U_MAX)),

@@ -63,8 +63,9 @@ static double *scenario_field(pdg_scenario *s, unsigned k)
 static double *settings_field(pdg_settings *st, unsigned k)
 {
     double *const f[] = {&st->lam, &st->rho0, &st->rho1, &st->rho2, &st->alpha, &st->beta,
-                         &st->eta_init, &st->eta_lb, &st->eta_ub, &st->step_tol, &st->vc_tol,
-                         &st->defect_tol, &st->tight_tol, &st->socp_tol, &st->prox_u};
+                         &st->eta_init, &st->eta_lb, &st->eta_ub, &st->step_tol,
+                         &st->cost_tol, &st->vc_tol, &st->defect_tol, &st->tight_tol,
+                         &st->socp_tol, &st->prox_u};
     return f[k % (sizeof f / sizeof f[0])];
 }
 

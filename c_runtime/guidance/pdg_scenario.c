@@ -70,6 +70,7 @@ pdg_setup_status pdg_default_settings(pdg_settings *st)
     st->iter_max = 20;
     st->max_subproblems = 60;
     st->step_tol = 5e-3;
+    st->cost_tol = 1e-5;
     st->vc_tol = 1e-6;
     st->defect_tol = 1e-5;
     st->rk4_substeps = 2;

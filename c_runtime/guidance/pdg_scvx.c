@@ -133,7 +133,8 @@ static int numbers_fault(const pdg_settings *s, char *text)
     } d[] = {{"lam", s->lam},         {"rho0", s->rho0},           {"rho1", s->rho1},
              {"rho2", s->rho2},       {"alpha", s->alpha},         {"beta", s->beta},
              {"eta_init", s->eta_init}, {"eta_lb", s->eta_lb},     {"eta_ub", s->eta_ub},
-             {"step_tol", s->step_tol}, {"vc_tol", s->vc_tol},     {"defect_tol", s->defect_tol},
+             {"step_tol", s->step_tol}, {"cost_tol", s->cost_tol}, {"vc_tol", s->vc_tol},
+             {"defect_tol", s->defect_tol},
              {"tight_tol", s->tight_tol}, {"prox_u", s->prox_u},     {"socp_tol", s->socp_tol}};
     const struct {
         const char *name;
@@ -213,8 +214,9 @@ static int tolerance_fault(const pdg_settings *s, char *text)
     const struct {
         const char *name;
         double v;
-    } nonneg[] = {{"step_tol", s->step_tol},   {"vc_tol", s->vc_tol},
-                  {"defect_tol", s->defect_tol}, {"tight_tol", s->tight_tol}};
+    } nonneg[] = {{"step_tol", s->step_tol},     {"cost_tol", s->cost_tol},
+                  {"vc_tol", s->vc_tol},         {"defect_tol", s->defect_tol},
+                  {"tight_tol", s->tight_tol}};
     size_t i;
     if (!(s->alpha >= PDG_ALPHA_MIN)) {
         snprintf(text, SETTING_TEXT,
@@ -414,6 +416,7 @@ static void copy_settings(pdg_settings *d, const pdg_settings *s)
     d->iter_max = s->iter_max;
     d->max_subproblems = s->max_subproblems;
     d->step_tol = s->step_tol;
+    d->cost_tol = s->cost_tol;
     d->vc_tol = s->vc_tol;
     d->defect_tol = s->defect_tol;
     d->rk4_substeps = s->rk4_substeps;
@@ -1565,12 +1568,15 @@ static void budget_spent(const pdg_workspace *ws, scvx_state *s, pdg_result *res
              s->k, s->defect, s->viol);
 }
 
-/* The convergence test: the candidate's step within step_tol, its virtual control within
- * vc_tol, and the iterate (the candidate when accepted) within defect_tol. */
-static int converged(const pdg_settings *st, const scvx_state *s, const candidate *cd)
+/* The convergence test: the candidate's step within step_tol, or the change of J it made
+ * (dJ, accepted steps only; INFINITY otherwise) within cost_tol (paper Algorithm 1: while
+ * dJ > eps_tol); its virtual control within vc_tol; the iterate (the candidate when
+ * accepted) within defect_tol. */
+static int converged(const pdg_settings *st, const scvx_state *s, const candidate *cd,
+                     double dJ)
 {
-    return cd->step <= st->step_tol && s->vc <= st->vc_tol && s->defect <= st->defect_tol &&
-           s->viol <= st->defect_tol;
+    return (cd->step <= st->step_tol || fabs(dJ) <= st->cost_tol) && s->vc <= st->vc_tol &&
+           s->defect <= st->defect_tol && s->viol <= st->defect_tol;
 }
 
 /* One subproblem of Algorithm 1 (Algorithm 2 with masks). Returns 1 to go on; 0 to stop,
@@ -1650,9 +1656,14 @@ static int scvx_iteration(pdg_workspace *ws, const pdg_options *opt, scvx_state 
         succeed(ws, s, &cd, has_mask);
     }
     /* step 5: convergence on the FULL constraint set; T-SCvx never returns what it rejects */
-    if (r->accepted && converged(st, s, &cd)) {
+    if (r->accepted && converged(st, s, &cd, r->dJ)) {
         *status = PDG_SOLVED;
-        snprintf(res->message, PDG_MESSAGE_LEN, "converged");
+        /* a step longer than step_tol that changed J by at most cost_tol: a creep along a
+         * flat valley of J (guidance/scvx.py CONVERGED_ON_COST) */
+        snprintf(res->message, PDG_MESSAGE_LEN, "%s",
+                 cd.step <= st->step_tol
+                     ? "converged"
+                     : "converged; the accepted step changed J by at most cost_tol");
         return 0;
     }
     if (!r->accepted && !r->restored) {
@@ -1661,7 +1672,7 @@ static int scvx_iteration(pdg_workspace *ws, const pdg_options *opt, scvx_state 
              * times a step's second-order defects outweighs its gain (the Maratos effect);
              * a reference that meets every tolerance is returned, solved
              * (guidance/scvx.py CONVERGED_AT_REFERENCE) */
-            if (converged(st, s, &cd)) {
+            if (converged(st, s, &cd, INFINITY)) {
                 *status = PDG_SOLVED;
                 snprintf(res->message, PDG_MESSAGE_LEN,
                          "converged; the step at the smallest trust radius, within step_tol, "

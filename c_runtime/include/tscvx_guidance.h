@@ -241,6 +241,8 @@ typedef struct {
     int iter_max;           /* accepted steps at most, 1..100 */
     int max_subproblems;    /* subproblem solves at most (rejections included), 1..500 */
     double step_tol;        /* convergence: scaled inf-norm of an accepted step, >= 0 */
+    double cost_tol;        /* or convergence: |dJ| of an accepted step (paper Algorithm 1's
+                               eps_tol; J scaled, fuel over m0 - m_dry), >= 0 */
     double vc_tol;          /* convergence: virtual control + buffers (scaled), >= 0 */
     double defect_tol;      /* convergence: nonlinear defects and path constraints, >= 0 */
     int rk4_substeps;       /* RK4 steps per FOH interval at least, 1..64; a grid coarser

@@ -499,12 +499,15 @@ static tscvx_solve_status fallback(tscvx_workspace *ws, tscvx_solve_status why, 
 /* Mehrotra predictor: affine direction (ds = lambda o lambda, dk = tau kappa, full residual
  * targets); returns -1 on failure, else writes the centering sigma = (1 - alpha_aff)^3.
  * The affine direction only sets sigma and the second-order term: no refinement (with the
- * sparse SOC expansion, whose solves need it, as many steps as the other solves). */
+ * sparse SOC expansion, whose solves need it, as many steps as the other solves).
+ * The cube is two multiplications, not libm's pow: IEEE 754 fixes their rounding, not pow's,
+ * so the iterates are the same bits under any libm (the RAD750's included). */
 static int predictor(tscvx_workspace *ws, tscvx_float *sigma) {
     tscvx_cone_prod(&ws->K, ws->lambda, ws->lambda, ws->wm2);
     const tscvx_int refine = ws->kkt.nexp > 0 ? ws->refine_now : 0;
     if (direction(ws, 1.0, ws->wm2, ws->tau * ws->kappa, refine) != 0) return -1;
-    *sigma = pow(1.0 - max_step(ws, 1.0), 3.0);
+    const tscvx_float one_minus_alpha = 1.0 - max_step(ws, 1.0);
+    *sigma = one_minus_alpha * one_minus_alpha * one_minus_alpha;
     return 0;
 }
 
