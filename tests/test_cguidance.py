@@ -564,7 +564,7 @@ def test_two_non_finite_settings_are_named_alike_in_python_and_c() -> None:
             named = str(py.value).split()[0]
             if not str(c.value).startswith(f"settings.{named}: must be finite"):
                 differ.append((a, b, str(py.value), str(c.value)))
-    assert len(reals) == 15 and not differ, differ
+    assert len(reals) == 16 and not differ, differ
 
 
 def test_the_unit_quaternion_limit_is_judged_alike_to_the_last_bit() -> None:
