@@ -358,7 +358,10 @@ def cmd_dispersion(args: argparse.Namespace) -> int:
 
 def cmd_verify(args: argparse.Namespace) -> int:
     tol = file_check.Tolerances(
-        landing=args.tol_landing, path=args.tol_path, node_deviation=args.tol_nodes
+        landing=args.tol_landing,
+        path=args.tol_path,
+        node_deviation=args.tol_nodes,
+        flown_path=args.tol_flown,
     )
     return file_check.main(args.files, tol)
 
@@ -610,6 +613,13 @@ def _add_verify(sub: argparse._SubParsersAction) -> None:
         type=positive_float,
         default=tol.node_deviation,
         help=f"node states against the propagation (default {tol.node_deviation:g})",
+    )
+    v.add_argument(
+        "--tol-flown",
+        type=positive_float,
+        default=tol.flown_path,
+        help="largest state-constraint value h (mass, glideslope, tilt, rate) on the flown "
+        f"trajectory, at and between the nodes (default {tol.flown_path:g})",
     )
     v.set_defaults(func=cmd_verify)
 

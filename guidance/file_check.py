@@ -18,9 +18,17 @@ from guidance.errors import InputError
 from guidance.params import CONSTRAINT_NAMES, IM, PARAM_NAMES, Params
 from guidance.scenario import ScenarioError, params_from_dict, scenario_from_dict
 from guidance.trajectory_io import read_trajectory
-from guidance.verify import Audit, audit, checked_trajectory, engine_landing_error
+from guidance.verify import (
+    STATE_CONSTRAINTS,
+    Audit,
+    audit,
+    checked_trajectory,
+    engine_landing_error,
+)
 
-SAMPLES_BETWEEN_NODES = 8  # path constraints sampled inside each interval (reported only)
+# states and thrust sampled inside each interval: the flown states are checked there (the
+# state constraints), the thrust constraints reported
+SAMPLES_BETWEEN_NODES = 8
 
 
 @dataclass(frozen=True)
@@ -39,6 +47,12 @@ class Tolerances:
     attitude: float = 1e-3  # final_attitude_error and |omega(t_f) - omega_f|, propagated
     node_deviation: float = 1e-3  # max |x_propagated - x| over the nodes
     path: float = 1e-6  # max h at the nodes, each constraint in its own units
+    # max h of the state constraints (mass, glideslope, tilt, rate) on the flown trajectory,
+    # at and between the nodes: the flight may leave the nodes by node_deviation, and a
+    # converged solve's flight passes the glideslope at touchdown (the cone's apex) by up to
+    # 2.7e-4, as far as it lands off (catalog and 20 sampled landings, SCvx and T-SCvx in C,
+    # 28 Nov 2026; 1.4e-4 on the default landing)
+    flown_path: float = 1e-3
 
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):
@@ -117,6 +131,7 @@ def trajectory_checks(a: Audit, p: Params, tol: Tolerances = Tolerances()) -> li
         Check("final rate |w(t_f) - w_f|", a.final_rate_error, tol.attitude),
         Check("node states vs propagation", a.max_node_deviation, tol.node_deviation),
         Check("path constraints at the nodes", a.max_path_violation, tol.path),
+        Check("state constraints on the flight", a.max_flown_state_violation, tol.flown_path),
     ]
 
 
@@ -166,8 +181,14 @@ def format_verdict(v: FileVerdict) -> str:
         f"  between the nodes ({SAMPLES_BETWEEN_NODES} samples per interval), max h: "
         + ", ".join(f"{name} {h:.1e}" for name, h in between.items())
     )
-    exceeded = [f"{name} by {h:.1e}" for name, h in between.items() if h > 0.0]
-    if exceeded:  # the method imposes the path constraints at the nodes only
+    # the method imposes the path constraints at the nodes only: the thrust command's are
+    # reported between them (its norm sags below T_min), the states' checked on the flight
+    exceeded = [
+        f"{name} by {h:.1e}"
+        for i, (name, h) in enumerate(between.items())
+        if h > 0.0 and i not in STATE_CONSTRAINTS
+    ]
+    if exceeded:
         lines.append(
             f"    exceeded between the nodes (reported, not checked): {', '.join(exceeded)}"
         )

@@ -14,7 +14,7 @@ from scipy.integrate import solve_ivp
 
 from guidance.constraints import path_constraint_values
 from guidance.errors import InputError
-from guidance.params import IM, IQ, IR, IV, IW, NU, NX, Params
+from guidance.params import CONSTRAINT_NAMES, IM, IQ, IR, IV, IW, NU, NX, Params
 
 # What the check propagates: a landing takes a few U_T, and its states and thrust are O(1)
 # to O(10) in the nondimensional units; far outside these the propagation does not end.
@@ -25,6 +25,11 @@ VALUE_LIMIT = 1e9
 # outside any landing (u = 1e5, inside VALUE_LIMIT) makes the integrator crawl or fail, and the
 # check then ran for more than ten minutes, so such an interval is stopped and reported.
 MAX_EVALUATIONS = 20_000
+# The path constraints on the state (the others bound the thrust command, which the flight
+# takes from the file as it is): what the flown trajectory is judged against.
+STATE_CONSTRAINTS = tuple(
+    CONSTRAINT_NAMES.index(n) for n in ("mass", "glideslope", "tilt", "omega")
+)
 
 
 class PropagationError(ArithmeticError):
@@ -205,6 +210,11 @@ class Audit:
     # (7,) max of h on the propagated trajectory between the nodes (NaN when not sampled):
     # the method imposes the constraints at the nodes only
     path_between_nodes: np.ndarray
+    # max h of the state constraints (STATE_CONSTRAINTS) on the flown trajectory: the
+    # propagated node states and, when sampled, the states between them (NaN when the
+    # propagation stopped). The file's node states meeting the constraints says nothing of
+    # the flight, which may leave them by up to the node-deviation tolerance and more between
+    max_flown_state_violation: float = float("nan")
     # why the open-loop propagation stopped before t_f ("" when it reached t_f); the
     # propagated figures are then NaN, which fails every check on them
     propagation_stopped: str = ""
@@ -249,10 +259,12 @@ def audit(x: np.ndarray, u: np.ndarray, t_f: float, p: Params, between: int = 0)
     xp = prop.nodes
     landing = _landing_errors(xp[-1], p)
     h = path_constraint_values(x, u, p)
+    flown = path_constraint_values(xp, u, p)[:, STATE_CONSTRAINTS]
     if between > 0:
         hb = path_constraint_values(
             prop.x_between.reshape(-1, xp.shape[1]), prop.u_between.reshape(-1, u.shape[1]), p
         ).max(axis=0)
+        flown = np.vstack([flown, hb[None, STATE_CONSTRAINTS]])
     else:
         hb = np.full(h.shape[1], np.nan)
     return Audit(
@@ -264,6 +276,7 @@ def audit(x: np.ndarray, u: np.ndarray, t_f: float, p: Params, between: int = 0)
         final_rate_error=float(np.linalg.norm(xp[-1, IW] - np.array(p.omega_f))),
         path_at_nodes=h.max(axis=0),
         path_between_nodes=hb,
+        max_flown_state_violation=float(flown.max()),  # NaN from a stopped propagation
         propagation_stopped=prop.stopped,
     )
 

@@ -8,22 +8,26 @@ purpose.
 from __future__ import annotations
 
 import json
+import math
 import re
 from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 import pytest
+from c_library import needs_c_library
 from scipy.integrate import solve_ivp
 from test_verify import reference_propagation
 
 from guidance.catalog import SCENARIOS
+from guidance.cguidance import solve_c
 from guidance.cli import main
 from guidance.file_check import SAMPLES_BETWEEN_NODES, Tolerances, verify_file
 from guidance.model import dynamics_functions, param_vector
-from guidance.params import IR, IV
+from guidance.params import CONSTRAINT_NAMES, I_HORIZONTAL, I_UP, IR, IV
 from guidance.trajectory_io import write_trajectory
-from guidance.verify import MAX_EVALUATIONS, final_attitude_error
+from guidance.verify import MAX_EVALUATIONS, final_attitude_error, propagate
 
 SCN = SCENARIOS["default"]
 P = SCN.params
@@ -165,7 +169,7 @@ def test_a_trajectory_far_outside_any_landing_stops_the_propagation_with_its_rea
     assert v.audit.propagation_stopped.startswith(where + reason), v.audit.propagation_stopped
     propagated = [c for c in v.checks if c.name not in
                   ("initial state vs scenario", "path constraints at the nodes")]  # fmt: skip
-    assert len(propagated) == 5 and all(np.isnan(c.value) and not c.ok for c in propagated)
+    assert len(propagated) == 6 and all(np.isnan(c.value) and not c.ok for c in propagated)
     assert main(["verify", str(bad)]) == 1
     assert f"open-loop propagation stopped in {where}" in capsys.readouterr().out
 
@@ -395,3 +399,47 @@ def test_damaged_or_crafted_archives_are_refused_with_exit_2(tmp_path: Path, cap
     assert main(["verify", str(damaged)]) == 2
     err = capsys.readouterr().err
     assert "damaged (not an .npz numpy can read)" in err and "decompress" not in err
+
+
+@needs_c_library
+def test_a_flight_that_leaves_the_path_constraints_fails_though_the_nodes_meet_them(
+    tmp_path: Path, capsys
+) -> None:
+    """Review of 28 Nov: the path constraints were checked on the file's node states only,
+    which the flight need only come within --tol-nodes (1e-3, in each component) of. The C
+    library's landing from "high", its file edited: the glideslope steepened until the
+    flight (its thrust untouched) passes the cone by 2e-3 at its closest node, and every file
+    node outside the cone moved back in by 6e-4 per component (up and toward the axis).
+    The file's nodes meet the constraints, the flight lands as before within every other
+    tolerance, but passes the cone by 5e-3 between the nodes: the file fails."""
+    scenario = SCENARIOS["high"]
+    r = solve_c(scenario)
+    assert r.status == "solved", r.reason
+    p = scenario.params
+    flown = propagate(r.x[0], r.u, r.t_f, p)
+    up, horizontal = flown[:-1, I_UP], np.linalg.norm(flown[:-1, I_HORIZONTAL], axis=1)
+    k = int(np.argmin(up / horizontal))  # the flight's node closest to a steeper cone
+    steep = p.replace(glideslope_deg=math.degrees(math.atan((up[k] + 2e-3) / horizontal[k])))
+    x, nudge = r.x.copy(), 6e-4
+    outside = steep.tan_glideslope * np.linalg.norm(x[:, I_HORIZONTAL], axis=1) > x[:, I_UP]
+    assert outside.sum() >= 1 and not outside[0]
+    x[outside, I_UP] = flown[outside, I_UP] + nudge
+    horizontal_flown = flown[outside][:, I_HORIZONTAL]
+    x[outside, I_HORIZONTAL] = horizontal_flown - nudge * np.sign(horizontal_flown)
+    path = tmp_path / "steep.npz"
+    write_trajectory(path, replace(r, x=x), steep, replace(scenario, params=steep), "scvx", "c")
+    v = verify_file(path)
+    figures = {c.name: c for c in v.checks}
+    glideslope = CONSTRAINT_NAMES.index("glideslope")
+    # what the old verdict judged passes: the file's nodes and the flight's landing
+    assert [name for name, c in figures.items() if not c.ok] == ["state constraints on the flight"]
+    assert figures["path constraints at the nodes"].value <= 0.0
+    assert figures["node states vs propagation"].value == pytest.approx(nudge, rel=1e-6)
+    # the flight passes the cone by 2e-3 at node k, by more between the nodes
+    flown_h = steep.tan_glideslope * np.linalg.norm(flown[k, I_HORIZONTAL]) - flown[k, I_UP]
+    assert flown_h == pytest.approx(2e-3, rel=1e-9)
+    worst = figures["state constraints on the flight"].value
+    assert worst == v.audit.path_between_nodes[glideslope] and worst > 2e-3
+    assert main(["verify", str(path)]) == 1
+    assert re.search(r"state constraints on the flight +\S+ +1e-03  FAIL", capsys.readouterr().out)
+    assert main(["verify", str(path), "--tol-flown", f"{1.01 * worst:g}"]) == 0
