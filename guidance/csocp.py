@@ -68,7 +68,9 @@ P_double = ct.POINTER(ct.c_double)
 
 
 MESSAGE_LEN = 160  # TSCVX_MESSAGE_LEN (tscvx_socp.h)
+SETUP_NONFINITE_DATA = 7  # TSCVX_SETUP_NONFINITE_DATA (tscvx_socp.h)
 SETUP_NOT_READY = 11  # TSCVX_SETUP_NOT_READY (tscvx_socp.h)
+SETUP_P_NOT_PSD = 14  # TSCVX_SETUP_P_NOT_PSD (tscvx_socp.h)
 
 
 class _Data(ct.Structure):
@@ -618,10 +620,13 @@ class Solver:
         caller's value order of the set-up's A / P (``A.data`` for CSC, CSR and COO, else
         ``csc_matrix(A).data``). An array that does not fit raises InvalidProblemError before
         anything changes. Returns the C setup status (0 = ok); ``message`` says why it refused
-        (the array and entry at fault, or what tscvx_check_workspace finds)."""
+        (the array and entry at fault, or what tscvx_check_workspace finds). The solver's
+        copies then hold what the workspace holds: the numbers sent when it stored them, the
+        ones before when it refused them unread (``_workspace_took``)."""
         new = self._checked_update(q, A_values, b, P_values)
         if not self.ready:
             return self.setup_status
+        kept = [(a, a.copy()) for a in self._copies_of(new)]
         if "q" in new:
             self._c[:] = new["q"]
         if "A_values" in new:
@@ -633,9 +638,41 @@ class Solver:
         if "P_values" in new and self._P is not None:
             self._P.data[:] = new["P_values"][self.split.P.order]  # type: ignore[union-attr]
         st = self._send(new)
+        # the message names the entry at fault in the numbers sent; then the copies go back
+        # to what the workspace holds when it took none of them
         self.message = "ok" if st == 0 else self._update_message(st)
+        if not self._workspace_took(st):
+            for copy, old in kept:
+                copy[:] = old
         self._data_message = self.message  # why a solve is refused until the next update
         return st
+
+    def _copies_of(self, new: dict[str, np.ndarray]) -> list[np.ndarray]:
+        """The solver's copies that an update with these arrays writes."""
+        copies = [self._c] if "q" in new else []
+        copies += [self._Aeq.data, self._G.data] if "A_values" in new else []
+        copies += [self._beq, self._h] if "b" in new else []
+        if "P_values" in new and self._P is not None:
+            copies.append(self._P.data)
+        return copies
+
+    def _workspace_took(self, st: int) -> bool:
+        """Whether tscvx_update_data, returning ``st``, stored the numbers sent (the copies
+        hold them). It stores none when it refuses them at its start: a number not finite, a
+        P failing the cheap semidefiniteness test (the one tscvx_check_data makes, which the
+        copies now holding the numbers sent fail again), or a workspace damaged before the
+        call. It stores them when it takes them, when P's factorization refuses P (stored,
+        and refused until an update replaces it), and when its end check finds damage done
+        during the call."""
+        if st == 0:
+            return True
+        if st == SETUP_P_NOT_PSD:
+            return int(self.lib.tscvx_check_data(ct.byref(self._data), None)) != SETUP_P_NOT_PSD
+        if st == SETUP_NOT_READY:
+            why = ct.create_string_buffer(MESSAGE_LEN)
+            self.lib.tscvx_check_workspace(self.ws, why)
+            return "during a data update" in why.value.decode()
+        return False
 
     def _send(self, new: dict[str, np.ndarray]) -> int:
         """tscvx_update_data with the arrays that changed (NULL: unchanged)."""

@@ -944,3 +944,45 @@ def test_a_refused_update_names_the_array_and_entry_at_fault() -> None:
     assert solver.update(q=prob.q) == csocp.SETUP_NOT_READY
     _, why = solver.check_workspace()
     assert why.startswith("workspace damaged") and solver.message.endswith(f": {why}")
+
+
+def test_a_refused_update_leaves_the_solvers_copies_as_the_workspace_holds_them() -> None:
+    """Review of 28 Nov: update() wrote the numbers into the solver's copies before the C
+    runtime looked at them, and kept them when it refused them. tscvx_update_data takes none
+    of a non-finite update or of a P failing the cheap test: after a NaN in b and a valid q,
+    the workspace solved with the set-up's b while the copies held the NaN, and the next
+    refusal (an infinite A entry) was blamed on that NaN ("h[6] = nan"). A P that passes the
+    cheap test but not the factorization is stored (refused until replaced): the copies hold
+    it."""
+    prob = random_feasible(3, n=10, with_P=True)
+    solver = csocp.Solver(prob)
+    set_up = [a.copy() for a in (solver._c, solver._beq, solver._h, solver._P.data)]
+    first = solver.solve()
+    b = prob.b.copy()
+    b[solver.split.g_rows[6]] = np.nan
+    assert solver.update(b=b) == csocp.SETUP_NONFINITE_DATA and "(h[6] = nan;" in solver.message
+    assert solver.update(q=prob.q) == 0
+    again = solver.solve()  # the workspace's b is the set-up's (to rounding: tscvx_socp.h)
+    assert again.status == "solved"
+    np.testing.assert_allclose(again.x, first.x, rtol=0, atol=1e-9)
+    held = (solver._c, solver._beq, solver._h, solver._P.data)
+    assert all(np.array_equal(a, b) for a, b in zip(held, set_up, strict=True))
+    A = prob.A.data.copy()
+    A[3] = np.inf
+    assert solver.update(A_values=A) == csocp.SETUP_NONFINITE_DATA
+    assert "(Gx[4] = inf;" in solver.message and "h[6]" not in solver.message
+    assert np.isfinite(solver._G.data).all() and np.isfinite(solver._Aeq.data).all()
+    # P: a negative diagonal entry fails the cheap test (nothing stored); the off-diagonal
+    # entries negated pass it but make P indefinite (stored, refused by the factorization)
+    P = sp.csc_matrix(prob.P)
+    diagonal = P.indices == np.repeat(np.arange(prob.n), np.diff(P.indptr))
+    negative = P.data.copy()
+    negative[np.flatnonzero(diagonal)[0]] = -1.0
+    assert solver.update(P_values=negative) == csocp.SETUP_P_NOT_PSD
+    assert "(P: a negative diagonal entry" in solver.message
+    assert np.array_equal(solver._P.data, set_up[3])
+    indefinite = np.where(diagonal, P.data, -P.data)
+    assert solver.update(P_values=indefinite) == csocp.SETUP_P_NOT_PSD
+    assert np.array_equal(solver._P.data, indefinite)
+    assert solver.update(q=prob.q) == csocp.SETUP_P_NOT_PSD  # still the stored P, refused
+    assert solver.update(P_values=P.data) == 0 and solver.solve().status == "solved"
