@@ -179,8 +179,10 @@ def library() -> ct.CDLL:
     lib.pdg_polish_message.restype = ct.c_char_p
     lib.pdg_problem_size.argtypes = [ct.c_void_p, _ip, _ip, _ip, _ip, _ip]
     lib.pdg_debug_assemble.argtypes = [ct.c_void_p, ct.POINTER(_Scenario), _dp, _dp, _d, _d,
-                                       _dp, _dp, _dp, _dp, _dp, _ip, _ip, _ip, _ip]  # fmt: skip
-    lib.pdg_debug_guess.argtypes = [ct.c_void_p, ct.POINTER(_Scenario), _dp, _dp, _dp]
+                                       _dp, _dp, _dp, _dp, _dp, _ip, _ip, _ip, _ip,
+                                       ct.c_char_p]  # fmt: skip
+    lib.pdg_debug_guess.argtypes = [ct.c_void_p, ct.POINTER(_Scenario), _dp, _dp, _dp,
+                                    ct.c_char_p]  # fmt: skip
     lib.pdg_solve_tscvx.argtypes = [ct.c_void_p, ct.POINTER(_Scenario),
                                     ct.POINTER(_TscvxOptions), ct.POINTER(_Result),
                                     ct.POINTER(_TscvxReport)]  # fmt: skip
@@ -536,14 +538,21 @@ class FlightNetsError(InputError):
 
 
 class FlightStatusError(RuntimeError):
-    """A C call that returns no SCvxResult (tscvx_guess_c) ended in a status that is not a
-    refusal, e.g. PDG_SOLVER_ERROR for a solution network whose prediction is not finite:
-    ``status`` its name as SCvxResult.status gives it ("solver_error"), ``reason`` (and the
-    message) the library's, as SCvxResult.reason."""
+    """A C call that returns no SCvxResult (tscvx_guess_c, c_assemble) ended in a status that
+    is not a refusal, e.g. PDG_SOLVER_ERROR for a solution network whose prediction is not
+    finite, or a model not finite at the iterate c_assemble was given: ``status`` its name
+    as SCvxResult.status gives it ("solver_error"), ``reason`` (and the message) the
+    library's, as SCvxResult.reason."""
 
     def __init__(self, status: str, reason: str) -> None:
         super().__init__(f"{status}: {reason}")
         self.status, self.reason = status, reason
+
+
+def _status_error(status: int, message: str) -> FlightStatusError:
+    """The FlightStatusError of a pdg_status that is not a refusal, with the library's reason."""
+    name = STATUS_NAMES[status] if 0 < status < len(STATUS_NAMES) else str(status)
+    return FlightStatusError(name, message)
 
 
 def net_source(models_dir: Path, kind: str) -> Path:
@@ -732,7 +741,7 @@ def tscvx_guess_c(
     if st == PDG_INVALID_INPUT:
         raise (FlightNetsError if text.startswith("nets: ") else InputError)(text)
     if st != 0:
-        raise FlightStatusError(STATUS_NAMES[st] if 0 < st < len(STATUS_NAMES) else str(st), text)
+        raise _status_error(st, text)
     return x, u, tf.value
 
 
@@ -779,21 +788,35 @@ def theta_c(scenario: Scenario) -> np.ndarray:
     return out
 
 
+def _debug_call_error(status: int, message: str) -> InputError | FlightStatusError:
+    """A test hook's failure as the solves' calls raise it: a refusal (PDG_INVALID_INPUT) an
+    InputError (a ScenarioError naming the field), any other status a FlightStatusError;
+    both with the library's message."""
+    if status == PDG_INVALID_INPUT:
+        return _refusal(message)
+    return _status_error(status, message)
+
+
 def c_guess(scenario: Scenario) -> tuple[np.ndarray, np.ndarray, float]:
-    """The C initial guess (for tests against guidance.guess.initial_guess)."""
+    """The C initial guess (for tests against guidance.guess.initial_guess). A refusal raises
+    InputError with the library's message."""
     ws = workspace(scenario)
     N = scenario.params.N
     x, u, tf = np.zeros((N, NX)), np.zeros((N, NU)), ct.c_double(0.0)
+    msg = ct.create_string_buffer(MESSAGE_LEN)
     st = library().pdg_debug_guess(ws.ws, ct.byref(c_scenario(scenario)), _dptr(x), _dptr(u),
-                                   ct.byref(tf))  # fmt: skip
+                                   ct.byref(tf), msg)  # fmt: skip
     if st != 0:
-        raise ValueError(f"pdg_debug_guess returned {st}")
+        raise _debug_call_error(st, msg.value.decode())
     return x, u, tf.value
 
 
 def c_assemble(scenario: Scenario, x: np.ndarray, u: np.ndarray, t_f: float,
                eta: float) -> dict[str, np.ndarray]:  # fmt: skip
-    """The C subproblem about (x, u, t_f), scaling with Ss = t_f (for tests)."""
+    """The C subproblem about (x, u, t_f), scaling with Ss = t_f (for tests). A refusal (x or
+    u not finite, t_f or eta not finite and > 0) raises InputError, a failed assembly (the
+    model not finite at the iterate: PDG_SOLVER_ERROR) FlightStatusError "solver_error", both
+    with the library's message."""
     import scipy.sparse as sp
 
     ws = workspace(scenario)
@@ -804,13 +827,18 @@ def c_assemble(scenario: Scenario, x: np.ndarray, u: np.ndarray, t_f: float,
     Gp, Gi = np.zeros(n + 1, np.int32), np.zeros(ng, np.int32)
     xx = np.ascontiguousarray(x, dtype=float)
     uu = np.ascontiguousarray(u, dtype=float)
+    if xx.shape != (scenario.params.N, NX) or uu.shape != (scenario.params.N, NU):
+        # the C call reads N x 14 and N x 3 numbers whatever it is given
+        raise InputError(f"assemble: x, u must be {scenario.params.N} x {NX} and "
+                         f"{scenario.params.N} x {NU}")  # fmt: skip
+    msg = ct.create_string_buffer(MESSAGE_LEN)
     st = library().pdg_debug_assemble(
         ws.ws, ct.byref(c_scenario(scenario)), _dptr(xx), _dptr(uu), float(t_f), float(eta),
         _dptr(c), _dptr(Ax), _dptr(b), _dptr(Gx), _dptr(h), Ap.ctypes.data_as(_ip),
-        Ai.ctypes.data_as(_ip), Gp.ctypes.data_as(_ip), Gi.ctypes.data_as(_ip),
+        Ai.ctypes.data_as(_ip), Gp.ctypes.data_as(_ip), Gi.ctypes.data_as(_ip), msg,
     )  # fmt: skip
     if st != 0:
-        raise ValueError(f"pdg_debug_assemble returned {st}")
+        raise _debug_call_error(st, msg.value.decode())
     return {
         "c": c,
         "A": sp.csc_matrix((Ax, Ai, Ap), shape=(p, n)),

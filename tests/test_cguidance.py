@@ -184,6 +184,28 @@ def test_c_subproblem_equals_python_subproblem(name: str) -> None:
         np.testing.assert_allclose(c[key], py[key], rtol=0, atol=tol)
 
 
+def test_the_test_hooks_raise_as_the_other_calls_with_the_library_reason() -> None:
+    """Review of 28 Nov: c_assemble and c_guess raised ValueError("pdg_debug_... returned 3")
+    for every failure, where the module's other calls raise FlightStatusError for a status
+    that is not a refusal (tscvx_guess_c) and InputError for a refusal, with the library's
+    message (the C hooks now write one)."""
+    scn = SCENARIOS["default"]
+    x, u, tf = cguidance.c_guess(scn)
+    x[6, 13] = 0.0  # m = 0 at a node: the model is not finite there
+    with pytest.raises(cguidance.FlightStatusError) as failed:
+        cguidance.c_assemble(scn, x, u, tf, 0.5)
+    assert failed.value.status == "solver_error"
+    assert failed.value.reason == "model evaluation failed at the iterate"
+    with pytest.raises(InputError, match=r"^t_f = 0 and eta = 0\.5: both must be finite and > 0$"):
+        cguidance.c_assemble(scn, x, u, 0.0, 0.5)
+    with pytest.raises(InputError, match="x, u must be 50 x 14 and 50 x 3"):
+        cguidance.c_assemble(scn, x[:10], u, tf, 0.5)  # C would read past the array
+    below = Scenario(dataclasses.replace(scn.initial, r0=(0.5, 4.0, 0.0)), scn.params)
+    with pytest.raises(ScenarioError, match="start is below the 20 deg glideslope cone") as refused:
+        cguidance.c_guess(below)
+    assert refused.value.field == "r0"
+
+
 # ---- the whole solve ------------------------------------------------------------------------
 
 

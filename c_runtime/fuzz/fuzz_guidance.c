@@ -258,7 +258,7 @@ static void solve(fz_reader *r, pdg_workspace *ws, const landing *L, size_t nare
         gx = (double *)xmalloc(sizeof(double) * 14 * N);
         gu = (double *)xmalloc(sizeof(double) * 3 * N);
         opt.guess_t_f = 1.0;
-        if (pdg_debug_guess(ws, &L->sc, gx, gu, &opt.guess_t_f) != 0) {
+        if (pdg_debug_guess(ws, &L->sc, gx, gu, &opt.guess_t_f, NULL) != 0) {
             for (k = 0; k < 14u * (unsigned)N; ++k) {
                 gx[k] = 0.5;
             }

@@ -1953,10 +1953,18 @@ pdg_setup_status pdg_problem_size(const pdg_workspace *ws, int *n, int *p, int *
 
 /* ---- test hooks -------------------------------------------------------------------------- */
 
-int pdg_debug_guess(pdg_workspace *ws, const pdg_scenario *s, double *x, double *u, double *t_f)
+int pdg_debug_guess(pdg_workspace *ws, const pdg_scenario *s, double *x, double *u, double *t_f,
+                    char *message)
 {
-    char msg[PDG_MESSAGE_LEN];
-    if (!pdg_ws_idle(ws) || !x || !u || !t_f) {
+    char local[PDG_MESSAGE_LEN];
+    char *msg = message ? message : local;
+    msg[0] = '\0';
+    if (!PDG_WS_READY(ws) || !x || !u || !t_f) {
+        snprintf(msg, PDG_MESSAGE_LEN, "a required pointer is NULL or the workspace not set up");
+        return PDG_INVALID_INPUT;
+    }
+    if (!pdg_ws_idle(ws)) {
+        snprintf(msg, PDG_MESSAGE_LEN, PDG_BUSY_MESSAGE);
         return PDG_INVALID_INPUT;
     }
     if (pdg_check_workspace_scenario(ws, s, msg)) {
@@ -1968,23 +1976,48 @@ int pdg_debug_guess(pdg_workspace *ws, const pdg_scenario *s, double *x, double 
 
 int pdg_debug_assemble(pdg_workspace *ws, const pdg_scenario *s, const double *x,
                        const double *u, double t_f, double eta, double *c, double *Ax,
-                       double *b, double *Gx, double *h, int *Ap, int *Ai, int *Gp, int *Gi)
+                       double *b, double *Gx, double *h, int *Ap, int *Ai, int *Gp, int *Gi,
+                       char *message)
 {
-    char msg[PDG_MESSAGE_LEN];
+    char local[PDG_MESSAGE_LEN];
+    char *msg = message ? message : local;
     double tf2;
-    int i;
-    if (!pdg_ws_idle(ws) || !x || !u || !(eta > 0.0 && isfinite(eta)) ||
-        !(t_f > 0.0 && isfinite(t_f))) {
+    int i, assembled;
+    msg[0] = '\0';
+    if (!PDG_WS_READY(ws) || !x || !u) {
+        snprintf(msg, PDG_MESSAGE_LEN, "a required pointer is NULL or the workspace not set up");
         return PDG_INVALID_INPUT;
     }
-    if (pdg_check_workspace_scenario(ws, s, msg) || !pdg_all_finite(x, (size_t)ws->N * NX) ||
-        !pdg_all_finite(u, (size_t)ws->N * NU)) {
+    if (!pdg_ws_idle(ws)) {
+        snprintf(msg, PDG_MESSAGE_LEN, PDG_BUSY_MESSAGE);
+        return PDG_INVALID_INPUT;
+    }
+    if (!(t_f > 0.0 && isfinite(t_f)) || !(eta > 0.0 && isfinite(eta))) {
+        snprintf(msg, PDG_MESSAGE_LEN, "t_f = %g and eta = %g: both must be finite and > 0",
+                 t_f, eta);
+        return PDG_INVALID_INPUT;
+    }
+    if (pdg_check_workspace_scenario(ws, s, msg)) {
+        return PDG_INVALID_INPUT;
+    }
+    if (!pdg_all_finite(x, (size_t)ws->N * NX) || !pdg_all_finite(u, (size_t)ws->N * NU)) {
+        snprintf(msg, PDG_MESSAGE_LEN, "x or u holds a number that is not finite");
         return PDG_INVALID_INPUT;
     }
     prepare_scenario(ws, s, t_f);
     to_scaled(ws, x, u, t_f, ws->z);
     to_physical(ws, ws->z, ws->x, ws->u, &tf2);
-    if (discretize(ws, x, u, t_f, ws->disc) != 0 || assemble(ws, ws->z, ws->disc, NULL, eta, 0)) {
+    if (discretize(ws, x, u, t_f, ws->disc) != 0) {
+        snprintf(msg, PDG_MESSAGE_LEN, "model evaluation failed at the iterate");
+        return PDG_SOLVER_ERROR;
+    }
+    assembled = assemble(ws, ws->z, ws->disc, NULL, eta, 0);
+    if (assembled != 0) {
+        snprintf(msg, PDG_MESSAGE_LEN, "%s",
+                 assembled == ASSEMBLE_MAP_DAMAGED
+                     ? "the workspace is damaged (its map of the subproblem into A and G "
+                       "points outside them): set it up again"
+                     : "the SOCP runtime refused the subproblem's numbers");
         return PDG_SOLVER_ERROR;
     }
     for (i = 0; c && i < ws->n; ++i) c[i] = ws->c[i];

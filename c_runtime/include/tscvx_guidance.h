@@ -519,16 +519,21 @@ pdg_status pdg_solve_tscvx(pdg_workspace *ws, const pdg_scenario *scenario,
 /* For tests: assembles the subproblem about the physical iterate (x, u, t_f) of `scenario`
  * with trust radius eta (scaling, guess-independent: Ss = t_f) and copies its data out:
  * c (n), A values (nnz_A, the CSC order of Ap/Ai), b (p), G values, h (m), and the pattern
- * (Ap n+1, Ai, Gp n+1, Gi; any pointer may be NULL). Returns 0, PDG_INVALID_INPUT (a
- * scenario the workspace refuses, non-finite x or u, t_f or eta not finite and positive) or
- * PDG_SOLVER_ERROR (the model evaluation failed). */
+ * (Ap n+1, Ai, Gp n+1, Gi; any of these may be NULL). Returns 0, PDG_INVALID_INPUT (a
+ * workspace not set up or busy, a scenario the workspace refuses, non-finite x or u, t_f or
+ * eta not finite and positive) or PDG_SOLVER_ERROR (the model evaluation failed, or the SOCP
+ * runtime refused the numbers), with the reason in `message` (PDG_MESSAGE_LEN bytes, may be
+ * NULL; "" on success). */
 int pdg_debug_assemble(pdg_workspace *ws, const pdg_scenario *scenario, const double *x,
                        const double *u, double t_f, double eta, double *c, double *Ax,
-                       double *b, double *Gx, double *h, int *Ap, int *Ai, int *Gp, int *Gi);
+                       double *b, double *Gx, double *h, int *Ap, int *Ai, int *Gp, int *Gi,
+                       char *message);
 
-/* For tests: the initial guess (cubic Hermite + projection) into x (N x 14), u, t_f. */
+/* For tests: the initial guess (cubic Hermite + projection) into x (N x 14), u, t_f. Returns
+ * 0 or PDG_INVALID_INPUT (a workspace not set up or busy, a NULL output, a scenario the
+ * workspace refuses) with the reason in `message` (PDG_MESSAGE_LEN bytes, may be NULL). */
 int pdg_debug_guess(pdg_workspace *ws, const pdg_scenario *scenario, double *x, double *u,
-                    double *t_f);
+                    double *t_f, char *message);
 
 #ifdef __cplusplus
 }

@@ -286,22 +286,30 @@ static void test_stale_workspace(pdg_workspace *ws, void *arena, size_t bytes)
     pdg_scenario s;
     pdg_result r;
     pdg_log_row row;
+    char msg[PDG_MESSAGE_LEN];
     double tf = 0.0;
     pdg_default_scenario(&s);
-    CHECK(pdg_debug_guess(ws, &s, x, u, &tf) == 0);
+    CHECK(pdg_debug_guess(ws, &s, x, u, &tf, NULL) == 0);
     CHECK(pdg_debug_assemble(ws, &s, x, u, tf, -5.0, NULL, NULL, NULL, NULL, NULL, NULL, NULL,
-                             NULL, NULL) == PDG_INVALID_INPUT);
+                             NULL, NULL, NULL) == PDG_INVALID_INPUT);
     CHECK(pdg_debug_assemble(ws, &s, x, u, 0.0, 0.5, NULL, NULL, NULL, NULL, NULL, NULL, NULL,
-                             NULL, NULL) == PDG_INVALID_INPUT);
+                             NULL, NULL, NULL) == PDG_INVALID_INPUT);
     CHECK(pdg_debug_assemble(ws, &s, x, u, NAN, 0.5, NULL, NULL, NULL, NULL, NULL, NULL, NULL,
-                             NULL, NULL) == PDG_INVALID_INPUT);
+                             NULL, NULL, NULL) == PDG_INVALID_INPUT);
     x[20] = NAN;
     CHECK(pdg_debug_assemble(ws, &s, x, u, tf, 0.5, NULL, NULL, NULL, NULL, NULL, NULL, NULL,
-                             NULL, NULL) == PDG_INVALID_INPUT);
+                             NULL, NULL, NULL) == PDG_INVALID_INPUT);
     x[20] = 0.0;
-    CHECK(pdg_debug_guess(ws, &s, x, u, &tf) == 0);
+    CHECK(pdg_debug_guess(ws, &s, x, u, &tf, NULL) == 0);
     CHECK(pdg_debug_assemble(ws, &s, x, u, tf, 0.5, NULL, NULL, NULL, NULL, NULL, NULL, NULL,
-                             NULL, NULL) == 0);
+                             NULL, NULL, NULL) == 0);
+    x[6 * PDG_NSTATE + 13] = 0.0; /* m = 0 at a node: the model fails, and says so */
+    CHECK(pdg_debug_assemble(ws, &s, x, u, tf, 0.5, NULL, NULL, NULL, NULL, NULL, NULL, NULL,
+                             NULL, NULL, msg) == PDG_SOLVER_ERROR &&
+          strcmp(msg, "model evaluation failed at the iterate") == 0);
+    CHECK(pdg_debug_assemble(ws, &s, x, u, 0.0, 0.5, NULL, NULL, NULL, NULL, NULL, NULL, NULL,
+                             NULL, NULL, msg) == PDG_INVALID_INPUT && strstr(msg, "t_f = 0"));
+    CHECK(pdg_debug_guess(ws, &s, x, u, &tf, msg) == 0 && msg[0] == '\0');
     /* a bit flipped in a set-up constant (a loop bound, a setting): refused until restored */
     {
         const int n = ws->n, max_sub = ws->st.max_subproblems;
@@ -506,7 +514,7 @@ static int call_back_in(void *ctx, int k, unsigned char *mask, int n)
     if (pdg_solve(ws, &s, NULL, &r) == PDG_INVALID_INPUT && strstr(r.message, "busy")) {
         ++reentry_refused;
     }
-    if (pdg_debug_guess(ws, &s, inner_x, inner_u, &t_f) == PDG_INVALID_INPUT) {
+    if (pdg_debug_guess(ws, &s, inner_x, inner_u, &t_f, NULL) == PDG_INVALID_INPUT) {
         ++reentry_refused;
     }
     return 0;
@@ -1418,7 +1426,7 @@ static void test_answers_independent_of_history(void)
     memset(&o, 0, sizeof o);
     o.mask_fn = stop_at_two;
     CHECK(pdg_solve(ws, &b, &o, &r) == PDG_INVALID_INPUT && log_rows(ws) > 0);
-    CHECK(pdg_debug_guess(ws, &b, gx, gu, &gt_f) == 0);
+    CHECK(pdg_debug_guess(ws, &b, gx, gu, &gt_f, NULL) == 0);
     gx[6 * PDG_NSTATE + 13] = 0.0; /* m = 0 at a node: the model fails at the guess */
     memset(&o, 0, sizeof o);
     o.guess_x = gx;
@@ -1428,9 +1436,9 @@ static void test_answers_independent_of_history(void)
     ws->lay.n ^= 1 << 3; /* an upset, refused, then repaired */
     CHECK(pdg_solve(ws, &s, NULL, &r) == PDG_INVALID_INPUT);
     ws->lay.n ^= 1 << 3;
-    CHECK(pdg_debug_guess(ws, &b, gx, gu, &gt_f) == 0);
+    CHECK(pdg_debug_guess(ws, &b, gx, gu, &gt_f, NULL) == 0);
     CHECK(pdg_debug_assemble(ws, &b, gx, gu, gt_f, 0.3, c, Ax, bb, Gx, h, NULL, NULL, NULL,
-                             NULL) == 0);
+                             NULL, NULL) == 0);
     far = s;
     far.r0[0] = 1e3; /* out of reach: the model fails at the first subproblem's answer */
     CHECK(pdg_solve(ws, &far, NULL, &r) == PDG_SOLVER_ERROR && r.subproblems_solved > 0);
