@@ -458,9 +458,11 @@ def _mask_callback(
 
 
 def _ran_with(settings: SCvxSettings | None, socp: dict[str, float | int]) -> SCvxSettings:
-    """The SCvxSettings of a C call: the given ones with any per-call override of a field."""
+    """The SCvxSettings of a C call: the given ones with any per-call override of a field,
+    and the discretization that runs (the C loop's generated C, whatever the setting)."""
     names = {f.name for f in dataclasses.fields(SCvxSettings)}
-    return (settings or SCvxSettings()).replace(**{k: v for k, v in socp.items() if k in names})
+    ran = {k: v for k, v in socp.items() if k in names} | {"discretization": "c"}
+    return (settings or SCvxSettings()).replace(**ran)
 
 
 def _collect(

@@ -240,14 +240,15 @@ def _write_trajectory(args: argparse.Namespace, result: SCvxResult, scenario: Sc
         scenario,
         args.method,
         args.backend,
-        _solve_inputs(args),
+        _solve_inputs(args, result),
     )
     print(f"wrote {args.out}")
 
 
-def _solve_inputs(args: argparse.Namespace) -> dict[str, Path] | None:
+def _solve_inputs(args: argparse.Namespace, result: SCvxResult) -> dict[str, Path] | None:
     """The files the solve started from, for the trajectory file's provenance, and the C
-    library that solved it (which build exactly: its sha256 beside the code version)."""
+    library that solved it (which build exactly: its sha256 beside the code version), or
+    that discretized the Python loop's subproblems (its generated C: result.settings)."""
     files: dict[str, Path] = {}
     if args.guess:  # SCvx only (_check_method_options)
         name = "initial_guess" if args.at is None else f"initial_guess from t = {args.at:g}"
@@ -262,6 +263,10 @@ def _solve_inputs(args: argparse.Namespace) -> dict[str, Path] | None:
         from guidance.csocp import library_path
 
         files["c_library"] = library_path()
+    if args.backend != "c" and result.settings and result.settings.discretization == "c":
+        from guidance.cgnc import LIB_PATH
+
+        files["c_discretization"] = LIB_PATH
     return files or None
 
 

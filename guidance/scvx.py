@@ -258,6 +258,8 @@ class SCvxSolver:
             from guidance import cgnc
 
             self.engine = "c" if cgnc.available() else "casadi"
+            # the result's settings say which discretization ran, not "auto"
+            self.st = self.st.replace(discretization=self.engine)
 
     # ---- pieces ---------------------------------------------------------------------------
     def template(self, mask: np.ndarray | None) -> SubproblemTemplate:

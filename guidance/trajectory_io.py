@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import math
 import zipfile
 from pathlib import Path
 
@@ -21,6 +22,7 @@ from guidance.errors import (
     UNREADABLE_NPZ,
     DuplicateKeyError,
     InputError,
+    describe,
     npz_damage,
     unique_keys,
 )
@@ -30,6 +32,13 @@ from guidance.scenario import scenario_to_dict
 from guidance.scvx import SCvxResult
 
 REQUIRED_KEYS = ("t_f", "x", "u", "status", "iterations", "solve_time_s", "params")
+# The contract's scalars: the dtype kinds each may have and what it is. A count is an integer;
+# a time any real number (an integer time is exact), and none of them true/false.
+SCALAR_KEYS = {
+    "t_f": ("iuf", "one real number >= 0 (a scalar, U_T; DESIGN.md)"),
+    "iterations": ("iu", "one integer >= 0 (a scalar; DESIGN.md)"),
+    "solve_time_s": ("iuf", "one real number >= 0 (a scalar, seconds; DESIGN.md)"),
+}
 JSON_KEYS = ("params", "scenario", "settings", "provenance")
 
 
@@ -105,11 +114,23 @@ def read_trajectory(path: str | Path) -> dict[str, object]:
     status = out["status"]
     if not (isinstance(status, np.ndarray) and status.shape == () and status.dtype.kind == "U"):
         raise InputError(f"{path}: status must be a text entry (DESIGN.md), got {status!r}")
+    for key, (kinds, what) in SCALAR_KEYS.items():
+        _check_scalar(path, key, out[key], kinds, what)
     for key, value in out.items():
         if isinstance(value, np.ndarray) and value.dtype.kind == "U":  # the text entries
             for item in value.ravel().tolist():
                 _check_no_nul(path, key, item)
     return out
+
+
+def _check_scalar(path: str | Path, key: str, value: object, kinds: str, what: str) -> None:
+    """One of the contract's scalar entries: one finite number >= 0 of its kind, not an array
+    (iterations = "3" or NaN, t_f = [4.2] were read as trajectory files)."""
+    if isinstance(value, np.ndarray) and value.shape == () and value.dtype.kind in kinds:
+        number = float(value)
+        if math.isfinite(number) and number >= 0.0:
+            return
+    raise InputError(f"{path}: {key}: expected {what}, got {value!r}")
 
 
 def _load(path: str | Path) -> dict[str, object]:
@@ -118,7 +139,7 @@ def _load(path: str | Path) -> dict[str, object]:
             out: dict[str, object] = {k: data[k] for k in data.files}
         for key in JSON_KEYS:  # decoded to dictionaries
             if key in out:
-                out[key] = _decode_json(path, key, str(out[key]))
+                out[key] = _decode_json(path, key, out[key])
     except InputError:
         raise  # already names the file and says what is wrong
     except UNREADABLE_NPZ as exc:
@@ -134,9 +155,17 @@ def _check_no_nul(path: str | Path, key: str, text: str) -> None:
         )
 
 
-def _decode_json(path: str | Path, entry: str, text: str) -> object:
-    """A JSON entry; a key given twice in any of its objects is refused, not the last kept."""
+def _decode_json(path: str | Path, entry: str, value: object) -> object:
+    """A JSON entry (one text); a key given twice in any of its objects is refused, not the
+    last kept. An entry that is no JSON text is said to be one, not a damaged archive."""
+    unreadable = f"{path}: not a readable trajectory file: its {entry} entry"
+    if not (isinstance(value, np.ndarray) and value.shape == () and value.dtype.kind == "U"):
+        raise InputError(f"{unreadable} must be a JSON text, got {describe(value)}")
     try:
-        return json.loads(text, object_pairs_hook=unique_keys)
+        return json.loads(str(value), object_pairs_hook=unique_keys)
     except DuplicateKeyError as exc:
         raise InputError(f"{path}: {entry}: key {exc.key!r} given twice") from None
+    except RecursionError:
+        raise InputError(f"{unreadable} is JSON nested too deeply to read") from None
+    except ValueError as exc:  # JSONDecodeError, an integer of more than 4,300 digits
+        raise InputError(f"{unreadable} is not valid JSON ({exc})") from None

@@ -9,9 +9,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from guidance import cgnc
 from guidance.catalog import SCENARIOS
 from guidance.cli import main
 from guidance.params import NC, InitialState, Scenario, SCvxSettings
+from guidance.provenance import file_digest
 from guidance.scvx import SCvxResult, solve_scvx
 from guidance.symmetry import rotate_scenario, rotate_states
 from guidance.trajectory_io import read_trajectory
@@ -100,11 +102,15 @@ def test_cli_writes_the_trajectory_contract(tmp_path: Path) -> None:
     ):
         assert key in params
     assert data["scenario"]["m0"] == 3.0
-    # the defaults, with the IPM warm start off: Clarabel starts every subproblem cold
-    assert data["settings"] == dataclasses.asdict(SCvxSettings(socp_warm_start=False))
+    # the defaults, with the IPM warm start off (Clarabel starts every subproblem cold) and
+    # the discretization that ran, not "auto" (audit of 28 Nov: the file did not say which)
+    ran = SCvxSettings(socp_warm_start=False, discretization="c")
+    assert data["settings"] == dataclasses.asdict(ran)
     prov = data["provenance"]
     assert prov["generator"].startswith("guidance ") and "clarabel" in prov["packages"]
-    assert "files" not in prov  # SCvx reads no model file
+    # SCvx reads no model file; the build of the generated C that discretized is named
+    lib = cgnc.LIB_PATH
+    assert prov["files"] == {"c_discretization": {"path": str(lib), "sha256": file_digest(lib)}}
     assert fig.stat().st_size > 10_000
 
 

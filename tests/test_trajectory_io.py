@@ -157,3 +157,86 @@ def test_a_file_solved_in_c_names_the_library_build(
     lib = cgnc.LIB_PATH if backend == "c" else csocp.library_path()
     assert lib.name == library
     assert recorded == {"path": str(lib), "sha256": hashlib.sha256(lib.read_bytes()).hexdigest()}
+
+
+@pytest.mark.parametrize(
+    ("entry", "value"),
+    [
+        ("t_f", np.array([4.25])),  # DESIGN.md: a scalar
+        ("t_f", np.float64(np.nan)),
+        ("t_f", np.bool_(True)),
+        ("iterations", np.str_("7")),
+        ("iterations", np.float64(7.0)),  # a count is an integer
+        ("iterations", np.int64(-1)),
+        ("iterations", np.arange(3)),
+        ("solve_time_s", np.float64(np.nan)),
+        ("solve_time_s", np.str_("0.125")),
+        ("solve_time_s", np.float64(-0.5)),
+    ],
+)
+def test_a_contract_scalar_of_the_wrong_kind_is_refused(
+    tmp_path: Path, entry: str, value: np.ndarray
+) -> None:
+    """Audit of 28 Nov: DESIGN.md fixes t_f (scalar), iterations (int), solve_time_s (float),
+    but only status was checked: iterations = "7" or NaN and t_f = [4.25] were read as
+    trajectory files (and `guidance verify` passed them)."""
+    bad = _rewritten(tmp_path, **{entry: value})
+    with pytest.raises(InputError, match=rf"{re.escape(str(bad))}: {entry}: expected one"):
+        read_trajectory(bad)
+
+
+@pytest.mark.parametrize("entry", ["params", "scenario", "settings", "provenance"])
+@pytest.mark.parametrize(
+    ("value", "problem"),
+    [
+        (np.str_("{not json"), "is not valid JSON"),
+        (np.str_('{"N": ' + "9" * 5000 + "}"), "is not valid JSON"),
+        (np.arange(3.0), "must be a JSON text"),
+    ],
+)
+def test_a_json_entry_that_is_no_json_text_is_named(
+    tmp_path: Path, entry: str, value: np.ndarray, problem: str
+) -> None:
+    """Audit of 28 Nov: a params (or scenario, settings, provenance) entry that was not JSON
+    made the whole file "damaged (not an .npz numpy can read)", which it is not; the entry is
+    named and what is wrong with it said."""
+    bad = _rewritten(tmp_path, **{entry: value})
+    with pytest.raises(InputError) as exc:
+        read_trajectory(bad)
+    assert f"{bad}: not a readable trajectory file: its {entry} entry {problem}" in str(exc.value)
+    assert "damaged" not in str(exc.value)
+
+
+def test_every_backend_writes_the_same_contract(tmp_path: Path) -> None:
+    """What `guidance solve --out` writes, read back: the same entries with the same dtypes
+    and shapes whichever backend solved it (a coarse grid keeps it quick), the
+    discretization that ran (audit of 28 Nov: every file said "auto", and the C loop's
+    "auto" or "casadi" discretized in C all the same) and the C builds that computed it."""
+    from guidance.cli import main
+
+    scenario = tmp_path / "s.json"
+    scenario.write_text(
+        '{"r0": [4, 4, 0], "v0": [0, -1, -2], "q0": [1, 0, 0, 0], "w0": [0, 0, 0], '
+        '"m0": 3.0, "glideslope_deg": 20.0, "tilt_max_deg": 90.0, "N": 20}'
+    )
+    layouts, builds = {}, {}
+    for backend in ("clarabel", "c-socp", "c"):
+        out = tmp_path / f"{backend}.npz"
+        assert main(["solve", str(scenario), "--backend", backend, "--out", str(out)]) == 0
+        d = read_trajectory(out)
+        layouts[backend] = {  # masks: one row per iteration, which the backends may differ in
+            k: (v.dtype.kind, v.shape[k == "masks" :]) if isinstance(v, np.ndarray) else sorted(v)  # type: ignore[call-overload]
+            for k, v in d.items()
+            if k != "provenance"  # its files differ: the C library that solved it
+        }
+        assert d["x"].shape == (20, 14) and d["u"].shape == (20, 3)  # type: ignore[union-attr]
+        assert d["masks"].shape[1] == NC * 20  # type: ignore[union-attr]
+        assert d["scenario"]["N"] == d["params"]["N"] == 20  # type: ignore[index]
+        assert d["settings"]["discretization"] == "c"  # type: ignore[index]
+        builds[backend] = set(d["provenance"]["files"])  # type: ignore[index]
+    assert builds == {
+        "clarabel": {"c_discretization"},
+        "c-socp": {"c_library", "c_discretization"},
+        "c": {"c_library"},
+    }
+    assert layouts["c-socp"] == layouts["clarabel"] == layouts["c"]
