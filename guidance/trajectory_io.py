@@ -26,7 +26,7 @@ from guidance.errors import (
     npz_damage,
     unique_keys,
 )
-from guidance.params import Params, Scenario, SCvxSettings, rk4_steps_per_interval
+from guidance.params import NU, NX, Params, Scenario, SCvxSettings, rk4_steps_per_interval
 from guidance.provenance import provenance
 from guidance.scenario import scenario_to_dict
 from guidance.scvx import SCvxResult
@@ -55,7 +55,9 @@ def write_trajectory(
     (scvx.POLISH_OUTCOMES), scenario, the SCvx settings the solve ran with
     (``result.settings``, when known) and provenance (with the path and
     sha256 of each file in ``inputs``, such as the networks of a T-SCvx solve). A text with a
-    NUL character raises InputError before anything is written."""
+    NUL character, params other than the scenario's, x or u not of params.N rows, or a result
+    without a trajectory (no file the readers take) raise InputError before anything is
+    written."""
     path = Path(path)
     text = {
         "status": result.status,
@@ -66,6 +68,7 @@ def write_trajectory(
     }
     for key, value in text.items():
         _check_no_nul(path, key, value)
+    _check_contract(path, result, params, scenario)
     with atomic_write(path) as f:
         np.savez(
             f,
@@ -85,6 +88,27 @@ def write_trajectory(
             provenance=np.str_(json.dumps(provenance(inputs))),
             # numpy's stubs read ** as possibly its allow_pickle flag
             **({} if result.settings is None else _settings_entries(result.settings, params.N)),  # type: ignore[arg-type]
+        )
+
+
+def _check_contract(path: Path, result: SCvxResult, params: Params, scenario: Scenario) -> None:
+    """What the readers require of a file, checked before writing one: the parameters the
+    scenario has, x and u of their N, and a trajectory (a solve that stopped before its
+    first subproblem has none: t_f and x are NaN). InputError names what is wrong."""
+    if scenario.params != params:
+        differ = [f.name for f in dataclasses.fields(Params)
+                  if getattr(scenario.params, f.name) != getattr(params, f.name)]  # fmt: skip
+        raise InputError(f"{path}: params and scenario disagree on {', '.join(differ)}")
+    for name, value, cols in (("x", result.x, NX), ("u", result.u, NU)):
+        shape = np.shape(value)
+        if shape != (params.N, cols):
+            raise InputError(f"{path}: {name} is {shape}, the params ask for ({params.N}, {cols})")
+    t_f = float(result.t_f)
+    finite = np.isfinite(result.x).all() and np.isfinite(result.u).all()
+    if not (math.isfinite(t_f) and t_f > 0.0 and finite):
+        raise InputError(
+            f"{path}: no trajectory to write (status {result.status}, t_f = {t_f:g}, x and u "
+            f"{'finite' if finite else 'not finite'}): {result.reason}"
         )
 
 

@@ -240,3 +240,39 @@ def test_every_backend_writes_the_same_contract(tmp_path: Path) -> None:
         "c": {"c_library"},
     }
     assert layouts["c-socp"] == layouts["clarabel"] == layouts["c"]
+
+
+def _no_trajectory() -> SCvxResult:
+    nan = float("nan")
+    return SCvxResult("solver_error", "the first subproblem failed", np.full((N, 14), nan),
+                      np.full((N, 3), nan), nan, 0, 0, 0.01)  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("case", "message"),
+    [
+        ("params_not_the_scenarios", "params and scenario disagree on T_max"),
+        ("another_N", r"x is \(5, 14\), the params ask for \(6, 14\)"),
+        ("no_trajectory", r"no trajectory to write \(status solver_error"),
+    ],
+)
+def test_the_writer_refuses_a_file_the_readers_would(
+    tmp_path: Path, case: str, message: str
+) -> None:
+    """Audit of 28 Nov: write_trajectory (guidance.write_trajectory) wrote whatever it was
+    given: params that were not the scenario's, x of another N than the params', a solve
+    without a trajectory (t_f NaN). Each file was then refused by read_trajectory or guidance
+    verify; the writer now refuses it, and writes nothing."""
+    p = Params(N=N)
+    result, params, scenario = _result("solved", "converged"), p, Scenario(params=p)
+    if case == "params_not_the_scenarios":
+        params = p.replace(T_max=4.0)
+    elif case == "another_N":
+        params = Params(N=N + 1)
+        scenario = Scenario(params=params)
+    else:
+        result = _no_trajectory()
+    path = tmp_path / "new" / "t.npz"
+    with pytest.raises(InputError, match=message):
+        write_trajectory(path, result, params, scenario, "scvx", "c")
+    assert list(tmp_path.iterdir()) == []
