@@ -87,18 +87,24 @@ class FileVerdict:
         return all(c.ok for c in self.checks)
 
 
-def _problem(data: dict[str, object], path: Path) -> tuple[Params, np.ndarray | None]:
-    """The file's parameters and, when it holds its scenario, the initial state it asks for."""
+def _problem(data: dict[str, object], path: Path) -> tuple[Params, np.ndarray | None, list[str]]:
+    """The file's parameters, the initial state its scenario asks for (None without one) and
+    the keys of its params that are no parameter of this package. DESIGN.md's params hold *at
+    least* the parameters: every one is required, others are allowed (a tool may record more)
+    and not used, which the report says."""
+    recorded = data["params"]
     try:
-        recorded = data["params"]
-        missing = [n for n in PARAM_NAMES if isinstance(recorded, dict) and n not in recorded]
+        if not isinstance(recorded, dict):
+            raise ScenarioError("<root>", "the parameters are a JSON object")
+        missing = [n for n in PARAM_NAMES if n not in recorded]
         if missing:  # a trajectory file records every parameter: none is taken as a default
             raise ScenarioError(missing[0], "missing (the file records every parameter)")
-        params = params_from_dict(recorded)  # type: ignore[arg-type]
+        params = params_from_dict({n: recorded[n] for n in PARAM_NAMES})
     except ScenarioError as exc:
         raise InputError(f"{path}: params field '{exc.field}': {exc.reason}") from exc
+    extra = [k for k in recorded if k not in PARAM_NAMES]
     if "scenario" not in data:
-        return params, None
+        return params, None, extra
     try:
         scenario = scenario_from_dict(data["scenario"])  # type: ignore[arg-type]
     except ScenarioError as exc:
@@ -110,7 +116,7 @@ def _problem(data: dict[str, object], path: Path) -> tuple[Params, np.ndarray | 
             if getattr(scenario.params, f.name) != getattr(params, f.name)
         ]
         raise InputError(f"{path}: params and scenario disagree on {', '.join(differ)}")
-    return params, scenario.x0
+    return params, scenario.x0, extra
 
 
 def _arrays(data: dict[str, object], p: Params, path: Path) -> tuple[np.ndarray, np.ndarray, float]:
@@ -139,7 +145,7 @@ def verify_file(path: str | Path, tol: Tolerances = Tolerances()) -> FileVerdict
     """Read and check one trajectory file; a file that cannot be checked raises InputError."""
     path = Path(path)
     data = read_trajectory(path)
-    p, x0 = _problem(data, path)
+    p, x0, extra = _problem(data, path)
     x, u, t_f = _arrays(data, p, path)
     a = audit(x, u, t_f, p, between=SAMPLES_BETWEEN_NODES)
     checks = trajectory_checks(a, p, tol)
@@ -152,6 +158,8 @@ def verify_file(path: str | Path, tol: Tolerances = Tolerances()) -> FileVerdict
     )
     if x0 is None:  # the contract does not require the entry: say what is not checked
         header += " (no scenario in the file: x[0] not checked against one)"
+    if extra:
+        header += f" (params not of this package, not used by the check: {', '.join(extra)})"
     thrust_min = CONSTRAINT_NAMES.index("thrust_min")
     engine = None
     if a.path_between_nodes[thrust_min] > 0.0:

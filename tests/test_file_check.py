@@ -315,6 +315,20 @@ def test_files_that_cannot_be_checked_exit_2(
     assert captured.out == ""  # nothing reported before every file is known good to read
 
 
+def test_params_beyond_the_packages_are_allowed_and_named(
+    written: Path, tmp_path: Path, capsys
+) -> None:
+    """Audit of 28 Nov: DESIGN.md's params hold *at least* the listed parameters, so a tool
+    may record more (here I_sp, from which alpha_mdot is derived); such a file was refused
+    ("params field 'I_sp': unknown parameter", exit 2). It is checked, and the report says
+    which keys it did not use. Every parameter of the package is still required."""
+    path = _with_params(written, tmp_path / "more.npz", {**_params_json(written), "I_sp": 30.0})
+    assert main(["verify", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "(params not of this package, not used by the check: I_sp)" in out
+    assert "verdict: pass" in out
+
+
 def test_tolerances_must_be_positive(capsys) -> None:
     with pytest.raises(ValueError, match="tolerance path must be a finite number > 0"):
         Tolerances(path=0.0)
