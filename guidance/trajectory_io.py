@@ -26,9 +26,17 @@ from guidance.errors import (
     npz_damage,
     unique_keys,
 )
-from guidance.params import NU, NX, Params, Scenario, SCvxSettings, rk4_steps_per_interval
+from guidance.params import (
+    NU,
+    NX,
+    PARAM_NAMES,
+    Params,
+    Scenario,
+    SCvxSettings,
+    rk4_steps_per_interval,
+)
 from guidance.provenance import provenance
-from guidance.scenario import scenario_to_dict
+from guidance.scenario import checked, scenario_to_dict
 from guidance.scvx import SCvxResult
 
 REQUIRED_KEYS = ("t_f", "x", "u", "status", "iterations", "solve_time_s", "params")
@@ -68,7 +76,8 @@ def write_trajectory(
     }
     for key, value in text.items():
         _check_no_nul(path, key, value)
-    _check_contract(path, result, params, scenario)
+    scenario = _check_contract(path, result, params, scenario)
+    params = scenario.params  # equal to the given ones, as the numbers JSON takes
     with atomic_write(path) as f:
         np.savez(
             f,
@@ -91,13 +100,19 @@ def write_trajectory(
         )
 
 
-def _check_contract(path: Path, result: SCvxResult, params: Params, scenario: Scenario) -> None:
-    """What the readers require of a file, checked before writing one: the parameters the
-    scenario has, x and u of their N, and a trajectory (a solve that stopped before its
-    first subproblem has none: t_f and x are NaN). InputError names what is wrong."""
-    if scenario.params != params:
-        differ = [f.name for f in dataclasses.fields(Params)
-                  if getattr(scenario.params, f.name) != getattr(params, f.name)]  # fmt: skip
+def _check_contract(path: Path, result: SCvxResult, params: Params, scenario: Scenario) -> Scenario:
+    """What the readers require of a file, checked before writing one: a scenario that passes
+    the scenario file's checks (returned with its numbers as floats: a numpy float32 is no
+    JSON number), the parameters it has, x and u of their N, and a trajectory (a solve that
+    stopped before its first subproblem has none: t_f and x are NaN). InputError names what
+    is wrong."""
+    scenario = checked(scenario)
+    differ = [
+        name
+        for name in PARAM_NAMES
+        if not np.array_equal(getattr(scenario.params, name), getattr(params, name))
+    ]
+    if differ:
         raise InputError(f"{path}: params and scenario disagree on {', '.join(differ)}")
     for name, value, cols in (("x", result.x, NX), ("u", result.u, NU)):
         shape = np.shape(value)
@@ -110,6 +125,7 @@ def _check_contract(path: Path, result: SCvxResult, params: Params, scenario: Sc
             f"{path}: no trajectory to write (status {result.status}, t_f = {t_f:g}, x and u "
             f"{'finite' if finite else 'not finite'}): {result.reason}"
         )
+    return scenario
 
 
 def _settings_entries(settings: SCvxSettings, N: int) -> dict[str, np.generic]:

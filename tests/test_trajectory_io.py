@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from guidance.errors import InputError
-from guidance.params import NC, Params, Scenario, SCvxSettings
+from guidance.params import NC, InitialState, Params, Scenario, SCvxSettings
 from guidance.scvx import SCvxResult
 from guidance.trajectory_io import REQUIRED_KEYS, read_trajectory, write_trajectory
 
@@ -254,6 +254,7 @@ def _no_trajectory() -> SCvxResult:
         ("params_not_the_scenarios", "params and scenario disagree on T_max"),
         ("another_N", r"x is \(5, 14\), the params ask for \(6, 14\)"),
         ("no_trajectory", r"no trajectory to write \(status solver_error"),
+        ("non_unit_q0", "scenario field 'q0': must be a unit quaternion"),
     ],
 )
 def test_the_writer_refuses_a_file_the_readers_would(
@@ -261,8 +262,9 @@ def test_the_writer_refuses_a_file_the_readers_would(
 ) -> None:
     """Audit of 28 Nov: write_trajectory (guidance.write_trajectory) wrote whatever it was
     given: params that were not the scenario's, x of another N than the params', a solve
-    without a trajectory (t_f NaN). Each file was then refused by read_trajectory or guidance
-    verify; the writer now refuses it, and writes nothing."""
+    without a trajectory (t_f NaN), a scenario a scenario file could not hold. Each file was
+    then refused by read_trajectory or guidance verify; the writer now refuses it, and
+    writes nothing."""
     p = Params(N=N)
     result, params, scenario = _result("solved", "converged"), p, Scenario(params=p)
     if case == "params_not_the_scenarios":
@@ -270,9 +272,25 @@ def test_the_writer_refuses_a_file_the_readers_would(
     elif case == "another_N":
         params = Params(N=N + 1)
         scenario = Scenario(params=params)
+    elif case == "non_unit_q0":  # verify refused its scenario entry
+        scenario = Scenario(InitialState(q0=(1.0, 0.5, 0.0, 0.0)), p)
     else:
         result = _no_trajectory()
     path = tmp_path / "new" / "t.npz"
     with pytest.raises(InputError, match=message):
         write_trajectory(path, result, params, scenario, "scvx", "c")
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_scenario_of_numpy_numbers_is_written_as_json_numbers(tmp_path: Path) -> None:
+    """Audit of 28 Nov: a Scenario built in Python with numpy float32 values (which
+    guidance.solve takes) made write_trajectory raise json's TypeError (a traceback); it is
+    written with the values as floats, as the solve used them."""
+    r0 = tuple(np.array([4.0, 4.0, 0.5], np.float32))
+    p = Params(N=N, T_max=np.float32(4.5))  # type: ignore[arg-type]
+    scenario = Scenario(InitialState(r0=r0), p)  # type: ignore[arg-type]
+    path = tmp_path / "t.npz"
+    write_trajectory(path, _result("solved", "converged"), p, scenario, "scvx", "c")
+    d = read_trajectory(path)
+    assert d["scenario"]["r0"] == [4.0, 4.0, 0.5]  # type: ignore[index]
+    assert d["params"]["T_max"] == d["scenario"]["T_max"] == 4.5  # type: ignore[index]
