@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from c_library import needs_c_library
 
 from guidance.errors import InputError
 from guidance.params import NC, InitialState, Params, Scenario, SCvxSettings
@@ -207,6 +208,7 @@ def test_a_json_entry_that_is_no_json_text_is_named(
     assert "damaged" not in str(exc.value)
 
 
+@needs_c_library
 def test_every_backend_writes_the_same_contract(tmp_path: Path) -> None:
     """What `guidance solve --out` writes, read back: the same entries with the same dtypes
     and shapes whichever backend solved it (a coarse grid keeps it quick), the
