@@ -532,10 +532,15 @@ def landing_set(limit: int | None = None, prox_u: float = 0.0) -> list[ConicProb
     subproblems time the conic solver, whatever SCvx's answer (docs/budget.md timed them
     at prox_u = 1)."""
     from guidance.params import PROX_U_MAX, Scenario
-    from guidance.scvx import collect_subproblems
+    from guidance.scvx import collect_subproblems, discretization_engine
 
     beyond = math.isfinite(prox_u) and prox_u > PROX_U_MAX
-    settings = SCvxSettings(prox_u=PROX_U_MAX if beyond else prox_u)  # NaN, < 0: InputError
+    # the discretization resolved here: the solver would resolve "auto" in a new (checked)
+    # copy of the settings, which refuses the weight beyond the bound
+    settings = SCvxSettings(
+        prox_u=PROX_U_MAX if beyond else prox_u,  # NaN, < 0: InputError
+        discretization=discretization_engine("auto"),
+    )
     if beyond:
         object.__setattr__(settings, "prox_u", float(prox_u))
     subs = collect_subproblems(Scenario(), settings)

@@ -234,6 +234,16 @@ class _LoopState:
     subproblems: list[ConicProblem] = field(default_factory=list)
 
 
+def discretization_engine(setting: str) -> str:
+    """The discretization SCvxSettings.discretization runs: "auto" is the generated C when
+    the library is built, else CasADi's VM."""
+    if setting != "auto":
+        return setting
+    from guidance import cgnc
+
+    return "c" if cgnc.available() else "casadi"
+
+
 class SCvxSolver:
     """SCvx / T-SCvx for one scenario. ``solve`` runs the whole loop."""
 
@@ -253,11 +263,8 @@ class SCvxSolver:
         self.record = record_subproblems
         self._templates: dict[bytes, SubproblemTemplate] = {}
         self._sessions: dict[int, conic.Session] = {}  # conic solver per sparsity pattern
-        self.engine = self.st.discretization
-        if self.engine == "auto":
-            from guidance import cgnc
-
-            self.engine = "c" if cgnc.available() else "casadi"
+        self.engine = discretization_engine(self.st.discretization)
+        if self.engine != self.st.discretization:
             # the result's settings say which discretization ran, not "auto"
             self.st = self.st.replace(discretization=self.engine)
 
