@@ -33,6 +33,7 @@ from guidance.subproblem import (
     Layout,
     Scaling,
     SubproblemTemplate,
+    carry_solution,
     physical,
     scaled,
 )
@@ -223,6 +224,7 @@ class _LoopState:
     # prev_pred is the prediction of the last accepted succession (a retry keeps it).
     prev_pred: np.ndarray | None = None
     last_sol: ConicSolution | None = None  # where the next IPM starts
+    last_tpl: SubproblemTemplate | None = None  # the template (mask) last_sol answers
     stalled: bool = False  # rejected at the smallest radius
     ipm_used: int = 0  # IPM iterations so far (failed warm-started runs included)
     capped: bool = False  # the last subproblem's limit was the budget's, not socp_max_iter
@@ -432,10 +434,15 @@ class SCvxSolver:
         warm = s.last_sol is not None and st.socp_warm_start and session.warm_starts
         cap, warm = iteration_cap(st, s.ipm_used, warm)
         s.capped = cap < st.socp_max_iter
-        sol = session.solve(prob, s.last_sol if warm else None, max_iter=cap)
+        start = None
+        if warm and s.last_sol is not None and s.last_tpl is not None:
+            # from a subproblem of another mask too, as the C loop, whose one pattern keeps
+            # dropped rows empty (a point of another size was refused: a cold start)
+            start = carry_solution(s.last_sol, s.last_tpl, tpl)
+        sol = session.solve(prob, start, max_iter=cap)
         s.ipm_used += sol.iterations
         if sol.ok:
-            s.last_sol = sol  # the next subproblem's IPM starts from it (as the C loop)
+            s.last_sol, s.last_tpl = sol, tpl  # the next subproblem's IPM starts from it
         return prob, sol
 
     def _candidate(

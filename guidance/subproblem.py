@@ -17,12 +17,12 @@ built once (:class:`SubproblemTemplate`) and every SCvx iteration only writes ne
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import scipy.sparse as sp
 
-from guidance.conic import ConeKind, ConicProblem
+from guidance.conic import ConeKind, ConicProblem, ConicSolution
 from guidance.model import transition_pattern
 from guidance.params import (
     ALWAYS_KEPT,
@@ -205,6 +205,7 @@ class SubproblemTemplate:
         self.indptr = np.searchsorted(cols[order], np.arange(self.n + 1)).astype(np.int64)
         if np.any((np.diff(rows[order]) == 0) & (np.diff(cols[order]) == 0)):
             raise AssertionError("duplicate entries in the subproblem pattern")
+        self.row_ids = self._row_ids()
 
     def _dynamics_rows(self, R: _Rows) -> None:
         """Dynamics (zero cone), 14 rows per interval; entries in this order per interval:
@@ -316,6 +317,24 @@ class SubproblemTemplate:
         self.r_trp = R.m
         for cols in self.tr_pairs:
             R.add("soc", np.array([1, 2]), cols, 3)
+
+    def _row_ids(self) -> np.ndarray:
+        """Each row's index in the full subproblem's rows (the template of the all-ones
+        mask): the rows of a masked template are the full one's with the dropped mass rows
+        and path cones left out, the rest in the same order (carry_solution)."""
+        N = self.N
+        dims = np.array(CONE_DIMS)
+        per_node = int(dims[1:6].sum())
+        first = np.concatenate([[0], np.cumsum(dims[1:5])])  # offset of c = 1..5 in a node
+        full_tmin = self.r_mass + N
+        full_cones = full_tmin + N
+        full_after = full_cones + N * per_node
+        ids = [np.arange(self.r_mass), self.r_mass + self.nodes_mass, full_tmin + np.arange(N)]
+        for node, c in self.soc_rows:  # node-major, c = 1..5, as _path_cone_rows adds them
+            ids.append(full_cones + node * per_node + first[c - 1] + np.arange(dims[c]))
+        cones_end = self.r_tmin + N + sum(int(dims[c]) for _, c in self.soc_rows)
+        ids.append(full_after + np.arange(self.m - cones_end))
+        return np.concatenate(ids).astype(np.int64)
 
     def trust_norm(self, dz: np.ndarray) -> float:
         """|dz| in the trust region's norm: the largest |component| of the scalar part and
@@ -482,3 +501,35 @@ def physical(z: np.ndarray, lay: Layout, sc: Scaling) -> tuple[np.ndarray, np.nd
 
 def scaled(x: np.ndarray, u: np.ndarray, t_f: float, lay: Layout, sc: Scaling) -> np.ndarray:
     return pack(sc.scale_x(x), u / sc.Su, t_f / sc.Ss, lay)
+
+
+def carry_solution(
+    sol: ConicSolution, src: SubproblemTemplate, dst: SubproblemTemplate
+) -> ConicSolution:
+    """``sol``, an answer to a subproblem of template ``src``, as a starting point of one of
+    template ``dst`` (another mask): the rows both keep carry their slack and dual; a row
+    only ``dst`` keeps starts at its cone's identity (s = e, z = 0), as the C loop's dropped
+    rows (G = 0, h = e, one pattern for every mask) end a solve. The runtime's warm start
+    then centres the point on the new data."""
+    if src is dst:
+        return sol
+    pos = np.full(int(max(src.row_ids.max(), dst.row_ids.max())) + 1, -1, dtype=np.int64)
+    pos[src.row_ids] = np.arange(src.m)
+    j = pos[dst.row_ids]
+    have = j >= 0
+    s_new = _cone_identity(dst.cones)
+    z_new = np.zeros(dst.m)
+    s_new[have] = sol.s[j[have]]
+    z_new[have] = sol.z[j[have]]
+    return replace(sol, s=s_new, z=z_new)
+
+
+def _cone_identity(cones: list[tuple[ConeKind, int]]) -> np.ndarray:
+    """e of a cone list: 0 on the zero cone, 1 on the orthant, (1, 0, ...) on each SOC."""
+    parts = []
+    for kind, height in cones:
+        e = np.zeros(height) if kind == "zero" else np.ones(height)
+        if kind == "soc":
+            e[1:] = 0.0
+        parts.append(e)
+    return np.concatenate(parts)

@@ -27,6 +27,7 @@ from guidance.subproblem import (
     TR_SCALAR_STATES,
     Scaling,
     SubproblemTemplate,
+    carry_solution,
     scaled,
 )
 
@@ -215,6 +216,46 @@ def test_masked_mass_constraint_has_no_rows() -> None:
     A = tpl.assemble(disc, z, 1.0, 500.0, scn, sc).A.tocsr()
     row = A[tpl.r_mass].toarray().ravel()
     assert np.flatnonzero(row).tolist() == [tpl.lay.x_index(3, IM)]
+
+
+def test_a_masked_subproblem_is_the_full_one_without_the_dropped_rows() -> None:
+    """row_ids names each row of a masked template in the full one, so an answer carries
+    from one mask to the next (carry_solution: the C loop, one pattern for every mask,
+    warm-starts across masks; the Python loop started cold after every mask change)."""
+    N = 6
+    scn = Scenario(SCN.initial, SCN.params.replace(N=N))
+    x, u, t_f = initial_guess(scn)
+    full = SubproblemTemplate(N, True)
+    sc = Scaling.for_scenario(scn, t_f)
+    z = scaled(x, u, t_f, full.lay, sc)
+    disc = discretize(x, u, t_f, scn.params, 2)
+    rng = np.random.default_rng(7)
+    pf = full.assemble(disc, z, 1.0, 500.0, scn, sc)
+    assert full.row_ids.tolist() == list(range(full.m))
+    masks = [rng.random((N, NC)) < 0.5 for _ in range(2)]
+    tpls = [SubproblemTemplate(N, True, m.reshape(-1)) for m in masks]
+    for tpl in tpls:
+        pm = tpl.assemble(disc, z, 1.0, 500.0, scn, sc)
+        assert tpl.m < full.m and len(set(tpl.row_ids.tolist())) == tpl.m
+        np.testing.assert_array_equal(pm.A.toarray(), pf.A.toarray()[tpl.row_ids])
+        np.testing.assert_array_equal(pm.b, pf.b[tpl.row_ids])
+    # an answer of the full problem (numbered rows) carried to a mask and on to another
+    answer = conic.ConicSolution(
+        "solved", z, np.arange(full.m, dtype=float), -np.arange(full.m, dtype=float), 0.0, 9, 0.0
+    )
+    a, b = tpls
+    on_a = carry_solution(answer, full, a)
+    np.testing.assert_array_equal(on_a.s, a.row_ids)
+    np.testing.assert_array_equal(on_a.z, -a.row_ids)
+    assert on_a.x is z
+    on_b = carry_solution(on_a, a, b)
+    both = np.isin(b.row_ids, a.row_ids)
+    np.testing.assert_array_equal(on_b.s[both], b.row_ids[both])
+    # a row only b keeps starts at its cone's identity (s = e, z = 0)
+    fresh = b.soc_rows[next(key for key in b.soc_rows if not a.mask[key])]
+    assert not both[fresh] and on_b.s[fresh] == 1.0 and on_b.z[fresh] == 0.0
+    assert not on_b.s[fresh + 1 :][:2].any()
+    assert carry_solution(on_a, a, a) is on_a
 
 
 def test_settings_take_numpy_scalars_and_refuse_numbers_beyond_a_float() -> None:
