@@ -145,7 +145,8 @@ class Polish:
 
 
 def step_label(accepted: bool, restored: int) -> str:
-    """The log's last column: a guard rejection (same radius) reads apart from a rho one."""
+    """The log's last column: a guard rejection (constraints put back) reads apart from a rho
+    one."""
     if accepted:
         return "acc"
     return f"rej, {restored} put back" if restored else "rej"
@@ -392,16 +393,17 @@ class SCvxSolver:
             step_met = cand.step <= st.step_tol
             s.status, s.reason = "solved", "converged" if step_met else CONVERGED_ON_COST
             return False
-        if not record.accepted and not record.restored:
-            if s.eta <= st.eta_lb:  # same reference, same radius: rejected forever
-                if self._converged(s, cand):  # the reference meets every tolerance
-                    s.status, s.reason = "solved", CONVERGED_AT_REFERENCE
-                else:
-                    s.stalled = True
-                return False
-            if s.last_sol is not None and eta_new < cand.tr_step:  # the retry's warm start
-                f = RETRY_START * eta_new / cand.tr_step
-                s.last_sol = _pulled_back(s.last_sol, s.z, f, self.lay)
+        if not record.accepted and not record.restored and s.eta <= st.eta_lb:
+            # same reference, same radius: rejected forever
+            if self._converged(s, cand):  # the reference meets every tolerance
+                s.status, s.reason = "solved", CONVERGED_AT_REFERENCE
+            else:
+                s.stalled = True
+            return False
+        # the retry's warm start (a guard rejection at the same radius keeps the answer)
+        if not record.accepted and s.last_sol is not None and eta_new < min(s.eta, cand.tr_step):
+            f = RETRY_START * eta_new / cand.tr_step
+            s.last_sol = _pulled_back(s.last_sol, s.z, f, self.lay)
         s.eta = eta_new
         return True
 
@@ -503,12 +505,18 @@ class SCvxSolver:
             # Full-constraint guard: a candidate that violates a constraint the mask dropped
             # is rejected, and the constraint is put back for the rest of the solve. The retry
             # starts from the same reference (which meets every convex constraint, so the
-            # subproblem stays feasible) with the same radius. T_min is never dropped
+            # subproblem stays feasible). A step rho accepted is retried at the same radius
+            # (the mask failed, not the linearization); one rho rejected too at the radius
+            # contracted by alpha, as step 5 of Algorithm 2 rejects it. At the same radius
+            # (until 28 Nov) that retry was rejected again 5 times of 6 (Algorithm 2 with the
+            # networks, 21 landings), and with SCvx's own tight masks Algorithm 2 took 30.2
+            # subproblems per landing instead of 24.9 (docs/tscvx.md). T_min is never dropped
             # (tpl.mask keeps it): its buffer is penalized instead.
             dropped = (c.h.reshape(-1) > st.defect_tol) & ~tpl.mask.reshape(-1)
             if dropped.any():
                 s.forced |= dropped
-                accepted, eta_new, restored = False, s.eta, int(dropped.sum())
+                eta_new = s.eta if accepted else _guard_radius(s.eta, st)
+                accepted, restored = False, int(dropped.sum())
         record = IterationRecord(
             s.k + 1,
             c.J,
@@ -809,6 +817,13 @@ def _retry_radius(eta: float, tr_step: float, st: SCvxSettings) -> float:
             break
         eta = eta / st.alpha
     return max(eta, st.eta_lb)
+
+
+def _guard_radius(eta: float, st: SCvxSettings) -> float:
+    """The radius after a guard rejection of a step rho rejected too (_judge): eta / alpha.
+    _retry_radius's skipping does not apply: the retry has another constraint, so a radius
+    that holds the rejected step need not give it back (C: pdg_scvx.c guard_radius)."""
+    return max(eta / st.alpha, st.eta_lb)
 
 
 def _trust_update(

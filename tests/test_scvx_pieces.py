@@ -316,6 +316,20 @@ def test_the_guard_puts_back_only_what_the_subproblem_dropped() -> None:
     record, _ = solver._judge(s, tpl, replace(cand, h=h), sol, mask, pred.reshape(-1), True)
     assert record.restored == 0
     h[5, glide] = 1.0  # the one the subproblem dropped
-    record, eta = solver._judge(s, tpl, replace(cand, h=h), sol, mask, pred.reshape(-1), True)
+    # a step rho accepts (J fell) is retried at the same radius: the mask failed, not the
+    # linearization
+    good = replace(cand, h=h, J=s.J - 0.5 * (s.J - cand.L))
+    record, eta = solver._judge(s, tpl, good, sol, mask, pred.reshape(-1), True)
+    assert record.rho >= solver.st.rho0
     assert (record.restored, record.accepted, eta) == (1, False, s.eta)
     assert s.forced[5 * NC + glide]
+    # one rho rejects too (J rose) at the radius contracted by alpha, as step 5 of Algorithm
+    # 2 rejects it (until 28 Nov at the same radius, where the retry was mostly rejected again)
+    s.forced[5 * NC + glide] = False
+    bad = replace(cand, h=h, J=s.J + 1.0)
+    record, eta = solver._judge(s, tpl, bad, sol, mask, pred.reshape(-1), True)
+    assert record.rho < solver.st.rho0
+    assert (record.restored, record.accepted, eta) == (1, False, s.eta / solver.st.alpha)
+    s.eta = solver.st.eta_lb  # never below the smallest radius
+    record, eta = solver._judge(s, tpl, bad, sol, mask, pred.reshape(-1), True)
+    assert (record.restored, eta) == (1, solver.st.eta_lb)

@@ -966,6 +966,14 @@ static double retry_radius(const pdg_settings *st, double eta, double tr_step)
     return eta > st->eta_lb ? eta : st->eta_lb;
 }
 
+/* The radius after a guard rejection of a step rho rejected too (judge; guidance/scvx.py
+ * _guard_radius) */
+static double guard_radius(const pdg_settings *st, double eta)
+{
+    eta = eta / st->alpha;
+    return eta > st->eta_lb ? eta : st->eta_lb;
+}
+
 static double trust_update(const pdg_settings *st, double eta, double rho, int accepted,
                            double tr_step, int use_tau, double tau_r)
 {
@@ -1518,11 +1526,15 @@ static double judge(pdg_workspace *ws, const scvx_state *s, const candidate *cd,
     /* Full-constraint guard: a candidate that violates a constraint the mask dropped is
      * rejected and the constraint put back for the rest of the solve; the retry starts from
      * the same reference (which meets every convex constraint, so the subproblem stays
-     * feasible) with the same radius. */
+     * feasible). A step rho accepted is retried at the same radius (the mask failed, not the
+     * linearization); one rho rejected too at the radius contracted by alpha, as step 5 of
+     * Algorithm 2 rejects it: at the same radius the retry was mostly rejected again
+     * (guidance/scvx.py _judge). retry_radius's skipping does not apply: the retry has
+     * another constraint. */
     const int restored = has_mask ? put_back_dropped(ws) : 0;
     if (restored > 0) {
+        eta_new = accepted ? s->eta : guard_radius(st, s->eta);
         accepted = 0;
-        eta_new = s->eta;
     }
     r->J = cd->J;
     r->dJ = dJ;
@@ -1666,25 +1678,24 @@ static int scvx_iteration(pdg_workspace *ws, const pdg_options *opt, scvx_state 
                      : "converged; the accepted step changed J by at most cost_tol");
         return 0;
     }
-    if (!r->accepted && !r->restored) {
-        if (s->eta <= st->eta_lb) { /* same reference, same radius: rejected forever */
-            /* Beyond the paper: near a plan whose defects are far below defect_tol, lambda
-             * times a step's second-order defects outweighs its gain (the Maratos effect);
-             * a reference that meets every tolerance is returned, solved
-             * (guidance/scvx.py CONVERGED_AT_REFERENCE) */
-            if (converged(st, s, &cd, INFINITY)) {
-                *status = PDG_SOLVED;
-                snprintf(res->message, PDG_MESSAGE_LEN,
-                         "converged; the step at the smallest trust radius, within step_tol, "
-                         "was rejected: the iterate kept");
-            } else {
-                s->stalled = 1;
-            }
-            return 0;
+    if (!r->accepted && !r->restored && s->eta <= st->eta_lb) {
+        /* same reference, same radius: rejected forever. Beyond the paper: near a plan whose
+         * defects are far below defect_tol, lambda times a step's second-order defects
+         * outweighs its gain (the Maratos effect); a reference that meets every tolerance is
+         * returned, solved (guidance/scvx.py CONVERGED_AT_REFERENCE) */
+        if (converged(st, s, &cd, INFINITY)) {
+            *status = PDG_SOLVED;
+            snprintf(res->message, PDG_MESSAGE_LEN,
+                     "converged; the step at the smallest trust radius, within step_tol, was "
+                     "rejected: the iterate kept");
+        } else {
+            s->stalled = 1;
         }
-        if (eta_new < cd.tr_step) {
-            pull_back(ws, RETRY_START * eta_new / cd.tr_step); /* the retry's warm start */
-        }
+        return 0;
+    }
+    /* the retry's warm start (a guard rejection at the same radius keeps the answer) */
+    if (!r->accepted && eta_new < s->eta && eta_new < cd.tr_step) {
+        pull_back(ws, RETRY_START * eta_new / cd.tr_step);
     }
     s->eta = eta_new;
     return 1;
