@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 import pytest
 
@@ -16,6 +18,11 @@ from guidance.verify import audit
 @pytest.fixture(scope="module")
 def reference() -> SCvxResult:
     return solve_scvx(SCENARIOS["north"])
+
+
+def _masks_of(reference: SCvxResult) -> Callable[[int], np.ndarray]:
+    """The reference's own tight set of succession k (its last one beyond its iterations)."""
+    return lambda k: reference.masks[min(k, len(reference.masks)) - 1]
 
 
 def test_oracle_warm_start_and_masks_converge_fast(reference: SCvxResult) -> None:
@@ -74,11 +81,7 @@ def test_a_guard_rejection_of_a_step_rho_rejects_contracts_the_radius(where: str
     cguidance = pytest.importorskip("guidance.cguidance")
     if not cguidance.LIB_PATH.exists():
         pytest.skip("run `make lib` first")
-    own = cguidance.solve_c(scenario).masks
-
-    def mask(k: int) -> np.ndarray:
-        return own[min(k, len(own)) - 1]
-
+    mask = _masks_of(cguidance.solve_c(scenario))  # SCvx's own tight sets
     st = SCvxSettings()
     if where == "c":
         r = cguidance.solve_c(scenario, st, masks=mask)
@@ -113,11 +116,7 @@ def test_reference_masks_without_warm_start_match_in_c_and_python(
     cguidance = pytest.importorskip("guidance.cguidance")
     if not cguidance.LIB_PATH.exists():
         pytest.skip("run `make lib` first")
-    scenario = SCENARIOS["north"]
-
-    def mask(k: int) -> np.ndarray:
-        return reference.masks[min(k, len(reference.masks)) - 1]
-
+    scenario, mask = SCENARIOS["north"], _masks_of(reference)
     py = solve_tscvx(scenario, None, lambda s, k: mask(k))
     c = cguidance.solve_c(scenario, masks=mask)
     assert py.status == c.status == "solved"
@@ -139,11 +138,7 @@ def test_the_python_loop_warm_starts_across_mask_changes_as_the_c_loop(
     cguidance = pytest.importorskip("guidance.cguidance")
     if not cguidance.LIB_PATH.exists():
         pytest.skip("run `make lib` first")
-    scenario = SCENARIOS["north"]
-
-    def mask(k: int) -> np.ndarray:
-        return reference.masks[min(k, len(reference.masks)) - 1]
-
+    scenario, mask = SCENARIOS["north"], _masks_of(reference)
     c = cguidance.solve_c(scenario, masks=mask)
     py = SCvxSolver(scenario, backend="c").solve(masks=mask)
     assert (py.status, py.subproblems_solved) == (c.status, c.subproblems_solved)
