@@ -12,7 +12,7 @@ from scipy.integrate import solve_ivp
 
 from guidance.catalog import SCENARIOS
 from guidance.model import dynamics_functions, param_vector
-from guidance.params import IR, IV
+from guidance.params import IQ, IR, IV, IW
 from guidance.verify import audit, engine_landing_error, propagate, propagate_sampled
 
 SCN = SCENARIOS["default"]
@@ -64,7 +64,10 @@ def test_propagate_matches_tight_reference(landing, stride: int, tol: float) -> 
 
 def test_audit_landing_error_uses_propagation(landing) -> None:
     """Perturbing the thrust while keeping the node states must show up in the landing error,
-    which is |r(t_f) - r_f| of the open-loop propagation (not of the node states)."""
+    which is |r(t_f) - r_f| of the open-loop propagation (not of the node states), and in the
+    touchdown attitude and rate (`guidance verify`'s "final attitude" and "final rate"): the
+    reference landing ends upright at rest (both ~1e-14 .. 3e-6), so no other test sees a
+    rate figure that is wrong, or stuck at 0, on a finite flight."""
     x, u, t_f = landing
     u_bad = u.copy()
     u_bad[:, 1] += 0.2  # a lateral thrust bias, node states untouched
@@ -77,6 +80,14 @@ def test_audit_landing_error_uses_propagation(landing) -> None:
     assert a.landing_position_error == pytest.approx(want_r, rel=1e-6)
     assert a.landing_velocity_error == pytest.approx(want_v, rel=1e-6)
     assert a.max_node_deviation == pytest.approx(np.abs(ref - x).max(), rel=1e-6)
+    # the bias torques the vehicle (thrust offset from the centre of mass): it lands turning
+    # (1.37 rad/U_T) and tilted (|(q2, q3)| 0.89) though the node states end upright at rest
+    want_w = np.linalg.norm(ref[-1, IW] - np.array(P.omega_f))
+    want_q = np.linalg.norm(ref[-1, IQ][2:4])  # roll-free: |(q2, q3)|
+    assert want_w > 0.1 and want_q > 0.1
+    assert np.linalg.norm(x[-1, IW] - np.array(P.omega_f)) < 1e-9
+    assert a.final_rate_error == pytest.approx(want_w, rel=1e-6)
+    assert a.final_attitude_error == pytest.approx(want_q, rel=1e-6)
     # the unperturbed landing passes
     good = audit(x, u, t_f, P)
     assert good.landing_position_error < 1e-3
