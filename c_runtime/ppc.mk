@@ -10,7 +10,7 @@
 #                     byte-swapped); and compares the default landing (SCvx and T-SCvx) and
 #                     the networks' outputs with the x86 build's, bit for bit (the drivers'
 #                     solution_fnv1a, a digest of x and u independent of the byte order, and
-#                     output_sum). 47 min here, 28 Nov (README: the figures).
+#                     output_sum). 31 to 47 min here, 28 Nov (README: the figures).
 # qemu 7.2 takes the ISA 3.0 forms of mffs that Debian's powerpc glibc uses in a few libm
 # functions (a 750 reads them as mffs) for illegal instructions: the programs run with
 # c_runtime/tests/qemu_ppc_mffs.c preloaded, which gives them the 750's meaning.
