@@ -624,7 +624,7 @@ def _add_verify(sub: argparse._SubParsersAction) -> None:
         type=positive_float,
         default=tol.flown_path,
         help="largest state-constraint value h (mass, glideslope, tilt, rate) on the flown "
-        f"trajectory, at and between the nodes (default {tol.flown_path:g})",
+        f"trajectory's nodes; between them reported, not checked (default {tol.flown_path:g})",
     )
     v.set_defaults(func=cmd_verify)
 
