@@ -59,7 +59,8 @@ def provenance(
 ) -> dict[str, object]:
     """The code, the versions of ``packages`` (default the solvers; those installed), the
     machine and the time; with ``files`` (a name for each input file, such as the networks of
-    a T-SCvx solve) their paths and sha256."""
+    a T-SCvx solve) their absolute paths and sha256 (a relative path would name the file
+    only from the working folder of the run, which nothing records)."""
     out: dict[str, object] = {
         "generator": code_version(),
         "created_utc": datetime.now(timezone.utc).isoformat(timespec="seconds"),
@@ -69,6 +70,7 @@ def provenance(
     }
     if files:
         out["files"] = {
-            name: {"path": str(path), "sha256": file_digest(path)} for name, path in files.items()
+            name: {"path": str(Path(path).absolute()), "sha256": file_digest(path)}
+            for name, path in files.items()
         }
     return out

@@ -49,3 +49,21 @@ def test_dirty_covers_what_the_numbers_depend_on(
     version = provenance.code_version()
     assert " git " in version
     assert version.endswith("+dirty") == dirty, version
+
+
+def test_an_input_file_given_relative_is_recorded_by_its_absolute_path(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Audit of 28 Nov: `guidance solve --guess plan.npz` recorded "plan.npz", which names the
+    file only from the folder the solve ran in, which the file does not record. The path is
+    recorded absolute (the sha256 says which bytes)."""
+    (tmp_path / "runs").mkdir()
+    (tmp_path / "runs" / "plan.npz").write_bytes(b"plan")
+    monkeypatch.chdir(tmp_path / "runs")
+    files = provenance.provenance({"initial_guess": Path("plan.npz")})["files"]
+    assert files == {  # type: ignore[comparison-overlap]
+        "initial_guess": {
+            "path": str(tmp_path / "runs" / "plan.npz"),
+            "sha256": provenance.file_digest(tmp_path / "runs" / "plan.npz"),
+        }
+    }
