@@ -62,6 +62,7 @@ from guidance.paths import BUILD_DIR
 from guidance.scenario import ScenarioError
 from guidance.scvx import (
     POLISH_OUTCOMES,
+    STATUSES,
     IterationRecord,
     Polish,
     SCvxResult,
@@ -72,7 +73,7 @@ from guidance.scvx import (
 from guidance.tscvx import REDUCED_ETA_INIT
 
 MESSAGE_LEN = 256
-STATUS_NAMES = ("solved", "infeasible", "max_iterations", "solver_error", "invalid_input")
+STATUS_NAMES = (*STATUSES, "invalid_input")  # pdg_status: a solve's ends, then the refusal
 PDG_INVALID_INPUT = STATUS_NAMES.index("invalid_input")  # pdg_status (tscvx_guidance.h)
 SOCP_STATUS_NAMES = SOLVE_STATUS  # one table of the SOCP runtime's statuses (csocp)
 

@@ -187,7 +187,7 @@ def _check_output_files(out: str | None, plot: str | None, scenario: str | None)
 
 
 def _print_problem(args: argparse.Namespace, scenario: Scenario, settings: SCvxSettings) -> None:
-    print(f"scenario: {json.dumps(scenario_to_dict(scenario))}")
+    print(f"scenario: {json.dumps(scenario_to_dict(scenario, changed_only=True))}")
     objective = "paper's linear" if settings.prox_u == 0 else f"proximal weight {settings.prox_u:g}"
     print(
         f"method: {args.method}, backend: {args.backend}, N = {scenario.params.N}, "
@@ -293,10 +293,8 @@ def _network_files(models: Path, backend: str) -> dict[str, Path]:
 
 def cmd_scenario(args: argparse.Namespace) -> int:
     scenario = _load(args.scenario, False)
-    out = scenario_to_dict(scenario)
-    if args.all:  # every parameter a scenario file may set, with its value
-        out.update({k: v for k, v in scenario.params.to_json_dict().items() if k not in out})
-    print(json.dumps(out, indent=2))
+    # --all: every parameter a scenario file may set, with its value
+    print(json.dumps(scenario_to_dict(scenario, changed_only=not args.all), indent=2))
     return 0
 
 

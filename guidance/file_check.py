@@ -11,12 +11,18 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from guidance.errors import InputError
 from guidance.params import CONSTRAINT_NAMES, IM, PARAM_NAMES, Params
-from guidance.scenario import ScenarioError, params_from_dict, scenario_from_dict
+from guidance.scenario import (
+    REQUIRED_KEYS,
+    ScenarioError,
+    params_from_dict,
+    scenario_from_dict,
+)
 from guidance.trajectory_io import read_trajectory
 from guidance.verify import (
     Audit,
@@ -106,7 +112,7 @@ def _problem(data: dict[str, object], path: Path) -> tuple[Params, np.ndarray | 
     if "scenario" not in data:
         return params, None, extra
     try:
-        scenario = scenario_from_dict(data["scenario"])  # type: ignore[arg-type]
+        scenario = scenario_from_dict(_with_omitted_params(data["scenario"], params))
     except ScenarioError as exc:
         raise InputError(f"{path}: {exc}") from exc
     if scenario.params != params:
@@ -117,6 +123,20 @@ def _problem(data: dict[str, object], path: Path) -> tuple[Params, np.ndarray | 
         ]
         raise InputError(f"{path}: params and scenario disagree on {', '.join(differ)}")
     return params, scenario.x0, extra
+
+
+def _with_omitted_params(entry: object, params: Params) -> Any:
+    """The file's scenario entry with the parameters it leaves out taken from the file's
+    params. Files written before 28 Nov 2026 list only the parameters that differed from the
+    defaults of the day; read with today's defaults, a changed default made them disagree
+    with their own params (or, for the initial state's checks, be judged by another value).
+    The params record what the solve used. The scenario's own keys (REQUIRED_KEYS) are not
+    filled: a file without one is refused as before."""
+    if not isinstance(entry, dict):
+        return entry  # scenario_from_dict names what is wrong
+    recorded = params.to_json_dict()
+    omitted = {n: recorded[n] for n in PARAM_NAMES if n not in entry and n not in REQUIRED_KEYS}
+    return {**entry, **omitted}
 
 
 def _arrays(data: dict[str, object], p: Params, path: Path) -> tuple[np.ndarray, np.ndarray, float]:

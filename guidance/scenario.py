@@ -198,8 +198,11 @@ def _reject_constant(name: str) -> float:
     return float(name.replace("Infinity", "inf"))
 
 
-def scenario_to_dict(scenario: Scenario) -> dict[str, Any]:
-    """The JSON contract form; parameters are written only where they differ from defaults."""
+def scenario_to_dict(scenario: Scenario, changed_only: bool = False) -> dict[str, Any]:
+    """The JSON contract form, with every parameter: a file carries the parameters it was
+    made with, not today's defaults (a file that left one out was read with the default of
+    the day it is read). ``changed_only``: only those that differ from the defaults (for
+    display)."""
     s = scenario.initial
     out: dict[str, Any] = {
         "r0": list(s.r0),
@@ -212,7 +215,7 @@ def scenario_to_dict(scenario: Scenario) -> dict[str, Any]:
     }
     default = Params().to_json_dict()
     for key, value in scenario.params.to_json_dict().items():
-        if key not in out and value != default[key]:
+        if key not in out and not (changed_only and value == default[key]):
             out[key] = value
     return out
 

@@ -152,9 +152,15 @@ def step_label(accepted: bool, restored: int) -> str:
     return f"rej, {restored} put back" if restored else "rej"
 
 
+# The statuses a solve ends with, on every backend (the C library's pdg_status in this order,
+# less its refusal PDG_INVALID_INPUT, which returns no result): the only ones a trajectory
+# file may hold.
+STATUSES = ("solved", "infeasible", "max_iterations", "solver_error")
+
+
 @dataclass
 class SCvxResult:
-    status: str  # "solved" | "infeasible" | "max_iterations" | "solver_error"
+    status: str  # one of STATUSES
     reason: str
     x: np.ndarray  # (N, 14)
     u: np.ndarray  # (N, 3), T_B

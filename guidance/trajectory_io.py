@@ -3,8 +3,9 @@
 Text entries (``status``, ``reason``, ``method``, ``backend``, ``polish``) hold no NUL
 character: numpy stores them as fixed-width strings padded with NULs, so a trailing NUL would
 be read back as padding, by this reader and any other, and lost. A text with one is refused
-on writing, and a file with one in its text is refused on reading. The JSON entries refuse a
-key given twice (``json`` would keep the last and say nothing).
+on writing, and a file with one in its text is refused on reading. ``status`` is one of the
+solvers' (scvx.STATUSES), on writing and reading. The JSON entries refuse a key given twice
+(``json`` would keep the last and say nothing).
 """
 
 from __future__ import annotations
@@ -37,7 +38,7 @@ from guidance.params import (
 )
 from guidance.provenance import provenance
 from guidance.scenario import checked, scenario_to_dict
-from guidance.scvx import SCvxResult
+from guidance.scvx import STATUSES, SCvxResult
 
 REQUIRED_KEYS = ("t_f", "x", "u", "status", "iterations", "solve_time_s", "params")
 # The contract's scalars: the dtype kinds each may have and what it is. A count is an integer;
@@ -60,12 +61,12 @@ def write_trajectory(
     inputs: dict[str, Path] | None = None,
 ) -> None:
     """Writes the contract keys plus the iteration masks, reason, what became of the polish
-    (scvx.POLISH_OUTCOMES), scenario, the SCvx settings the solve ran with
-    (``result.settings``, when known) and provenance (with the path and
-    sha256 of each file in ``inputs``, such as the networks of a T-SCvx solve). A text with a
-    NUL character, params other than the scenario's, x or u not of params.N rows, or a result
-    without a trajectory (no file the readers take) raise InputError before anything is
-    written."""
+    (scvx.POLISH_OUTCOMES), scenario (every parameter), the SCvx settings the solve ran with
+    (``result.settings``, when known) and provenance (with the absolute path and sha256 of
+    each file in ``inputs``, such as the networks of a T-SCvx solve). A text with a NUL
+    character, a status none of scvx.STATUSES, params other than the scenario's, x or u not
+    of params.N rows, or a result without a trajectory (no file the readers take) raise
+    InputError before anything is written."""
     path = Path(path)
     text = {
         "status": result.status,
@@ -76,6 +77,7 @@ def write_trajectory(
     }
     for key, value in text.items():
         _check_no_nul(path, key, value)
+    _check_status(path, result.status)
     scenario = _check_contract(path, result, params, scenario)
     params = scenario.params  # equal to the given ones, as the numbers JSON takes
     with atomic_write(path) as f:
@@ -160,7 +162,17 @@ def read_trajectory(path: str | Path) -> dict[str, object]:
         if isinstance(value, np.ndarray) and value.dtype.kind == "U":  # the text entries
             for item in value.ravel().tolist():
                 _check_no_nul(path, key, item)
+    _check_status(path, str(status))  # after the NUL check, which says more of such a text
     return out
+
+
+def _check_status(path: str | Path, status: str) -> None:
+    """A status the solvers end with (scvx.STATUSES); any other text is no answer of theirs
+    ("converged", "SOLVED", a typo), which a reader would report as if it were one."""
+    if status not in STATUSES:
+        raise InputError(
+            f"{path}: status {status!r} is none the solvers write (one of {', '.join(STATUSES)})"
+        )
 
 
 def _check_scalar(path: str | Path, key: str, value: object, kinds: str, what: str) -> None:

@@ -12,7 +12,7 @@ from c_library import needs_c_library
 
 from guidance import cli, dispersion
 from guidance.file_check import verify_file
-from guidance.params import InitialState, Scenario, SCvxSettings
+from guidance.params import PARAM_NAMES, InitialState, Scenario, SCvxSettings
 from guidance.scenario import load_scenario
 from guidance.trajectory_io import write_trajectory
 
@@ -113,6 +113,9 @@ def test_a_small_campaign_reports_and_writes_its_failures(tmp_path: Path, capsys
     assert [p.name for p in written] == ["landing_0.json", "landing_1.json"]
     first = sample_landings(1, BENCH_SEED)[0]
     assert load_scenario(written[0]) == Scenario(first.initial, first.params.replace(N=10))
+    # every parameter, not only those off today's defaults: solved again the same whatever
+    # the defaults become (audit of 28 Nov)
+    assert set(PARAM_NAMES) <= set(json.loads(written[0].read_text()))
     campaign = _strict((folder / "campaign.json").read_text())
     assert campaign["ipm_budget"] == 30 and campaign["nodes"] == 10
     assert campaign["failures"]["landing_1.json"]["status"] == "max_iterations"

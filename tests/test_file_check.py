@@ -275,6 +275,8 @@ _UNCHECKABLE: dict[str, Callable[[Path, Path], object]] = {
     "status_nul": lambda src, dst: _edited(src, dst, status="sol\x00ved"),
     # DESIGN.md: status is text; an integer status passed (CLI review, 26 Nov)
     "status_int": lambda src, dst: _edited(src, dst, status=5),
+    # any text passed as a status (audit of 28 Nov); only the solvers' are read
+    "status_other": lambda src, dst: _edited(src, dst, status="converged"),
     "folder": lambda src, dst: dst.mkdir(),
 }
 
@@ -301,6 +303,7 @@ _UNCHECKABLE: dict[str, Callable[[Path, Path], object]] = {
         ("t_max_twice", "params: key 'T_max' given twice"),
         ("status_nul", "status 'sol\\x00ved' holds a NUL character"),
         ("status_int", "status must be a text entry (DESIGN.md), got array(5)"),
+        ("status_other", "status 'converged' is none the solvers write (one of solved, "),
         ("folder", "folder.npz: is a folder, not a trajectory file"),
     ],
 )
@@ -461,3 +464,31 @@ def test_a_flight_that_leaves_the_path_constraints_fails_though_the_nodes_meet_t
     assert re.search(r"state constraints on the flight +\S+ +1e-03  FAIL", out)
     assert re.search(r"exceeded between the nodes \(reported, not checked\):.*glideslope", out)
     assert main(["verify", str(path), "--tol-flown", f"{1.01 * worst:g}"]) == 0
+
+
+def test_an_old_file_is_judged_by_its_own_params_not_todays_defaults(
+    written: Path, tmp_path: Path, capsys
+) -> None:
+    """Audit of 28 Nov: files written before then list in their scenario entry only the
+    parameters that differed from the defaults of the day. Here one written when the default
+    T_max was 6 (its params say 6, its scenario entry, the seven required keys, says nothing):
+    read with today's default 5 it was refused, "params and scenario disagree on T_max". The
+    parameters it leaves out are the file's params; the required keys are not filled."""
+    s = SCN.initial
+    old_entry = {"r0": list(s.r0), "v0": list(s.v0), "q0": list(s.q0), "w0": list(s.w0),
+                 "m0": s.m0, "glideslope_deg": P.glideslope_deg,
+                 "tilt_max_deg": P.tilt_max_deg}  # fmt: skip
+    then = {**_params_json(written), "T_max": 6.0}
+    old = _edited(written, tmp_path / "old.npz", params=json.dumps(then),
+                  scenario=json.dumps(old_entry))  # fmt: skip
+    assert main(["verify", str(old)]) == 0
+    assert "verdict: pass" in capsys.readouterr().out
+    assert verify_file(old).checks[0].name == "initial state vs scenario"  # x[0] still checked
+    # as written by today's defaults it reads as it always did
+    same = _edited(written, tmp_path / "same.npz", scenario=json.dumps(old_entry))
+    assert main(["verify", str(same)]) == 0
+    # a required key missing is still refused, not taken from the params
+    del old_entry["glideslope_deg"]
+    broken = _edited(written, tmp_path / "broken.npz", scenario=json.dumps(old_entry))
+    assert main(["verify", str(broken)]) == 2
+    assert "scenario field 'glideslope_deg': missing" in capsys.readouterr().err

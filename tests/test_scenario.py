@@ -306,6 +306,21 @@ def test_scenario_all_lists_every_parameter_and_reads_back(
     assert scenario_from_dict(printed) == scenario_from_dict({**GOOD, "T_max": 4.5})
 
 
+def test_the_printed_scenario_lists_only_what_differs(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """`guidance scenario` (and the solve's first line) show the overrides only; --all every
+    parameter: what a file written by the package holds."""
+    from guidance.scenario import scenario_to_dict
+
+    path = tmp_path / "s.json"
+    path.write_text(json.dumps({**GOOD, "T_max": 4.5}))
+    assert main(["scenario", str(path)]) == 0
+    shown = json.loads(capsys.readouterr().out)
+    assert shown == {**GOOD, "T_max": 4.5}
+    assert set(scenario_to_dict(load_scenario(path))) == set(GOOD) | set(Params().to_json_dict())
+
+
 @pytest.mark.parametrize("content", ["utf16", "digits", "nested"])
 def test_unreadable_scenario_files_are_refused_by_name(content: str, tmp_path: Path) -> None:
     """A UTF-16 file (what some shells write), an integer of 5,000 digits and arrays nested

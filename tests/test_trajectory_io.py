@@ -296,3 +296,49 @@ def test_a_scenario_of_numpy_numbers_is_written_as_json_numbers(tmp_path: Path) 
     d = read_trajectory(path)
     assert d["scenario"]["r0"] == [4.0, 4.0, 0.5]  # type: ignore[index]
     assert d["params"]["T_max"] == d["scenario"]["T_max"] == 4.5  # type: ignore[index]
+
+
+def test_the_scenario_entry_carries_every_parameter(tmp_path: Path) -> None:
+    """Audit of 28 Nov: the scenario entry listed only the parameters that differed from the
+    defaults, so a changed default would read an old file with the new value (guidance verify
+    then refused it: "params and scenario disagree"). A data file carries every parameter it
+    was made with (DESIGN.md)."""
+    from guidance.params import PARAM_NAMES
+    from guidance.scenario import scenario_from_dict
+
+    p = Params(N=N, T_max=4.5)
+    path = tmp_path / "t.npz"
+    write_trajectory(path, _result("solved", "converged"), p, Scenario(params=p), "scvx", "c")
+    entry = read_trajectory(path)["scenario"]
+    assert set(PARAM_NAMES) <= set(entry)  # type: ignore[arg-type]
+    assert entry == {**entry, **p.to_json_dict()}  # type: ignore[dict-item]
+    assert scenario_from_dict(entry) == Scenario(params=p)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("status", ["converged", "SOLVED", "invalid_input", ""])
+def test_a_status_no_solver_writes_is_refused(tmp_path: Path, status: str) -> None:
+    """Audit of 28 Nov: any text was read (and shown by guidance verify) as a file's status.
+    Only the solvers' (scvx.STATUSES) are: another is refused naming the file and the
+    statuses, on reading and, before anything is written, on writing."""
+    bad = _rewritten(tmp_path, status=np.str_(status))
+    with pytest.raises(
+        InputError, match=rf"{re.escape(str(bad))}: status '{status}' is none the solvers write"
+    ):
+        read_trajectory(bad)
+    p = Params(N=N)
+    path = tmp_path / "new" / "t.npz"
+    with pytest.raises(InputError, match="solved, infeasible, max_iterations, solver_error"):
+        write_trajectory(path, _result(status, "?"), p, Scenario(params=p), "scvx", "c")
+    assert not path.parent.exists()
+
+
+def test_every_status_a_solver_ends_with_is_read_back(tmp_path: Path) -> None:
+    from guidance.cguidance import STATUS_NAMES
+    from guidance.scvx import STATUSES
+
+    assert STATUS_NAMES[: len(STATUSES)] == STATUSES  # the C library's, in pdg_status order
+    p = Params(N=N)
+    for status in STATUSES:
+        path = tmp_path / f"{status}.npz"
+        write_trajectory(path, _result(status, "why"), p, Scenario(params=p), "scvx", "c")
+        assert str(read_trajectory(path)["status"]) == status
