@@ -1,5 +1,6 @@
 """The JSON files the commands write and read back (run records, training reports, the models
-folder's metrics): one checked reader.
+folder's metrics): one checked reader; and ``load_json``, the one place a JSON file's text is
+read and parsed (scenario files too), so that every JSON file is read alike.
 
 A file that cannot be read, is not JSON, or is not the object its writer makes (a damaged or
 hand-edited one, or another program's) raises InputError naming the file, what is wrong with
@@ -10,7 +11,7 @@ answer.
 from __future__ import annotations
 
 import json
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -24,6 +25,17 @@ ANY: type = object
 
 _NAMES = {dict: "an object", list: "a list", str: "a string", int: "an integer", float: "a number"}
 _NAMES |= {bool: "true/false", type(None): "null"}
+
+
+def load_json(path: Path, parse_constant: Callable[[str], Any] | None = None) -> Any:
+    """The JSON value in the file ``path``: UTF-8 text, a byte order mark at its start ignored
+    (RFC 8259 lets a parser ignore one; Windows editors write it, and such a scenario file was
+    refused as "not valid JSON"), a key given twice refused (errors.unique_keys).
+    ``parse_constant``: as json.loads's (NaN, Infinity). Raises what the caller words for its
+    file: OSError, UnicodeDecodeError, DuplicateKeyError, ValueError (no JSON, an integer of
+    more than 4,300 digits) or RecursionError (nesting)."""
+    text = path.read_text(encoding="utf-8-sig")
+    return json.loads(text, parse_constant=parse_constant, object_pairs_hook=unique_keys)
 
 
 def read_json_object(
@@ -41,13 +53,11 @@ def read_json_object(
         return InputError(f"{path}: not {what} ({problem}); {fix}")
 
     try:
-        text = path.read_text(encoding="utf-8")
+        data = load_json(path)
     except OSError as exc:
         raise InputError(f"{path}: cannot read it ({exc.strerror or exc}); {fix}") from None
     except UnicodeDecodeError as exc:
         raise fail(f"not UTF-8 text ({exc.reason})") from None
-    try:
-        data = json.loads(text, object_pairs_hook=unique_keys)
     except DuplicateKeyError as exc:
         raise fail(f"key {exc.key!r} given twice") from None
     except (ValueError, RecursionError) as exc:  # JSONDecodeError, a huge integer, nesting

@@ -15,7 +15,8 @@ from typing import Any
 
 import numpy as np
 
-from guidance.errors import DuplicateKeyError, InputError, unique_keys
+from guidance.errors import DuplicateKeyError, InputError
+from guidance.json_files import load_json
 from guidance.params import (
     N_MAX,
     N_MIN,
@@ -179,13 +180,11 @@ def read_scenario_data(path: str | Path) -> dict[str, Any]:
     checked as a scenario (scenario_from_dict does that)."""
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        data = load_json(path, parse_constant=_reject_constant)
     except OSError as exc:
         raise ScenarioError("<file>", f"cannot read {path}: {exc.strerror}") from exc
     except UnicodeDecodeError as exc:  # e.g. UTF-16, as some shells redirect
         raise ScenarioError("<file>", f"{path} is not UTF-8 text ({exc.reason})") from None
-    try:
-        data = json.loads(text, parse_constant=_reject_constant, object_pairs_hook=unique_keys)
     except DuplicateKeyError as exc:
         raise ScenarioError(exc.key, "given twice") from None
     except (ValueError, RecursionError) as exc:  # JSONDecodeError, a 4,300-digit integer, nesting

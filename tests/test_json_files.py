@@ -69,3 +69,11 @@ def test_a_dataset_run_record_is_read_by_it(tmp_path: Path) -> None:
     message = str(exc.value)
     assert message.startswith(f"{tmp_path / 'run.json'}: not a dataset run's record (no 'ranges'")
     assert message.endswith("; restore it from a copy, or start the run in another --run-dir")
+
+
+def test_a_byte_order_mark_at_the_start_is_ignored(tmp_path: Path) -> None:
+    """RFC 8259 lets a parser ignore a leading BOM (Windows editors write one): read, as a
+    scenario file is (one reader, json_files.load_json)."""
+    path = tmp_path / "report.json"
+    path.write_bytes(b"\xef\xbb\xbf" + GOOD.encode())
+    assert read_json_object(path, "a report", "fix", NEEDS)["macs"] == 3

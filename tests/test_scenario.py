@@ -336,3 +336,19 @@ def test_unreadable_scenario_files_are_refused_by_name(content: str, tmp_path: P
     with pytest.raises(ScenarioError, match=r"scenario file: .* is not (UTF-8 text|valid JSON)"):
         load_scenario(path)
     assert main(["scenario", str(path)]) == 2
+
+
+def test_a_scenario_file_starting_with_a_byte_order_mark_is_read(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Audit of 28 Nov: a scenario file saved as "UTF-8 with BOM" (Windows editors) was
+    refused as not valid JSON; RFC 8259 lets a parser ignore the mark, and every JSON file
+    is now read so (guidance.json_files.load_json). A mark elsewhere is no JSON."""
+    path = tmp_path / "bom.json"
+    path.write_bytes(b"\xef\xbb\xbf" + json.dumps({**GOOD, "T_max": 4.5}).encode())
+    assert load_scenario(path) == scenario_from_dict({**GOOD, "T_max": 4.5})
+    assert main(["scenario", str(path)]) == 0
+    assert json.loads(capsys.readouterr().out)["T_max"] == 4.5
+    path.write_bytes(b"\xef\xbb\xbf\xef\xbb\xbf" + json.dumps(GOOD).encode())
+    with pytest.raises(ScenarioError, match="is not valid JSON"):
+        load_scenario(path)
