@@ -597,13 +597,13 @@ _TRAINED: dict[tuple, dict] = {}
 
 
 def check_trained_params(models_dir: Path | str, kind: str, params: Params) -> None:
-    """For an ONNX source, the check of guidance.nn.infer: every problem parameter that is not
-    a network input must be the one the model was trained for, named in the ONNX file's
-    terms. (The C library checks the same against the values the .tnn blob records, for
-    .tnn files and converted ONNX alike; this names them before the conversion.)"""
+    """For an ONNX source, the checks of guidance.nn.infer: the grid (N) the model was trained
+    on, then every other problem parameter that is not a network input, named in the ONNX
+    file's terms. (The C library checks the same against the values the .tnn blob records,
+    for .tnn files and converted ONNX alike; this names them before the conversion.)"""
     import json
 
-    from guidance.nn.infer import META_KEY, _params_diff
+    from guidance.nn.infer import META_KEY, _params_diff, grid_mismatch
 
     path = net_source(Path(models_dir), kind)
     if path.suffix != ONNX_SUFFIX:
@@ -617,12 +617,15 @@ def check_trained_params(models_dir: Path | str, kind: str, params: Params) -> N
         if META_KEY not in props:  # an empty file parses as an empty model
             raise FlightNetsError(f"model {path}: not a T-SCvx model export (no metadata)")
         try:
-            _TRAINED[key] = dict(json.loads(props[META_KEY])).get("params", {})
+            _TRAINED[key] = dict(json.loads(props[META_KEY]))
         except (json.JSONDecodeError, TypeError, ValueError) as exc:
             raise FlightNetsError(
                 f"model {path}: its '{META_KEY}' metadata is unreadable ({exc})"
             ) from None
-    diff = _params_diff(_TRAINED[key], params)
+    grid = grid_mismatch(kind, _TRAINED[key].get("N"), params.N)
+    if grid:
+        raise FlightNetsError(f"model {path}: {grid}")
+    diff = _params_diff(_TRAINED[key].get("params", {}), params)
     if diff:
         raise FlightNetsError(
             f"model {path}: trained for other problem parameters: " + "; ".join(diff)
@@ -648,7 +651,22 @@ def _nets(models_dir: Path | str | None, masks: bool, params: Params | None = No
     if params is not None:
         for kind in kinds:
             check_trained_params(d, kind, params)
-    return flight_net(d, "solution"), (flight_net(d, "constraint") if masks else None)
+    nets = tuple(flight_net(d, kind) if kind in kinds else None for kind in NET_KINDS)
+    if params is not None:  # a .tnn's grid, named by its file
+        for kind, net in zip(NET_KINDS, nets, strict=True):
+            _check_grid(f"model {net_source(d, kind)}", kind, net, params.N)
+    return nets
+
+
+def _check_grid(where: str, kind: str, net: object, N: int) -> None:
+    """A FlightNet (or None) trained on the problem's grid, refused in the words of
+    guidance.nn.infer.grid_mismatch (onnxruntime's refusal too), before the C library's
+    own check of the same."""
+    from guidance.nn.infer import grid_mismatch
+
+    grid = None if net is None else grid_mismatch(kind, net.info.N, N)  # type: ignore[attr-defined]
+    if grid:
+        raise FlightNetsError(f"{where}: {grid}")
 
 
 def solve_tscvx_c(
@@ -671,6 +689,9 @@ def solve_tscvx_c(
         raise ScenarioError("N", f"must lie in [{N_MIN}, {N_MAX}], got {N}")
     _check_tscvx_arguments(masks, nets)
     ran_with = _ran_with(settings, socp)  # a bad setting refused before the solve
+    if nets is not None:
+        for kind, net in zip(NET_KINDS, nets, strict=True):
+            _check_grid("nets", kind, net if kind == SOLUTION or masks else None, N)
     sol, con = nets if nets is not None else _nets(models_dir, masks, scenario.params)
     ws = workspace(scenario, settings, **socp)
     cs = c_scenario(scenario)
@@ -729,20 +750,24 @@ def tscvx_guess_c(
     scenario: Scenario, models_dir: Path | str | None = None, net=None
 ) -> tuple[np.ndarray, np.ndarray, float]:
     """The projected warm start computed on board (pdg_tscvx_guess). A refusal raises
-    FlightNetsError (the networks) or InputError; a failed inference (PDG_SOLVER_ERROR)
+    FlightNetsError (the networks) or InputError (a ScenarioError naming the field, as
+    solve_tscvx_c's); a failed inference (PDG_SOLVER_ERROR)
     FlightStatusError with status "solver_error" and the library's reason."""
+    N = scenario.params.N
+    if not N_MIN <= N <= N_MAX:  # as solve_tscvx_c: the range before any network's grid
+        raise ScenarioError("N", f"must lie in [{N_MIN}, {N_MAX}], got {N}")
     _check_net("net", net)
+    _check_grid("net", SOLUTION, net, N)
     sol = net if net is not None else _nets(models_dir, False, scenario.params)[0]
     ws = workspace(scenario)
-    N = scenario.params.N
     x, u, tf = np.zeros((N, NX)), np.zeros((N, NU)), ct.c_double(0.0)
     msg = ct.create_string_buffer(MESSAGE_LEN)
     with _holding(sol):
         st = library().pdg_tscvx_guess(ws.ws, ct.byref(c_scenario(scenario)), sol._net,
                                        _dptr(x), _dptr(u), ct.byref(tf), msg)  # fmt: skip
     text = msg.value.decode()
-    if st == PDG_INVALID_INPUT:
-        raise (FlightNetsError if text.startswith("nets: ") else InputError)(text)
+    if st == PDG_INVALID_INPUT:  # a bad scenario as every C call raises it: the field named
+        raise FlightNetsError(text) if text.startswith("nets: ") else _refusal(text)
     if st != 0:
         raise _status_error(st, text)
     return x, u, tf.value

@@ -288,9 +288,10 @@ def test_networks_of_the_wrong_kind_are_refused(nets) -> None:
 
 def test_networks_for_another_N_are_refused(nets) -> None:
     scn = Scenario(SCENARIOS["default"].initial, Params(N=30))
-    with pytest.raises(cguidance.FlightNetsError, match=r"trained for N = 50 .* N = 30"):
+    grid = "the solution network is trained for N = 50, the problem has N = 30"
+    with pytest.raises(cguidance.FlightNetsError, match=f"^nets: {grid}"):
         cguidance.solve_tscvx_c(scn, nets=nets)
-    with pytest.raises(cguidance.FlightNetsError, match="N = 30"):
+    with pytest.raises(cguidance.FlightNetsError, match=f"^net: {grid}"):
         cguidance.tscvx_guess_c(scn, net=nets[0])
 
 
@@ -428,3 +429,41 @@ def test_a_failed_warm_start_inference_is_a_solver_error_not_bad_input() -> None
     assert whole.reason == (
         "solution network: the network output is not finite (overflow inside the network)"
     )
+
+
+def test_the_warm_start_call_names_a_bad_scenario_field(nets) -> None:
+    """Audit of 28 Nov: tscvx_guess_c raised a plain InputError for a bad scenario where
+    solve_tscvx_c (and every other C entry point) raises the ScenarioError naming the field."""
+    bad = Scenario(InitialState(m0=1.5))
+    for call in (lambda: cguidance.tscvx_guess_c(bad, net=nets[0]),
+                 lambda: cguidance.tscvx_guess_c(bad),
+                 lambda: cguidance.solve_tscvx_c(bad, nets=nets)):  # fmt: skip
+        with pytest.raises(ScenarioError, match=r"m0 = 1\.5 must exceed the dry mass") as raised:
+            call()
+        assert raised.value.field == "m0"
+
+
+def test_networks_of_another_grid_are_refused_alike_on_every_backend() -> None:
+    """Audit of 28 Nov: T-SCvx with N = 30 was refused as "output size 851 (N = 50) does not
+    match ..." with onnxruntime and as "trained for other problem parameters: N (model 50,
+    problem 30)" with the C library: now in the one wording of
+    guidance.nn.infer.grid_mismatch, the file named, whichever runs the network."""
+    from guidance import solve
+    from guidance.nn.conventions import MODELS_DIR
+
+    scn = Scenario(SCENARIOS["default"].initial, Params(N=30))
+    said = {}
+    for backend in ("clarabel", "c-socp", "c"):
+        with pytest.raises(InputError) as raised:
+            solve(scn, "tscvx", backend)
+        said[backend] = str(raised.value)
+    want = (
+        f"model {MODELS_DIR / 'solution.onnx'}: the solution network is trained for N = 50, "
+        "the problem has N = 30 (T-SCvx runs on its networks' grid; SCvx solves any N in "
+        "[3, 400])"
+    )
+    assert said == {"clarabel": want, "c-socp": want, "c": want}
+    tnn = cguidance.BUILD_MODELS_DIR / "solution.tnn"  # the flight blob: the same words
+    with pytest.raises(cguidance.FlightNetsError) as raised:
+        cguidance.solve_tscvx_c(scn, models_dir=cguidance.BUILD_MODELS_DIR)
+    assert str(raised.value) == want.replace(str(MODELS_DIR / "solution.onnx"), str(tnn))

@@ -526,7 +526,13 @@ def load_flight_model(path: str | Path, kind: str, params=None) -> FlightNet:
     """A weight file loaded in the C library and checked against the problem, as
     ``guidance.nn.infer.load_model`` checks an ONNX file: kind, input/output sizes, N and the
     problem parameters it was trained for."""
-    from guidance.nn.infer import ModelMismatchError, _params_diff, expected_sizes, trained_dict
+    from guidance.nn.infer import (
+        ModelMismatchError,
+        _params_diff,
+        expected_sizes,
+        grid_mismatch,
+        trained_dict,
+    )
     from guidance.params import Params
 
     params = params or Params()
@@ -548,10 +554,13 @@ def load_flight_model(path: str | Path, kind: str, params=None) -> FlightNet:
         raise ModelMismatchError(
             f"model {path}: input size {net.d_in} does not match the problem's {d_in}"
         )
-    if net.d_out != d_out or net.info.N != params.N:
+    grid = grid_mismatch(kind, net.info.N, params.N)
+    if grid:
+        raise ModelMismatchError(f"model {path}: {grid}")
+    if net.d_out != d_out:
         raise ModelMismatchError(
-            f"model {path}: output size {net.d_out} (N = {net.info.N}) does not match the "
-            f"problem's {d_out} (N = {params.N})"
+            f"model {path}: output size {net.d_out} does not match the problem's {d_out} "
+            f"(N = {params.N})"
         )
     recorded = [net.info.params[i] for i in range(net.info.n_params)]
     diff = _params_diff(trained_dict(recorded), params)

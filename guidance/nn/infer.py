@@ -18,7 +18,7 @@ import numpy as np
 
 from guidance.errors import InputError
 from guidance.nn.conventions import PROBE_RTOL
-from guidance.params import NC, NU, NX, PARAM_NAMES, Params, Scenario
+from guidance.params import N_MAX, N_MIN, NC, NU, NX, PARAM_NAMES, Params, Scenario
 from guidance.sampling import N_THETA, THETA_NAMES
 
 META_KEY = "tscvx"
@@ -79,6 +79,19 @@ def expected_sizes(kind: str, N: int) -> tuple[int, int]:
     if kind == "solution":
         return N_THETA, (NX + NU) * N + 1
     raise ValueError(f"unknown model kind {kind!r}")
+
+
+def grid_mismatch(kind: str, trained_N: object, N: int) -> str | None:
+    """Why a ``kind`` network trained on ``trained_N`` nodes cannot serve a problem of N nodes
+    (None when it can): the one wording of this refusal, whichever runs the network
+    (onnxruntime, or the C library from a .tnn or a converted ONNX file). Its outputs are per
+    node, so T-SCvx runs only on the grid its networks were trained for."""
+    if trained_N == N:
+        return None
+    return (
+        f"the {kind} network is trained for N = {trained_N}, the problem has N = {N} (T-SCvx "
+        f"runs on its networks' grid; SCvx solves any N in [{N_MIN}, {N_MAX}])"
+    )
 
 
 def _fail(path: str | Path, msg: str) -> ModelMismatchError:
@@ -180,20 +193,7 @@ class OnnxModel:
             raise _fail(path, f"is a {meta.get('kind')!r} network, a {kind!r} one was asked for")
         d_in, d_out = expected_sizes(kind, params.N)
         inp = self.session.get_inputs()[0]
-        out = self.session.get_outputs()[0]
-        g_in, g_out = inp.shape[-1], out.shape[-1]
-        if g_in != d_in or meta.get("d_in") != d_in:
-            raise _fail(
-                path,
-                f"input size {g_in} does not match the problem's {d_in} "
-                f"({'theta (16) and the iteration k' if kind == 'constraint' else 'theta (16)'})",
-            )
-        if g_out != d_out or meta.get("d_out") != d_out or meta.get("N") != params.N:
-            raise _fail(
-                path,
-                f"output size {g_out} (N = {meta.get('N')}) does not match the problem's "
-                f"{d_out} (N = {params.N})",
-            )
+        self._check_sizes(meta, kind, params.N, inp.shape[-1], self.session.get_outputs()[0])
         names = [*THETA_NAMES, "k"] if kind == "constraint" else list(THETA_NAMES)
         if meta.get("input_names") != names:
             raise _fail(path, f"inputs {meta.get('input_names')} differ from {names}")
@@ -207,6 +207,25 @@ class OnnxModel:
         self.N = params.N
         self.input_name = inp.name
         self._check_probe()
+
+    def _check_sizes(self, meta: dict, kind: str, N: int, g_in: object, out: Any) -> None:
+        """The graph's input size ``g_in`` and output ``out``, and the metadata's sizes and
+        grid, those of a ``kind`` network for N nodes."""
+        d_in, d_out = expected_sizes(kind, N)
+        if g_in != d_in or meta.get("d_in") != d_in:
+            raise _fail(
+                self.path,
+                f"input size {g_in} does not match the problem's {d_in} "
+                f"({'theta (16) and the iteration k' if kind == 'constraint' else 'theta (16)'})",
+            )
+        grid = grid_mismatch(kind, meta.get("N"), N)
+        if grid:
+            raise _fail(self.path, grid)
+        g_out = out.shape[-1]
+        if g_out != d_out or meta.get("d_out") != d_out:
+            raise _fail(
+                self.path, f"output size {g_out} does not match the problem's {d_out} (N = {N})"
+            )
 
     def _check_normalization(self, meta: dict, d_in: int, d_out: int) -> None:
         for key, size in (("in_mean", d_in), ("in_std", d_in), ("out_mean", d_out)):
