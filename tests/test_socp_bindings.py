@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import scipy.sparse as sp
-from socp_problems import random_feasible
+from socp_problems import badly_scaled, random_feasible
 
 from guidance import csocp
 from guidance.conic import ConicProblem, same_pattern, solve_clarabel
@@ -340,6 +340,62 @@ def test_iteration_limit_returns_the_best_iterate(seed: int) -> None:
         assert float(np.abs(sol.x - ref.x).max()) <= 1e-3 * scale
         log = sol.info["log"]
         assert max(sol.info["pres"], sol.info["dres"]) <= max(log[-1]["pres"], log[-1]["dres"])
+
+
+def _distance(pres: float, dres: float, gap: float, pcost: float, optimum: float) -> float:
+    """How far an iterate is from the answer: its relative residuals, and its gap and
+    objective error relative to the optimum's size (Clarabel's optimum), floored at 1e-8
+    (Clarabel's own accuracy)."""
+    size = max(1.0, abs(optimum))
+    return max(pres, dres, gap / size, abs(pcost - optimum) / size, 1e-8)
+
+
+def _check_iteration_limits(prob: ConicProblem, limits: range, **settings: float) -> bool:
+    """Stopped by each limit in `limits`, the runtime's point is within 10 x the distance
+    (_distance) of the best iterate it went through (its log). False (nothing checked) where
+    Clarabel does not solve the problem at 1e-9 or 1e-8."""
+    ref = solve_clarabel(prob)
+    if ref.status != "solved":
+        ref = solve_clarabel(prob, tol=1e-8)
+    if ref.status != "solved":
+        return False
+    for limit in limits:
+        sol = csocp.solve(prob, log=True, max_iter=limit, **settings)
+        if sol.status == "solved":
+            break
+        assert sol.status in ("max_iterations", "solved_inaccurate"), (limit, sol.status)
+        inf = sol.info
+        got = _distance(inf["pres"], inf["dres"], inf["gap_abs"], inf["pcost"], ref.obj)
+        each = [_distance(r["pres"], r["dres"], r["gap"], r["pcost"], ref.obj) for r in inf["log"]]
+        best = int(np.argmin(each))
+        assert got <= 10.0 * each[best], (limit, got, best, each[best])
+    return True
+
+
+@pytest.mark.parametrize("family", [random_feasible, badly_scaled])
+@pytest.mark.parametrize("seed", [0, 1, 2, 3, 4, 5, 6, 8])
+def test_iteration_limit_returns_no_clearly_worse_iterate(family, seed: int) -> None:
+    """Every iteration limit short of the answer: the point returned is no more than 10 times
+    as far from the answer (residuals, gap, objective against Clarabel's) as the best iterate
+    the solve went through. The best iterate was picked by each iterate's gap relative to its
+    own costs: an early iterate with costs far off (in the hundreds) scored a relative gap
+    near 1 and was returned in place of a later one 20 to 100 times closer (seed 4 at limit
+    3: iterate 1). With tolerances (1e-15) below what the arithmetic reaches, the last iterates
+    get worse again (residuals 1e-15, then 1e-4): the last iterate is not the answer either."""
+    prob = family(seed)
+    assert _check_iteration_limits(prob, range(1, 40))
+    tight = {"tol_feas": 1e-15, "tol_gap_abs": 1e-15, "tol_gap_rel": 1e-15}
+    assert _check_iteration_limits(prob, range(10, 41, 10), **tight)
+
+
+def test_iteration_limit_on_landing_subproblems_returns_no_clearly_worse_iterate() -> None:
+    """The same on the default landing's subproblems (subproblem 7 at limit 4 returned iterate
+    2, 100 times as far from the answer as iterate 4)."""
+    scvx = pytest.importorskip("guidance.scvx")
+    catalog = pytest.importorskip("guidance.catalog")
+    probs = scvx.collect_subproblems(catalog.SCENARIOS["default"])
+    checked = sum(_check_iteration_limits(prob, range(1, 40)) for prob in probs)
+    assert checked >= len(probs) - 3, (checked, len(probs))
 
 
 @pytest.mark.parametrize("seed", range(4))

@@ -349,7 +349,8 @@ tscvx_solve_status tscvx_solve(tscvx_workspace *ws);
  * for PRIMAL_INFEASIBLE, y and z for DUAL_INFEASIBLE: no number there to be taken for a
  * solution); a direction whose normalized numbers would not be finite (a descent near the
  * bottom of the double range) is not reported as a certificate. For SOLVED_INACCURATE and
- * MAX_ITER the best or last iterate.
+ * MAX_ITER the best iterate: the smallest worst ratio of its residuals and gap to the
+ * tolerances (docs/socp-runtime.md, "The best iterate").
  * TSCVX_SETUP_NO_SOLUTION (arrays untouched) before a solve since the last setup or data
  * update, after NUMERICAL_ERROR, and after a solve whose end check found the workspace
  * damaged (TSCVX_INVALID_INPUT). */

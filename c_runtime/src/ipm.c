@@ -228,12 +228,36 @@ void tscvx_unscale_solution(const tscvx_workspace *ws, tscvx_float *x, tscvx_flo
     for (tscvx_int i = 0; s && i < m; i++) s[i] = ws->s[i] / ws->EG[i] * px;
 }
 
-static void save_best(tscvx_workspace *ws, tscvx_float merit, tscvx_int k) {
+/* The best iterate: the smallest worst ratio to the tolerances,
+ *   max(max(pres, dres) / tol_feas, min(gap_abs / tol_gap_abs, gap_abs / (g tol_gap_rel))),
+ * with both candidates' gaps made relative to one yardstick g = max(1, min(|pcost|, |dcost|))
+ * of the CURRENT iterate (the latest estimate of the objective's size), not each to its own.
+ * Each to its own (until 28 Nov) rewarded iterates whose costs were far off: an early
+ * iterate's costs in the hundreds made its relative gap about 1, which beat a later one whose
+ * residuals, gap and objective were 10 to 100 times closer to the answer but whose costs
+ * (near the optimum's) were smaller. Stopped at max_iter 4, subproblem 7 of the default
+ * landing returned iterate 2, 118 times as far from Clarabel's answer as iterate 4
+ * (tests/test_socp_bindings.py, test_iteration_limit_*). Near an answer the two yardsticks
+ * agree, and the rule still keeps the best of the last iterates when rounding makes them
+ * worse (tolerances below what the arithmetic reaches). */
+static tscvx_float merit(const tscvx_workspace *ws, tscvx_float feas, tscvx_float gap_abs,
+                         tscvx_float g) {
+    const tscvx_settings *st = &ws->st;
+    return fmax(feas / st->tol_feas, fmin(gap_abs / st->tol_gap_abs, gap_abs / g / st->tol_gap_rel));
+}
+
+/* Saves the current iterate as the best one if it is (or none is saved yet). */
+static void update_best(tscvx_workspace *ws, const measures *r, tscvx_int k) {
+    const tscvx_float feas = fmax(r->pres, r->dres);
+    const tscvx_float g = fmax(1.0, fmin(fabs(r->pcost), fabs(r->dcost)));
+    if (ws->best_iter >= 0 && !(merit(ws, feas, r->gap_abs, g) < merit(ws, ws->bfeas, ws->bgap, g)))
+        return;
     vcopy(ws->bx, ws->x, ws->n);
     vcopy(ws->by, ws->y, ws->p);
     vcopy(ws->bz, ws->z, ws->m);
     vcopy(ws->bs, ws->s, ws->m);
-    ws->btau = ws->tau, ws->bkappa = ws->kappa, ws->bmerit = merit, ws->best_iter = k;
+    ws->btau = ws->tau, ws->bkappa = ws->kappa, ws->best_iter = k;
+    ws->bfeas = feas, ws->bgap = r->gap_abs;
 }
 
 static void restore_best(tscvx_workspace *ws) {
@@ -550,11 +574,7 @@ static tscvx_solve_status ipm_run(tscvx_workspace *ws, int warm) {
             status = fallback(ws, TSCVX_NUMERICAL_ERROR, &r);
             break;
         }
-        /* best iterate: the smallest worst ratio to the tolerances */
-        const tscvx_float merit = fmax(fmax(r.pres, r.dres) / ws->st.tol_feas,
-                                       fmin(r.gap_abs / ws->st.tol_gap_abs,
-                                            r.gap_rel / ws->st.tol_gap_rel));
-        if (ws->best_iter < 0 || merit < ws->bmerit) save_best(ws, merit, k);
+        update_best(ws, &r, k);
         if (converged(ws, &r, 0)) { status = TSCVX_SOLVED; break; }
         if (primal_infeasible(ws)) { status = TSCVX_PRIMAL_INFEASIBLE; break; }
         if (dual_infeasible(ws)) { status = TSCVX_DUAL_INFEASIBLE; break; }

@@ -333,7 +333,8 @@ struct tscvx_workspace {
     tscvx_float *wn;             /* n: work vector */
     tscvx_float *wp;             /* p: work vector (right-hand sides of the y rows) */
     /* best iterate so far; between solves, the warm-start point (original units) */
-    tscvx_float *bx, *by, *bz, *bs, btau, bkappa, bmerit;
+    tscvx_float *bx, *by, *bz, *bs, btau, bkappa;
+    tscvx_float bfeas, bgap; /* its max(pres, dres) and gap_abs (ipm.c, update_best) */
     tscvx_int best_iter;
     int warm; /* bx, by, bz, bs hold a point from tscvx_warm_start for the next solve */
     /* results (original units) */
