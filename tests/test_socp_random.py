@@ -216,3 +216,37 @@ def test_a_feasible_problem_whose_multipliers_look_like_a_certificate(c: float, 
     sol, ref = check_against_clarabel(prob)
     assert ref.status == "solved"
     assert sol.x[0] == pytest.approx(lo, rel=1e-8)
+
+
+def _one_huge_h(seed: int, big: float) -> ConicProblem:
+    """random_feasible(seed) with big added to the first nonnegative row's right-hand side."""
+    base = random_feasible(seed)
+    b, row = base.b.copy(), 0
+    for kind, dim in base.cones:
+        if kind == "nonneg":
+            b[row] += big
+            break
+        row += dim
+    return ConicProblem(base.P, base.q, base.A, b, base.cones)
+
+
+@pytest.mark.parametrize("seed", [2, 3, 18, 20])
+@pytest.mark.parametrize("big", [1e10, 1e12, 1e14, 1e15])
+def test_one_huge_h_entry_solves_as_clarabel(seed: int, big: float) -> None:
+    """One right-hand side of 1e10 to 1e15, its row active: the answer grows to 1e9-1e14
+    beside equality rows whose b is about 1, and the rounding of A x alone (1e-16 of 1e13)
+    is more than tol_feas (1e-8) of 1 + |b|. The runtime ended these numerical_error
+    (1e14, 1e15) or solved_inaccurate (1e10, 1e12) where Clarabel solves them; it now calls a
+    residual at the rounding of its row's terms met. Solved, Clarabel's objective to 1e-12,
+    and the residual of each row within 64 ulps of the sum of its terms' magnitudes
+    (Clarabel's own: 1 to 13 ulps)."""
+    prob = _one_huge_h(seed, big)
+    ref = solve_clarabel(prob)
+    sol = csocp.solve(prob)
+    assert ref.status == "solved"
+    assert sol.status == "solved", sol.status
+    assert abs(sol.obj - ref.obj) <= 1e-12 * abs(ref.obj), (sol.obj, ref.obj)
+    terms = abs(prob.A) @ np.abs(sol.x) + np.abs(sol.s) + np.abs(prob.b)
+    res = np.abs(prob.A @ sol.x + sol.s - prob.b)
+    assert np.all(res <= 64 * np.finfo(float).eps * terms), float(np.max(res / terms))
+    assert cone_violation(prob.cones, sol.s) <= 1e-15 * big

@@ -141,7 +141,8 @@ typedef enum {
 /* Outcome of tscvx_solve. */
 typedef enum {
     TSCVX_UNSOLVED = 0,          /* solve not called since setup/update */
-    TSCVX_SOLVED,                /* all tolerances met */
+    TSCVX_SOLVED,                /* all tolerances met (a primal residual within 16 ulps
+                                    of its row's terms counts as met: rounding) */
     TSCVX_SOLVED_INACCURATE,     /* reduced tolerances met (best iterate) */
     TSCVX_PRIMAL_INFEASIBLE,     /* certificate (y, z): A'y + G'z = 0, z in K, b'y + h'z < 0 */
     TSCVX_DUAL_INFEASIBLE,       /* certificate (x, s): Px = 0, Ax = 0, Gx + s = 0, s in K, c'x < 0 */
