@@ -165,6 +165,113 @@ static void upset_after_last_solve(pdg_workspace *ws, const pdg_scenario *s, tsc
     CHECK(x[PDG_NSTATE * (N - 1) + 13] == m_f);
 }
 
+/* A copy of the network file `blob` (len bytes, little-endian doubles after the header) with
+ * its CRC-32 recomputed, built into a net in *arena (copy and arena malloc'd, the caller frees
+ * them): outputs = 0, every weight (the values before the probes: normalization, encoder,
+ * layers, decoder) set to a; outputs = 1, the output means set to a and the output stds to b.
+ * A file the loader accepts as it would the exporter's (every number finite and within the
+ * float32 range, the scales positive, the trained-for parameters kept). */
+static void put_le64(unsigned char *p, double v)
+{
+    uint64_t bits;
+    int i;
+    memcpy(&bits, &v, sizeof bits);
+    for (i = 0; i < 8; ++i) p[i] = (unsigned char)(bits >> (8 * i));
+}
+
+static tscvx_nn *edited_net(const unsigned char *blob, size_t len, int outputs, double a,
+                            double b, unsigned char **copy, void **arena)
+{
+    tscvx_nn *net = NULL;
+    size_t bytes = 0, first, count, k;
+    uint32_t crc;
+    int i;
+    *copy = malloc(len);
+    *arena = NULL;
+    if (!*copy) return NULL;
+    memcpy(*copy, blob, len);
+    /* the layout from the blob as given (a net built for this only) */
+    if (tscvx_nn_arena_size(blob, len, 0u, &bytes) != TSCVX_NN_OK || !(*arena = malloc(bytes)) ||
+        tscvx_nn_init(&net, *arena, bytes, blob, len, 0u) != TSCVX_NN_OK) {
+        return NULL;
+    }
+    /* in_mean, in_scale (d_in each), out_mean, out_std (d_out each) lead the values */
+    first = outputs ? 2u * (size_t)net->d_in : 0u;
+    count = outputs ? (size_t)net->d_out : (size_t)(net->probe_in - net->in_mean);
+    for (k = 0; k < count; ++k) {
+        put_le64(*copy + TSCVX_NN_HEADER_BYTES + 8u * (first + k), a);
+        if (outputs) put_le64(*copy + TSCVX_NN_HEADER_BYTES + 8u * (first + count + k), b);
+    }
+    crc = nn_crc32(*copy, NN_CRC_OFFSET, 0u);
+    crc = nn_crc32(*copy + TSCVX_NN_HEADER_BYTES, len - TSCVX_NN_HEADER_BYTES, crc);
+    for (i = 0; i < 4; ++i) (*copy)[NN_CRC_OFFSET + (unsigned)i] = (unsigned char)(crc >> (8 * i));
+    net = NULL;
+    if (tscvx_nn_init(&net, *arena, bytes, *copy, len, 0u) != TSCVX_NN_OK) {
+        char why[TSCVX_NN_MESSAGE_LEN] = "";
+        tscvx_nn_check_blob(*copy, len, why);
+        fprintf(stderr, "edited network refused: %s\n", why);
+        return NULL;
+    }
+    return net;
+}
+
+/* The mask-failure fallback of pdg_solve_tscvx (pdg_tscvx_report.mask_failures: "mask
+ * inferences refused by the network (non-finite output): those subproblems were the full
+ * one"), exercised by no other test. The loader refuses NaN, infinite and beyond-float32
+ * values, not large ones: a constraint network whose every weight is 3e38 (within the float32
+ * range) is accepted, and its products compound past the double range before a LayerNorm
+ * can rescale them (the standardized input is already 9e76), so every inference is NaN. Whether a network overflows depends on its input;
+ * a bound on the weights that excluded it would refuse networks that never do. Each
+ * subproblem then falls back to the full one: no mask predicted, a failure per subproblem,
+ * and the landing the same to the bit as with a network whose every logit is 50 (out_mean 50,
+ * out_std 1e-300: every constraint kept, a full mask at every k). */
+static void overflowing_constraint_net(pdg_workspace *ws, const pdg_scenario *s, tscvx_nn *sol,
+                                       const unsigned char *blob, size_t len)
+{
+    static double x_keep[PDG_N_MAX * PDG_NSTATE], u_keep[PDG_N_MAX * PDG_NCTRL];
+    unsigned char *copy[2] = {NULL, NULL};
+    void *arena[2] = {NULL, NULL};
+    tscvx_nn *huge = edited_net(blob, len, 0, 3e38, 0.0, &copy[0], &arena[0]);
+    tscvx_nn *keep = edited_net(blob, len, 1, 50.0, 1e-300, &copy[1], &arena[1]);
+    pdg_tscvx_options o = {0};
+    pdg_tscvx_report rep, rep_keep;
+    pdg_result r, r_keep;
+    double out[PDG_N_MAX * PDG_NCON];
+    double theta[PDG_THETA_LEN + 1];
+    int N = s->params.N, i;
+    CHECK(huge != NULL && keep != NULL);
+    if (!huge || !keep) goto done;
+    pdg_theta_of(s, theta);
+    theta[PDG_THETA_LEN] = 1.0;
+    CHECK(tscvx_nn_run(huge, theta, PDG_THETA_LEN + 1, out, PDG_NCON * N) ==
+          TSCVX_NN_NUMERICAL_ERROR);
+    o.solution = sol;
+    o.constraint = keep;
+    r_keep.x = x_keep;
+    r_keep.u = u_keep;
+    CHECK(pdg_solve_tscvx(ws, s, &o, &r_keep, &rep_keep) == PDG_SOLVED);
+    CHECK(rep_keep.masks_predicted == r_keep.subproblems_solved && rep_keep.mask_failures == 0);
+    o.constraint = huge;
+    r.x = x;
+    r.u = u;
+    CHECK(pdg_solve_tscvx(ws, s, &o, &r, &rep) == PDG_SOLVED);
+    CHECK(rep.masks_predicted == 0 && rep.mask_failures == r.subproblems_solved &&
+          rep.mask_failures > 0);
+    CHECK(rep.warm_started && rep.eta_init == PDG_TSCVX_ETA_INIT);
+    CHECK(r.iterations == r_keep.iterations && r.subproblems_solved == r_keep.subproblems_solved);
+    CHECK(r.t_f == r_keep.t_f && r.max_violation <= 1e-6 && r.max_defect <= 1e-3);
+    for (i = 0; i < N * PDG_NSTATE; ++i) CHECK(x[i] == x_keep[i]);
+    for (i = 0; i < N * PDG_NCTRL; ++i) CHECK(u[i] == u_keep[i]);
+    printf("T-SCvx, constraint network overflowing: %d mask failures, %d subproblems, m_f %.6f "
+           "(as with full masks)\n",
+           rep.mask_failures, r.subproblems_solved, x[PDG_NSTATE * (N - 1) + 13]);
+done:
+    for (i = 0; i < 2; ++i) {
+        free(arena[i]);
+        free(copy[i]);
+    }
+}
+
 int main(int argc, char **argv)
 {
     const char *paths[2] = {"build/models/solution.tnn", "build/models/constraint.tnn"};
@@ -318,6 +425,8 @@ int main(int argc, char **argv)
     printf("T-SCvx: %d iterations, %d subproblems, m_f %.6f (SCvx %d iterations, m_f %.6f)\n",
            r.iterations, r.subproblems_solved, x[PDG_NSTATE * (N - 1) + 13], iters_scvx,
            m_scvx);
+
+    overflowing_constraint_net(ws, &s, sol, blob[1], len[1]);
 
     /* the end check of pdg_solve_tscvx: each network, and the guidance workspace */
     upset_after_last_solve(ws, &s, sol, con, &con->ff,
