@@ -80,6 +80,7 @@ include c_runtime/guidance.mk
 include c_runtime/coverage.mk
 include c_runtime/ppc.mk
 include c_runtime/fuzz/fuzz.mk
+include c_runtime/stack.mk
 
 # ---- tests ---------------------------------------------------------------------------------
 pytest: setup lib
