@@ -11,8 +11,10 @@ scenario, workspace set up before the measured call, then one ``pdg_solve``), an
 - memory: code + static data (``size`` of the static libraries the flight image links:
   libtscvx_gnc.a, libtscvx.a and SuiteSparse's libamd.a, libldl.a, libsuitesparseconfig.a;
   libc/libm are the flight OS's) + the guidance arena as reserved (the size query's answer;
-  the library's high-water report is printed beside it) + the stack high-water mark of the
-  call (stack painting in the driver) + the caller's answer arrays x and u at N. Budget:
+  the library's high-water report is printed beside it) + the static worst-case stack bound
+  of the call (guidance/stack_bound.py: GCC's frames over the call graph, no recursion; the
+  stack high-water measured by painting in the driver is printed beside it, and must not
+  exceed it) + the caller's answer arrays x and u at N. Budget:
   DESIGN.md's 60 MB of SRAM, read as 60 MiB (2^20 bytes, as memory parts are sized); every
   figure printed in MiB.
 
@@ -33,8 +35,8 @@ start) and T-SCvx (Algorithm 2, masks) side by side in the same columns.
 Network rows: ``build/nn_budget_driver`` (c_runtime/nn/tests/nn_budget_driver.c) runs one
 ``tscvx_nn_run`` of each shipped network (build/models/*.tnn, the default scenario's theta,
 k = 1), counted with ``--toggle-collect=tscvx_nn_run``; budget 5 M host instructions per
-inference (issue 5). Memory: the weight file (read in place) + the net's arena + the stack
-high-water of the call.
+inference (issue 5). Memory: the weight file (read in place) + the net's arena + the static
+stack bound of the call (its painted high-water beside it).
 """
 
 from __future__ import annotations
@@ -46,7 +48,7 @@ import sys
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
-from guidance import callgrind
+from guidance import callgrind, stack_bound
 from guidance.argtypes import at_least
 from guidance.errors import LibraryNotBuiltError
 from guidance.nn.conventions import CONSTRAINT, KINDS, SOLUTION, TNN_SUFFIX, network_file
@@ -115,7 +117,7 @@ class Budget:
     const_data_bytes: int  # data + bss: the writable static data (the name kept for --json)
     arena_bytes: int
     arena_high_water: int
-    stack_high_water: int
+    stack_high_water: int  # measured: the painted stack of this call
     heap_allocations_in_solve: int
     host_wall_s: float
     variant: str = "SCvx"
@@ -123,6 +125,7 @@ class Budget:
     nn_arena_bytes: int = 0  # their arenas
     result_bytes: int = 0  # the caller's answer arrays x (N x 14) and u (N x 3)
     nodes: int = 50  # the grid's N
+    stack_bound: int = 0  # static worst case of the call (stack_bound.py): what memory counts
 
     @property
     def memory_bytes(self) -> int:
@@ -130,7 +133,7 @@ class Budget:
             self.code_bytes
             + self.const_data_bytes
             + self.arena_bytes  # reserved in the flight image, not only its high-water
-            + self.stack_high_water
+            + self.stack_bound  # the worst case, not this call's high-water
             + self.nn_weights_bytes
             + self.nn_arena_bytes
             + self.result_bytes
@@ -160,10 +163,11 @@ class NetBudget:
     stack_high_water: int
     heap_allocations_in_run: int
     host_wall_s: float
+    stack_bound: int = 0  # static worst case of tscvx_nn_run
 
     @property
     def memory_bytes(self) -> int:
-        return self.weights_bytes + self.arena_bytes + self.stack_high_water
+        return self.weights_bytes + self.arena_bytes + self.stack_bound
 
     def within_budget(self) -> bool:
         return self.instructions <= NN_INSTRUCTION_BUDGET
@@ -186,10 +190,25 @@ def rad750_seconds(instructions: float) -> float:
     return RISC_EXPANSION * instructions / (IPC * CLOCK_HZ)
 
 
-def build(quiet: bool = True) -> None:
+def build(quiet: bool = True, stack: bool = True) -> None:
+    """The library, the drivers and (with `stack`) the static stack analysis's units."""
     cmd = ["make", "-s", "-C", str(ROOT), "lib", str(DRIVER.relative_to(ROOT)),
            str(NN_DRIVER.relative_to(ROOT))]  # fmt: skip
     subprocess.run(cmd, check=True, capture_output=quiet)
+    if stack:
+        stack_bound.build(quiet)
+
+
+def static_stack(function: str, measured: int) -> int:
+    """The static stack bound of a public function (stack_bound.py, build/stack as built),
+    checked against the high-water `measured` by painting: a bound below it is wrong."""
+    bound = stack_bound.flight_bounds(do_build=False)[function].bytes
+    if bound < measured:
+        raise RuntimeError(
+            f"the static stack bound of {function} ({bound} B) is below its measured "
+            f"high-water ({measured} B): the analysis misses a frame"
+        )
+    return bound
 
 
 def _variant_args(variant: str) -> tuple[list[str], str]:
@@ -261,6 +280,7 @@ def measure_networks(do_build: bool = True) -> list[NetBudget]:
             raise RuntimeError(f"nn budget driver failed on {path}: {out.stderr[-2000:]}")
         kv = dict(line.split(" ", 1) for line in out.stdout.splitlines() if " " in line)
         instr = callgrind.total([str(NN_DRIVER), str(path), "--repeat", "1"], "tscvx_nn_run")
+        stack = int(kv["stack_high_water"])
         rows.append(
             NetBudget(
                 name=name,
@@ -270,9 +290,10 @@ def measure_networks(do_build: bool = True) -> list[NetBudget]:
                 rad750_s=rad750_seconds(instr),
                 weights_bytes=int(kv["blob_bytes"]),
                 arena_bytes=int(kv["arena_bytes"]),
-                stack_high_water=int(kv["stack_high_water"]),
+                stack_high_water=stack,
                 heap_allocations_in_run=int(kv["heap_allocations_in_run"]),
                 host_wall_s=float(kv["wall_s_min"]),
+                stack_bound=static_stack("tscvx_nn_run", stack),
             )
         )
     return rows
@@ -302,6 +323,8 @@ def measure(do_build: bool = True, variant: str = "SCvx", nodes: int | None = No
     if do_build:
         build()
     native = _run_driver(variant=variant, nodes=nodes)
+    _, function = _variant_args(variant)
+    bound = static_stack(function, int(native["stack_high_water"]))
     instr, parts = count_instructions(variant, nodes)
     text, data = code_size()
     return Budget(
@@ -325,6 +348,7 @@ def measure(do_build: bool = True, variant: str = "SCvx", nodes: int | None = No
         nn_arena_bytes=int(native.get("nn_arena_bytes", 0)),
         result_bytes=int(native["result_bytes"]),
         nodes=int(native["nodes"]),
+        stack_bound=bound,
     )
 
 
@@ -370,7 +394,7 @@ def report_variants(rows: list[Budget]) -> str:
                 f"{b.socp_iterations - base.socp_iterations:+d} IPM iterations"
             )
     lines.append(
-        "  memory: code + static data + guidance arena + stack high-water + answer arrays "
+        "  memory: code + static data + guidance arena + static stack bound + answer arrays "
         "+ network weights (read in place) + network arenas; budget "
         f"{_mb(MEMORY_BUDGET_B).strip()} and {TIME_BUDGET_S:.0f} s RAD750"
     )
@@ -436,8 +460,8 @@ def report(b: Budget) -> str:
         f"  {'writable static data (data + bss)':48s} {_mb(b.const_data_bytes):>16s}",
         f"  {'guidance arena (as sized and reserved)':48s} {_mb(b.arena_bytes):>16s}"
         f"   ({b.arena_bytes} B; high-water {b.arena_high_water} B, library report)",
-        f"  {'stack high-water (painted stack)':48s} {_mb(b.stack_high_water):>16s}"
-        f"   ({b.stack_high_water} B)",
+        f"  {'stack, static worst case (stack_bound.py)':48s} {_mb(b.stack_bound):>16s}"
+        f"   ({b.stack_bound} B; high-water of this call {b.stack_high_water} B, painted)",
         f"  {'answer arrays x, u (the caller, at N)':48s} {_mb(b.result_bytes):>16s}"
         f"   ({b.result_bytes} B)",
         *(
@@ -464,12 +488,13 @@ def report_networks(nets: list[NetBudget], call: Budget | None = None) -> str:
         "Network inference (tscvx_nn_run, one call each; budget "
         f"{NN_INSTRUCTION_BUDGET / 1e6:.0f} M host instructions per inference)",
         f"  {'network':12s} {'host instr.':>12s} {'RAD750 ms':>10s} {'weights':>10s} "
-        f"{'arena':>9s} {'stack':>7s} {'heap':>5s} {'host ms':>8s}  ok",
+        f"{'arena':>9s} {'stack: painted / bound':>22s} {'heap':>5s} {'host ms':>8s}  ok",
     ]
     for n in nets:
         lines.append(
             f"  {n.name:12s} {n.instructions / 1e6:10.3f} M {n.rad750_s * 1e3:10.1f} "
-            f"{n.weights_bytes / 2**20:6.2f} MiB {n.arena_bytes:7d} B {n.stack_high_water:5d} B "
+            f"{n.weights_bytes / 2**20:6.2f} MiB {n.arena_bytes:7d} B "
+            f"{n.stack_high_water:9d} B / {n.stack_bound:6d} B "
             f"{n.heap_allocations_in_run:5d} {n.host_wall_s * 1e3:8.3f}  "
             f"{'yes' if n.within_budget() else 'NO'}"
         )
@@ -523,7 +548,7 @@ def _json_row(b: Budget) -> dict[str, object]:
 def run(args: argparse.Namespace) -> int:
     """The budget job for parsed options (add_arguments)."""
     if not args.no_build:
-        build()
+        build(stack=not args.check_noalloc)
     needed = (DRIVER,) if args.check_noalloc else (DRIVER, NN_DRIVER)
     missing = [str(d) for d in needed if not d.is_file()]
     if missing:
@@ -570,6 +595,12 @@ def run(args: argparse.Namespace) -> int:
         print(report(calls[-1]))
         print()
         print(report_networks(nets, calls[-1]))
+        print()
+        painted: dict[str, int] = {"tscvx_nn_run": max(n.stack_high_water for n in nets)}
+        for c in calls:
+            fn = VARIANTS[c.variant][1]
+            painted[fn] = max(painted.get(fn, 0), c.stack_high_water)
+        print(stack_bound.summary(stack_bound.flight_bounds(do_build=False), painted))
     return 0
 
 
