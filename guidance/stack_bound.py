@@ -37,6 +37,7 @@ from collections.abc import Callable, Iterable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
+from guidance.errors import LibraryNotBuiltError
 from guidance.paths import BUILD_DIR, ROOT
 
 STACK_DIR = BUILD_DIR / "stack"
@@ -478,7 +479,7 @@ def flight_bounds(do_build: bool = True) -> dict[str, Bound]:
     if do_build:
         build()
     if not UNITS.is_file():
-        raise StackCheckError(f"{UNITS} not found: run `make stack-info`")
+        raise LibraryNotBuiltError(f"{UNITS} not found: run `make stack-info` (or drop --no-build)")
     units = [ROOT / line for line in UNITS.read_text().split()]
     headers = sorted({*PUBLIC_HEADERS, *(ROOT / "c_runtime").glob("*/*.h"),
                       *(BUILD_DIR / "generated").glob("*.h")})  # fmt: skip
@@ -536,6 +537,9 @@ def main(argv: list[str] | None = None) -> int:
     except StackCheckError as exc:
         print(f"stack check failed: {exc}", file=sys.stderr)
         return 1
+    except LibraryNotBuiltError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
     if args.json:
         print(json.dumps({k: asdict(v) for k, v in bounds.items()}, indent=2))
     else:
