@@ -123,8 +123,11 @@ bench: setup lib $(BUILD)/ctest/bench_driver
 	$(GUIDANCE) bench --backend clarabel c-socp c --tscvx-landings 24 --callgrind
 	$(GUIDANCE) agreement --landings 20
 
+# The default landing, then a campaign of BUDGET_LANDINGS sampled landings (about 30 s each
+# under callgrind; docs/budget.md's figures are of `guidance budget --landings 20`).
+BUDGET_LANDINGS ?= 4
 budget: setup-flight lib
-	$(GUIDANCE) budget
+	$(GUIDANCE) budget --landings $(BUDGET_LANDINGS)
 
 # `models` (data generation, training, export) lives with the models it makes.
 -include models/models.mk

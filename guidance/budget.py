@@ -1,6 +1,7 @@
 """RAD750 budget check of one complete guidance call (DESIGN.md, "The RAD750 budget model").
 
     python -m guidance.budget [--no-build] [--json] [--check-noalloc] [--nodes N [N ...]]
+                              [--landings K [--seed S]]
 
 Builds ``build/pdg_budget_driver`` (c_runtime/examples/pdg_budget_driver.c: the default
 scenario, workspace set up before the measured call, then one ``pdg_solve``), and measures:
@@ -32,6 +33,18 @@ and with masks one constraint-network inference per iteration), counted with
 blobs (read in place) and the network arenas. The comparison table puts SCvx, T-SCvx (warm
 start) and T-SCvx (Algorithm 2, masks) side by side in the same columns.
 
+Campaign: ``--landings K [--seed S]`` measures, after the default landing, K landings drawn
+from the networks' training distribution by the T-SCvx benchmark's sampler
+(bench_tscvx.sample_landings: guidance/sampling.py's ranges, each turned about the up axis; its
+seed by default, so none was trained on, and the same landings as the first K of ``guidance
+dispersion``'s), each given to the driver with ``--landing`` and measured as above in all three
+variants. Per variant it reports the median, the 90th percentile (nearest rank: a landing's
+figure) and the largest RAD750-equivalent time and which landing took it, the statuses, the
+T-SCvx / SCvx ratio of instructions landing by landing (median and range), and the memory
+over the landings (the arena and the stack bound are fixed by N and the networks; the report
+says whether anything varied). A timing budget is judged on a campaign's worst case, and the
+default landing lies outside the training distribution.
+
 Network rows: ``build/nn_budget_driver`` (c_runtime/nn/tests/nn_budget_driver.c) runs one
 ``tscvx_nn_run`` of each shipped network (build/models/*.tnn, the default scenario's theta,
 k = 1), counted with ``--toggle-collect=tscvx_nn_run``; budget 5 M host instructions per
@@ -48,11 +61,13 @@ import sys
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
+import numpy as np
+
 from guidance import callgrind, stack_bound
 from guidance.argtypes import at_least
-from guidance.errors import LibraryNotBuiltError
+from guidance.errors import InputError, LibraryNotBuiltError
 from guidance.nn.conventions import CONSTRAINT, KINDS, SOLUTION, TNN_SUFFIX, network_file
-from guidance.params import N_MAX, N_MIN
+from guidance.params import N_MAX, N_MIN, Params, Scenario
 from guidance.paths import BUILD_DIR, ROOT
 
 DRIVER = BUILD_DIR / "pdg_budget_driver"
@@ -219,15 +234,32 @@ def _variant_args(variant: str) -> tuple[list[str], str]:
     return [a.format(**paths) for a in args], function
 
 
-def _driver_cmd(variant: str, repeat: int, nodes: int | None = None) -> list[str]:
+def landing_arg(scenario: Scenario) -> str:
+    """The driver's ``--landing`` value of a landing of the default vehicle: its theta
+    (sampling.theta_of), each number as Python's repr, which strtod reads back to the same
+    double."""
+    from guidance.sampling import scenario_of, theta_of
+
+    theta = theta_of(scenario)
+    if scenario_of(theta, Params()) != scenario:
+        raise ValueError("--landing carries theta only: the scenario's vehicle must be the default")
+    return ",".join(repr(float(v)) for v in theta)
+
+
+def _driver_cmd(
+    variant: str, repeat: int, nodes: int | None = None, landing: str | None = None
+) -> list[str]:
     args, _ = _variant_args(variant)
     grid = [] if nodes is None else ["--nodes", str(nodes)]
-    return [str(DRIVER), "--repeat", str(repeat), *grid, *args]
+    other = [] if landing is None else ["--landing", landing]
+    return [str(DRIVER), "--repeat", str(repeat), *grid, *other, *args]
 
 
-def _run_driver(variant: str = "SCvx", nodes: int | None = None) -> dict[str, str]:
-    """Three native guidance calls: the driver's ``key value`` lines."""
-    cmd = _driver_cmd(variant, 3, nodes)
+def _run_driver(
+    variant: str = "SCvx", nodes: int | None = None, landing: str | None = None, repeat: int = 3
+) -> dict[str, str]:
+    """``repeat`` native guidance calls: the driver's ``key value`` lines."""
+    cmd = _driver_cmd(variant, repeat, nodes, landing)
     out = subprocess.run(cmd, capture_output=True, text=True, check=False)
     if out.returncode not in DRIVER_OK:
         raise RuntimeError(f"budget driver failed ({out.returncode}): {out.stderr[-2000:]}")
@@ -245,12 +277,12 @@ def _run_driver(variant: str = "SCvx", nodes: int | None = None) -> dict[str, st
 
 
 def count_instructions(
-    variant: str = "SCvx", nodes: int | None = None
+    variant: str = "SCvx", nodes: int | None = None, landing: str | None = None
 ) -> tuple[int, dict[str, int]]:
     """Instructions inside the guidance call (callgrind): pdg_solve, or pdg_solve_tscvx for
     the T-SCvx variants, with the SOCP / discretization / network-inference split."""
     _, function = _variant_args(variant)
-    cmd = _driver_cmd(variant, 1, nodes)
+    cmd = _driver_cmd(variant, 1, nodes, landing)
     with callgrind.collect(cmd, function, ok_codes=DRIVER_OK) as run:
         parts = callgrind.inclusive_costs(run.out_file, PARTS)
     if parts:
@@ -317,15 +349,22 @@ def code_size() -> tuple[int, int]:
     return text, data
 
 
-def measure(do_build: bool = True, variant: str = "SCvx", nodes: int | None = None) -> Budget:
+def measure(
+    do_build: bool = True,
+    variant: str = "SCvx",
+    nodes: int | None = None,
+    landing: str | None = None,
+    repeat: int = 3,
+) -> Budget:
     """One complete guidance call of ``variant`` (a key of VARIANTS), on ``nodes`` nodes
-    (None: the default scenario's N)."""
+    (None: the default scenario's N), of ``landing`` (the driver's --landing; None: the
+    default landing); the host wall time is the fastest of ``repeat`` native calls."""
     if do_build:
         build()
-    native = _run_driver(variant=variant, nodes=nodes)
+    native = _run_driver(variant=variant, nodes=nodes, landing=landing, repeat=repeat)
     _, function = _variant_args(variant)
     bound = static_stack(function, int(native["stack_high_water"]))
-    instr, parts = count_instructions(variant, nodes)
+    instr, parts = count_instructions(variant, nodes, landing)
     text, data = code_size()
     return Budget(
         status=native["status"],
@@ -519,6 +558,175 @@ def report_networks(nets: list[NetBudget], call: Budget | None = None) -> str:
     return "\n".join(lines)
 
 
+# ---- campaign: sampled landings (--landings K) -------------------------------------------
+
+
+@dataclass
+class CampaignLanding:
+    """One landing of the campaign: its index in the sampler's draw, theta and one measured
+    call per variant (VARIANTS' order)."""
+
+    index: int
+    theta: list[float]
+    calls: list[Budget]
+
+
+@dataclass
+class VariantSpread:
+    """One variant over the campaign's landings."""
+
+    variant: str
+    landings: int
+    median_s: float
+    p90_s: float  # nearest rank: the figure of a landing
+    max_s: float
+    largest_landing: int  # the landing of max_s (its index in the draw)
+    statuses: dict[str, int]
+    median_instructions: float
+    # instructions / SCvx's on the same landing (None for SCvx itself)
+    ratio_median: float | None
+    ratio_min: float | None
+    ratio_max: float | None
+    memory_bytes: tuple[int, int]  # (least, most) over the landings
+    arena_bytes: tuple[int, int]
+    stack_bound: tuple[int, int]
+    arena_high_water: tuple[int, int]
+    stack_high_water: tuple[int, int]  # painted
+    heap_allocations: int  # inside the calls, summed over the landings
+
+    @property
+    def memory_fixed(self) -> bool:
+        """The memory the budget counts is the same on every landing."""
+        return self.memory_bytes[0] == self.memory_bytes[1]
+
+
+def measure_campaign(
+    landings: int, seed: int | None = None, progress: bool = True
+) -> list[CampaignLanding]:
+    """``landings`` landings of the T-SCvx benchmark's sampler (``seed``, default its own),
+    each measured in every variant (callgrind; the driver built)."""
+    from guidance.bench_tscvx import BENCH_SEED, sample_landings
+    from guidance.sampling import theta_of
+
+    out = []
+    scenarios = sample_landings(landings, seed=BENCH_SEED if seed is None else seed)
+    for i, scenario in enumerate(scenarios):
+        arg = landing_arg(scenario)
+        calls = [measure(do_build=False, variant=v, landing=arg, repeat=1) for v in VARIANTS]
+        out.append(CampaignLanding(i, [float(v) for v in theta_of(scenario)], calls))
+        if progress:
+            done = ", ".join(f"{c.variant} {c.status} {c.rad750_s:.2f} s" for c in calls)
+            print(f"landing {i + 1}/{len(scenarios)}: {done}", file=sys.stderr, flush=True)
+    return out
+
+
+def _range(values: list[int]) -> tuple[int, int]:
+    return (min(values), max(values))
+
+
+def campaign_spread(rows: list[CampaignLanding]) -> list[VariantSpread]:
+    """Per variant: the spread of the RAD750 time over the landings, the largest and its
+    landing, statuses, the instruction ratio against SCvx landing by landing, the memory."""
+    from guidance.dispersion import spread
+
+    if not rows:
+        raise ValueError("a campaign of no landings")
+    out = []
+    for j, variant in enumerate(VARIANTS):
+        calls = [r.calls[j] for r in rows]
+        if any(c.variant != variant for c in calls):
+            raise ValueError(f"landing calls out of order: expected {variant}")
+        med, p90, largest = spread([c.rad750_s for c in calls], q=90)
+        worst = max(range(len(rows)), key=lambda i: calls[i].instructions)
+        ratios = None
+        if j > 0:  # against SCvx (VARIANTS' first) on the same landing
+            ratios = [
+                c.instructions / r.calls[0].instructions for c, r in zip(calls, rows, strict=True)
+            ]
+        statuses: dict[str, int] = {}
+        for c in calls:
+            statuses[c.status] = statuses.get(c.status, 0) + 1
+        out.append(
+            VariantSpread(
+                variant=variant,
+                landings=len(rows),
+                median_s=med,
+                p90_s=p90,
+                max_s=largest,
+                largest_landing=rows[worst].index,
+                statuses=statuses,
+                median_instructions=float(np.median([c.instructions for c in calls])),
+                ratio_median=None if ratios is None else float(np.median(ratios)),
+                ratio_min=None if ratios is None else min(ratios),
+                ratio_max=None if ratios is None else max(ratios),
+                memory_bytes=_range([c.memory_bytes for c in calls]),
+                arena_bytes=_range([c.arena_bytes for c in calls]),
+                stack_bound=_range([c.stack_bound for c in calls]),
+                arena_high_water=_range([c.arena_high_water for c in calls]),
+                stack_high_water=_range([c.stack_high_water for c in calls]),
+                heap_allocations=sum(c.heap_allocations_in_solve for c in calls),
+            )
+        )
+    return out
+
+
+def _bytes_range(r: tuple[int, int]) -> str:
+    return f"{r[0]} B" if r[0] == r[1] else f"{r[0]}-{r[1]} B"
+
+
+def _mib_range(r: tuple[int, int]) -> str:
+    lo, hi = (f"{b / 2**20:.2f}" for b in r)
+    return f"{lo} MiB" if r[0] == r[1] else f"{lo}-{hi} MiB"
+
+
+def report_campaign(rows: list[CampaignLanding], seed: int) -> str:
+    """The campaign's spread per variant (campaign_spread) and one line per landing."""
+    spreads = campaign_spread(rows)
+    lines = [
+        f"Campaign: {len(rows)} landings of the training distribution (bench_tscvx's sampler, "
+        f"seed {seed}), one complete guidance call each, RAD750-equivalent seconds",
+        f"  {'call':22s} {'median':>8s} {'90th pct':>8s} {'largest':>8s} {'(landing)':>9s} "
+        f"{'instr./SCvx: median [range]':>28s} {'memory':>10s}  statuses",
+    ]
+    for v in spreads:
+        ratio = (
+            "-"
+            if v.ratio_median is None
+            else f"{v.ratio_median:.2f} [{v.ratio_min:.2f}, {v.ratio_max:.2f}]"
+        )
+        stat = ", ".join(f"{n} {k}" for k, n in sorted(v.statuses.items()))
+        lines.append(
+            f"  {v.variant:22s} {v.median_s:8.2f} {v.p90_s:8.2f} {v.max_s:8.2f} "
+            f"{v.largest_landing:9d} {ratio:>28s} {_mib_range(v.memory_bytes):>10s}  {stat}"
+        )
+    lines.append(
+        "  90th pct: nearest rank (a landing's figure); instr./SCvx: the call's instructions "
+        "over SCvx's on the same landing"
+    )
+    for v in spreads:
+        fixed = "the same on every landing" if v.memory_fixed else "varies with the landing"
+        lines.append(
+            f"  {v.variant}: memory {fixed} (arena {_mib_range(v.arena_bytes)}, stack bound "
+            f"{_bytes_range(v.stack_bound)}; measured: arena high-water "
+            f"{_bytes_range(v.arena_high_water)}, stack painted "
+            f"{_bytes_range(v.stack_high_water)}); heap allocations "
+            f"{v.heap_allocations}"
+        )
+    by_index = {r.index: r for r in rows}
+    for i in sorted({v.largest_landing for v in spreads}):
+        theta = ",".join(repr(t) for t in by_index[i].theta)
+        lines.append(f"  landing {i}, the largest of a variant: {DRIVER.name} --landing {theta}")
+    lines.append(f"  {'landing':>7s} " + " ".join(f"{v:>30s}" for v in VARIANTS))
+    for r in rows:
+        cells = [
+            f"{c.status[:10]:>10s} {c.subproblems:3d} {c.socp_iterations:4d} {c.rad750_s:7.2f} s"
+            for c in r.calls
+        ]
+        lines.append(f"  {r.index:7d} " + " ".join(f"{x:>30s}" for x in cells))
+    lines.append("  per landing: status, subproblems, IPM iterations, RAD750-equivalent time")
+    return "\n".join(lines)
+
+
 def add_arguments(ap: argparse.ArgumentParser) -> None:
     """The options, shared by ``python -m guidance.budget`` and ``guidance budget``."""
     ap.add_argument("--no-build", action="store_true", help="use the built driver as is")
@@ -531,6 +739,15 @@ def add_arguments(ap: argparse.ArgumentParser) -> None:
         "--nodes", type=at_least(N_MIN, N_MAX), nargs="+", metavar="N",
         help=f"measure the SCvx call of the default landing on each of these grids instead, N "
         f"in [{N_MIN}, {N_MAX}] (the T-SCvx and network rows need the networks' N = 50)",
+    )  # fmt: skip
+    ap.add_argument(
+        "--landings", type=at_least(1), metavar="K",
+        help="also measure K landings drawn from the networks' training distribution, every "
+        "variant (about 30 s a landing): median, 90th percentile and largest time",
+    )  # fmt: skip
+    ap.add_argument(
+        "--seed", type=at_least(0), metavar="S",
+        help="the campaign's draw seed (default: the T-SCvx benchmark's, never trained on)",
     )  # fmt: skip
 
 
@@ -547,6 +764,7 @@ def _json_row(b: Budget) -> dict[str, object]:
 
 def run(args: argparse.Namespace) -> int:
     """The budget job for parsed options (add_arguments)."""
+    _check_campaign_options(args)
     if not args.no_build:
         build(stack=not args.check_noalloc)
     needed = (DRIVER,) if args.check_noalloc else (DRIVER, NN_DRIVER)
@@ -574,39 +792,85 @@ def run(args: argparse.Namespace) -> int:
             print(report_grids(grids))
         return 0
     calls = measure_variants(do_build=False)
-    b = calls[0]
     nets = measure_networks(do_build=False)
+    campaign = measure_campaign(args.landings, args.seed) if args.landings else None
     if args.json:
-        d = asdict(b)
-        d.update(memory_bytes=b.memory_bytes, within_time=b.within_time(),
-                 within_memory=b.within_memory())  # fmt: skip
-        d["networks"] = [
-            {**asdict(n), "memory_bytes": n.memory_bytes, "within_budget": n.within_budget()}
-            for n in nets
-        ]
-        d["calls"] = [_json_row(c) for c in calls]
-        d["provenance"] = measured_files()
-        print(json.dumps(d, indent=2))
+        print(json.dumps(_json_figures(calls, nets, campaign, _campaign_seed(args)), indent=2))
     else:
-        print(report(b))
-        print()
-        print(report_variants(calls))
-        print()
-        print(report(calls[-1]))
-        print()
-        print(report_networks(nets, calls[-1]))
-        print()
-        painted: dict[str, int] = {"tscvx_nn_run": max(n.stack_high_water for n in nets)}
-        for c in calls:
-            fn = VARIANTS[c.variant][1]
-            painted[fn] = max(painted.get(fn, 0), c.stack_high_water)
-        print(stack_bound.summary(stack_bound.flight_bounds(do_build=False), painted))
+        print(_text_figures(calls, nets))
+        if campaign is not None:
+            print()
+            print(report_campaign(campaign, _campaign_seed(args)))
     return 0
+
+
+def _json_figures(
+    calls: list[Budget],
+    nets: list[NetBudget],
+    campaign: list[CampaignLanding] | None,
+    seed: int,
+) -> dict[str, object]:
+    """--json: the SCvx call's figures at the top level, the calls, networks and campaign."""
+    b = calls[0]
+    d = asdict(b)
+    d.update(memory_bytes=b.memory_bytes, within_time=b.within_time(),
+             within_memory=b.within_memory())  # fmt: skip
+    d["networks"] = [
+        {**asdict(n), "memory_bytes": n.memory_bytes, "within_budget": n.within_budget()}
+        for n in nets
+    ]
+    d["calls"] = [_json_row(c) for c in calls]
+    if campaign is not None:
+        d["campaign"] = {
+            "seed": seed,
+            "variants": [
+                {**asdict(v), "memory_fixed": v.memory_fixed} for v in campaign_spread(campaign)
+            ],
+            "landings": [
+                {"index": r.index, "theta": r.theta, "calls": [_json_row(c) for c in r.calls]}
+                for r in campaign
+            ],
+        }
+    d["provenance"] = measured_files()
+    return d
+
+
+def _text_figures(calls: list[Budget], nets: list[NetBudget]) -> str:
+    """The default landing's reports: SCvx, the variants, Algorithm 2, networks, stack."""
+    painted: dict[str, int] = {"tscvx_nn_run": max(n.stack_high_water for n in nets)}
+    for c in calls:
+        fn = VARIANTS[c.variant][1]
+        painted[fn] = max(painted.get(fn, 0), c.stack_high_water)
+    parts = [
+        report(calls[0]),
+        report_variants(calls),
+        report(calls[-1]),
+        report_networks(nets, calls[-1]),
+        stack_bound.summary(stack_bound.flight_bounds(do_build=False), painted),
+    ]
+    return "\n\n".join(parts)
+
+
+def _campaign_seed(args: argparse.Namespace) -> int:
+    from guidance.bench_tscvx import BENCH_SEED
+
+    return BENCH_SEED if args.seed is None else int(args.seed)
+
+
+def _check_campaign_options(args: argparse.Namespace) -> None:
+    """--seed belongs to --landings; a campaign is of the networks' grid and of the time."""
+    landings = getattr(args, "landings", None)
+    if getattr(args, "seed", None) is not None and not landings:
+        raise InputError("--seed: the seed of a campaign, give --landings K too")
+    if landings and (args.nodes or args.check_noalloc):
+        raise InputError(
+            "--landings: measured on the networks' grid, not with --nodes or --check-noalloc"
+        )
 
 
 if __name__ == "__main__":
     try:
         sys.exit(main())
-    except LibraryNotBuiltError as exc:  # as `guidance budget` reports it
+    except (LibraryNotBuiltError, InputError) as exc:  # as `guidance budget` reports them
         print(f"error: {exc}", file=sys.stderr)
         sys.exit(2)

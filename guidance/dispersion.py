@@ -123,14 +123,14 @@ def solve_landing(job: tuple[int, Scenario, SCvxSettings, str]) -> Landing:
     )
 
 
-def spread(values: Sequence[float]) -> tuple[float, float, float]:
-    """(median, 95th percentile by nearest rank: a value that occurred, largest); NaN for
+def spread(values: Sequence[float], q: float = 95) -> tuple[float, float, float]:
+    """(median, q-th percentile by nearest rank: a value that occurred, largest); NaN for
     none."""
     if not values:
         return (math.nan, math.nan, math.nan)
     v = np.asarray(values, float)
-    p95 = np.percentile(v, 95, method="inverted_cdf")
-    return (float(np.median(v)), float(p95), float(v.max()))
+    pq = np.percentile(v, q, method="inverted_cdf")
+    return (float(np.median(v)), float(pq), float(v.max()))
 
 
 def _figures(values: tuple[float, float, float], fmt: str) -> str:

@@ -377,3 +377,191 @@ def test_the_json_figures_name_the_binaries_measured() -> None:
         "sha256": hashlib.sha256(lib.read_bytes()).hexdigest(),
     }
     assert {p.name for p in budget.NN_MODELS.values() if p.exists()} <= set(files)
+
+
+# ---- a landing other than the default, and the campaign (--landings K) ---------------------
+
+needs_driver = pytest.mark.skipif(
+    not budget.DRIVER.exists() or not all(p.exists() for p in budget.NN_MODELS.values()),
+    reason="make budget builds the driver; make lib the networks",
+)
+
+
+def _fnv1a(x: object, u: object) -> str:
+    """The driver's solution_fnv1a, computed here: FNV-1a over x then u, each double's bytes
+    least significant first."""
+    import numpy as np
+
+    h = 0xCBF29CE484222325
+    for a in (x, u):
+        for byte in np.ascontiguousarray(a, dtype="<f8").tobytes():
+            h = ((h ^ byte) * 0x100000001B3) & 0xFFFFFFFFFFFFFFFF
+    return f"{h:016x}"
+
+
+@needs_driver
+def test_the_driver_solves_the_landing_given_on_its_command_line() -> None:
+    from guidance.bench_tscvx import sample_landings
+    from guidance.cguidance import solve_c, solve_tscvx_c
+
+    default = budget._run_driver("SCvx", repeat=1)
+    scenario = sample_landings(2)[1]
+    arg = budget.landing_arg(scenario)
+    # the same landing through the library's Python binding: an independent path to the call
+    for variant, ref in (
+        ("SCvx", solve_c(scenario)),
+        ("T-SCvx (Algorithm 2)", solve_tscvx_c(scenario, masks=True)),
+    ):
+        kv = budget._run_driver(variant, landing=arg, repeat=1)
+        assert kv["status"] == ref.status == "solved"
+        assert int(kv["iterations"]) == ref.iterations
+        assert int(kv["subproblems"]) == ref.subproblems_solved
+        assert float(kv["m_f"]) == pytest.approx(ref.m_f, abs=1e-12)
+        assert kv["solution_fnv1a"] == _fnv1a(ref.x, ref.u)  # the same answer, to the bit
+        assert kv["solution_fnv1a"] != default["solution_fnv1a"]
+
+
+@needs_driver
+def test_the_driver_refuses_a_bad_argument_with_its_usage() -> None:
+    import subprocess
+
+    from guidance.params import Scenario
+    from guidance.sampling import theta_of
+
+    good = [repr(float(v)) for v in theta_of(Scenario())]
+    light = [*good[:13], "1.5", *good[14:]]  # m0 below the dry mass: the library refuses it
+    bad = {
+        ("--landing", ",".join(good[:15])): "--landing",  # 15 numbers
+        ("--landing", ",".join([*good, "1"])): "--landing",  # 17
+        ("--landing", ",".join(good) + ","): "--landing",
+        ("--landing", ",".join(good).replace(",", ",,", 1)): "--landing",
+        ("--landing", ",".join(good).replace(",", ", ", 1)): "--landing",
+        ("--landing", ",".join(["4x", *good[1:]])): "--landing",
+        ("--landing", ",".join(["nan", *good[1:]])): "--landing",
+        ("--landing", ",".join(["1e999", *good[1:]])): "--landing",
+        ("--landing", ""): "--landing",
+        ("--landing", ",".join(light)): "scenario field 'm0'",
+        ("--landing",): "--landing: needs a value",
+        ("--repeat", "0"): "--repeat 0: R must be",
+        ("--repeat", "3x"): "--repeat 3x: R must be",
+        ("--repeat", "1001"): "--repeat 1001: R must be",
+        ("--nodes", "12x"): "--nodes 12x: N must be",
+        ("--masks", "x.tnn"): "--masks needs --tscvx",
+        ("--landings", "2"): "--landings: unknown option",
+    }
+    for argv, said in bad.items():
+        out = subprocess.run([str(budget.DRIVER), *argv], capture_output=True, text=True)
+        assert out.returncode == 1, argv
+        assert said in out.stderr and "usage: pdg_budget_driver" in out.stderr, argv
+        assert out.stdout == "", argv  # no call made
+    # the default landing's own numbers, given on the command line, are the default landing
+    given = budget._run_driver("SCvx", landing=",".join(good), repeat=1)
+    assert given["solution_fnv1a"] == budget._run_driver("SCvx", repeat=1)["solution_fnv1a"]
+
+
+def test_campaign_options_are_refused_where_they_do_not_apply() -> None:
+    from guidance.cli import build_parser
+    from guidance.errors import InputError
+
+    ap = build_parser()
+    args = ap.parse_args(["budget", "--landings", "3", "--seed", "7"])
+    assert (args.landings, args.seed) == (3, 7)
+    refused = (
+        (["--seed", "7"], "--seed"),
+        (["--landings", "2", "--nodes", "20"], "--nodes"),
+        (["--landings", "2", "--check-noalloc"], "--check-noalloc"),
+    )
+    for argv, said in refused:
+        with pytest.raises(InputError, match=said):
+            budget.run(ap.parse_args(["budget", "--no-build", *argv]))
+    for bad in ("0", "x"):
+        with pytest.raises(SystemExit):
+            ap.parse_args(["budget", "--landings", bad])
+
+
+def _call(
+    variant: str, instructions: int, status: str = "solved", arena: int = 100
+) -> budget.Budget:
+    return budget.Budget(
+        status=status, iterations=10, subproblems=20, socp_iterations=200, m_f=2.2,
+        instructions=instructions, instructions_by_part={},
+        rad750_s=budget.rad750_seconds(instructions), code_bytes=1000, const_data_bytes=10,
+        arena_bytes=arena, arena_high_water=arena - 1, stack_high_water=50,
+        heap_allocations_in_solve=0, host_wall_s=0.5, variant=variant, stack_bound=60,
+    )  # fmt: skip
+
+
+def _landing(index: int, scvx: int, warm: int, alg2: int, **kw: object) -> budget.CampaignLanding:
+    names = list(budget.VARIANTS)
+    return budget.CampaignLanding(
+        index, [0.0] * 16,
+        [_call(names[0], scvx), _call(names[1], warm), _call(names[2], alg2, **kw)],  # type: ignore[arg-type]
+    )  # fmt: skip
+
+
+def test_the_campaign_spread_is_computed_landing_by_landing() -> None:
+    M = 10**6
+    # two landings (K = 2): the median is their mean, the 90th percentile and the largest the
+    # larger; the ratio pairs each landing with its own SCvx call
+    rows = [
+        _landing(0, 2000 * M, 1000 * M, 3000 * M),
+        _landing(1, 1000 * M, 1500 * M, 1000 * M, status="max_iterations"),
+    ]
+    scvx, warm, alg2 = budget.campaign_spread(rows)
+    assert scvx.median_s == pytest.approx(budget.rad750_seconds(1500 * M))
+    assert scvx.p90_s == scvx.max_s == pytest.approx(budget.rad750_seconds(2000 * M))
+    assert scvx.largest_landing == 0 and warm.largest_landing == 1 and alg2.largest_landing == 0
+    assert scvx.ratio_median is None
+    assert (warm.ratio_min, warm.ratio_median, warm.ratio_max) == pytest.approx((0.5, 1.0, 1.5))
+    assert (alg2.ratio_min, alg2.ratio_median, alg2.ratio_max) == pytest.approx((1.0, 1.25, 1.5))
+    assert scvx.statuses == {"solved": 2} and alg2.statuses == {"solved": 1, "max_iterations": 1}
+    assert scvx.memory_fixed and alg2.memory_fixed
+    # five landings: the 90th percentile by nearest rank is the 5th value, the median the 3rd;
+    # the largest is named by its landing's index in the draw
+    times = [5, 1, 4, 2, 3]
+    rows = [_landing(10 + i, t * M, t * M, t * M, arena=100 + i) for i, t in enumerate(times)]
+    rows[3].calls[0] = _call("SCvx", 9 * M)
+    scvx, warm, alg2 = budget.campaign_spread(rows)
+    assert scvx.median_s == pytest.approx(budget.rad750_seconds(4 * M))
+    assert scvx.p90_s == scvx.max_s == pytest.approx(budget.rad750_seconds(9 * M))
+    assert scvx.largest_landing == 13 and warm.largest_landing == 10
+    assert warm.median_s == pytest.approx(budget.rad750_seconds(3 * M))
+    assert warm.ratio_min == pytest.approx(2 / 9) and warm.ratio_max == 1.0
+    assert not alg2.memory_fixed and alg2.arena_bytes == (100, 104) and scvx.memory_fixed
+    text = budget.report_campaign(rows, seed=7)
+    assert "5 landings" in text and "seed 7" in text
+    assert "varies with the landing" in text and "the same on every landing" in text
+    with pytest.raises(ValueError):
+        budget.campaign_spread([])
+
+
+@needs_driver
+def test_a_campaign_measures_the_sampled_landings(monkeypatch: pytest.MonkeyPatch) -> None:
+    """K = 2 end to end, the driver run natively on each landing and variant; callgrind is
+    replaced by a count the test knows (1 M per IPM iteration) to keep it fast."""
+    from guidance.bench_tscvx import sample_landings
+
+    asked: list[str | None] = []
+
+    def fake_count(variant: str, nodes: int | None = None, landing: str | None = None):
+        asked.append(landing)
+        kv = budget._run_driver(variant, landing=landing, repeat=1)
+        return int(kv["socp_iterations"]) * 10**6, {}
+
+    monkeypatch.setattr(budget, "count_instructions", fake_count)
+    monkeypatch.setattr(budget, "static_stack", lambda function, measured: measured)
+    rows = budget.measure_campaign(2, seed=5, progress=False)
+    args = [budget.landing_arg(s) for s in sample_landings(2, seed=5)]
+    assert asked == [args[0]] * 3 + [args[1]] * 3
+    ipm = [[c.socp_iterations for c in r.calls] for r in rows]
+    assert all(c.instructions == c.socp_iterations * 10**6 for r in rows for c in r.calls)
+    spreads = budget.campaign_spread(rows)
+    for j, v in enumerate(spreads):
+        col = [ipm[0][j], ipm[1][j]]
+        assert v.max_s == pytest.approx(budget.rad750_seconds(max(col) * 10**6))
+        assert v.median_s == pytest.approx(budget.rad750_seconds(sum(col) / 2 * 10**6))
+        assert v.largest_landing == col.index(max(col))
+        assert v.memory_fixed  # arena and stack bound fixed by N
+        if j:
+            r = sorted(ipm[i][j] / ipm[i][0] for i in range(2))
+            assert (v.ratio_min, v.ratio_max) == pytest.approx((r[0], r[1]))

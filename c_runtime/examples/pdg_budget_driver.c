@@ -1,10 +1,13 @@
 /*
  * pdg_budget_driver.c -- one complete guidance call, for the RAD750 budget (guidance/budget.py).
  *
- *   pdg_budget_driver [--repeat R] [--nodes N] [--tscvx SOLUTION.tnn [--masks CONSTRAINT.tnn]]
+ *   pdg_budget_driver [--repeat R] [--nodes N] [--landing THETA]
+ *                     [--tscvx SOLUTION.tnn [--masks CONSTRAINT.tnn]]
  *
  * Sets up the workspace for the default scenario (on N nodes with --nodes: the same landing on
- * another grid), outside the measured call, then calls
+ * another grid; with --landing another landing of the default vehicle, THETA its 16 numbers
+ * comma-separated in the order of guidance/sampling.py's theta: r0 (3), v0 (3), q0 (4),
+ * w0 (3), m0, glideslope_deg, tilt_max_deg), outside the measured call, then calls
  * pdg_solve once (R times for wall-clock timing); with --tscvx the measured call is the
  * complete on-board T-SCvx call pdg_solve_tscvx (solution-network inference, projection, SCvx
  * from the reduced radius, and with --masks a constraint-network inference per subproblem
@@ -15,9 +18,15 @@
  * bytes, arena high-water, the stack high-water of pdg_solve (measured by painting the stack
  * below the caller's frame with a pattern and finding the deepest overwritten byte), heap
  * allocations made inside pdg_solve (malloc interposition), the wall time per call and, for
- * T-SCvx, the weight bytes (blobs read in place) and network arena bytes.
+ * T-SCvx, the weight bytes (blobs read in place) and network arena bytes. A bad argument (an
+ * unknown option, a number that is not one or out of its range, a landing the library's
+ * pdg_validate_scenario refuses) gets the reason and the usage on stderr and exit 1, before
+ * any call; a call made exits 0 when solved, 3 otherwise.
  */
 #define _GNU_SOURCE
+#include <ctype.h>
+#include <errno.h>
+#include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -87,41 +96,134 @@ typedef struct {
     tscvx_nn *net[2];
 } networks;
 
-/* --repeat R, --nodes N, --tscvx FILE, --masks FILE; 0, or 1 (with the reason on stderr) for
- * an unknown option or one without its value, N outside [PDG_N_MIN, PDG_N_MAX] or --masks
- * without --tscvx. */
-static int parse_args(int argc, char **argv, int *repeat, int *nodes, networks *nn)
+#define N_THETA 16 /* guidance/sampling.py's theta */
+
+static const char usage[] =
+    "usage: pdg_budget_driver [--repeat R] [--nodes N] [--landing THETA]\n"
+    "                         [--tscvx SOLUTION.tnn [--masks CONSTRAINT.tnn]]\n"
+    "  R in [1, 1000]; N in [%d, %d]; THETA: 16 comma-separated numbers,\n"
+    "  r0 (3), v0 (3), q0 (4), w0 (3), m0, glideslope_deg, tilt_max_deg\n";
+
+/* The driver's command line: what parse_args fills. */
+typedef struct {
+    int repeat, nodes; /* nodes 0: the scenario's own N */
+    int has_landing;
+    double theta[N_THETA];
+} options;
+
+/* A whole-string integer in [lo, hi]: 0, or 1 for anything else (no sign games, no
+ * trailing characters, no overflow). */
+static int parse_int(const char *s, long lo, long hi, int *out)
+{
+    char *end;
+    long v;
+    errno = 0;
+    v = strtol(s, &end, 10);
+    if (end == s || *end != '\0' || errno != 0 || v < lo || v > hi) {
+        return 1;
+    }
+    *out = (int)v;
+    return 0;
+}
+
+/* Exactly N_THETA finite numbers separated by single commas (strtod each; no blank, which
+ * strtod would skip, nothing between a number and its comma, no empty field, no overflow or
+ * underflow): 0, or 1. */
+static int parse_theta(const char *s, double theta[N_THETA])
+{
+    int k;
+    for (k = 0; k < N_THETA; ++k) {
+        char *end;
+        if (isspace((unsigned char)*s)) {
+            return 1;
+        }
+        errno = 0;
+        theta[k] = strtod(s, &end);
+        if (end == s || errno != 0 || !isfinite(theta[k])) {
+            return 1;
+        }
+        if (k < N_THETA - 1 ? *end != ',' : *end != '\0') {
+            return 1;
+        }
+        s = end + 1;
+    }
+    return 0;
+}
+
+/* --repeat R, --nodes N, --landing THETA, --tscvx FILE, --masks FILE; 0, or 1 (with the
+ * reason on stderr) for an unknown option or one without its value, a number that is not
+ * one or out of its range, or --masks without --tscvx. */
+static int parse_args(int argc, char **argv, options *o, networks *nn)
 {
     int i;
     for (i = 1; i < argc; i += 2) {
+        const char *v;
         if (i + 1 >= argc) {
             fprintf(stderr, "%s: needs a value\n", argv[i]);
             return 1;
         }
+        v = argv[i + 1];
         if (strcmp(argv[i], "--repeat") == 0) {
-            *repeat = atoi(argv[i + 1]);
-            *repeat = *repeat < 1 ? 1 : (*repeat > 1000 ? 1000 : *repeat);
-        } else if (strcmp(argv[i], "--nodes") == 0) {
-            char *end;
-            const long n = strtol(argv[i + 1], &end, 10);
-            if (*end != '\0' || n < PDG_N_MIN || n > PDG_N_MAX) {
-                fprintf(stderr, "--nodes %s: N must be an integer in [%d, %d]\n", argv[i + 1],
-                        PDG_N_MIN, PDG_N_MAX);
+            if (parse_int(v, 1, 1000, &o->repeat)) {
+                fprintf(stderr, "--repeat %s: R must be an integer in [1, 1000]\n", v);
                 return 1;
             }
-            *nodes = (int)n;
+        } else if (strcmp(argv[i], "--nodes") == 0) {
+            if (parse_int(v, PDG_N_MIN, PDG_N_MAX, &o->nodes)) {
+                fprintf(stderr, "--nodes %s: N must be an integer in [%d, %d]\n", v, PDG_N_MIN,
+                        PDG_N_MAX);
+                return 1;
+            }
+        } else if (strcmp(argv[i], "--landing") == 0) {
+            if (parse_theta(v, o->theta)) {
+                fprintf(stderr, "--landing %s: THETA must be %d finite numbers, "
+                                "comma-separated\n", v, N_THETA);
+                return 1;
+            }
+            o->has_landing = 1;
         } else if (strcmp(argv[i], "--tscvx") == 0) {
-            nn->path[0] = argv[i + 1];
+            nn->path[0] = v;
         } else if (strcmp(argv[i], "--masks") == 0) {
-            nn->path[1] = argv[i + 1];
+            nn->path[1] = v;
         } else {
-            fprintf(stderr, "%s: unknown option (--repeat, --nodes, --tscvx, --masks)\n",
-                    argv[i]);
+            fprintf(stderr, "%s: unknown option\n", argv[i]);
             return 1;
         }
     }
     if (nn->path[1] && !nn->path[0]) {
         fprintf(stderr, "--masks needs --tscvx\n");
+        return 1;
+    }
+    return 0;
+}
+
+/* The default scenario, turned into the landing of theta (the default vehicle otherwise, as
+ * guidance/sampling.py's scenario_of) and on N nodes when asked; 0, or 1 with the reason on
+ * stderr when the library refuses the landing. */
+static int scenario_from(const options *o, pdg_scenario *scn)
+{
+    char message[PDG_MESSAGE_LEN];
+    int k;
+    pdg_default_scenario(scn);
+    if (o->nodes) {
+        scn->params.N = o->nodes;
+    }
+    if (!o->has_landing) {
+        return 0;
+    }
+    for (k = 0; k < 3; ++k) {
+        scn->r0[k] = o->theta[k];
+        scn->v0[k] = o->theta[3 + k];
+        scn->w0[k] = o->theta[10 + k];
+    }
+    for (k = 0; k < 4; ++k) {
+        scn->q0[k] = o->theta[6 + k];
+    }
+    scn->m0 = o->theta[13];
+    scn->params.glideslope_deg = o->theta[14];
+    scn->params.tilt_max_deg = o->theta[15];
+    if (pdg_validate_scenario(scn, message) != 0) {
+        fprintf(stderr, "--landing: %s\n", message);
         return 1;
     }
     return 0;
@@ -227,11 +329,14 @@ int main(int argc, char **argv)
     pdg_workspace *ws;
     void *arena = NULL;
     size_t need = 0, stack = 0;
-    int repeat = 1, nodes = 0, i;
+    options o = {1, 0, 0, {0.0}};
+    int i;
     double wall = 0.0;
     pdg_status status;
 
-    if (parse_args(argc, argv, &repeat, &nodes, &nn)) {
+    pdg_default_settings(&st);
+    if (parse_args(argc, argv, &o, &nn) || scenario_from(&o, &scn)) {
+        fprintf(stderr, usage, PDG_N_MIN, PDG_N_MAX);
         return 1;
     }
     for (i = 0; i < 2; ++i) {
@@ -244,11 +349,6 @@ int main(int argc, char **argv)
     use_tscvx = nn.path[0] != NULL;
     tscvx_opt.solution = nn.net[0];
     tscvx_opt.constraint = nn.net[1];
-    pdg_default_settings(&st);
-    pdg_default_scenario(&scn);
-    if (nodes) {
-        scn.params.N = nodes;
-    }
     ws = set_up(&scn, &st, &arena, &need);
     if (!ws) {
         release(arena, &nn);
@@ -256,7 +356,7 @@ int main(int argc, char **argv)
     }
     res.x = x;
     res.u = u;
-    status = measure(ws, &scn, &res, repeat, &wall, &stack);
+    status = measure(ws, &scn, &res, o.repeat, &wall, &stack);
     print_report(status, &res, &scn, ws, need, stack, wall, &nn);
     release(arena, &nn);
     return status == PDG_SOLVED ? 0 : 3;
