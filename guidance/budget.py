@@ -616,7 +616,7 @@ def measure_campaign(
         out.append(CampaignLanding(i, [float(v) for v in theta_of(scenario)], calls))
         if progress:
             done = ", ".join(f"{c.variant} {c.status} {c.rad750_s:.2f} s" for c in calls)
-            print(f"landing {i + 1}/{len(scenarios)}: {done}", file=sys.stderr, flush=True)
+            print(f"landing {i} ({i + 1} of {len(scenarios)}): {done}", file=sys.stderr, flush=True)
     return out
 
 
