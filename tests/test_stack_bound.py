@@ -40,73 +40,70 @@ def _analyse(tmp_path: Path, source: str, *entries: str) -> dict[str, stack_boun
     return stack_bound.analyse(_compile(tmp_path, source), entries, base=tmp_path)
 
 
-@needs_gcc
-def test_it_finds_direct_recursion(tmp_path: Path) -> None:
-    src = "int fact(int n);\nint fact(int n) { return n <= 1 ? 1 : n * fact(n - 1); }\n"
-    with pytest.raises(StackCheckError, match=r"recursion: fact -> fact"):
-        _analyse(tmp_path, src, "fact")
-
-
-@needs_gcc
-def test_it_finds_mutual_recursion(tmp_path: Path) -> None:
-    src = (
+# (what is wrong, the unit's source, the entry point analysed, what the refusal says)
+REFUSALS = [
+    (
+        "direct recursion",
+        "int fact(int n);\nint fact(int n) { return n <= 1 ? 1 : n * fact(n - 1); }\n",
+        "fact",
+        r"recursion: fact -> fact",
+    ),
+    (
+        "mutual recursion",
         "int odd(int n);\nint even(int n);\n"
         "int even(int n) { return n == 0 ? 1 : odd(n - 1); }\n"
         "int odd(int n) { return n == 0 ? 0 : even(n - 1); }\n"
-        "int top(int n);\nint top(int n) { return even(n); }\n"
-    )
-    with pytest.raises(
-        StackCheckError, match=r"recursion: (even -> odd -> even|odd -> even -> odd)"
-    ):
-        _analyse(tmp_path, src, "top")
-
-
-@needs_gcc
-def test_it_refuses_a_variable_length_array(tmp_path: Path) -> None:
-    src = (
+        "int top(int n);\nint top(int n) { return even(n); }\n",
+        "top",
+        r"recursion: (even -> odd -> even|odd -> even -> odd)",
+    ),
+    (
+        "variable-length array",
         "double sum(int n);\n"
         "double sum(int n) { volatile double a[n]; double s = 0;\n"
         "  for (int i = 0; i < n; i++) a[i] = i;\n"
-        "  for (int i = 0; i < n; i++) s += a[i];\n  return s; }\n"
-    )
-    with pytest.raises(StackCheckError, match=r"unbounded stack frame.*sum"):
-        _analyse(tmp_path, src, "sum")
-
-
-@needs_gcc
-def test_it_refuses_a_call_through_a_bare_function_pointer(tmp_path: Path) -> None:
-    src = "int apply(int (*fn)(int), int x);\nint apply(int (*fn)(int), int x) { return fn(x); }\n"
-    with pytest.raises(StackCheckError, match=r"indirect call at .*unit.c:2:.*cannot tell"):
-        _analyse(tmp_path, src, "apply")
-
-
-@needs_gcc
-def test_it_refuses_a_struct_member_no_table_fills(tmp_path: Path) -> None:
-    src = (
+        "  for (int i = 0; i < n; i++) s += a[i];\n  return s; }\n",
+        "sum",
+        r"unbounded stack frame.*sum",
+    ),
+    (
+        "bare function pointer",
+        "int apply(int (*fn)(int), int x);\nint apply(int (*fn)(int), int x) { return fn(x); }\n",
+        "apply",
+        r"indirect call at .*unit.c:2:.*cannot tell",
+    ),
+    (
+        "member no table fills",
         "struct ops { int (*run)(int); };\n"
         "int go(const struct ops *o, int x);\n"
-        "int go(const struct ops *o, int x) { return o->run(x) + 1; }\n"
-    )
-    with pytest.raises(StackCheckError, match=r"unresolved indirect call at .*o->run"):
-        _analyse(tmp_path, src, "go")
-
-
-@needs_gcc
-def test_it_refuses_a_member_set_from_a_variable(tmp_path: Path) -> None:
-    src = (
+        "int go(const struct ops *o, int x) { return o->run(x) + 1; }\n",
+        "go",
+        r"unresolved indirect call at .*o->run",
+    ),
+    (
+        "member set from a variable",
         "struct ops { int (*run)(int); };\n"
         "int go(struct ops *o, int (*f)(int), int x);\n"
-        "int go(struct ops *o, int (*f)(int), int x) { o->run = f; return o->run(x); }\n"
-    )
-    with pytest.raises(StackCheckError, match=r"cannot tell what 'f' stored in .run"):
-        _analyse(tmp_path, src, "go")
+        "int go(struct ops *o, int (*f)(int), int x) { o->run = f; return o->run(x); }\n",
+        "go",
+        r"cannot tell what 'f' stored in .run",
+    ),
+    (
+        "external without allowance",
+        'int puts(const char *s);\nint hello(void);\nint hello(void) { return puts("hi"); }\n',
+        "hello",
+        r"hello calls puts.*no stack allowance",
+    ),
+]
 
 
 @needs_gcc
-def test_it_refuses_an_external_without_allowance(tmp_path: Path) -> None:
-    src = 'int puts(const char *s);\nint hello(void);\nint hello(void) { return puts("hi"); }\n'
-    with pytest.raises(StackCheckError, match=r"hello calls puts.*no stack allowance"):
-        _analyse(tmp_path, src, "hello")
+@pytest.mark.parametrize(
+    ("source", "entry", "refusal"), [r[1:] for r in REFUSALS], ids=[r[0] for r in REFUSALS]
+)
+def test_the_tool_refuses(tmp_path: Path, source: str, entry: str, refusal: str) -> None:
+    with pytest.raises(StackCheckError, match=refusal):
+        _analyse(tmp_path, source, entry)
 
 
 TABLE = """
