@@ -307,6 +307,31 @@ def _assigned_targets(
             seams.targets.setdefault((t, member), set()).update(new)
 
 
+_NOT_CALLED = re.compile(r"(?<![\w.>])([A-Za-z_]\w*)\b(?!\s*\()")
+
+
+def check_address_taken(graph: CallGraph, seams: Seams) -> None:
+    """Every compiled function named other than in a call (its address taken: a table entry,
+    an assignment, an argument) must be one the seams hold, or an indirect call could reach
+    it unseen: a table the readers above do not know (`T const name = {...}`, a nested
+    initializer, a cast) would leave the bound short without a word."""
+    held: set[str] = set().union(*seams.targets.values()) if seams.targets else set()
+    names = {f.name for f in graph.frames.values()}
+    for path, text in seams.texts.items():
+        for m in _NOT_CALLED.finditer(text):
+            if m.group(1) not in names:
+                continue
+            target = graph.function(m.group(1), path)
+            if target is not None and target not in held:
+                line = text.count("\n", 0, m.start()) + 1
+                raise StackCheckError(
+                    f"{path.name}:{line}: the address of {m.group(1)} is taken, but no table "
+                    "or assignment the tool reads holds it: an indirect call could reach it "
+                    "unseen (write the table as `T name = {...};`, or teach "
+                    "guidance/stack_bound.py the new form)"
+                )
+
+
 def resolve_site(site: str, seams: Seams, base: Path = ROOT) -> set[str]:
     """The functions an indirect call at file:line:col may reach, or StackCheckError."""
     file, line, col = site.rsplit(":", 2)
@@ -462,6 +487,7 @@ def analyse(
     check_frames(graph)
     files = sorted(graph.sources | {p.resolve() for p in (*headers, *public)})
     seams = find_seams(graph, files, public)
+    check_address_taken(graph, seams)
     resolve_indirect(graph, seams, base)
     memo, own = depths(graph), depths(graph, externals=False)
     return {e: bound(graph, memo, own, e) for e in entries}

@@ -89,6 +89,18 @@ REFUSALS = [
         r"cannot tell what 'f' stored in .run",
     ),
     (
+        "table written in a form the reader skips",
+        "typedef struct { int (*run)(int); } ops;\n"
+        "static int small(int x) { return x; }\n"
+        "static int large(int x) { volatile int a[300]; a[0] = x; return a[0]; }\n"
+        "static const ops fast = { small };\n"
+        "static ops const slow = { large };\n"
+        "int go(const ops *o, int x);\n"
+        "int go(const ops *o, int x) { return o->run(x) + (&slow != o); }\n",
+        "go",
+        r"unit.c:5: the address of large is taken, but no table",
+    ),
+    (
         "external without allowance",
         'int puts(const char *s);\nint hello(void);\nint hello(void) { return puts("hi"); }\n',
         "hello",
